@@ -1,0 +1,38 @@
+# Stager: `make demo` sets everything up and solves the sample; `make test` runs the suite.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+APT_PACKAGES := libegl1 libgl1-mesa-dri libegl-mesa0 libosmesa6
+
+.PHONY: setup test demo clean system-packages
+
+setup: $(STAMP)
+
+# The renderer needs Mesa's EGL/OSMesa libraries; install them only when missing.
+system-packages:
+	@missing=""; for p in $(APT_PACKAGES); do \
+	  dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages:$$missing"; \
+	  SUDO=""; [ "$$(id -u)" -ne 0 ] && SUDO=sudo; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
+	fi
+
+$(STAMP): pyproject.toml | system-packages
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e '.[dev]'
+	# pyrender pins PyOpenGL 3.1.0, with which OSMesa fails; 3.1.10 makes EGL and OSMesa work.
+	$(PY) -m pip install -q 'PyOpenGL==3.1.10'
+	touch $(STAMP)
+
+test: setup
+	$(PY) -m pytest
+
+demo: setup
+	$(VENV)/bin/layout solve samples/living_room.toml --suggestions 4 --seed 0 --out out/demo
+	@echo "plans written to $(CURDIR)/out/demo (plan_1.png ... plan_4.png, layout_K.json)"
+
+clean:
+	rm -rf $(VENV) out .pytest_cache

@@ -1,0 +1,1231 @@
+"""numba kernels: one projection kernel and one residual kernel per constraint kind.
+
+Every kernel works on the arrays of :class:`layout.model.Model` (packed as named
+tuples) and on the state arrays ``pos (n, 3)`` and ``yaw (n,)``. Corrections always go
+to a particle's *body* (itself, or the rigid group it is fixed to), so rigid groups
+move as one. In Gauss–Seidel mode a correction is written at once; in Jacobi mode it
+is added to ``acc`` and :func:`flush` applies the average of each batch
+(one constraint kind) with over-relaxation ω.
+
+Formulas follow Weiss et al. 2018 (TVCG) Sec. 3 and the thesis Ch. 5; the equation
+numbers in comments are the paper's. Degenerate cases (a zero-length direction) are
+skipped and counted in ``degen[kind]``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ._codes import (
+    ARC,
+    BOX,
+    DECAY,
+    EQ,
+    FACE,
+    GROW,
+    ITEM,
+    K_ACCESS,
+    K_BALANCE,
+    K_BOUNDARY,
+    K_COLLISION,
+    K_CURVE,
+    K_DISTANCE,
+    K_HEAT,
+    K_LANE,
+    K_ORIENTATION,
+    K_STACK,
+    K_SYMMETRY,
+    K_WALL_DISTANCE,
+    K_WALL_ORIENTATION,
+    KINDS,
+    MAX,
+    MIN,
+    OBSTACLE,
+)
+
+N_KINDS = len(KINDS)
+EPS = 1e-12
+# Vertical overlap below which two boxes count as resting on each other, not colliding.
+Z_TOUCH_M = 1e-6
+# A corner pushed back inside the floor lands this far inside, so it tests as inside.
+INSIDE_M = 1e-7
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+@njit(cache=True, inline="always")
+def stiffness(k0, schedule, it, rate):
+    """k_l for iteration ``it`` >= 1 and rate M (Sec. 3.1)."""
+    if schedule == DECAY:
+        return 1.0 - (1.0 - k0) ** (rate / it)
+    if schedule == GROW:
+        return 1.0 - (1.0 - k0) ** (it / rate)
+    return k0
+
+
+@njit(cache=True, inline="always")
+def wrap(a):
+    """Angle wrapped to [-pi, pi)."""
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@njit(cache=True, inline="always")
+def pose(P, pos, yaw, i):
+    """World pose (x, y, z, yaw) of particle ``i``, composed through its body."""
+    b = P.body[i]
+    if b == i:
+        return pos[i, 0], pos[i, 1], pos[i, 2], yaw[i]
+    c = math.cos(yaw[b])
+    s = math.sin(yaw[b])
+    ox = P.body_offset[i, 0]
+    oy = P.body_offset[i, 1]
+    return (
+        pos[b, 0] + c * ox - s * oy,
+        pos[b, 1] + s * ox + c * oy,
+        pos[b, 2] + P.body_offset[i, 2],
+        yaw[b] + P.body_yaw[i],
+    )
+
+
+@njit(cache=True, inline="always")
+def push(b, dx, dy, dz, pos, acc, jac):
+    if jac:
+        acc[b, 0] += dx
+        acc[b, 1] += dy
+        acc[b, 2] += dz
+        acc[b, 3] += 1.0
+    else:
+        pos[b, 0] += dx
+        pos[b, 1] += dy
+        pos[b, 2] += dz
+
+
+@njit(cache=True, inline="always")
+def turn(b, da, yaw, acc, jac):
+    if jac:
+        acc[b, 4] += da
+        acc[b, 5] += 1.0
+    else:
+        yaw[b] += da
+
+
+@njit(cache=True)
+def flush(pos, yaw, acc, omega):
+    """Apply the averaged Jacobi corrections, Δp = ω/n Σ Δp_j (thesis Eq. 3.6).
+
+    ``acc`` is (n, 6): summed dx, dy, dz, their count, summed dyaw, its count.
+    """
+    for b in range(pos.shape[0]):
+        if acc[b, 3] > 0.0:
+            f = omega / acc[b, 3]
+            pos[b, 0] += f * acc[b, 0]
+            pos[b, 1] += f * acc[b, 1]
+            pos[b, 2] += f * acc[b, 2]
+        if acc[b, 5] > 0.0:
+            yaw[b] += omega * acc[b, 4] / acc[b, 5]
+        for q in range(6):
+            acc[b, q] = 0.0
+
+
+@njit(cache=True)
+def sync_members(P, pos, yaw):
+    """Write the world pose of every rigid-group member from its body."""
+    for i in range(pos.shape[0]):
+        if P.body[i] != i:
+            x, y, z, a = pose(P, pos, yaw, i)
+            pos[i, 0] = x
+            pos[i, 1] = y
+            pos[i, 2] = z
+            yaw[i] = a
+
+
+@njit(cache=True)
+def nearest_on_polygon(poly, x, y):
+    """Nearest boundary point (qx, qy), its edge (first found on ties) and distance."""
+    m = poly.shape[0]
+    best = 1e300
+    bx = 0.0
+    by = 0.0
+    be = 0
+    for e in range(m):
+        ax = poly[e, 0]
+        ay = poly[e, 1]
+        ex = poly[(e + 1) % m, 0] - ax
+        ey = poly[(e + 1) % m, 1] - ay
+        ll = ex * ex + ey * ey
+        t = ((x - ax) * ex + (y - ay) * ey) / ll if ll > 0.0 else 0.0
+        t = min(1.0, max(0.0, t))
+        qx = ax + t * ex
+        qy = ay + t * ey
+        d2 = (x - qx) ** 2 + (y - qy) ** 2
+        if d2 < best:
+            best = d2
+            bx = qx
+            by = qy
+            be = e
+    return bx, by, be, math.sqrt(best)
+
+
+@njit(cache=True)
+def inside_polygon(poly, x, y):
+    """Crossing-number point-in-polygon test."""
+    m = poly.shape[0]
+    inside = False
+    j = m - 1
+    for i in range(m):
+        xi = poly[i, 0]
+        yi = poly[i, 1]
+        xj = poly[j, 0]
+        yj = poly[j, 1]
+        if (yi > y) != (yj > y):
+            xc = xj + (y - yj) * (xi - xj) / (yi - yj)
+            if x < xc:
+                inside = not inside
+        j = i
+    return inside
+
+
+@njit(cache=True, inline="always")
+def support(hd, hw, c, s, nx, ny):
+    """Half-extent along unit direction n of a box with half depth/width and yaw (c, s)."""
+    return hd * abs(c * nx + s * ny) + hw * abs(-s * nx + c * ny)
+
+
+@njit(cache=True)
+def sat(xa, ya, ca, sa, hda, hwa, xb, yb, cb, sb, hdb, hwb):
+    """Separating-axis test of two oriented rectangles.
+
+    Returns (depth, nx, ny): the smallest penetration depth (negative = separated by
+    that much along the best axis) and the unit axis pointing from b to a.
+    """
+    dx = xa - xb
+    dy = ya - yb
+    best = 1e300
+    bnx = 1.0
+    bny = 0.0
+    for k in range(4):
+        if k == 0:
+            nx, ny = ca, sa
+        elif k == 1:
+            nx, ny = -sa, ca
+        elif k == 2:
+            nx, ny = cb, sb
+        else:
+            nx, ny = -sb, cb
+        dist = dx * nx + dy * ny
+        depth = support(hda, hwa, ca, sa, nx, ny) + support(hdb, hwb, cb, sb, nx, ny) - abs(dist)
+        if depth < best:
+            best = depth
+            if dist < 0.0:
+                bnx, bny = -nx, -ny
+            else:
+                bnx, bny = nx, ny
+    return best, bnx, bny
+
+
+@njit(cache=True, inline="always")
+def inv_mass_of(P, i):
+    return P.inv_mass[P.body[i]]
+
+
+# ------------------------------------------------------------------- static kinds
+
+
+@njit(cache=True)
+def project_distance(D, P, pos, yaw, acc, jac, it, rate, degen):
+    """Pairwise (and focal-point) distance, Eqs. (4)–(6); EQ, MIN or MAX."""
+    for c in range(D.rest.shape[0]):
+        i = D.pairs[c, 0]
+        j = D.pairs[c, 1]
+        xi, yi, _, _ = pose(P, pos, yaw, i)
+        xj, yj, _, _ = pose(P, pos, yaw, j)
+        wi = inv_mass_of(P, i) * D.w_scale[c, 0]
+        wj = inv_mass_of(P, j) * D.w_scale[c, 1]
+        dx = xi - xj
+        dy = yi - yj
+        length = math.sqrt(dx * dx + dy * dy)
+        if wi + wj == 0.0:
+            continue
+        if length < EPS:
+            degen[K_DISTANCE] += 1
+            continue
+        C = length - D.rest[c]
+        if (D.mode[c] == MIN and C >= 0.0) or (D.mode[c] == MAX and C <= 0.0):
+            continue
+        f = stiffness(D.k0[c], D.schedule[c], it, rate) * C / ((wi + wj) * length)
+        push(P.body[i], -wi * f * dx, -wi * f * dy, 0.0, pos, acc, jac)
+        push(P.body[j], wj * f * dx, wj * f * dy, 0.0, pos, acc, jac)
+
+
+@njit(cache=True)
+def residual_distance(D, P, pos, yaw, out):
+    for c in range(D.rest.shape[0]):
+        xi, yi, _, _ = pose(P, pos, yaw, D.pairs[c, 0])
+        xj, yj, _, _ = pose(P, pos, yaw, D.pairs[c, 1])
+        C = math.sqrt((xi - xj) ** 2 + (yi - yj) ** 2) - D.rest[c]
+        if D.mode[c] == MIN:
+            C = min(C, 0.0)
+        elif D.mode[c] == MAX:
+            C = max(C, 0.0)
+        out[c] = C
+
+
+@njit(cache=True, inline="always")
+def lane_geometry(L, P, pos, yaw, c):
+    """Ghost point on the lane vector nearest the item, and the required clearance."""
+    o = L.origin[c]
+    i = L.item[c]
+    xo, yo, _, ao = pose(P, pos, yaw, o)
+    xi, yi, _, ai = pose(P, pos, yaw, i)
+    co = math.cos(ao)
+    so = math.sin(ao)
+    sx = xo + co * L.start[c, 0] - so * L.start[c, 1]
+    sy = yo + so * L.start[c, 0] + co * L.start[c, 1]
+    vx = math.cos(ao + L.angle[c])
+    vy = math.sin(ao + L.angle[c])
+    t = min(L.length[c], max(0.0, (xi - sx) * vx + (yi - sy) * vy))  # Eq. (8), clamped
+    qx = sx + t * vx
+    qy = sy + t * vy
+    dx = xi - qx
+    dy = yi - qy
+    dist = math.sqrt(dx * dx + dy * dy)
+    if dist < EPS:
+        nx, ny = -vy, vx
+    else:
+        nx, ny = dx / dist, dy / dist
+    # Clearance from the item's box, not its center: the half width of the lane plus
+    # the item's extent towards the lane.
+    hd = 0.5 * P.size[i, 1]
+    hw = 0.5 * P.size[i, 0]
+    need = L.half_width[c] + support(hd, hw, math.cos(ai), math.sin(ai), nx, ny)
+    return dist - need, nx, ny, dist
+
+
+@njit(cache=True)
+def project_lane(L, P, pos, yaw, acc, jac, it, rate, degen):
+    """Traffic lane, Eqs. (7)–(8): the item keeps clear of a vector; ghost on origin."""
+    for c in range(L.origin.shape[0]):
+        i = L.item[c]
+        o = L.origin[c]
+        C, nx, ny, dist = lane_geometry(L, P, pos, yaw, c)
+        if C >= 0.0:
+            continue
+        if dist < EPS:
+            degen[K_LANE] += 1
+        wi = inv_mass_of(P, i) * L.w_scale[c, 0]
+        wo = inv_mass_of(P, o) * L.w_scale[c, 1]
+        if wi + wo == 0.0:
+            continue
+        f = stiffness(L.k0[c], L.schedule[c], it, rate) * C / (wi + wo)
+        push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, acc, jac)
+        push(P.body[o], wo * f * nx, wo * f * ny, 0.0, pos, acc, jac)
+
+
+@njit(cache=True)
+def residual_lane(L, P, pos, yaw, out):
+    for c in range(L.origin.shape[0]):
+        C, _, _, _ = lane_geometry(L, P, pos, yaw, c)
+        out[c] = min(C, 0.0)
+
+
+@njit(cache=True, inline="always")
+def weighted_center(P, pos, yaw, members, a, b, by_area):
+    """Center of mass of members[a:b] (mass = box volume, or footprint area)."""
+    mx = 0.0
+    my = 0.0
+    total = 0.0
+    for q in range(a, b):
+        j = members[q]
+        mu = P.size[j, 0] * P.size[j, 1] if by_area else P.mass[j]
+        x, y, _, _ = pose(P, pos, yaw, j)
+        mx += mu * x
+        my += mu * y
+        total += mu
+    return mx / total, my / total, total
+
+
+@njit(cache=True, inline="always")
+def project_center(P, pos, yaw, acc, jac, members, a, b, by_area, ex, ey, total, k):
+    """Correction of C = ½‖m − p̃‖² (Eqs. 9–10): Δp_j = −k s w_j ∇_j C."""
+    denom = 0.0
+    for q in range(a, b):
+        j = members[q]
+        mu = P.size[j, 0] * P.size[j, 1] if by_area else P.mass[j]
+        denom += inv_mass_of(P, j) * mu * mu
+    if denom == 0.0:
+        return
+    # s = C / Σ w_j |∇_j C|² with ∇_j C = (μ_j / M) e  =>  Δp_j = −k e w_j μ_j M / (2 Σ w μ²).
+    for q in range(a, b):
+        j = members[q]
+        mu = P.size[j, 0] * P.size[j, 1] if by_area else P.mass[j]
+        f = -k * inv_mass_of(P, j) * mu * total / (2.0 * denom)
+        push(P.body[j], f * ex, f * ey, 0.0, pos, acc, jac)
+
+
+@njit(cache=True, inline="always")
+def heat_target(H, P, pos, yaw, c):
+    fr = H.frame[c]
+    if fr < 0:
+        return H.target[c, 0], H.target[c, 1]
+    x, y, _, a = pose(P, pos, yaw, fr)
+    ca = math.cos(a)
+    sa = math.sin(a)
+    return x + ca * H.target[c, 0] - sa * H.target[c, 1], y + sa * H.target[c, 0] + ca * H.target[c, 1]
+
+
+@njit(cache=True)
+def project_heat(H, P, pos, yaw, acc, jac, it, rate, degen):
+    """Heat point: the members' center of mass goes to a point (Eq. 9)."""
+    for c in range(H.frame.shape[0]):
+        a = H.start[c]
+        b = H.start[c + 1]
+        mx, my, total = weighted_center(P, pos, yaw, H.members, a, b, False)
+        tx, ty = heat_target(H, P, pos, yaw, c)
+        k = stiffness(H.k0[c], H.schedule[c], it, rate)
+        project_center(P, pos, yaw, acc, jac, H.members, a, b, False, mx - tx, my - ty, total, k)
+
+
+@njit(cache=True)
+def residual_heat(H, P, pos, yaw, out):
+    for c in range(H.frame.shape[0]):
+        mx, my, _ = weighted_center(P, pos, yaw, H.members, H.start[c], H.start[c + 1], False)
+        tx, ty = heat_target(H, P, pos, yaw, c)
+        out[c] = 0.5 * ((mx - tx) ** 2 + (my - ty) ** 2)
+
+
+@njit(cache=True, inline="always")
+def symmetry_target(S, P, pos, yaw, c, mx, my):
+    """Projection of the members' center onto the focal's axis (ray), Eq. (11)."""
+    xf, yf, _, af = pose(P, pos, yaw, S.focal[c])
+    vx = math.cos(af + S.angle[c])
+    vy = math.sin(af + S.angle[c])
+    t = max(0.0, (mx - xf) * vx + (my - yf) * vy)
+    return xf + t * vx, yf + t * vy
+
+
+@njit(cache=True)
+def project_symmetry(S, P, pos, yaw, acc, jac, it, rate, degen):
+    """Focal point symmetry: members' center of mass onto the focal's axis."""
+    for c in range(S.focal.shape[0]):
+        a = S.start[c]
+        b = S.start[c + 1]
+        mx, my, total = weighted_center(P, pos, yaw, S.members, a, b, False)
+        tx, ty = symmetry_target(S, P, pos, yaw, c, mx, my)
+        k = stiffness(S.k0[c], S.schedule[c], it, rate)
+        project_center(P, pos, yaw, acc, jac, S.members, a, b, False, mx - tx, my - ty, total, k)
+
+
+@njit(cache=True)
+def residual_symmetry(S, P, pos, yaw, out):
+    for c in range(S.focal.shape[0]):
+        mx, my, _ = weighted_center(P, pos, yaw, S.members, S.start[c], S.start[c + 1], False)
+        tx, ty = symmetry_target(S, P, pos, yaw, c, mx, my)
+        out[c] = 0.5 * ((mx - tx) ** 2 + (my - ty) ** 2)
+
+
+@njit(cache=True)
+def project_balance(B, P, pos, yaw, acc, jac, it, rate, degen):
+    """Visual balance, Eq. (12): footprint-weighted center to the room centroid."""
+    for c in range(B.target.shape[0]):
+        a = B.start[c]
+        b = B.start[c + 1]
+        mx, my, total = weighted_center(P, pos, yaw, B.members, a, b, True)
+        k = stiffness(B.k0[c], B.schedule[c], it, rate)
+        ex = mx - B.target[c, 0]
+        ey = my - B.target[c, 1]
+        project_center(P, pos, yaw, acc, jac, B.members, a, b, True, ex, ey, total, k)
+
+
+@njit(cache=True)
+def residual_balance(B, P, pos, yaw, out):
+    for c in range(B.target.shape[0]):
+        mx, my, _ = weighted_center(P, pos, yaw, B.members, B.start[c], B.start[c + 1], True)
+        out[c] = 0.5 * ((mx - B.target[c, 0]) ** 2 + (my - B.target[c, 1]) ** 2)
+
+
+@njit(cache=True, inline="always")
+def wall_frame(R, x, y):
+    """Signed distance to the walls (positive inside), inward direction, nearest edge."""
+    qx, qy, e, dist = nearest_on_polygon(R.polygon, x, y)
+    if dist < EPS:
+        return 0.0, R.edge_normal[e, 0], R.edge_normal[e, 1], e
+    nx = (x - qx) / dist
+    ny = (y - qy) / dist
+    if inside_polygon(R.polygon, x, y):
+        return dist, nx, ny, e
+    return -dist, -nx, -ny, e
+
+
+@njit(cache=True)
+def project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen):
+    """Distance to wall, Eq. (13); the wall point has infinite mass."""
+    for c in range(W.item.shape[0]):
+        i = W.item[c]
+        if inv_mass_of(P, i) == 0.0:
+            continue
+        x, y, _, _ = pose(P, pos, yaw, i)
+        sd, nx, ny, _ = wall_frame(R, x, y)
+        C = sd - W.rest[c]
+        if (W.mode[c] == MIN and C >= 0.0) or (W.mode[c] == MAX and C <= 0.0):
+            continue
+        k = stiffness(W.k0[c], W.schedule[c], it, rate)
+        push(P.body[i], -k * C * nx, -k * C * ny, 0.0, pos, acc, jac)
+
+
+@njit(cache=True)
+def residual_wall_distance(W, R, P, pos, yaw, out):
+    for c in range(W.item.shape[0]):
+        x, y, _, _ = pose(P, pos, yaw, W.item[c])
+        sd, _, _, _ = wall_frame(R, x, y)
+        C = sd - W.rest[c]
+        if W.mode[c] == MIN:
+            C = min(C, 0.0)
+        elif W.mode[c] == MAX:
+            C = max(C, 0.0)
+        out[c] = C
+
+
+@njit(cache=True, inline="always")
+def wall_orientation_error(O, R, P, pos, yaw, c):
+    x, y, _, a = pose(P, pos, yaw, O.item[c])
+    _, _, e, _ = nearest_on_polygon(R.polygon, x, y)
+    want = math.atan2(R.edge_normal[e, 1], R.edge_normal[e, 0]) + O.angle[c]
+    return wrap(want - a)
+
+
+@njit(cache=True)
+def project_wall_orientation(O, R, P, pos, yaw, acc, jac, it, rate, degen):
+    """Orientation to wall, Eq. (17): smallest rotation towards the wanted angle."""
+    for c in range(O.item.shape[0]):
+        i = O.item[c]
+        if inv_mass_of(P, i) == 0.0:
+            continue
+        k = stiffness(O.k0[c], O.schedule[c], it, rate)
+        turn(P.body[i], k * wall_orientation_error(O, R, P, pos, yaw, c), yaw, acc, jac)
+
+
+@njit(cache=True)
+def residual_wall_orientation(O, R, P, pos, yaw, out):
+    for c in range(O.item.shape[0]):
+        out[c] = abs(wall_orientation_error(O, R, P, pos, yaw, c))
+
+
+@njit(cache=True, inline="always")
+def orientation_errors(O, P, pos, yaw, c):
+    """Smallest rotations (Δθ_i, Δθ_j) that satisfy the pair's orientation, Eq. (16)."""
+    i = O.pairs[c, 0]
+    j = O.pairs[c, 1]
+    xi, yi, _, ai = pose(P, pos, yaw, i)
+    xj, yj, _, aj = pose(P, pos, yaw, j)
+    di = 0.0
+    dj = 0.0
+    if O.mode[c] == FACE:
+        toward_j = math.atan2(yj - yi, xj - xi)
+        if not math.isnan(O.angle[c, 0]):
+            di = wrap(O.angle[c, 0] - (ai - toward_j))
+        if not math.isnan(O.angle[c, 1]):
+            dj = wrap(O.angle[c, 1] - (aj - toward_j - math.pi))
+    else:
+        # Parallel: yaw_i - yaw_j = angle (mod pi), shared by inverse mass.
+        err = O.angle[c, 0] - (ai - aj)
+        err = (err + 0.5 * math.pi) % math.pi - 0.5 * math.pi
+        wi = inv_mass_of(P, i)
+        wj = inv_mass_of(P, j)
+        if wi + wj > 0.0:
+            di = err * wi / (wi + wj)
+            dj = -err * wj / (wi + wj)
+    return di, dj
+
+
+@njit(cache=True)
+def project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen):
+    for c in range(O.mode.shape[0]):
+        i = O.pairs[c, 0]
+        j = O.pairs[c, 1]
+        di, dj = orientation_errors(O, P, pos, yaw, c)
+        k = stiffness(O.k0[c], O.schedule[c], it, rate)
+        if inv_mass_of(P, i) > 0.0:
+            turn(P.body[i], k * di, yaw, acc, jac)
+        if inv_mass_of(P, j) > 0.0:
+            turn(P.body[j], k * dj, yaw, acc, jac)
+
+
+@njit(cache=True)
+def residual_orientation(O, P, pos, yaw, out):
+    for c in range(O.mode.shape[0]):
+        di, dj = orientation_errors(O, P, pos, yaw, c)
+        out[c] = math.sqrt(di * di + dj * dj)
+
+
+@njit(cache=True)
+def project_stack(S, P, pos, yaw, acc, jac, it, rate, degen):
+    """Vertical stacking, Eqs. (18)–(19). The base rests on what is below it, so only
+    the top moves vertically; x and y are shared by inverse mass."""
+    for c in range(S.k0.shape[0]):
+        i = S.pairs[c, 0]
+        j = S.pairs[c, 1]
+        xi, yi, zi, _ = pose(P, pos, yaw, i)
+        xj, yj, zj, _ = pose(P, pos, yaw, j)
+        wi = inv_mass_of(P, i)
+        wj = inv_mass_of(P, j)
+        if wi + wj == 0.0:
+            continue
+        k = stiffness(S.k0[c], S.schedule[c], it, rate)
+        cz = zj - (zi + 0.5 * (P.size[i, 2] + P.size[j, 2]))
+        cx = xj - xi
+        cy = yj - yi
+        fi = k * wi / (wi + wj)
+        fj = k * wj / (wi + wj)
+        dzj = -k * cz if wj > 0.0 else 0.0
+        push(P.body[i], fi * cx, fi * cy, 0.0, pos, acc, jac)
+        push(P.body[j], -fj * cx, -fj * cy, dzj, pos, acc, jac)
+
+
+@njit(cache=True)
+def residual_stack(S, P, pos, yaw, out):
+    for c in range(S.k0.shape[0]):
+        i = S.pairs[c, 0]
+        j = S.pairs[c, 1]
+        xi, yi, zi, _ = pose(P, pos, yaw, i)
+        xj, yj, zj, _ = pose(P, pos, yaw, j)
+        cz = zj - (zi + 0.5 * (P.size[i, 2] + P.size[j, 2]))
+        out[c] = math.sqrt(cz * cz + (xj - xi) ** 2 + (yj - yi) ** 2)
+
+
+@njit(cache=True, inline="always")
+def curve_point(U, c, lx, ly):
+    """Nearest point on curve c (group frame) to (lx, ly), and its parameter in [0, 1]."""
+    p = U.params[c]
+    if U.kind[c] == ARC:
+        cx, cy, r, a0, a1 = p[0], p[1], p[2], p[3], p[4]
+        phi = math.atan2(ly - cy, lx - cx)
+        mid = 0.5 * (a0 + a1)
+        phi = mid + wrap(phi - mid)
+        phi = min(max(phi, min(a0, a1)), max(a0, a1))
+        t = (phi - a0) / (a1 - a0) if a1 != a0 else 0.0
+        return cx + r * math.cos(phi), cy + r * math.sin(phi), t
+    ax, ay, bx, by = p[0], p[1], p[2], p[3]
+    ex = bx - ax
+    ey = by - ay
+    ll = ex * ex + ey * ey
+    t = ((lx - ax) * ex + (ly - ay) * ey) / ll if ll > 0.0 else 0.0
+    t = min(1.0, max(0.0, t))
+    return ax + t * ex, ay + t * ey, t
+
+
+@njit(cache=True)
+def curve_offsets(U, P, pos, yaw, c, param):
+    """For each member of curve c: world offset from its curve point; fills ``param``."""
+    g = U.group[c]
+    xg, yg, _, ag = pose(P, pos, yaw, g)
+    cg = math.cos(ag)
+    sg = math.sin(ag)
+    a = U.start[c]
+    b = U.start[c + 1]
+    out = np.empty((b - a, 2))
+    for q in range(a, b):
+        x, y, _, _ = pose(P, pos, yaw, U.members[q])
+        lx = cg * (x - xg) + sg * (y - yg)
+        ly = -sg * (x - xg) + cg * (y - yg)
+        px, py, t = curve_point(U, c, lx, ly)
+        param[q - a] = t
+        out[q - a, 0] = x - (xg + cg * px - sg * py)
+        out[q - a, 1] = y - (yg + sg * px + cg * py)
+    return out
+
+
+@njit(cache=True)
+def curve_order(param):
+    """Members sorted by curve parameter (insertion sort: nearly sorted each call)."""
+    n = param.shape[0]
+    order = np.arange(n)
+    for a in range(1, n):
+        v = order[a]
+        b = a - 1
+        while b >= 0 and param[order[b]] > param[v]:
+            order[b + 1] = order[b]
+            b -= 1
+        order[b + 1] = v
+    return order
+
+
+@njit(cache=True)
+def project_curve(U, P, pos, yaw, acc, jac, it, rate, degen):
+    """Members of a non-rigid group onto its segment or arc (a distance constraint to
+    the nearest curve point, Sec. 3.2), then equal spacing between neighbours in
+    curve-parameter order."""
+    for c in range(U.group.shape[0]):
+        g = U.group[c]
+        a = U.start[c]
+        b = U.start[c + 1]
+        k = stiffness(U.k0[c], U.schedule[c], it, rate)
+        wg = 0.0 if U.anchor_fixed[c] else inv_mass_of(P, g)
+        param = np.empty(b - a)
+        off = curve_offsets(U, P, pos, yaw, c, param)
+        for q in range(a, b):
+            i = U.members[q]
+            wi = inv_mass_of(P, i)
+            if wi + wg == 0.0:
+                continue
+            fi = k * wi / (wi + wg)
+            fg = k * wg / (wi + wg)
+            dx = off[q - a, 0]
+            dy = off[q - a, 1]
+            push(P.body[i], -fi * dx, -fi * dy, 0.0, pos, acc, jac)
+            if fg > 0.0:
+                push(P.body[g], fg * dx, fg * dy, 0.0, pos, acc, jac)
+        if U.spacing[c] <= 0.0:
+            continue
+        order = curve_order(param)
+        for q in range(order.shape[0] - 1):
+            i = U.members[a + order[q]]
+            j = U.members[a + order[q + 1]]
+            xi, yi, _, _ = pose(P, pos, yaw, i)
+            xj, yj, _, _ = pose(P, pos, yaw, j)
+            wi = inv_mass_of(P, i)
+            wj = inv_mass_of(P, j)
+            dx = xi - xj
+            dy = yi - yj
+            length = math.sqrt(dx * dx + dy * dy)
+            if wi + wj == 0.0:
+                continue
+            if length < EPS:
+                degen[K_CURVE] += 1
+                continue
+            f = k * (length - U.spacing[c]) / ((wi + wj) * length)
+            push(P.body[i], -wi * f * dx, -wi * f * dy, 0.0, pos, acc, jac)
+            push(P.body[j], wj * f * dx, wj * f * dy, 0.0, pos, acc, jac)
+
+
+@njit(cache=True)
+def residual_curve(U, P, pos, yaw, out):
+    for c in range(U.group.shape[0]):
+        a = U.start[c]
+        param = np.empty(U.start[c + 1] - a)
+        off = curve_offsets(U, P, pos, yaw, c, param)
+        total = 0.0
+        for q in range(off.shape[0]):
+            total += off[q, 0] ** 2 + off[q, 1] ** 2
+        if U.spacing[c] > 0.0:
+            order = curve_order(param)
+            for q in range(order.shape[0] - 1):
+                xi, yi, _, _ = pose(P, pos, yaw, U.members[a + order[q]])
+                xj, yj, _, _ = pose(P, pos, yaw, U.members[a + order[q + 1]])
+                total += (math.sqrt((xi - xj) ** 2 + (yi - yj) ** 2) - U.spacing[c]) ** 2
+        out[c] = math.sqrt(total)
+
+
+# ------------------------------------------------------------ layout boundary
+
+
+@njit(cache=True)
+def boundary_item(R, P, pos, yaw, i, project):
+    """Keep the footprint of item i inside the floor polygon (hard, Sec. 3.3.7).
+
+    Corners outside are moved to the nearest boundary point; reflex (inner) corners of
+    the polygon that poke into the box push it out along its axis of least
+    penetration, so L- and U-shaped floors are exact. Returns the squared violation
+    before projection.
+    """
+    b = P.body[i]
+    hd = 0.5 * P.size[i, 1]
+    hw = 0.5 * P.size[i, 0]
+    violation = 0.0
+    for rep in range(4):
+        x, y, _, a = pose(P, pos, yaw, i)
+        c = math.cos(a)
+        s = math.sin(a)
+        moved = False
+        for k in range(4):
+            lx = hd if (k == 1 or k == 2) else -hd
+            ly = hw if k >= 2 else -hw
+            cx = x + c * lx - s * ly
+            cy = y + s * lx + c * ly
+            if inside_polygon(R.polygon, cx, cy):
+                continue
+            qx, qy, e, dist = nearest_on_polygon(R.polygon, cx, cy)
+            if rep == 0:
+                violation += dist * dist
+            if project:
+                pos[b, 0] += qx - cx + INSIDE_M * R.edge_normal[e, 0]
+                pos[b, 1] += qy - cy + INSIDE_M * R.edge_normal[e, 1]
+                moved = True
+                break
+        if not project or not moved:
+            break
+    x, y, _, a = pose(P, pos, yaw, i)
+    c = math.cos(a)
+    s = math.sin(a)
+    for v in range(R.polygon.shape[0]):
+        if not R.reflex[v]:
+            continue
+        dx = R.polygon[v, 0] - x
+        dy = R.polygon[v, 1] - y
+        lx = c * dx + s * dy
+        ly = -s * dx + c * dy
+        px = hd - abs(lx)
+        py = hw - abs(ly)
+        if px <= 0.0 or py <= 0.0:
+            continue
+        violation += min(px, py) ** 2
+        if not project:
+            continue
+        if px < py:
+            sg = -1.0 if lx > 0.0 else 1.0
+            pos[b, 0] += sg * (px + INSIDE_M) * c
+            pos[b, 1] += sg * (px + INSIDE_M) * s
+        else:
+            sg = -1.0 if ly > 0.0 else 1.0
+            pos[b, 0] += -sg * (py + INSIDE_M) * s
+            pos[b, 1] += sg * (py + INSIDE_M) * c
+        x, y, _, a = pose(P, pos, yaw, i)
+    return violation
+
+
+@njit(cache=True)
+def project_boundary(R, P, pos, yaw):
+    for i in range(P.role.shape[0]):
+        if P.bounded[i] and P.inv_mass[P.body[i]] > 0.0:
+            boundary_item(R, P, pos, yaw, i, True)
+
+
+@njit(cache=True)
+def residual_boundary(R, P, pos, yaw, out):
+    for i in range(P.role.shape[0]):
+        out[i] = -math.sqrt(boundary_item(R, P, pos, yaw, i, False)) if P.bounded[i] else 0.0
+
+
+# ------------------------------------------------- collision and accessibility
+
+
+@njit(cache=True)
+def candidate_pairs(P, pos, yaw, cell_m, pad_m):
+    """Pairs (i < j) whose padded bounding boxes overlap, from a uniform spatial hash.
+
+    Items with accessibility are padded by their deepest clearance so the pair list
+    serves the accessibility constraints too. Each box is inserted in every cell it
+    covers; a pair is reported only from the first cell of its boxes' intersection,
+    so every pair appears once.
+    """
+    n = P.role.shape[0]
+    idx = np.empty(n, np.int64)
+    m = 0
+    for i in range(n):
+        if P.role[i] == OBSTACLE or (P.role[i] == ITEM and (P.collides[i] or P.access_depth[i].max() > 0.0)):
+            idx[m] = i
+            m += 1
+    lo = np.empty((m, 2))
+    hi = np.empty((m, 2))
+    for q in range(m):
+        i = idx[q]
+        x, y, _, a = pose(P, pos, yaw, i)
+        c = abs(math.cos(a))
+        s = abs(math.sin(a))
+        hd = 0.5 * P.size[i, 1] + P.access_depth[i].max()
+        hw = 0.5 * P.size[i, 0] + P.access_depth[i].max()
+        ex = c * hd + s * hw + pad_m
+        ey = s * hd + c * hw + pad_m
+        lo[q, 0] = x - ex
+        lo[q, 1] = y - ey
+        hi[q, 0] = x + ex
+        hi[q, 1] = y + ey
+    pairs = np.empty((max(16, 8 * m), 2), np.int64)
+    if m < 2:
+        return pairs[:0]
+    x0 = lo[:, 0].min()
+    y0 = lo[:, 1].min()
+    cell = cell_m
+    nx = int((hi[:, 0].max() - x0) / cell) + 1
+    ny = int((hi[:, 1].max() - y0) / cell) + 1
+    while nx * ny > 4 * m + 64:
+        cell *= 1.5
+        nx = int((hi[:, 0].max() - x0) / cell) + 1
+        ny = int((hi[:, 1].max() - y0) / cell) + 1
+    cx0 = np.empty(m, np.int64)
+    cy0 = np.empty(m, np.int64)
+    cx1 = np.empty(m, np.int64)
+    cy1 = np.empty(m, np.int64)
+    count = np.zeros(nx * ny + 1, np.int64)
+    for q in range(m):
+        cx0[q] = int((lo[q, 0] - x0) / cell)
+        cy0[q] = int((lo[q, 1] - y0) / cell)
+        cx1[q] = min(nx - 1, int((hi[q, 0] - x0) / cell))
+        cy1[q] = min(ny - 1, int((hi[q, 1] - y0) / cell))
+        for gy in range(cy0[q], cy1[q] + 1):
+            for gx in range(cx0[q], cx1[q] + 1):
+                count[gy * nx + gx + 1] += 1
+    for g in range(nx * ny):
+        count[g + 1] += count[g]
+    fill = count.copy()
+    cells = np.empty(count[nx * ny], np.int64)
+    for q in range(m):
+        for gy in range(cy0[q], cy1[q] + 1):
+            for gx in range(cx0[q], cx1[q] + 1):
+                g = gy * nx + gx
+                cells[fill[g]] = q
+                fill[g] += 1
+    npairs = 0
+    for g in range(nx * ny):
+        gx = g % nx
+        gy = g // nx
+        for u in range(count[g], count[g + 1]):
+            qa = cells[u]
+            for v in range(u + 1, count[g + 1]):
+                qb = cells[v]
+                if lo[qa, 0] > hi[qb, 0] or lo[qb, 0] > hi[qa, 0]:
+                    continue
+                if lo[qa, 1] > hi[qb, 1] or lo[qb, 1] > hi[qa, 1]:
+                    continue
+                if max(cx0[qa], cx0[qb]) != gx or max(cy0[qa], cy0[qb]) != gy:
+                    continue
+                i = idx[qa]
+                j = idx[qb]
+                if P.body[i] == P.body[j]:
+                    continue
+                if P.inv_mass[P.body[i]] == 0.0 and P.inv_mass[P.body[j]] == 0.0:
+                    continue
+                if npairs == pairs.shape[0]:
+                    grown = np.empty((2 * npairs, 2), np.int64)
+                    grown[:npairs] = pairs
+                    pairs = grown
+                pairs[npairs, 0] = min(i, j)
+                pairs[npairs, 1] = max(i, j)
+                npairs += 1
+    return pairs[:npairs]
+
+
+@njit(cache=True, inline="always")
+def z_overlap(P, zi, i, zj, j):
+    return abs(zi - zj) < 0.5 * (P.size[i, 2] + P.size[j, 2]) - Z_TOUCH_M
+
+
+@njit(cache=True)
+def collision_pair(P, R, pos, yaw, i, j, model, gap_m):
+    """Collision constraint value of a pair (<= 0 when colliding) and its direction.
+
+    BOX: exact penetration of the oriented footprints (SAT), pushed along the axis of
+    least penetration. SPHERE: the paper's bounding circles, Eq. (15), activated when
+    the boxes overlap. Returns (C, nx, ny, active) with n pointing from j to i.
+    """
+    if not (P.collides[i] and P.collides[j]):
+        return 0.0, 0.0, 0.0, False
+    xi, yi, zi, ai = pose(P, pos, yaw, i)
+    xj, yj, zj, aj = pose(P, pos, yaw, j)
+    if not z_overlap(P, zi, i, zj, j):
+        return 0.0, 0.0, 0.0, False
+    ci = math.cos(ai)
+    si = math.sin(ai)
+    cj = math.cos(aj)
+    sj = math.sin(aj)
+    depth, nx, ny = sat(
+        xi, yi, ci, si, 0.5 * P.size[i, 1], 0.5 * P.size[i, 0],
+        xj, yj, cj, sj, 0.5 * P.size[j, 1], 0.5 * P.size[j, 0],
+    )
+    if depth <= -gap_m:
+        return 0.0, 0.0, 0.0, False
+    if model == BOX:
+        return -(depth + gap_m), nx, ny, True
+    ri = 0.5 * math.sqrt(P.size[i, 0] ** 2 + P.size[i, 1] ** 2)
+    rj = 0.5 * math.sqrt(P.size[j, 0] ** 2 + P.size[j, 1] ** 2)
+    dx = xi - xj
+    dy = yi - yj
+    dist = math.sqrt(dx * dx + dy * dy)
+    C = dist - (ri + rj)
+    if C >= 0.0:
+        return 0.0, 0.0, 0.0, False
+    if dist < EPS:
+        return C, nx, ny, True
+    return C, dx / dist, dy / dist, True
+
+
+@njit(cache=True)
+def wall_points_pair(P, R, pos, yaw, i, j, model, gap_m):
+    """Extra projection between the wall points of two colliding wall-bound items
+    (Sec. 3.3.9, Fig. 8b): they slide apart along the wall instead of off it."""
+    xi, yi, _, ai = pose(P, pos, yaw, i)
+    xj, yj, _, aj = pose(P, pos, yaw, j)
+    qxi, qyi, _, _ = nearest_on_polygon(R.polygon, xi, yi)
+    qxj, qyj, _, _ = nearest_on_polygon(R.polygon, xj, yj)
+    dx = qxi - qxj
+    dy = qyi - qyj
+    dist = math.sqrt(dx * dx + dy * dy)
+    if dist < EPS:
+        return 0.0, 0.0, 0.0, False
+    tx = dx / dist
+    ty = dy / dist
+    if model == BOX:
+        need = (
+            support(0.5 * P.size[i, 1], 0.5 * P.size[i, 0], math.cos(ai), math.sin(ai), tx, ty)
+            + support(0.5 * P.size[j, 1], 0.5 * P.size[j, 0], math.cos(aj), math.sin(aj), tx, ty)
+            + gap_m
+        )
+    else:
+        need = 0.5 * (
+            math.sqrt(P.size[i, 0] ** 2 + P.size[i, 1] ** 2) + math.sqrt(P.size[j, 0] ** 2 + P.size[j, 1] ** 2)
+        )
+    return dist - need, tx, ty, True
+
+
+@njit(cache=True)
+def project_collision(P, R, pairs, pos, yaw, acc, jac, k, model, gap_m, degen):
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        C, nx, ny, active = collision_pair(P, R, pos, yaw, i, j, model, gap_m)
+        if not active:
+            continue
+        wi = inv_mass_of(P, i)
+        wj = inv_mass_of(P, j)
+        f = k * C / (wi + wj)
+        push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, acc, jac)
+        push(P.body[j], wj * f * nx, wj * f * ny, 0.0, pos, acc, jac)
+        if P.wall_bound[i] and P.wall_bound[j]:
+            C2, tx, ty, ok = wall_points_pair(P, R, pos, yaw, i, j, model, gap_m)
+            if not ok:
+                degen[K_COLLISION] += 1
+            elif C2 < 0.0:
+                f = k * C2 / (wi + wj)
+                push(P.body[i], -wi * f * tx, -wi * f * ty, 0.0, pos, acc, jac)
+                push(P.body[j], wj * f * tx, wj * f * ty, 0.0, pos, acc, jac)
+
+
+@njit(cache=True)
+def residual_collision(P, R, pairs, pos, yaw, model, out):
+    for p in range(pairs.shape[0]):
+        C, _, _, active = collision_pair(P, R, pos, yaw, pairs[p, 0], pairs[p, 1], model, 0.0)
+        out[p] = C if active else 0.0
+
+
+@njit(cache=True)
+def access_side(P, pos, yaw, owner, side, other, model):
+    """Accessibility of side ``side`` of ``owner`` against item ``other`` (Eq. 14).
+
+    Active only when the other item's box intersects the access box. BOX: exact
+    penetration into the access box; SPHERE: the paper's ‖p_i − a_jk‖ − (b_i + ad_jk)
+    with b and ad the half diagonals. Returns (C, nx, ny, active), n from box to other.
+    """
+    depth_m = P.access_depth[owner, side]
+    if depth_m <= 0.0:
+        return 0.0, 0.0, 0.0, False
+    xo, yo, zo, ao = pose(P, pos, yaw, owner)
+    xi, yi, zi, ai = pose(P, pos, yaw, other)
+    if not z_overlap(P, zo, owner, zi, other):
+        return 0.0, 0.0, 0.0, False
+    co = math.cos(ao)
+    so = math.sin(ao)
+    hd = 0.5 * P.size[owner, 1]
+    hw = 0.5 * P.size[owner, 0]
+    if side == 0 or side == 2:
+        sgn = 1.0 if side == 2 else -1.0
+        lx = sgn * (hd + 0.5 * depth_m)
+        ly = 0.0
+        bhd = 0.5 * depth_m
+        bhw = hw
+    else:
+        sgn = 1.0 if side == 1 else -1.0
+        lx = 0.0
+        ly = sgn * (hw + 0.5 * depth_m)
+        bhd = hd
+        bhw = 0.5 * depth_m
+    ax = xo + co * lx - so * ly
+    ay = yo + so * lx + co * ly
+    ci = math.cos(ai)
+    si = math.sin(ai)
+    hdi = 0.5 * P.size[other, 1]
+    hwi = 0.5 * P.size[other, 0]
+    depth, nx, ny = sat(xi, yi, ci, si, hdi, hwi, ax, ay, co, so, bhd, bhw)
+    if depth <= 0.0:
+        return 0.0, 0.0, 0.0, False
+    if model == BOX:
+        return -depth, nx, ny, True
+    dx = xi - ax
+    dy = yi - ay
+    dist = math.sqrt(dx * dx + dy * dy)
+    C = dist - (math.sqrt(hdi * hdi + hwi * hwi) + math.sqrt(bhd * bhd + bhw * bhw))
+    if C >= 0.0:
+        return 0.0, 0.0, 0.0, False
+    if dist < EPS:
+        return C, nx, ny, True
+    return C, dx / dist, dy / dist, True
+
+
+@njit(cache=True, inline="always")
+def access_exempt(P, i, j):
+    """Members of one group (a table and its chairs) may sit in each other's access."""
+    return P.parent[i] >= 0 and P.parent[i] == P.parent[j]
+
+
+@njit(cache=True)
+def project_access(P, pairs, pos, yaw, acc, jac, k, model, degen):
+    for p in range(pairs.shape[0]):
+        for turn_ in range(2):
+            owner = pairs[p, turn_]
+            other = pairs[p, 1 - turn_]
+            if P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
+                continue
+            if access_exempt(P, owner, other):
+                continue
+            wo = inv_mass_of(P, owner)
+            wi = inv_mass_of(P, other)
+            if wo + wi == 0.0:
+                continue
+            for side in range(4):
+                C, nx, ny, active = access_side(P, pos, yaw, owner, side, other, model)
+                if not active:
+                    continue
+                f = k * C / (wo + wi)
+                push(P.body[other], -wi * f * nx, -wi * f * ny, 0.0, pos, acc, jac)
+                push(P.body[owner], wo * f * nx, wo * f * ny, 0.0, pos, acc, jac)
+
+
+@njit(cache=True)
+def residual_access(P, pairs, pos, yaw, model, out):
+    """Squared-sum violation of all access sides, per candidate pair."""
+    for p in range(pairs.shape[0]):
+        total = 0.0
+        for turn_ in range(2):
+            owner = pairs[p, turn_]
+            other = pairs[p, 1 - turn_]
+            if P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
+                continue
+            if access_exempt(P, owner, other):
+                continue
+            for side in range(4):
+                C, _, _, active = access_side(P, pos, yaw, owner, side, other, model)
+                if active:
+                    total += C * C
+        out[p] = -math.sqrt(total)
+
+
+# ------------------------------------------------------------------ energy, loop
+
+
+@njit(cache=True)
+def energy_terms(M, pos, yaw, pairs, model, weights):
+    """Weighted squared residual of each kind, Σ_j g_j C_j² (Eq. 1, before the root)."""
+    P, D, L, H, S, B, W, WO, O, ST, U, R = M
+    terms = np.zeros(N_KINDS)
+    out = np.empty(max(P.role.shape[0], pairs.shape[0], D.rest.shape[0], L.origin.shape[0],
+                       H.frame.shape[0], S.focal.shape[0], B.target.shape[0], W.item.shape[0],
+                       WO.item.shape[0], O.mode.shape[0], ST.k0.shape[0], U.group.shape[0], 1))
+    residual_distance(D, P, pos, yaw, out)
+    terms[K_DISTANCE] = (out[: D.rest.shape[0]] ** 2).sum()
+    residual_lane(L, P, pos, yaw, out)
+    terms[K_LANE] = (out[: L.origin.shape[0]] ** 2).sum()
+    residual_heat(H, P, pos, yaw, out)
+    terms[K_HEAT] = (out[: H.frame.shape[0]] ** 2).sum()
+    residual_symmetry(S, P, pos, yaw, out)
+    terms[K_SYMMETRY] = (out[: S.focal.shape[0]] ** 2).sum()
+    residual_balance(B, P, pos, yaw, out)
+    terms[K_BALANCE] = (out[: B.target.shape[0]] ** 2).sum()
+    residual_wall_distance(W, R, P, pos, yaw, out)
+    terms[K_WALL_DISTANCE] = (out[: W.item.shape[0]] ** 2).sum()
+    residual_wall_orientation(WO, R, P, pos, yaw, out)
+    terms[K_WALL_ORIENTATION] = (out[: WO.item.shape[0]] ** 2).sum()
+    residual_orientation(O, P, pos, yaw, out)
+    terms[K_ORIENTATION] = (out[: O.mode.shape[0]] ** 2).sum()
+    residual_stack(ST, P, pos, yaw, out)
+    terms[K_STACK] = (out[: ST.k0.shape[0]] ** 2).sum()
+    residual_curve(U, P, pos, yaw, out)
+    terms[K_CURVE] = (out[: U.group.shape[0]] ** 2).sum()
+    residual_boundary(R, P, pos, yaw, out)
+    terms[K_BOUNDARY] = (out[: P.role.shape[0]] ** 2).sum()
+    residual_collision(P, R, pairs, pos, yaw, model, out)
+    terms[K_COLLISION] = (out[: pairs.shape[0]] ** 2).sum()
+    residual_access(P, pairs, pos, yaw, model, out)
+    terms[K_ACCESS] = (out[: pairs.shape[0]] ** 2).sum()
+    for k in range(N_KINDS):
+        terms[k] *= weights[k]
+    return terms
+
+
+@njit(cache=True)
+def solve_loop(M, pos, yaw, max_iter, patience, tol, rate, jac, omega, order, model, k_collision,
+               k_access, gap_m, cell_m, pad_m, weights):
+    """Algorithm 1: project all constraints per iteration, keep the best layout.
+
+    Per iteration ``it`` (1-based) the interleaving row ``order[(it - 1) % 6]`` says
+    whether the soft ("others") and wall constraints are projected (thesis Table 5.1);
+    stacking, collision, accessibility and the layout boundary are projected every
+    iteration, the boundary last so every layout handed out is inside the floor.
+
+    The loop stops after ``max_iter`` iterations, or once the best energy has not
+    improved by more than the fraction ``tol`` for ``patience`` iterations.
+
+    Returns the best positions and yaws, the energy trace (trace[l] = energy before
+    iteration l + 1), the best iteration, the iterations run and degenerate counts.
+    """
+    P, D, L, H, S, B, W, WO, O, ST, U, R = M
+    n = pos.shape[0]
+    acc = np.zeros((n, 6))
+    degen = np.zeros(N_KINDS, np.int64)
+    trace = np.full(max_iter + 1, np.nan)
+    best_pos = pos.copy()
+    best_yaw = yaw.copy()
+    best_e = np.inf
+    best_it = 0
+    ref_e = np.inf
+    ref_it = 0
+    it = 0
+    while True:
+        pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
+        e = math.sqrt(energy_terms(M, pos, yaw, pairs, model, weights).sum())
+        trace[it] = e
+        if e < best_e:
+            best_e = e
+            best_it = it
+            best_pos[:] = pos
+            best_yaw[:] = yaw
+        if e < ref_e * (1.0 - tol):
+            ref_e = e
+            ref_it = it
+        if it >= max_iter or it - ref_it >= patience:
+            break
+        it += 1
+        row = (it - 1) % 6
+        others = order[row, 1]
+        if others:
+            project_distance(D, P, pos, yaw, acc, jac, it, rate, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+            project_lane(L, P, pos, yaw, acc, jac, it, rate, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+            project_heat(H, P, pos, yaw, acc, jac, it, rate, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+            project_symmetry(S, P, pos, yaw, acc, jac, it, rate, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+            project_balance(B, P, pos, yaw, acc, jac, it, rate, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+            project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+            project_curve(U, P, pos, yaw, acc, jac, it, rate, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+        if order[row, 0]:
+            project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+            project_wall_orientation(WO, R, P, pos, yaw, acc, jac, it, rate, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+        project_stack(ST, P, pos, yaw, acc, jac, it, rate, degen)
+        if jac:
+            flush(pos, yaw, acc, omega)
+        if order[row, 2]:
+            kc = stiffness(k_collision, GROW, it, rate)
+            project_collision(P, R, pairs, pos, yaw, acc, jac, kc, model, gap_m, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+            project_access(P, pairs, pos, yaw, acc, jac, k_access, model, degen)
+            if jac:
+                flush(pos, yaw, acc, omega)
+        project_boundary(R, P, pos, yaw)
+    return best_pos, best_yaw, trace[: it + 1], best_it, it, degen

@@ -1,0 +1,148 @@
+"""Floor-plane geometry shared by the solver, the metrics and the plots.
+
+Conventions (used everywhere in :mod:`layout`):
+
+* The floor frame is right-handed: x and y span the floor, z points up, meters.
+* An item's ``yaw_rad`` is the direction its *front* faces: ``(cos yaw, sin yaw)``.
+* Item sizes are ``(width, depth, height)``: depth runs along the facing direction,
+  width across it. In the item's local frame +x is front, +y is left.
+* Sides are numbered as in Weiss et al. (accessibility centers): 0 back, 1 left,
+  2 front, 3 right.
+* Polygons are ``(m, 2)`` arrays of vertices in meters, counter-clockwise, not closed
+  (the last vertex is not a copy of the first).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+SIDE_NAMES = ("back", "left", "front", "right")
+# Outward unit normal of each side in the item's local frame (x front, y left).
+SIDE_NORMALS = np.array([[-1.0, 0.0], [0.0, 1.0], [1.0, 0.0], [0.0, -1.0]])
+
+
+def box_corners(center_m, yaw_rad, width_m, depth_m):
+    """Corners of oriented footprint rectangles.
+
+    Parameters
+    ----------
+    center_m : (n, 2) float64
+        Footprint centers in meters.
+    yaw_rad : (n,) float64
+        Facing direction of each item.
+    width_m, depth_m : (n,) float64
+        Extent across and along the facing direction.
+
+    Returns
+    -------
+    corners_m : (n, 4, 2) float64
+        Counter-clockwise corners: back-right, front-right, front-left, back-left.
+    """
+    center_m = np.asarray(center_m, dtype=np.float64).reshape(-1, 2)
+    yaw_rad = np.asarray(yaw_rad, dtype=np.float64).reshape(-1)
+    hw = 0.5 * np.asarray(width_m, dtype=np.float64).reshape(-1)
+    hd = 0.5 * np.asarray(depth_m, dtype=np.float64).reshape(-1)
+    local = np.stack(
+        [
+            np.stack([-hd, -hw], axis=-1),
+            np.stack([hd, -hw], axis=-1),
+            np.stack([hd, hw], axis=-1),
+            np.stack([-hd, hw], axis=-1),
+        ],
+        axis=1,
+    )
+    c, s = np.cos(yaw_rad)[:, None], np.sin(yaw_rad)[:, None]
+    x = c * local[..., 0] - s * local[..., 1]
+    y = s * local[..., 0] + c * local[..., 1]
+    return np.stack([x, y], axis=-1) + center_m[:, None, :]
+
+
+def access_box_corners(center_m, yaw_rad, width_m, depth_m, access_depth_m):
+    """Corners of the accessibility boxes in front of each side of each item.
+
+    Parameters
+    ----------
+    center_m : (n, 2) float64
+    yaw_rad, width_m, depth_m : (n,) float64
+    access_depth_m : (n, 4) float64
+        Clearance depth in front of the back, left, front and right side; 0 = none.
+
+    Returns
+    -------
+    corners_m : (n, 4, 4, 2) float64
+        ``corners_m[i, k]`` is the rectangle of side ``k`` of item ``i`` (degenerate, of
+        zero depth, where ``access_depth_m[i, k] == 0``).
+    """
+    center_m = np.asarray(center_m, dtype=np.float64).reshape(-1, 2)
+    yaw_rad = np.asarray(yaw_rad, dtype=np.float64).reshape(-1)
+    w = np.asarray(width_m, dtype=np.float64).reshape(-1)
+    d = np.asarray(depth_m, dtype=np.float64).reshape(-1)
+    a = np.asarray(access_depth_m, dtype=np.float64).reshape(-1, 4)
+    c, s = np.cos(yaw_rad), np.sin(yaw_rad)
+    out = np.empty((len(w), 4, 4, 2))
+    for k in range(4):
+        nx, ny = SIDE_NORMALS[k]
+        # Along the normal the box spans from the face outwards by the access depth.
+        half_along_normal = 0.5 * np.where(nx != 0, d, w)
+        half_across = 0.5 * np.where(nx != 0, w, d)
+        offset = half_along_normal + 0.5 * a[:, k]
+        lx, ly = nx * offset, ny * offset
+        cx = center_m[:, 0] + c * lx - s * ly
+        cy = center_m[:, 1] + s * lx + c * ly
+        # The box's local "depth" axis is the side normal.
+        box_yaw = yaw_rad + np.arctan2(ny, nx)
+        out[:, k] = box_corners(np.stack([cx, cy], -1), box_yaw, 2 * half_across, a[:, k])
+    return out
+
+
+def polygon_area(polygon_m):
+    """Signed area (m²) of a polygon: positive when counter-clockwise."""
+    p = np.asarray(polygon_m, dtype=np.float64)
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def polygon_centroid(polygon_m):
+    """Area centroid (2,) of a simple polygon in meters."""
+    p = np.asarray(polygon_m, dtype=np.float64)
+    x, y = p[:, 0], p[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    a = 0.5 * cross.sum()
+    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6.0 * a)
+
+
+def segments_intersect(p1, p2, q1, q2) -> bool:
+    """Whether closed segments p1p2 and q1q2 touch or cross."""
+
+    def orient(a, b, c):
+        v = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        return 0 if abs(v) < 1e-12 else (1 if v > 0 else -1)
+
+    def on_segment(a, b, c):
+        return min(a[0], b[0]) - 1e-12 <= c[0] <= max(a[0], b[0]) + 1e-12 and min(
+            a[1], b[1]
+        ) - 1e-12 <= c[1] <= max(a[1], b[1]) + 1e-12
+
+    o1, o2 = orient(p1, p2, q1), orient(p1, p2, q2)
+    o3, o4 = orient(q1, q2, p1), orient(q1, q2, p2)
+    if o1 != o2 and o3 != o4:
+        return True
+    return (
+        (o1 == 0 and on_segment(p1, p2, q1))
+        or (o2 == 0 and on_segment(p1, p2, q2))
+        or (o3 == 0 and on_segment(q1, q2, p1))
+        or (o4 == 0 and on_segment(q1, q2, p2))
+    )
+
+
+def self_intersection(polygon_m):
+    """First pair of non-adjacent edges ``(a, b)`` that touch, or ``None`` if simple."""
+    p = np.asarray(polygon_m, dtype=np.float64)
+    m = len(p)
+    for a in range(m):
+        for b in range(a + 1, m):
+            if b == a + 1 or (a == 0 and b == m - 1):
+                continue
+            if segments_intersect(p[a], p[(a + 1) % m], p[b], p[(b + 1) % m]):
+                return a, b
+    return None

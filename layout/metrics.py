@@ -1,0 +1,468 @@
+"""Exact quality metrics of a furniture layout: overlaps, containment, clearances, paths.
+
+All functions follow the conventions of :mod:`layout.geometry` (floor frame in meters,
+polygons ``(m, 2)`` counter-clockwise and not closed, footprints ``(n, 4, 2)`` as
+returned by :func:`layout.geometry.box_corners`). Inputs are never modified.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import skimage.draw
+import skimage.measure
+import skimage.morphology
+
+from layout.geometry import polygon_area
+
+# Vertical intervals must overlap by more than this to count as a 3-D collision, so
+# that an item standing exactly on top of another does not collide with it.
+_Z_OVERLAP_TOL_M = 1e-6
+# Pairs clipped per NumPy batch in the narrow phase: bounds the temporaries to a few MB.
+_NARROW_CHUNK = 65536
+
+
+def _as_polygon(polygon_m, name, min_vertices=3):
+    p = np.asarray(polygon_m, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 2 or len(p) < min_vertices:
+        raise ValueError(f"{name} must have shape (m, 2) with m >= {min_vertices}, got {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError(f"{name} must be finite")
+    return p
+
+
+def _as_boxes(corners_m, name="corners_m"):
+    c = np.asarray(corners_m, dtype=np.float64)
+    if c.ndim != 3 or c.shape[1:] != (4, 2):
+        raise ValueError(f"{name} must have shape (n, 4, 2), got {c.shape}")
+    if not np.all(np.isfinite(c)):
+        raise ValueError(f"{name} must be finite")
+    return c
+
+
+def _as_flags(flags, n, name):
+    f = np.asarray(flags)
+    if f.shape != (n,):
+        raise ValueError(f"{name} must have shape ({n},), got {f.shape}")
+    return f.astype(bool)
+
+
+def _signed_areas(poly):
+    """Shoelace signed areas (P,) of polygons (P, M, 2).
+
+    Padding slots must repeat the first vertex: they add zero-length edges only.
+    """
+    x, y = poly[..., 0], poly[..., 1]
+    xn, yn = np.roll(x, -1, axis=1), np.roll(y, -1, axis=1)
+    return 0.5 * (x * yn - xn * y).sum(axis=1)
+
+
+def _ccw(poly):
+    """Copy of convex polygons (P, K, 2) with clockwise ones reversed."""
+    cw = _signed_areas(poly) < 0
+    out = poly.copy()
+    out[cw] = out[cw, ::-1]
+    return out
+
+
+def _clip_batch(subject, clip):
+    """Sutherland–Hodgman clipping of many polygons, each by its own convex polygon.
+
+    Parameters
+    ----------
+    subject : (P, M, 2) float64
+        Subject polygons; any orientation, may be non-convex.
+    clip : (P, K, 2) float64
+        Convex clip polygons, counter-clockwise.
+
+    Returns
+    -------
+    poly : (P, M', 2) float64
+        Clipped polygons, each padded after its last vertex with copies of its first
+        one (an empty result is a single repeated point). A non-convex subject may yield
+        zero-area bridge edges, which leave the signed area exact.
+    """
+    poly = subject
+    n_pairs, m = poly.shape[:2]
+    count = np.full(n_pairs, m)
+    rows = np.arange(n_pairs)
+    for k in range(clip.shape[1]):
+        if m == 0:
+            break
+        a = clip[:, k]
+        edge = clip[:, (k + 1) % clip.shape[1]] - a
+        valid = np.arange(m)[None, :] < count[:, None]
+        rel = poly - a[:, None, :]
+        # Cross product with the edge: >= 0 is inside (left of a counter-clockwise edge).
+        d = edge[:, None, 0] * rel[..., 1] - edge[:, None, 1] * rel[..., 0]
+        # Padding with the first vertex makes the slot after the last vertex close the ring.
+        d_next = np.roll(d, -1, axis=1)
+        p_next = np.roll(poly, -1, axis=1)
+        inside = d >= 0
+        crosses = valid & (inside != (d_next >= 0))
+        t = np.divide(d, d - d_next, out=np.zeros_like(d), where=crosses)
+        hit = poly + t[..., None] * (p_next - poly)
+        # Vertex i then the crossing on edge i -> i+1 keeps the boundary order.
+        out = np.stack([poly, hit], axis=2).reshape(n_pairs, 2 * m, 2)
+        keep = np.stack([valid & inside, crosses], axis=2).reshape(n_pairs, 2 * m)
+        count = keep.sum(axis=1)
+        m = int(count.max())
+        slot = np.cumsum(keep, axis=1) - 1
+        r, s = np.nonzero(keep)
+        poly = np.empty((n_pairs, m, 2))
+        poly[:] = out[rows, np.argmax(keep, axis=1)][:, None, :]
+        poly[r, slot[r, s]] = out[r, s]
+    return poly
+
+
+def _pairwise_intersection_area(subject, clip):
+    """Areas (P,) of ``subject[p] ∩ clip[p]``: subjects (P, M, 2) simple, clips convex."""
+    if len(subject) == 0:
+        return np.zeros(0)
+    return np.abs(_signed_areas(_clip_batch(subject, _ccw(clip))))
+
+
+def _clip_one(subject, clip):
+    """Sutherland–Hodgman on vertex lists: ``subject`` any simple, ``clip`` convex CCW.
+
+    Plain Python: for a single pair it is an order of magnitude faster than the NumPy
+    batch, whose per-call overhead dominates at this size.
+    """
+    out = subject
+    for (ax, ay), (bx, by) in zip(clip, clip[1:] + clip[:1]):
+        if not out:
+            break
+        ex, ey = bx - ax, by - ay
+        src, out = out, []
+        px, py = src[-1]
+        dp = ex * (py - ay) - ey * (px - ax)
+        for qx, qy in src:
+            dq = ex * (qy - ay) - ey * (qx - ax)
+            if (dq >= 0) != (dp >= 0):
+                t = dp / (dp - dq)
+                out.append((px + t * (qx - px), py + t * (qy - py)))
+            if dq >= 0:
+                out.append((qx, qy))
+            px, py, dp = qx, qy, dq
+    return out
+
+
+def _ccw_list(polygon):
+    """Vertex list of a polygon array, reversed if clockwise."""
+    pts = [tuple(v) for v in polygon.tolist()]
+    return pts[::-1] if polygon_area(polygon) < 0 else pts
+
+
+def clip_polygon_by_convex(subject_m, clip_m):
+    """Part of a polygon inside a convex polygon.
+
+    Parameters
+    ----------
+    subject_m : (m, 2) array_like
+        Simple polygon in meters, any orientation, may be non-convex (an L-shaped floor).
+    clip_m : (k, 2) array_like
+        Convex polygon in meters, any orientation.
+
+    Returns
+    -------
+    clipped_m : (p, 2) float64
+        The intersection, in the subject's orientation; ``(0, 2)`` when empty. When the
+        subject is non-convex and the intersection has several pieces, they are joined by
+        zero-area bridge edges along the clip boundary, so its signed area is still exact.
+    """
+    s = _as_polygon(subject_m, "subject_m")
+    c = _as_polygon(clip_m, "clip_m")
+    out = _clip_one([tuple(v) for v in s.tolist()], _ccw_list(c))
+    if len(out) < 3:
+        return np.zeros((0, 2))
+    return np.array(out, dtype=np.float64)
+
+
+def convex_intersection_area(a_m, b_m):
+    """Area of the intersection of two convex polygons.
+
+    Parameters
+    ----------
+    a_m, b_m : (k, 2) array_like
+        Convex polygons in meters, any orientation (e.g. footprints, shape (4, 2)).
+
+    Returns
+    -------
+    area_m2 : float
+        Intersection area in m²; 0 when they are disjoint or only touch.
+    """
+    a = _as_polygon(a_m, "a_m")
+    b = _as_polygon(b_m, "b_m")
+    out = _clip_one([tuple(v) for v in a.tolist()], _ccw_list(b))
+    return abs(0.5 * sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(out, out[1:] + out[:1])))
+
+
+def box_overlaps(corners_m, z_range_m, collides, min_area_m2=1e-6):
+    """All pairs of colliding items whose boxes interpenetrate.
+
+    A sort-and-sweep over the footprints' x extents (then y and z interval tests) finds
+    candidates; their footprints are intersected exactly.
+
+    Parameters
+    ----------
+    corners_m : (n, 4, 2) array_like
+        Footprint corners in meters.
+    z_range_m : (n, 2) array_like
+        Bottom and top height of each item in meters.
+    collides : (n,) array_like of bool
+        Items taking part in collisions (rugs and lamps on tables may not).
+    min_area_m2 : float
+        Footprint intersections of at most this area (m²) are contacts, not overlaps.
+
+    Returns
+    -------
+    pairs : (k, 2) int64
+        Item indices ``i < j``, sorted lexicographically.
+    area_m2 : (k,) float64
+        Footprint intersection area of each pair in m².
+    """
+    corners = _as_boxes(corners_m)
+    n = len(corners)
+    z = np.asarray(z_range_m, dtype=np.float64)
+    if z.shape != (n, 2):
+        raise ValueError(f"z_range_m must have shape ({n}, 2), got {z.shape}")
+    active = np.flatnonzero(_as_flags(collides, n, "collides"))
+    lo = corners[active].min(axis=1)
+    hi = corners[active].max(axis=1)
+    order = np.argsort(lo[:, 0], kind="stable")
+    lo, hi, ids = lo[order], hi[order], active[order]
+    # Sorted by x-min, box i can only meet the boxes after it that start before it ends.
+    end = np.searchsorted(lo[:, 0], hi[:, 0], side="left")
+    n_cand = np.maximum(end - np.arange(len(ids)) - 1, 0)
+    first = np.repeat(np.arange(len(ids)), n_cand)
+    start = np.cumsum(n_cand) - n_cand
+    second = first + 1 + np.arange(n_cand.sum()) - np.repeat(start, n_cand)
+    keep = (lo[first, 1] < hi[second, 1]) & (lo[second, 1] < hi[first, 1])
+    first, second = ids[first[keep]], ids[second[keep]]
+    z_overlap = np.minimum(z[first, 1], z[second, 1]) - np.maximum(z[first, 0], z[second, 0])
+    keep = z_overlap > _Z_OVERLAP_TOL_M
+    first, second = first[keep], second[keep]
+
+    area = np.empty(len(first))
+    for s in range(0, len(first), _NARROW_CHUNK):
+        sl = slice(s, s + _NARROW_CHUNK)
+        area[sl] = _pairwise_intersection_area(corners[first[sl]], corners[second[sl]])
+    keep = area > min_area_m2
+    pairs = np.sort(np.stack([first[keep], second[keep]], axis=1), axis=1).astype(np.int64)
+    area = area[keep]
+    order = np.lexsort((pairs[:, 1], pairs[:, 0]))
+    return pairs[order], area[order]
+
+
+def area_outside(polygon_m, corners_m):
+    """Area of each footprint lying outside the floor.
+
+    Parameters
+    ----------
+    polygon_m : (m, 2) array_like
+        Floor polygon in meters, possibly non-convex.
+    corners_m : (n, 4, 2) array_like
+        Footprint corners in meters.
+
+    Returns
+    -------
+    area_m2 : (n,) float64
+        ``area(box) - area(floor ∩ box)`` in m², exact up to rounding.
+    """
+    floor = _as_polygon(polygon_m, "polygon_m")
+    corners = _as_boxes(corners_m)
+    n = len(corners)
+    box_area = np.abs(_signed_areas(corners))
+    inside = _pairwise_intersection_area(np.broadcast_to(floor, (n,) + floor.shape), corners)
+    return np.maximum(box_area - inside, 0.0)
+
+
+def door_clearance(door_zones_m, corners_m, blocks):
+    """How much blocking furniture covers each door's clearance zone.
+
+    Parameters
+    ----------
+    door_zones_m : (d, 4, 2) array_like
+        Convex clearance zone of each door in meters.
+    corners_m : (n, 4, 2) array_like
+        Footprint corners in meters.
+    blocks : (n,) array_like of bool
+        Items that obstruct walking (a rug does not).
+
+    Returns
+    -------
+    area_m2 : (d,) float64
+        Summed overlap area in m² of blocking footprints with each zone; 0 means clear.
+    """
+    zones = _as_boxes(door_zones_m, "door_zones_m")
+    corners = _as_boxes(corners_m)
+    blocking = corners[_as_flags(blocks, len(corners), "blocks")]
+    d, b = len(zones), len(blocking)
+    area = _pairwise_intersection_area(
+        np.repeat(blocking[None], d, axis=0).reshape(d * b, 4, 2),
+        np.repeat(zones, b, axis=0),
+    )
+    return area.reshape(d, b).sum(axis=1)
+
+
+@dataclass(frozen=True, eq=False)
+class Traversability:
+    """Result of :func:`traversability`.
+
+    Attributes
+    ----------
+    ok : bool
+        Every door and every access side touch one common passable component.
+    n_components : int
+        Number of 8-connected components of ``passable``.
+    unreachable : tuple of (int, int)
+        ``(item, side)`` access sides not touching the main component (the one touched
+        by the most doors, ties broken by the most access sides).
+    blocked_doors : tuple of int
+        Doors not touching the main component.
+    passable : (H, W) bool
+        Where a person can stand; row ``r``, column ``c`` covers
+        ``x in origin_m[0] + resolution_m * [c, c + 1]`` and
+        ``y in origin_m[1] + resolution_m * [r, r + 1]`` (draw with ``origin="lower"``).
+    origin_m : (2,) float64
+        World (x, y) in meters of the outer corner of pixel (0, 0).
+    resolution_m : float
+        Pixel side in meters.
+    """
+
+    ok: bool
+    n_components: int
+    unreachable: tuple
+    blocked_doors: tuple
+    passable: np.ndarray
+    origin_m: np.ndarray
+    resolution_m: float
+
+
+class _Raster:
+    """Fills world polygons into a pixel grid whose row axis is y and column axis is x."""
+
+    def __init__(self, origin_m, resolution_m, shape):
+        self.origin_m = origin_m
+        self.resolution_m = resolution_m
+        self.shape = shape
+
+    def pixels(self, polygon_m):
+        """Row and column indices of the pixels whose centers lie in ``polygon_m``."""
+        col = (polygon_m[:, 0] - self.origin_m[0]) / self.resolution_m - 0.5
+        row = (polygon_m[:, 1] - self.origin_m[1]) / self.resolution_m - 0.5
+        rr, cc = skimage.draw.polygon(row, col, self.shape)
+        if len(rr) == 0:
+            # Slivers thinner than a pixel cover no center; keep the pixels they lie in.
+            pts = np.vstack([polygon_m, polygon_m.mean(axis=0, keepdims=True)])
+            rc = np.floor((pts[:, ::-1] - self.origin_m[::-1]) / self.resolution_m).astype(int)
+            inside = np.all((rc >= 0) & (rc < self.shape), axis=1)
+            rr, cc = rc[inside, 0], rc[inside, 1]
+        return rr, cc
+
+    def mask(self, polygon_m):
+        m = np.zeros(self.shape, dtype=bool)
+        m[self.pixels(polygon_m)] = True
+        return m
+
+
+def traversability(
+    polygon_m,
+    corners_m,
+    blocks,
+    access_corners_m,
+    access_depth_m,
+    door_zones_m,
+    resolution_m=0.05,
+    radius_m=0.25,
+):
+    """Whether people can walk from the doors to every side that must stay accessible.
+
+    Follows Henderson et al. (Sec. 4): the floor minus blocking footprints is eroded by
+    a disk the size of a person, the free part of the door zones is added back (people
+    enter there), and the doors and all access zones must reach one common component.
+
+    Parameters
+    ----------
+    polygon_m : (m, 2) array_like
+        Floor polygon in meters, possibly non-convex.
+    corners_m : (n, 4, 2) array_like
+        Footprint corners in meters.
+    blocks : (n,) array_like of bool
+        Items that obstruct walking.
+    access_corners_m : (n, 4, 4, 2) array_like
+        Access rectangles from :func:`layout.geometry.access_box_corners`.
+    access_depth_m : (n, 4) array_like
+        Access depth per side (back, left, front, right) in meters; 0 = no access needed.
+    door_zones_m : (d, 4, 2) array_like
+        Clearance zone of each door inside the room, in meters.
+    resolution_m : float
+        Pixel side in meters.
+    radius_m : float
+        Half the width of a walking person in meters.
+
+    Returns
+    -------
+    Traversability
+    """
+    floor = _as_polygon(polygon_m, "polygon_m")
+    corners = _as_boxes(corners_m)
+    n = len(corners)
+    blocks = _as_flags(blocks, n, "blocks")
+    access = np.asarray(access_corners_m, dtype=np.float64)
+    if access.shape != (n, 4, 4, 2):
+        raise ValueError(f"access_corners_m must have shape ({n}, 4, 4, 2), got {access.shape}")
+    depth = np.asarray(access_depth_m, dtype=np.float64)
+    if depth.shape != (n, 4):
+        raise ValueError(f"access_depth_m must have shape ({n}, 4), got {depth.shape}")
+    doors = _as_boxes(np.asarray(door_zones_m, dtype=np.float64).reshape(-1, 4, 2), "door_zones_m")
+    resolution_m = float(resolution_m)
+    radius_m = float(radius_m)
+    if not resolution_m > 0 or not radius_m >= 0:
+        raise ValueError("resolution_m must be > 0 and radius_m >= 0")
+
+    # One blank pixel around the floor so that erosion sees the walls on every side.
+    origin = floor.min(axis=0) - resolution_m
+    shape = tuple(
+        int(v) for v in np.ceil((floor.max(axis=0) - origin) / resolution_m)[::-1] + 1
+    )
+    raster = _Raster(origin, resolution_m, shape)
+    free = raster.mask(floor)
+    for box in corners[blocks]:
+        free[raster.pixels(box)] = False
+    disk = skimage.morphology.disk(int(round(radius_m / resolution_m)))
+    passable = skimage.morphology.erosion(free, disk, mode="constant", cval=0.0)
+    door_masks = [raster.mask(zone) & free for zone in doors]
+    for m in door_masks:
+        passable |= m
+    labels, n_components = skimage.measure.label(
+        passable, connectivity=2, background=0, return_num=True
+    )
+
+    def touched(where):
+        return set(np.unique(labels[where]).tolist()) - {0}
+
+    door_touch = [touched(m) for m in door_masks]
+    sides = [(int(i), int(k)) for i, k in zip(*np.nonzero(depth > 0))]
+    side_touch = [touched(raster.pixels(access[i, k])) for i, k in sides]
+    n_doors = np.zeros(n_components + 1, dtype=np.int64)
+    n_sides = np.zeros(n_components + 1, dtype=np.int64)
+    for t in door_touch:
+        n_doors[list(t)] += 1
+    for t in side_touch:
+        n_sides[list(t)] += 1
+    # The background (label 0) is in no touched set, yet with its low label it would
+    # win a tie at zero counts.
+    n_doors[0] = n_sides[0] = -1
+    main = int(np.lexsort((-np.arange(n_components + 1), n_sides, n_doors))[-1])
+    unreachable = tuple(s for s, t in zip(sides, side_touch) if main not in t)
+    blocked = tuple(j for j, t in enumerate(door_touch) if main not in t)
+    return Traversability(
+        ok=not unreachable and not blocked,
+        n_components=int(n_components),
+        unreachable=unreachable,
+        blocked_doors=blocked,
+        passable=passable,
+        origin_m=origin,
+        resolution_m=resolution_m,
+    )

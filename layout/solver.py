@@ -1,0 +1,273 @@
+"""The position-based layout solver (Weiss et al. 2018, Algorithm 1).
+
+>>> from layout import LayoutBuilder, Solver
+>>> b = LayoutBuilder([[0, 0], [4, 0], [4, 3], [0, 3]])
+>>> bed = b.add_item("bed", (1.6, 2.1, 0.5))
+>>> b.against_wall(bed)
+>>> layout = Solver().solve(b.finalize(), seed=0)
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _codes as codes
+from . import _kernels as K
+from .errors import LayoutError
+from .geometry import box_corners
+from .model import Model, State
+
+# Thesis Table 5.1: which constraints are projected in each of six interleaved
+# iterations (columns: wall, others, collision).
+TABLE_5_1 = (
+    (False, False, True),
+    (False, True, True),
+    (True, False, True),
+    (False, True, True),
+    (False, False, True),
+    (True, True, True),
+)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """One solved layout.
+
+    Attributes
+    ----------
+    model : the problem it solves.
+    position_m : (n, 3) float64 — center of every particle (items, groups, obstacles).
+    yaw_rad : (n,) float64 — facing direction, wrapped to [-pi, pi).
+    energy : float — E of Eq. (1) for this layout.
+    energy_by_kind : dict of kind -> g_j Σ C_j² (the squared terms before the root).
+    trace : (t,) float64 — energy before each iteration.
+    iterations, best_iteration : iterations run, and the one whose state was returned.
+    seed : the seed of the random start.
+    time_s : wall time of the solve (JIT compile excluded once warm).
+    degenerate : dict of kind -> projections skipped for a zero-length direction.
+    """
+
+    model: Model
+    position_m: np.ndarray
+    yaw_rad: np.ndarray
+    energy: float
+    energy_by_kind: dict
+    trace: np.ndarray
+    iterations: int
+    best_iteration: int
+    seed: int | None
+    time_s: float
+    degenerate: dict = field(default_factory=dict)
+
+    @property
+    def items(self) -> np.ndarray:
+        return self.model.items
+
+    def corners_m(self, indices=None) -> np.ndarray:
+        """(k, 4, 2) footprint corners of the given particles (default: the items)."""
+        idx = self.items if indices is None else np.asarray(indices)
+        size = self.model.particle_size_m[idx]
+        return box_corners(self.position_m[idx, :2], self.yaw_rad[idx], size[:, 0], size[:, 1])
+
+    def to_dict(self) -> dict:
+        """JSON-ready description: room, doors, windows and items (meters, radians)."""
+        m = self.model
+        return {
+            "room": {
+                "polygon_m": m.floor_polygon_m.tolist(),
+                "height_m": m.wall_height_m,
+                "doors_m": m.door_segments_m.tolist(),
+                "windows_m": m.window_segments_m.tolist(),
+            },
+            "items": [
+                {
+                    "id": m.names[i],
+                    "kind": m.kinds[i],
+                    "position_m": [round(float(v), 6) for v in self.position_m[i]],
+                    "yaw_rad": round(float(self.yaw_rad[i]), 6),
+                    "size_m": [float(v) for v in m.particle_size_m[i]],
+                    "group": m.names[m.particle_parent[i]] if m.particle_parent[i] >= 0 else None,
+                }
+                for i in self.items
+            ],
+            "energy": self.energy,
+            "seed": self.seed,
+            "iterations": self.iterations,
+        }
+
+
+def _random_inside(polygon_m, k, rng):
+    """k points uniformly distributed inside a simple polygon (rejection sampling)."""
+    lo, hi = polygon_m.min(0), polygon_m.max(0)
+    out = np.empty((0, 2))
+    while len(out) < k:
+        cand = rng.uniform(lo, hi, size=(max(16, 2 * (k - len(out))), 2))
+        keep = np.array([K.inside_polygon(polygon_m, x, y) for x, y in cand], bool)
+        out = np.concatenate([out, cand[keep]])
+    return out[:k]
+
+
+def initial_state(model: Model, rng: np.random.Generator) -> State:
+    """Uniformly random start (Algorithm 1, line 2) for every free body.
+
+    Particles with a start pose in the model keep it; rigid-group members follow their
+    group; stacked items start on their base.
+    """
+    n = model.n
+    pos = model.particle_init_position_m.copy()
+    yaw = model.particle_init_yaw_rad.copy()
+    free = model.particle_body == np.arange(n)
+    need_xy = free & np.isnan(pos[:, 0])
+    pos[need_xy, :2] = _random_inside(model.floor_polygon_m, int(need_xy.sum()), rng)
+    need_yaw = free & np.isnan(yaw)
+    yaw[need_yaw] = rng.uniform(-np.pi, np.pi, size=int(need_yaw.sum()))
+    pos[~free] = 0.0
+    yaw[~free] = 0.0
+    P = model.packed()[0]
+    K.sync_members(P, pos, yaw)
+    for base, top in model.stack_pairs:
+        if model.particle_body[top] == top:
+            pos[top, :2] = pos[base, :2]
+            pos[top, 2] = pos[base, 2] + 0.5 * (model.particle_size_m[base, 2] + model.particle_size_m[top, 2])
+    return State(pos, yaw)
+
+
+@dataclass(frozen=True)
+class Solver:
+    """Settings of the position-based solver.
+
+    Parameters
+    ----------
+    max_iterations : hard cap on iterations.
+    patience : stop when the best energy has not improved (by more than the fraction
+        ``tolerance``) for this many iterations.
+    tolerance : relative improvement that counts for ``patience``.
+    rate : M of the stiffness schedule k_l = 1 − (1 − k0)^(M/l) (and l/M for GROW).
+    method : "gauss-seidel" (each correction visible at once) or "jacobi" (batch
+        average per constraint kind, over-relaxed by ``omega``).
+    omega : Jacobi over-relaxation (1.2 after Macklin et al.).
+    collision : "box" — exact oriented boxes, pushed along the axis of least
+        penetration; or "sphere" — the paper's bounding circles.
+    collision_stiffness : k0 of the growing collision stiffness.
+    access_stiffness : constant stiffness of the accessibility constraints.
+    gap_m : clearance the collision projection aims for, so touching boxes part.
+    order : six rows of (wall, others, collision) flags, thesis Table 5.1.
+    """
+
+    max_iterations: int = 1000
+    patience: int = 50
+    tolerance: float = 1e-3
+    rate: float = 30.0
+    method: str = "gauss-seidel"
+    omega: float = 1.2
+    collision: str = "box"
+    collision_stiffness: float = 0.5
+    access_stiffness: float = 0.5
+    gap_m: float = 0.002
+    order: tuple = TABLE_5_1
+
+    def __post_init__(self):
+        if self.method not in ("gauss-seidel", "jacobi"):
+            raise LayoutError(f"solver.method: {self.method!r} is not 'gauss-seidel' or 'jacobi'")
+        if self.collision not in codes.COLLISION_NAMES:
+            raise LayoutError(f"solver.collision: {self.collision!r} is not 'box' or 'sphere'")
+        if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
+            raise LayoutError(f"solver.max_iterations: {self.max_iterations!r} must be an integer >= 1")
+        if not (isinstance(self.patience, int) and self.patience >= 1):
+            raise LayoutError(f"solver.patience: {self.patience!r} must be an integer >= 1")
+        if not self.rate >= 1.0:
+            raise LayoutError(f"solver.rate: {self.rate!r} must be >= 1 (the paper's M)")
+        for name in ("collision_stiffness", "access_stiffness"):
+            if not 0.0 < getattr(self, name) <= 1.0:
+                raise LayoutError(f"solver.{name}: {getattr(self, name)!r} must lie in (0, 1]")
+
+    def solve(self, model: Model, seed=None, state: State | None = None) -> Layout:
+        """Solve from a random start drawn with ``seed`` (or from ``state``)."""
+        rng = np.random.default_rng(seed)
+        start = initial_state(model, rng) if state is None else state.copy()
+        t0 = time.perf_counter()
+        best_pos, best_yaw, trace, best_it, iters, degen = K.solve_loop(
+            model.packed(),
+            np.ascontiguousarray(start.position_m, dtype=np.float64),
+            np.ascontiguousarray(start.yaw_rad, dtype=np.float64),
+            self.max_iterations,
+            self.patience,
+            float(self.tolerance),
+            float(self.rate),
+            self.method == "jacobi",
+            float(self.omega),
+            np.array(self.order, dtype=np.bool_),
+            codes.COLLISION_NAMES[self.collision],
+            float(self.collision_stiffness),
+            float(self.access_stiffness),
+            float(self.gap_m),
+            _cell_size(model),
+            0.05,
+            np.array(codes.ENERGY_WEIGHTS),
+        )
+        elapsed = time.perf_counter() - t0
+        K.sync_members(model.packed()[0], best_pos, best_yaw)
+        terms = energy_terms(model, State(best_pos, best_yaw), self.collision)
+        return Layout(
+            model=model,
+            position_m=best_pos,
+            yaw_rad=(best_yaw + np.pi) % (2.0 * np.pi) - np.pi,
+            energy=float(np.sqrt(sum(terms.values()))),
+            energy_by_kind=terms,
+            trace=trace,
+            iterations=int(iters),
+            best_iteration=int(best_it),
+            seed=None if seed is None else int(seed),
+            time_s=elapsed,
+            degenerate={k: int(v) for k, v in zip(codes.KINDS, degen) if v},
+        )
+
+    def suggest(self, model: Model, n: int, seed: int = 0) -> list[Layout]:
+        """``n`` layouts from ``n`` random starts; start k uses seed ``seed + k``."""
+        if not (isinstance(n, int) and n >= 1):
+            raise LayoutError(f"suggestions: {n!r} must be an integer >= 1")
+        return [self.solve(model, seed=seed + k) for k in range(n)]
+
+
+def _cell_size(model: Model) -> float:
+    """Spatial-hash cell: about two typical padded footprints."""
+    items = model.items
+    size = model.particle_size_m[items]
+    reach = 0.5 * np.hypot(size[:, 0], size[:, 1]) + model.particle_access_depth_m[items].max(1)
+    return float(max(0.25, 2.0 * np.median(reach)))
+
+
+def energy_terms(model: Model, state: State, collision: str = "box") -> dict:
+    """g_j Σ C_j² per constraint kind for a state (E = sqrt of the sum)."""
+    P = model.packed()[0]
+    pairs = K.candidate_pairs(P, state.position_m, state.yaw_rad, _cell_size(model), 0.05)
+    terms = K.energy_terms(model.packed(), state.position_m, state.yaw_rad, pairs,
+                           codes.COLLISION_NAMES[collision], np.array(codes.ENERGY_WEIGHTS))
+    return {k: float(v) for k, v in zip(codes.KINDS, terms)}
+
+
+def diversity(layouts: list[Layout]) -> float:
+    """How different suggestions are: mean over pairs of layouts of the symmetric
+    chamfer distance (m) between item centers of the same kind (so swapping two
+    identical chairs counts as no change)."""
+    if len(layouts) < 2:
+        return 0.0
+    m = layouts[0].model
+    items = m.items
+    kinds = np.array([m.kinds[i] for i in items])
+    total, count = 0.0, 0
+    for a in range(len(layouts)):
+        for b in range(a + 1, len(layouts)):
+            pa = layouts[a].position_m[items, :2]
+            pb = layouts[b].position_m[items, :2]
+            dists = []
+            for kind in np.unique(kinds):
+                sel = kinds == kind
+                d = np.linalg.norm(pa[sel][:, None] - pb[sel][None], axis=-1)
+                dists.extend(d.min(1))
+                dists.extend(d.min(0))
+            total += float(np.mean(dists))
+            count += 1
+    return total / count
