@@ -1,0 +1,457 @@
+"""Each constraint kind on a hand-computed case, and its gradient against finite differences.
+
+The generic check: for a scalar constraint C with k = 1, PBD moves particle i by
+Δp_i = −C w_i ∇_i C / Σ_j w_j ‖∇_j C‖² (Eqs. 2–3). We measure ∇C by central
+differences of the residual kernel and compare with what the projection kernel did.
+"""
+import math
+
+import numpy as np
+import pytest
+
+from layout import LayoutBuilder
+from layout import _codes as codes
+from layout import _kernels as K
+
+ROOM = [[0, 0], [10, 0], [10, 10], [0, 10]]
+L_ROOM = [[0, 0], [6, 0], [6, 3], [3, 3], [3, 6], [0, 6]]
+
+
+def _state(model, xy, yaw=None, z=None):
+    n = model.n
+    pos = np.zeros((n, 3))
+    pos[:, :2] = xy
+    pos[:, 2] = 0.5 * model.particle_size_m[:, 2] if z is None else z
+    yaw = np.zeros(n) if yaw is None else np.asarray(yaw, dtype=np.float64)
+    return pos, yaw.copy()
+
+
+def _project(kernel, arrays, model, pos, yaw, *extra):
+    P = model.packed()[0]
+    acc = np.zeros((model.n, 6))
+    degen = np.zeros(len(codes.KINDS), np.int64)
+    if extra:
+        kernel(arrays, *extra, P, pos, yaw, acc, False, 1, 30.0, degen)
+    else:
+        kernel(arrays, P, pos, yaw, acc, False, 1, 30.0, degen)
+    return degen
+
+
+def _fd_gradient(residual, pos, movable, h=1e-6):
+    """Central differences of a scalar residual w.r.t. x and y of each movable particle."""
+    grad = np.zeros((len(pos), 2))
+    for i in movable:
+        for a in range(2):
+            p1, p2 = pos.copy(), pos.copy()
+            p1[i, a] += h
+            p2[i, a] -= h
+            grad[i, a] = (residual(p1) - residual(p2)) / (2 * h)
+    return grad
+
+
+def _check_pbd_step(model, residual, before, after, movable):
+    """The kernel's step equals −C w ∇C / Σ w ‖∇C‖² with ∇C from finite differences."""
+    C = residual(before)
+    g = _fd_gradient(residual, before, movable)
+    w = model.particle_inv_mass
+    denom = sum(w[i] * g[i] @ g[i] for i in movable)
+    for i in movable:
+        expected = -C * w[i] * g[i] / denom
+        np.testing.assert_allclose(after[i, :2] - before[i, :2], expected, atol=1e-6)
+    assert abs(residual(after)) < abs(C)
+
+
+def _scalar(residual_kernel, arrays, model, yaw, index=0, *extra):
+    P = model.packed()[0]
+
+    def f(pos):
+        out = np.zeros(64)
+        if extra:
+            residual_kernel(arrays, *extra, P, pos, yaw, out)
+        else:
+            residual_kernel(arrays, P, pos, yaw, out)
+        return out[index]
+
+    return f
+
+
+def test_distance_hand_case_and_gradient():
+    b = LayoutBuilder(ROOM)
+    a = b.add_item("a", (1, 1, 1))  # mass 1
+    c = b.add_item("c", (1, 1, 0.5))  # mass 0.5: moves twice as far
+    b.distance(a, c, 1.0, k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, [[2, 5], [5, 5]])
+    before = pos.copy()
+    _project(K.project_distance, m.packed()[1], m, pos, yaw)
+    # C = 3 - 1 = 2; w = (1, 2): a moves 2 * 1/3 right, c moves 2 * 2/3 left.
+    np.testing.assert_allclose(pos[:, :2], [[2 + 2 / 3, 5], [5 - 4 / 3, 5]])
+    _check_pbd_step(m, _scalar(K.residual_distance, m.packed()[1], m, yaw), before, pos, [a, c])
+
+
+@pytest.mark.parametrize("mode,start,moves", [("min", 3.0, False), ("min", 0.5, True), ("max", 0.5, False), ("max", 3.0, True)])
+def test_distance_inequalities(mode, start, moves):
+    b = LayoutBuilder(ROOM)
+    a = b.add_item("a", (1, 1, 1))
+    c = b.add_item("c", (1, 1, 1))
+    b.distance(a, c, 1.0, mode=mode, k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, [[5, 5], [5 + start, 5]])
+    _project(K.project_distance, m.packed()[1], m, pos, yaw)
+    gap = pos[1, 0] - pos[0, 0]
+    assert math.isclose(gap, 1.0) if moves else math.isclose(gap, start)
+
+
+def test_focal_distance_pins_the_focal_point():
+    b = LayoutBuilder(ROOM)
+    tv = b.add_item("tv", (1.5, 0.4, 0.6))
+    chairs = [b.add_item(f"c{k}", (0.5, 0.5, 0.9)) for k in range(2)]
+    b.focal_distance(tv, chairs, 2.0, k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, [[5, 5], [5, 8], [8, 5]])
+    _project(K.project_distance, m.packed()[1], m, pos, yaw)
+    np.testing.assert_allclose(pos[:, :2], [[5, 5], [5, 7], [7, 5]])
+
+
+def test_distance_degenerate_is_counted_not_applied():
+    b = LayoutBuilder(ROOM)
+    a = b.add_item("a", (1, 1, 1))
+    c = b.add_item("c", (1, 1, 1))
+    b.distance(a, c, 1.0, k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, [[5, 5], [5, 5]])
+    degen = _project(K.project_distance, m.packed()[1], m, pos, yaw)
+    assert degen[codes.K_DISTANCE] == 1
+    np.testing.assert_array_equal(pos[:, :2], [[5, 5], [5, 5]])
+
+
+def test_lane_keeps_item_box_clear_and_gradient():
+    b = LayoutBuilder(ROOM)
+    stage = b.add_item("stage", (4, 2, 0.5))
+    seat = b.add_item("seat", (0.4, 0.4, 0.9))
+    b.lane(stage, [seat], angle_rad=0.0, length_m=5.0, half_width_m=0.5, k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, [[2, 5], [4, 5.3]])
+    before = pos.copy()
+    _project(K.project_lane, m.packed()[2], m, pos, yaw)
+    # Lane along +x from the stage center; the seat must be 0.5 + 0.2 (its half width) away.
+    np.testing.assert_allclose(pos[:, :2], [[2, 5], [4, 5.7]])
+    # With the origin free, the ghost point carries the stage along (w-weighted split).
+    b2 = LayoutBuilder(ROOM)
+    s2 = b2.add_item("stage", (4, 2, 0.5))
+    t2 = b2.add_item("seat", (0.4, 0.4, 0.9))
+    b2.lane(s2, [t2], angle_rad=0.0, length_m=5.0, half_width_m=0.5, pin_origin=False, k0=1.0, schedule="constant")
+    m2 = b2.finalize()
+    pos2, yaw2 = _state(m2, [[2, 5], [4, 5.3]])
+    before = pos2.copy()
+    _project(K.project_lane, m2.packed()[2], m2, pos2, yaw2)
+    _check_pbd_step(m2, _scalar(K.residual_lane, m2.packed()[2], m2, yaw2), before, pos2, [s2, t2])
+
+
+def test_heat_point_halves_the_error_and_gradient():
+    b = LayoutBuilder(ROOM)
+    a = b.add_item("a", (1, 1, 1))
+    c = b.add_item("c", (1, 1, 2))
+    b.heat([a, c], (5, 5), k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, [[2, 2], [4, 8]])
+    before = pos.copy()
+    _project(K.project_heat, m.packed()[3], m, pos, yaw)
+    # C = ½‖e‖² is quadratic: one Newton step on it halves e, and with w = 1/m every
+    # member moves by the same -e/2.
+    mass = np.array([1.0, 2.0])
+    com = lambda p: (mass[:, None] * p[:, :2]).sum(0) / mass.sum()  # noqa: E731
+    e0 = com(before) - 5
+    np.testing.assert_allclose(com(pos) - 5, e0 / 2)
+    np.testing.assert_allclose(pos[:, :2] - before[:, :2], [-e0 / 2, -e0 / 2])
+    _check_pbd_step(m, _scalar(K.residual_heat, m.packed()[3], m, yaw), before, pos, [a, c])
+
+
+def test_heat_point_in_a_parent_frame():
+    b = LayoutBuilder(ROOM)
+    desk = b.add_item("desk", (1.6, 0.8, 0.75), fixed=True, position_m=(5, 5), yaw_rad=math.pi / 2)
+    laptop = b.add_item("laptop", (0.3, 0.2, 0.02))
+    b.heat([laptop], (0.3, 0.0), frame=desk, k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, [[5, 5], [5, 5]], yaw=[math.pi / 2, 0])
+    for _ in range(40):
+        _project(K.project_heat, m.packed()[3], m, pos, yaw)
+    # 0.3 m towards the desk's front, which faces +y.
+    np.testing.assert_allclose(pos[1, :2], [5, 5.3], atol=1e-9)
+
+
+def test_symmetry_projects_center_onto_focal_axis_and_gradient():
+    b = LayoutBuilder(ROOM)
+    tv = b.add_item("tv", (1.5, 0.4, 0.6), fixed=True)
+    a = b.add_item("a", (0.8, 0.8, 0.8))
+    c = b.add_item("c", (0.8, 0.8, 0.8))
+    b.symmetry(tv, [a, c], k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, [[1, 5], [3, 6], [4, 7]])
+    before = pos.copy()
+    _project(K.project_symmetry, m.packed()[4], m, pos, yaw)
+    # TV faces +x from (1, 5); the chairs' center (3.5, 6.5) projects to (3.5, 5):
+    # e = (0, 1.5), halved by the step.
+    np.testing.assert_allclose(pos[1:, :2].mean(0), [3.5, 5.75])
+    _check_pbd_step(m, _scalar(K.residual_symmetry, m.packed()[4], m, yaw), before, pos, [a, c])
+
+
+def test_visual_balance_weights_by_footprint_and_gradient():
+    b = LayoutBuilder(ROOM)
+    a = b.add_item("a", (2, 1, 0.5))  # area 2
+    c = b.add_item("c", (1, 1, 2))  # area 1
+    b.balance([a, c], k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, [[2, 2], [8, 2]])
+    before = pos.copy()
+    _project(K.project_balance, m.packed()[5], m, pos, yaw)
+    area = np.array([2.0, 1.0])
+    center = (area[:, None] * pos[:, :2]).sum(0) / 3
+    e0 = np.array([(2 * 2 + 8) / 3, 2]) - 5
+    np.testing.assert_allclose(center - 5, e0 / 2)
+    _check_pbd_step(m, _scalar(K.residual_balance, m.packed()[5], m, yaw), before, pos, [a, c])
+
+
+def test_wall_distance_and_orientation():
+    b = LayoutBuilder(ROOM)
+    w = b.add_item("wardrobe", (1.2, 0.6, 2.0))
+    b.wall_distance(w, k0=1.0)
+    b.wall_orientation(w, k0=1.0)
+    m = b.finalize()
+    pos, yaw = _state(m, [[1.0, 4.0]], yaw=[0.4])
+    before = pos.copy()
+    P, R = m.packed()[0], m.packed()[11]
+    _project(K.project_wall_distance, m.packed()[6], m, pos, yaw, R)
+    # Nearest wall is x = 0; the center goes to half the depth from it.
+    np.testing.assert_allclose(pos[0, :2], [0.3, 4.0])
+    _check_pbd_step(m, _scalar(K.residual_wall_distance, m.packed()[6], m, yaw, 0, R), before, pos, [w])
+    _project(K.project_wall_orientation, m.packed()[7], m, pos, yaw, R)
+    assert abs(yaw[0]) < 1e-12  # faces the room: +x, the wall's inward normal
+
+
+def test_wall_distance_pulls_a_center_outside_back_in():
+    b = LayoutBuilder(ROOM)
+    w = b.add_item("w", (1, 0.5, 1))
+    b.wall_distance(w, 0.25, k0=1.0)
+    m = b.finalize()
+    pos, yaw = _state(m, [[-0.5, 4.0]])
+    _project(K.project_wall_distance, m.packed()[6], m, pos, yaw, m.packed()[11])
+    np.testing.assert_allclose(pos[0, :2], [0.25, 4.0])
+
+
+def test_pairwise_orientation_face_and_parallel():
+    b = LayoutBuilder(ROOM)
+    sofa = b.add_item("sofa", (2, 0.9, 0.8))
+    tv = b.add_item("tv", (1.5, 0.4, 0.6))
+    table = b.add_item("table", (1, 0.6, 0.4))
+    b.face(sofa, tv, mutual=True, k0=1.0, schedule="constant")
+    b.parallel(table, sofa, k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, [[2, 5], [2, 8], [5, 5]], yaw=[0.0, 0.5, 0.8])
+    _project(K.project_orientation, m.packed()[8], m, pos, yaw)
+    # The sofa turns to face +y (pi/2), the TV faces back (-pi/2).
+    assert math.isclose(K.wrap(yaw[1]), -math.pi / 2)
+    # Parallel runs after the sofa turned: the error (0 - (0.8 - pi/2)) mod pi is shared
+    # by inverse mass between the table and the sofa.
+    wt, ws = m.particle_inv_mass[2], m.particle_inv_mass[0]
+    err = (-(0.8 - math.pi / 2) + math.pi / 2) % math.pi - math.pi / 2
+    assert math.isclose(yaw[2], 0.8 + err * wt / (wt + ws))
+    assert math.isclose(yaw[0], math.pi / 2 - err * ws / (wt + ws))
+    assert math.isclose((yaw[2] - yaw[0]) % math.pi, 0.0, abs_tol=1e-12)
+
+
+def test_stack_puts_top_centered_on_base():
+    b = LayoutBuilder(ROOM)
+    book = b.add_item("book", (0.2, 0.3, 0.04))
+    top = b.add_item("top", (0.2, 0.3, 0.04))
+    b.stack(book, top)
+    m = b.finalize()
+    pos, yaw = _state(m, [[1, 1], [1.1, 1.0]], z=[0.02, 0.5])
+    _project(K.project_stack, m.packed()[9], m, pos, yaw)
+    assert math.isclose(pos[1, 2], 0.06)  # base center + half of both heights
+    assert math.isclose(pos[0, 2], 0.02)  # the base does not float up
+    np.testing.assert_allclose(pos[0, :2], pos[1, :2])
+
+
+def test_curve_segment_arc_and_spacing():
+    b = LayoutBuilder(ROOM)
+    g = b.add_group("row", position_m=(5, 5), yaw_rad=0.0, fixed=True)
+    seats = [b.add_item(f"s{k}", (0.5, 0.5, 0.9), group=g) for k in range(3)]
+    b.curve(g, seats, segment_m=((-2, 0), (2, 0)), spacing_m=1.0, k0=1.0, schedule="constant")
+    g2 = b.add_group("tier", position_m=(5, 2), yaw_rad=0.0, fixed=True)
+    s4 = b.add_item("s4", (0.5, 0.5, 0.9), group=g2)
+    b.curve(g2, [s4], arc=((0, 0), 2.0, 0.0, math.pi), k0=1.0, schedule="constant")
+    m = b.finalize()
+    pos, yaw = _state(m, np.zeros((m.n, 2)))
+    pos[[0, 4], :2] = [[5, 5], [5, 2]]
+    pos[seats, :2] = [[5.5, 5.4], [4.9, 4.8], [5.2, 5.1]]
+    pos[s4, :2] = [6, 3]
+    _project(K.project_curve, m.packed()[10], m, pos, yaw)
+    # Pulled onto y = 5, then neighbours in curve order (s1 at 4.9, s2 at 5.2, s0 at
+    # 5.5) are spaced, Gauss-Seidel: s1-s2 part by 0.7 (s1 4.55, s2 5.55); then s2-s0,
+    # 0.05 apart with s2 now past s0, part by 0.95 along s0 -> s2 (s2 6.025, s0 5.025).
+    np.testing.assert_allclose(pos[seats, 1], 5.0)
+    np.testing.assert_allclose(pos[seats, 0], [5.025, 4.55, 6.025])
+    # The arc point nearest (1, 1) in the tier frame is at 45 degrees on radius 2.
+    np.testing.assert_allclose(pos[s4, :2], [5 + math.sqrt(2), 2 + math.sqrt(2)])
+    for _ in range(50):
+        _project(K.project_curve, m.packed()[10], m, pos, yaw)
+    np.testing.assert_allclose(np.diff(np.sort(pos[seats, 0])), [1.0, 1.0], atol=1e-6)
+
+
+def test_boundary_l_shape_reflex_corner_and_outside_corner():
+    # a: a diamond (0.7071 m square at 45 degrees) whose corners all lie on the floor
+    # but which contains the reflex corner (3, 3) of the L. In its frame the corner is
+    # at (0.1414, 0): 0.2121 m deep along x, 0.3536 m along y, so it is pushed 0.2121 m
+    # back along its own x axis, (-0.15, -0.15) in the floor frame.
+    side = math.sqrt(0.5)
+    b = LayoutBuilder(L_ROOM)
+    b.add_item("a", (side, side, 1))
+    b.add_item("c", (1, 2, 1))
+    m = b.finalize()
+    P, R = m.packed()[0], m.packed()[11]
+    pos, yaw = _state(m, [[2.9, 2.9], [5.8, 1.0]], yaw=[math.pi / 4, 0])
+    K.project_boundary(R, P, pos, yaw)
+    np.testing.assert_allclose(pos[0, :2], [2.75, 2.75], atol=1e-6)
+    # c (depth 2 along x) pokes 0.8 m through the wall x = 6.
+    np.testing.assert_allclose(pos[1, :2], [5.0, 1.0], atol=1e-6)
+    out = np.zeros(m.n)
+    K.residual_boundary(R, P, pos, yaw, out)
+    np.testing.assert_allclose(out, 0.0)
+
+
+@pytest.mark.parametrize("model", [codes.BOX, codes.SPHERE])
+def test_collision_box_and_sphere(model):
+    b = LayoutBuilder(ROOM)
+    a = b.add_item("a", (1, 1, 1))
+    c = b.add_item("c", (1, 1, 1))
+    m = b.finalize()
+    P, R = m.packed()[0], m.packed()[11]
+    pos, yaw = _state(m, [[5, 5], [5.8, 5.1]])
+    before = pos.copy()
+    pairs = K.candidate_pairs(P, pos, yaw, 1.0, 0.05)
+    assert pairs.tolist() == [[0, 1]]
+    K.project_collision(P, R, pairs, pos, yaw, np.zeros((2, 6)), False, 1.0, model, 0.0,
+                        np.zeros(len(codes.KINDS), np.int64))
+    if model == codes.BOX:
+        # Depth 0.2 along x (the axis of least penetration), split equally.
+        np.testing.assert_allclose(pos[:, :2], [[4.9, 5], [5.9, 5.1]])
+    else:
+        np.testing.assert_allclose(np.linalg.norm(pos[1, :2] - pos[0, :2]), math.sqrt(2))
+
+    def residual(p):
+        out = np.zeros(1)
+        K.residual_collision(P, R, pairs, p, yaw, model, out)
+        return out[0]
+
+    _check_pbd_step(m, residual, before, pos, [a, c])
+
+
+def test_collision_ignores_items_at_different_heights_and_rigid_mates():
+    b = LayoutBuilder(ROOM)
+    desk = b.add_item("desk", (1.4, 0.7, 0.75))
+    lamp = b.add_item("lamp", (0.2, 0.2, 0.4), elevation_m=0.75)
+    g = b.add_group("set", rigid=True)
+    b.add_item("x", (1, 1, 1), group=g, offset_m=(0, 0))
+    b.add_item("y", (1, 1, 1), group=g, offset_m=(0.5, 0))
+    m = b.finalize()
+    P, R = m.packed()[0], m.packed()[11]
+    pos, yaw = _state(m, [[5, 5], [5, 5], [2, 2], [0, 0], [0, 0]])
+    pos[lamp, 2] = 0.95
+    pos[g, 2] = 0.0
+    K.sync_members(P, pos, yaw)
+    pairs = K.candidate_pairs(P, pos, yaw, 1.0, 0.05)
+    out = np.zeros(max(1, len(pairs)))
+    K.residual_collision(P, R, pairs, pos, yaw, codes.BOX, out)
+    assert np.all(out == 0.0)  # lamp rests on the desk; x and y are one rigid body
+    assert desk == 0
+
+
+def test_wall_bound_pair_slides_along_the_wall():
+    b = LayoutBuilder(ROOM)
+    a = b.add_item("a", (1.0, 0.6, 2))
+    c = b.add_item("c", (1.0, 0.6, 2))
+    b.against_wall(a)
+    b.against_wall(c)
+    m = b.finalize()
+    P, R = m.packed()[0], m.packed()[11]
+    pos, yaw = _state(m, [[0.3, 5.0], [0.3, 5.6]])
+    pairs = K.candidate_pairs(P, pos, yaw, 1.0, 0.05)
+    K.project_collision(P, R, pairs, pos, yaw, np.zeros((2, 6)), False, 1.0, codes.BOX, 0.0,
+                        np.zeros(len(codes.KINDS), np.int64))
+    # Both keep x = 0.3 (on the wall) and end 1 m apart along it.
+    np.testing.assert_allclose(pos[:, 0], [0.3, 0.3])
+    assert math.isclose(pos[1, 1] - pos[0, 1], 1.0)
+
+
+@pytest.mark.parametrize("model", [codes.BOX, codes.SPHERE])
+def test_accessibility_active_only_when_boxes_intersect(model):
+    b = LayoutBuilder(ROOM)
+    sofa = b.add_item("sofa", (1.0, 1.0, 0.8), access_m=(0, 0, 0.5, 0))
+    table = b.add_item("table", (0.4, 0.4, 0.4))
+    m = b.finalize()
+    P = m.packed()[0]
+    acc = np.zeros((2, 6))
+    degen = np.zeros(len(codes.KINDS), np.int64)
+    # Front access box spans x in [5.5, 6.0]; the table spans [6.05, 6.45]: inactive.
+    pos, yaw = _state(m, [[5, 5], [6.25, 5]])
+    pairs = K.candidate_pairs(P, pos, yaw, 1.0, 0.05)
+    before = pos.copy()
+    K.project_access(P, pairs, pos, yaw, acc, False, 1.0, model, degen)
+    np.testing.assert_array_equal(pos, before)
+    # Now 0.1 m inside the access box.
+    pos, yaw = _state(m, [[5, 5], [6.1, 5]])
+    before = pos.copy()
+    K.project_access(P, pairs, pos, yaw, acc, False, 1.0, model, degen)
+    w = m.particle_inv_mass
+    if model == codes.BOX:
+        moved = (pos[1, 0] - before[1, 0]) - (pos[0, 0] - before[0, 0])
+        assert math.isclose(moved, 0.1)
+        assert math.isclose((pos[1, 0] - before[1, 0]) / -(pos[0, 0] - before[0, 0]), w[1] / w[0])
+    else:
+        # Paper: distance from the access center to the table is at least b_i + ad_jk.
+        a_center = pos[0, :2] + [0.75, 0]
+        need = math.hypot(0.2, 0.2) + math.hypot(0.25, 0.5)
+        assert math.isclose(np.linalg.norm(pos[1, :2] - a_center), need)
+
+
+def test_jacobi_flush_averages_with_over_relaxation():
+    pos = np.zeros((2, 3))
+    yaw = np.zeros(2)
+    acc = np.zeros((2, 6))
+    K.push(0, 1.0, 0.0, 0.0, pos, acc, True)
+    K.push(0, 3.0, 2.0, 0.0, pos, acc, True)
+    K.turn(1, 0.5, yaw, acc, True)
+    K.flush(pos, yaw, acc, 1.2)
+    np.testing.assert_allclose(pos[0], [1.2 * 2.0, 1.2 * 1.0, 0.0])
+    assert math.isclose(yaw[1], 0.6)
+    assert not acc.any()
+
+
+@pytest.mark.parametrize("schedule,expect", [("constant", 0.5), ("decay", 1 - 0.5 ** (30 / 60)), ("grow", 1 - 0.5 ** (60 / 30))])
+def test_stiffness_schedules(schedule, expect):
+    assert math.isclose(K.stiffness(0.5, codes.SCHEDULE_NAMES[schedule], 60, 30.0), expect)
+
+
+def test_spatial_hash_matches_brute_force(rng):
+    b = LayoutBuilder([[0, 0], [30, 0], [30, 30], [0, 30]], 3.0)
+    n = 400
+    sizes = rng.uniform(0.2, 2.0, size=(n, 3))
+    for k in range(n):
+        b.add_item(f"i{k}", sizes[k], access_m=(0, 0, rng.choice([0, 0.5]), 0))
+    m = b.finalize()
+    pos, yaw = _state(m, rng.uniform(0, 30, size=(n, 2)), yaw=rng.uniform(-3, 3, n))
+    P = m.packed()[0]
+    pairs = {tuple(p) for p in K.candidate_pairs(P, pos, yaw, 1.0, 0.0)}
+    # Brute force on the same padded bounding boxes.
+    c, s = np.abs(np.cos(yaw)), np.abs(np.sin(yaw))
+    reach = m.particle_access_depth_m.max(1)
+    hd, hw = 0.5 * sizes[:, 1] + reach, 0.5 * sizes[:, 0] + reach
+    ex, ey = c * hd + s * hw, s * hd + c * hw
+    expect = {
+        (i, j)
+        for i in range(n)
+        for j in range(i + 1, n)
+        if abs(pos[i, 0] - pos[j, 0]) <= ex[i] + ex[j] and abs(pos[i, 1] - pos[j, 1]) <= ey[i] + ey[j]
+    }
+    assert pairs == expect
