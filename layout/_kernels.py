@@ -73,73 +73,85 @@ def wrap(a):
 
 
 @njit(cache=True, inline="always")
-def pose(P, pos, yaw, i):
-    """World pose (x, y, z, yaw) of particle ``i``, composed through its body."""
-    b = P.body[i]
-    if b == i:
-        return pos[i, 0], pos[i, 1], pos[i, 2], yaw[i]
-    c = math.cos(yaw[b])
-    s = math.sin(yaw[b])
-    ox = P.body_offset[i, 0]
-    oy = P.body_offset[i, 1]
-    return (
-        pos[b, 0] + c * ox - s * oy,
-        pos[b, 1] + s * ox + c * oy,
-        pos[b, 2] + P.body_offset[i, 2],
-        yaw[b] + P.body_yaw[i],
-    )
+def pose(pos, yaw, i):
+    """World pose (x, y, z, yaw) of particle ``i``: the state keeps every particle's
+    world pose, rigid-group members included (see :func:`move`)."""
+    return pos[i, 0], pos[i, 1], pos[i, 2], yaw[i]
 
 
 @njit(cache=True, inline="always")
-def push(b, dx, dy, dz, pos, acc, jac):
+def move(b, dx, dy, dz, da, pos, yaw, mstart, mlist):
+    """Translate body b by (dx, dy, dz) and turn it by da about its center, carrying
+    its rigid members along so every world pose stays current."""
+    pos[b, 0] += dx
+    pos[b, 1] += dy
+    pos[b, 2] += dz
+    if da != 0.0:
+        yaw[b] += da
+    if mstart[b + 1] == mstart[b]:
+        return
+    c = math.cos(da)
+    s = math.sin(da)
+    for q in range(mstart[b], mstart[b + 1]):
+        m = mlist[q]
+        rx = pos[m, 0] + dx - pos[b, 0]
+        ry = pos[m, 1] + dy - pos[b, 1]
+        pos[m, 0] = pos[b, 0] + c * rx - s * ry
+        pos[m, 1] = pos[b, 1] + s * rx + c * ry
+        pos[m, 2] += dz
+        yaw[m] += da
+
+
+@njit(cache=True, inline="always")
+def push(b, dx, dy, dz, pos, yaw, acc, jac, mstart, mlist):
     if jac:
         acc[b, 0] += dx
         acc[b, 1] += dy
         acc[b, 2] += dz
         acc[b, 3] += 1.0
     else:
-        pos[b, 0] += dx
-        pos[b, 1] += dy
-        pos[b, 2] += dz
+        move(b, dx, dy, dz, 0.0, pos, yaw, mstart, mlist)
 
 
 @njit(cache=True, inline="always")
-def turn(b, da, yaw, acc, jac):
+def turn(b, da, pos, yaw, acc, jac, mstart, mlist):
     if jac:
         acc[b, 4] += da
         acc[b, 5] += 1.0
     else:
-        yaw[b] += da
+        move(b, 0.0, 0.0, 0.0, da, pos, yaw, mstart, mlist)
 
 
 @njit(cache=True)
-def flush(pos, yaw, acc, omega):
+def flush(pos, yaw, acc, omega, mstart, mlist):
     """Apply the averaged Jacobi corrections, Δp = ω/n Σ Δp_j (thesis Eq. 3.6).
 
     ``acc`` is (n, 6): summed dx, dy, dz, their count, summed dyaw, its count.
     """
     for b in range(pos.shape[0]):
-        if acc[b, 3] > 0.0:
-            f = omega / acc[b, 3]
-            pos[b, 0] += f * acc[b, 0]
-            pos[b, 1] += f * acc[b, 1]
-            pos[b, 2] += f * acc[b, 2]
-        if acc[b, 5] > 0.0:
-            yaw[b] += omega * acc[b, 4] / acc[b, 5]
+        if acc[b, 3] == 0.0 and acc[b, 5] == 0.0:
+            continue
+        f = omega / acc[b, 3] if acc[b, 3] > 0.0 else 0.0
+        da = omega * acc[b, 4] / acc[b, 5] if acc[b, 5] > 0.0 else 0.0
+        move(b, f * acc[b, 0], f * acc[b, 1], f * acc[b, 2], da, pos, yaw, mstart, mlist)
         for q in range(6):
             acc[b, q] = 0.0
 
 
 @njit(cache=True)
 def sync_members(P, pos, yaw):
-    """Write the world pose of every rigid-group member from its body."""
+    """Write the world pose of every rigid-group member from its body's pose."""
     for i in range(pos.shape[0]):
-        if P.body[i] != i:
-            x, y, z, a = pose(P, pos, yaw, i)
-            pos[i, 0] = x
-            pos[i, 1] = y
-            pos[i, 2] = z
-            yaw[i] = a
+        b = P.body[i]
+        if b != i:
+            c = math.cos(yaw[b])
+            s = math.sin(yaw[b])
+            ox = P.body_offset[i, 0]
+            oy = P.body_offset[i, 1]
+            pos[i, 0] = pos[b, 0] + c * ox - s * oy
+            pos[i, 1] = pos[b, 1] + s * ox + c * oy
+            pos[i, 2] = pos[b, 2] + P.body_offset[i, 2]
+            yaw[i] = yaw[b] + P.body_yaw[i]
 
 
 @njit(cache=True)
@@ -226,11 +238,6 @@ def sat(xa, ya, ca, sa, hda, hwa, xb, yb, cb, sb, hdb, hwb):
     return best, bnx, bny
 
 
-@njit(cache=True, inline="always")
-def inv_mass_of(P, i):
-    return P.inv_mass[P.body[i]]
-
-
 # ------------------------------------------------------------------- static kinds
 
 
@@ -240,10 +247,10 @@ def project_distance(D, P, pos, yaw, acc, jac, it, rate, degen):
     for c in range(D.rest.shape[0]):
         i = D.pairs[c, 0]
         j = D.pairs[c, 1]
-        xi, yi, _, _ = pose(P, pos, yaw, i)
-        xj, yj, _, _ = pose(P, pos, yaw, j)
-        wi = inv_mass_of(P, i) * D.w_scale[c, 0]
-        wj = inv_mass_of(P, j) * D.w_scale[c, 1]
+        xi, yi, _, _ = pose(pos, yaw, i)
+        xj, yj, _, _ = pose(pos, yaw, j)
+        wi = P.inv_mass[P.body[i]] * D.w_scale[c, 0]
+        wj = P.inv_mass[P.body[j]] * D.w_scale[c, 1]
         dx = xi - xj
         dy = yi - yj
         length = math.sqrt(dx * dx + dy * dy)
@@ -256,15 +263,15 @@ def project_distance(D, P, pos, yaw, acc, jac, it, rate, degen):
         if (D.mode[c] == MIN and C >= 0.0) or (D.mode[c] == MAX and C <= 0.0):
             continue
         f = stiffness(D.k0[c], D.schedule[c], it, rate) * C / ((wi + wj) * length)
-        push(P.body[i], -wi * f * dx, -wi * f * dy, 0.0, pos, acc, jac)
-        push(P.body[j], wj * f * dx, wj * f * dy, 0.0, pos, acc, jac)
+        push(P.body[i], -wi * f * dx, -wi * f * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+        push(P.body[j], wj * f * dx, wj * f * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True)
 def residual_distance(D, P, pos, yaw, out):
     for c in range(D.rest.shape[0]):
-        xi, yi, _, _ = pose(P, pos, yaw, D.pairs[c, 0])
-        xj, yj, _, _ = pose(P, pos, yaw, D.pairs[c, 1])
+        xi, yi, _, _ = pose(pos, yaw, D.pairs[c, 0])
+        xj, yj, _, _ = pose(pos, yaw, D.pairs[c, 1])
         C = math.sqrt((xi - xj) ** 2 + (yi - yj) ** 2) - D.rest[c]
         if D.mode[c] == MIN:
             C = min(C, 0.0)
@@ -278,8 +285,8 @@ def lane_geometry(L, P, pos, yaw, c):
     """Ghost point on the lane vector nearest the item, and the required clearance."""
     o = L.origin[c]
     i = L.item[c]
-    xo, yo, _, ao = pose(P, pos, yaw, o)
-    xi, yi, _, ai = pose(P, pos, yaw, i)
+    xo, yo, _, ao = pose(pos, yaw, o)
+    xi, yi, _, ai = pose(pos, yaw, i)
     co = math.cos(ao)
     so = math.sin(ao)
     sx = xo + co * L.start[c, 0] - so * L.start[c, 1]
@@ -315,13 +322,13 @@ def project_lane(L, P, pos, yaw, acc, jac, it, rate, degen):
             continue
         if dist < EPS:
             degen[K_LANE] += 1
-        wi = inv_mass_of(P, i) * L.w_scale[c, 0]
-        wo = inv_mass_of(P, o) * L.w_scale[c, 1]
+        wi = P.inv_mass[P.body[i]] * L.w_scale[c, 0]
+        wo = P.inv_mass[P.body[o]] * L.w_scale[c, 1]
         if wi + wo == 0.0:
             continue
         f = stiffness(L.k0[c], L.schedule[c], it, rate) * C / (wi + wo)
-        push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, acc, jac)
-        push(P.body[o], wo * f * nx, wo * f * ny, 0.0, pos, acc, jac)
+        push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+        push(P.body[o], wo * f * nx, wo * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True)
@@ -340,7 +347,7 @@ def weighted_center(P, pos, yaw, members, a, b, by_area):
     for q in range(a, b):
         j = members[q]
         mu = P.size[j, 0] * P.size[j, 1] if by_area else P.mass[j]
-        x, y, _, _ = pose(P, pos, yaw, j)
+        x, y, _, _ = pose(pos, yaw, j)
         mx += mu * x
         my += mu * y
         total += mu
@@ -354,15 +361,15 @@ def project_center(P, pos, yaw, acc, jac, members, a, b, by_area, ex, ey, total,
     for q in range(a, b):
         j = members[q]
         mu = P.size[j, 0] * P.size[j, 1] if by_area else P.mass[j]
-        denom += inv_mass_of(P, j) * mu * mu
+        denom += P.inv_mass[P.body[j]] * mu * mu
     if denom == 0.0:
         return
     # s = C / Σ w_j |∇_j C|² with ∇_j C = (μ_j / M) e  =>  Δp_j = −k e w_j μ_j M / (2 Σ w μ²).
     for q in range(a, b):
         j = members[q]
         mu = P.size[j, 0] * P.size[j, 1] if by_area else P.mass[j]
-        f = -k * inv_mass_of(P, j) * mu * total / (2.0 * denom)
-        push(P.body[j], f * ex, f * ey, 0.0, pos, acc, jac)
+        f = -k * P.inv_mass[P.body[j]] * mu * total / (2.0 * denom)
+        push(P.body[j], f * ex, f * ey, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True, inline="always")
@@ -370,7 +377,7 @@ def heat_target(H, P, pos, yaw, c):
     fr = H.frame[c]
     if fr < 0:
         return H.target[c, 0], H.target[c, 1]
-    x, y, _, a = pose(P, pos, yaw, fr)
+    x, y, _, a = pose(pos, yaw, fr)
     ca = math.cos(a)
     sa = math.sin(a)
     return x + ca * H.target[c, 0] - sa * H.target[c, 1], y + sa * H.target[c, 0] + ca * H.target[c, 1]
@@ -399,7 +406,7 @@ def residual_heat(H, P, pos, yaw, out):
 @njit(cache=True, inline="always")
 def symmetry_target(S, P, pos, yaw, c, mx, my):
     """Projection of the members' center onto the focal's axis (ray), Eq. (11)."""
-    xf, yf, _, af = pose(P, pos, yaw, S.focal[c])
+    xf, yf, _, af = pose(pos, yaw, S.focal[c])
     vx = math.cos(af + S.angle[c])
     vy = math.sin(af + S.angle[c])
     t = max(0.0, (mx - xf) * vx + (my - yf) * vy)
@@ -464,21 +471,21 @@ def project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen):
     """Distance to wall, Eq. (13); the wall point has infinite mass."""
     for c in range(W.item.shape[0]):
         i = W.item[c]
-        if inv_mass_of(P, i) == 0.0:
+        if P.inv_mass[P.body[i]] == 0.0:
             continue
-        x, y, _, _ = pose(P, pos, yaw, i)
+        x, y, _, _ = pose(pos, yaw, i)
         sd, nx, ny, _ = wall_frame(R, x, y)
         C = sd - W.rest[c]
         if (W.mode[c] == MIN and C >= 0.0) or (W.mode[c] == MAX and C <= 0.0):
             continue
         k = stiffness(W.k0[c], W.schedule[c], it, rate)
-        push(P.body[i], -k * C * nx, -k * C * ny, 0.0, pos, acc, jac)
+        push(P.body[i], -k * C * nx, -k * C * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True)
 def residual_wall_distance(W, R, P, pos, yaw, out):
     for c in range(W.item.shape[0]):
-        x, y, _, _ = pose(P, pos, yaw, W.item[c])
+        x, y, _, _ = pose(pos, yaw, W.item[c])
         sd, _, _, _ = wall_frame(R, x, y)
         C = sd - W.rest[c]
         if W.mode[c] == MIN:
@@ -490,7 +497,7 @@ def residual_wall_distance(W, R, P, pos, yaw, out):
 
 @njit(cache=True, inline="always")
 def wall_orientation_error(O, R, P, pos, yaw, c):
-    x, y, _, a = pose(P, pos, yaw, O.item[c])
+    x, y, _, a = pose(pos, yaw, O.item[c])
     _, _, e, _ = nearest_on_polygon(R.polygon, x, y)
     want = math.atan2(R.edge_normal[e, 1], R.edge_normal[e, 0]) + O.angle[c]
     return wrap(want - a)
@@ -501,10 +508,10 @@ def project_wall_orientation(O, R, P, pos, yaw, acc, jac, it, rate, degen):
     """Orientation to wall, Eq. (17): smallest rotation towards the wanted angle."""
     for c in range(O.item.shape[0]):
         i = O.item[c]
-        if inv_mass_of(P, i) == 0.0:
+        if P.inv_mass[P.body[i]] == 0.0:
             continue
         k = stiffness(O.k0[c], O.schedule[c], it, rate)
-        turn(P.body[i], k * wall_orientation_error(O, R, P, pos, yaw, c), yaw, acc, jac)
+        turn(P.body[i], k * wall_orientation_error(O, R, P, pos, yaw, c), pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True)
@@ -518,8 +525,8 @@ def orientation_errors(O, P, pos, yaw, c):
     """Smallest rotations (Δθ_i, Δθ_j) that satisfy the pair's orientation, Eq. (16)."""
     i = O.pairs[c, 0]
     j = O.pairs[c, 1]
-    xi, yi, _, ai = pose(P, pos, yaw, i)
-    xj, yj, _, aj = pose(P, pos, yaw, j)
+    xi, yi, _, ai = pose(pos, yaw, i)
+    xj, yj, _, aj = pose(pos, yaw, j)
     di = 0.0
     dj = 0.0
     if O.mode[c] == FACE:
@@ -532,8 +539,8 @@ def orientation_errors(O, P, pos, yaw, c):
         # Parallel: yaw_i - yaw_j = angle (mod pi), shared by inverse mass.
         err = O.angle[c, 0] - (ai - aj)
         err = (err + 0.5 * math.pi) % math.pi - 0.5 * math.pi
-        wi = inv_mass_of(P, i)
-        wj = inv_mass_of(P, j)
+        wi = P.inv_mass[P.body[i]]
+        wj = P.inv_mass[P.body[j]]
         if wi + wj > 0.0:
             di = err * wi / (wi + wj)
             dj = -err * wj / (wi + wj)
@@ -547,10 +554,10 @@ def project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen):
         j = O.pairs[c, 1]
         di, dj = orientation_errors(O, P, pos, yaw, c)
         k = stiffness(O.k0[c], O.schedule[c], it, rate)
-        if inv_mass_of(P, i) > 0.0:
-            turn(P.body[i], k * di, yaw, acc, jac)
-        if inv_mass_of(P, j) > 0.0:
-            turn(P.body[j], k * dj, yaw, acc, jac)
+        if P.inv_mass[P.body[i]] > 0.0:
+            turn(P.body[i], k * di, pos, yaw, acc, jac, P.mstart, P.mlist)
+        if P.inv_mass[P.body[j]] > 0.0:
+            turn(P.body[j], k * dj, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True)
@@ -567,10 +574,10 @@ def project_stack(S, P, pos, yaw, acc, jac, it, rate, degen):
     for c in range(S.k0.shape[0]):
         i = S.pairs[c, 0]
         j = S.pairs[c, 1]
-        xi, yi, zi, _ = pose(P, pos, yaw, i)
-        xj, yj, zj, _ = pose(P, pos, yaw, j)
-        wi = inv_mass_of(P, i)
-        wj = inv_mass_of(P, j)
+        xi, yi, zi, _ = pose(pos, yaw, i)
+        xj, yj, zj, _ = pose(pos, yaw, j)
+        wi = P.inv_mass[P.body[i]]
+        wj = P.inv_mass[P.body[j]]
         if wi + wj == 0.0:
             continue
         k = stiffness(S.k0[c], S.schedule[c], it, rate)
@@ -580,8 +587,8 @@ def project_stack(S, P, pos, yaw, acc, jac, it, rate, degen):
         fi = k * wi / (wi + wj)
         fj = k * wj / (wi + wj)
         dzj = -k * cz if wj > 0.0 else 0.0
-        push(P.body[i], fi * cx, fi * cy, 0.0, pos, acc, jac)
-        push(P.body[j], -fj * cx, -fj * cy, dzj, pos, acc, jac)
+        push(P.body[i], fi * cx, fi * cy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+        push(P.body[j], -fj * cx, -fj * cy, dzj, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True)
@@ -589,8 +596,8 @@ def residual_stack(S, P, pos, yaw, out):
     for c in range(S.k0.shape[0]):
         i = S.pairs[c, 0]
         j = S.pairs[c, 1]
-        xi, yi, zi, _ = pose(P, pos, yaw, i)
-        xj, yj, zj, _ = pose(P, pos, yaw, j)
+        xi, yi, zi, _ = pose(pos, yaw, i)
+        xj, yj, zj, _ = pose(pos, yaw, j)
         cz = zj - (zi + 0.5 * (P.size[i, 2] + P.size[j, 2]))
         out[c] = math.sqrt(cz * cz + (xj - xi) ** 2 + (yj - yi) ** 2)
 
@@ -620,14 +627,14 @@ def curve_point(U, c, lx, ly):
 def curve_offsets(U, P, pos, yaw, c, param):
     """For each member of curve c: world offset from its curve point; fills ``param``."""
     g = U.group[c]
-    xg, yg, _, ag = pose(P, pos, yaw, g)
+    xg, yg, _, ag = pose(pos, yaw, g)
     cg = math.cos(ag)
     sg = math.sin(ag)
     a = U.start[c]
     b = U.start[c + 1]
     out = np.empty((b - a, 2))
     for q in range(a, b):
-        x, y, _, _ = pose(P, pos, yaw, U.members[q])
+        x, y, _, _ = pose(pos, yaw, U.members[q])
         lx = cg * (x - xg) + sg * (y - yg)
         ly = -sg * (x - xg) + cg * (y - yg)
         px, py, t = curve_point(U, c, lx, ly)
@@ -662,31 +669,31 @@ def project_curve(U, P, pos, yaw, acc, jac, it, rate, degen):
         a = U.start[c]
         b = U.start[c + 1]
         k = stiffness(U.k0[c], U.schedule[c], it, rate)
-        wg = 0.0 if U.anchor_fixed[c] else inv_mass_of(P, g)
+        wg = 0.0 if U.anchor_fixed[c] else P.inv_mass[P.body[g]]
         param = np.empty(b - a)
         off = curve_offsets(U, P, pos, yaw, c, param)
         for q in range(a, b):
             i = U.members[q]
-            wi = inv_mass_of(P, i)
+            wi = P.inv_mass[P.body[i]]
             if wi + wg == 0.0:
                 continue
             fi = k * wi / (wi + wg)
             fg = k * wg / (wi + wg)
             dx = off[q - a, 0]
             dy = off[q - a, 1]
-            push(P.body[i], -fi * dx, -fi * dy, 0.0, pos, acc, jac)
+            push(P.body[i], -fi * dx, -fi * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
             if fg > 0.0:
-                push(P.body[g], fg * dx, fg * dy, 0.0, pos, acc, jac)
+                push(P.body[g], fg * dx, fg * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
         if U.spacing[c] <= 0.0:
             continue
         order = curve_order(param)
         for q in range(order.shape[0] - 1):
             i = U.members[a + order[q]]
             j = U.members[a + order[q + 1]]
-            xi, yi, _, _ = pose(P, pos, yaw, i)
-            xj, yj, _, _ = pose(P, pos, yaw, j)
-            wi = inv_mass_of(P, i)
-            wj = inv_mass_of(P, j)
+            xi, yi, _, _ = pose(pos, yaw, i)
+            xj, yj, _, _ = pose(pos, yaw, j)
+            wi = P.inv_mass[P.body[i]]
+            wj = P.inv_mass[P.body[j]]
             dx = xi - xj
             dy = yi - yj
             length = math.sqrt(dx * dx + dy * dy)
@@ -696,8 +703,8 @@ def project_curve(U, P, pos, yaw, acc, jac, it, rate, degen):
                 degen[K_CURVE] += 1
                 continue
             f = k * (length - U.spacing[c]) / ((wi + wj) * length)
-            push(P.body[i], -wi * f * dx, -wi * f * dy, 0.0, pos, acc, jac)
-            push(P.body[j], wj * f * dx, wj * f * dy, 0.0, pos, acc, jac)
+            push(P.body[i], -wi * f * dx, -wi * f * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+            push(P.body[j], wj * f * dx, wj * f * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True)
@@ -712,8 +719,8 @@ def residual_curve(U, P, pos, yaw, out):
         if U.spacing[c] > 0.0:
             order = curve_order(param)
             for q in range(order.shape[0] - 1):
-                xi, yi, _, _ = pose(P, pos, yaw, U.members[a + order[q]])
-                xj, yj, _, _ = pose(P, pos, yaw, U.members[a + order[q + 1]])
+                xi, yi, _, _ = pose(pos, yaw, U.members[a + order[q]])
+                xj, yj, _, _ = pose(pos, yaw, U.members[a + order[q + 1]])
                 total += (math.sqrt((xi - xj) ** 2 + (yi - yj) ** 2) - U.spacing[c]) ** 2
         out[c] = math.sqrt(total)
 
@@ -735,7 +742,7 @@ def boundary_item(R, P, pos, yaw, i, project):
     hw = 0.5 * P.size[i, 0]
     violation = 0.0
     for rep in range(4):
-        x, y, _, a = pose(P, pos, yaw, i)
+        x, y, _, a = pose(pos, yaw, i)
         c = math.cos(a)
         s = math.sin(a)
         moved = False
@@ -750,13 +757,14 @@ def boundary_item(R, P, pos, yaw, i, project):
             if rep == 0:
                 violation += dist * dist
             if project:
-                pos[b, 0] += qx - cx + INSIDE_M * R.edge_normal[e, 0]
-                pos[b, 1] += qy - cy + INSIDE_M * R.edge_normal[e, 1]
+                dx = qx - cx + INSIDE_M * R.edge_normal[e, 0]
+                dy = qy - cy + INSIDE_M * R.edge_normal[e, 1]
+                move(b, dx, dy, 0.0, 0.0, pos, yaw, P.mstart, P.mlist)
                 moved = True
                 break
         if not project or not moved:
             break
-    x, y, _, a = pose(P, pos, yaw, i)
+    x, y, _, a = pose(pos, yaw, i)
     c = math.cos(a)
     s = math.sin(a)
     for v in range(R.polygon.shape[0]):
@@ -775,13 +783,11 @@ def boundary_item(R, P, pos, yaw, i, project):
             continue
         if px < py:
             sg = -1.0 if lx > 0.0 else 1.0
-            pos[b, 0] += sg * (px + INSIDE_M) * c
-            pos[b, 1] += sg * (px + INSIDE_M) * s
+            move(b, sg * (px + INSIDE_M) * c, sg * (px + INSIDE_M) * s, 0.0, 0.0, pos, yaw, P.mstart, P.mlist)
         else:
             sg = -1.0 if ly > 0.0 else 1.0
-            pos[b, 0] += -sg * (py + INSIDE_M) * s
-            pos[b, 1] += sg * (py + INSIDE_M) * c
-        x, y, _, a = pose(P, pos, yaw, i)
+            move(b, -sg * (py + INSIDE_M) * s, sg * (py + INSIDE_M) * c, 0.0, 0.0, pos, yaw, P.mstart, P.mlist)
+        x, y, _, a = pose(pos, yaw, i)
     return violation
 
 
@@ -821,7 +827,7 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
     hi = np.empty((m, 2))
     for q in range(m):
         i = idx[q]
-        x, y, _, a = pose(P, pos, yaw, i)
+        x, y, _, a = pose(pos, yaw, i)
         c = abs(math.cos(a))
         s = abs(math.sin(a))
         hd = 0.5 * P.size[i, 1] + P.access_depth[i].max()
@@ -898,38 +904,38 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
 
 
 @njit(cache=True, inline="always")
-def z_overlap(P, zi, i, zj, j):
-    return abs(zi - zj) < 0.5 * (P.size[i, 2] + P.size[j, 2]) - Z_TOUCH_M
+def z_overlap(size, zi, i, zj, j):
+    return abs(zi - zj) < 0.5 * (size[i, 2] + size[j, 2]) - Z_TOUCH_M
 
 
 @njit(cache=True)
-def collision_pair(P, R, pos, yaw, i, j, model, gap_m):
+def collision_pair(size, collides, pos, yaw, i, j, model, gap_m):
     """Collision constraint value of a pair (<= 0 when colliding) and its direction.
 
     BOX: exact penetration of the oriented footprints (SAT), pushed along the axis of
     least penetration. SPHERE: the paper's bounding circles, Eq. (15), activated when
     the boxes overlap. Returns (C, nx, ny, active) with n pointing from j to i.
     """
-    if not (P.collides[i] and P.collides[j]):
+    if not (collides[i] and collides[j]):
         return 0.0, 0.0, 0.0, False
-    xi, yi, zi, ai = pose(P, pos, yaw, i)
-    xj, yj, zj, aj = pose(P, pos, yaw, j)
-    if not z_overlap(P, zi, i, zj, j):
+    xi, yi, zi, ai = pose(pos, yaw, i)
+    xj, yj, zj, aj = pose(pos, yaw, j)
+    if not z_overlap(size, zi, i, zj, j):
         return 0.0, 0.0, 0.0, False
     ci = math.cos(ai)
     si = math.sin(ai)
     cj = math.cos(aj)
     sj = math.sin(aj)
     depth, nx, ny = sat(
-        xi, yi, ci, si, 0.5 * P.size[i, 1], 0.5 * P.size[i, 0],
-        xj, yj, cj, sj, 0.5 * P.size[j, 1], 0.5 * P.size[j, 0],
+        xi, yi, ci, si, 0.5 * size[i, 1], 0.5 * size[i, 0],
+        xj, yj, cj, sj, 0.5 * size[j, 1], 0.5 * size[j, 0],
     )
     if depth <= -gap_m:
         return 0.0, 0.0, 0.0, False
     if model == BOX:
         return -(depth + gap_m), nx, ny, True
-    ri = 0.5 * math.sqrt(P.size[i, 0] ** 2 + P.size[i, 1] ** 2)
-    rj = 0.5 * math.sqrt(P.size[j, 0] ** 2 + P.size[j, 1] ** 2)
+    ri = 0.5 * math.sqrt(size[i, 0] ** 2 + size[i, 1] ** 2)
+    rj = 0.5 * math.sqrt(size[j, 0] ** 2 + size[j, 1] ** 2)
     dx = xi - xj
     dy = yi - yj
     dist = math.sqrt(dx * dx + dy * dy)
@@ -945,8 +951,8 @@ def collision_pair(P, R, pos, yaw, i, j, model, gap_m):
 def wall_points_pair(P, R, pos, yaw, i, j, model, gap_m):
     """Extra projection between the wall points of two colliding wall-bound items
     (Sec. 3.3.9, Fig. 8b): they slide apart along the wall instead of off it."""
-    xi, yi, _, ai = pose(P, pos, yaw, i)
-    xj, yj, _, aj = pose(P, pos, yaw, j)
+    xi, yi, _, ai = pose(pos, yaw, i)
+    xj, yj, _, aj = pose(pos, yaw, j)
     qxi, qyi, _, _ = nearest_on_polygon(R.polygon, xi, yi)
     qxj, qyj, _, _ = nearest_on_polygon(R.polygon, xj, yj)
     dx = qxi - qxj
@@ -974,50 +980,50 @@ def project_collision(P, R, pairs, pos, yaw, acc, jac, k, model, gap_m, degen):
     for p in range(pairs.shape[0]):
         i = pairs[p, 0]
         j = pairs[p, 1]
-        C, nx, ny, active = collision_pair(P, R, pos, yaw, i, j, model, gap_m)
+        C, nx, ny, active = collision_pair(P.size, P.collides, pos, yaw, i, j, model, gap_m)
         if not active:
             continue
-        wi = inv_mass_of(P, i)
-        wj = inv_mass_of(P, j)
+        wi = P.inv_mass[P.body[i]]
+        wj = P.inv_mass[P.body[j]]
         f = k * C / (wi + wj)
-        push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, acc, jac)
-        push(P.body[j], wj * f * nx, wj * f * ny, 0.0, pos, acc, jac)
+        push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+        push(P.body[j], wj * f * nx, wj * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
         if P.wall_bound[i] and P.wall_bound[j]:
             C2, tx, ty, ok = wall_points_pair(P, R, pos, yaw, i, j, model, gap_m)
             if not ok:
                 degen[K_COLLISION] += 1
             elif C2 < 0.0:
                 f = k * C2 / (wi + wj)
-                push(P.body[i], -wi * f * tx, -wi * f * ty, 0.0, pos, acc, jac)
-                push(P.body[j], wj * f * tx, wj * f * ty, 0.0, pos, acc, jac)
+                push(P.body[i], -wi * f * tx, -wi * f * ty, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+                push(P.body[j], wj * f * tx, wj * f * ty, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True)
 def residual_collision(P, R, pairs, pos, yaw, model, out):
     for p in range(pairs.shape[0]):
-        C, _, _, active = collision_pair(P, R, pos, yaw, pairs[p, 0], pairs[p, 1], model, 0.0)
+        C, _, _, active = collision_pair(P.size, P.collides, pos, yaw, pairs[p, 0], pairs[p, 1], model, 0.0)
         out[p] = C if active else 0.0
 
 
 @njit(cache=True)
-def access_side(P, pos, yaw, owner, side, other, model):
+def access_side(size, access_depth, pos, yaw, owner, side, other, model):
     """Accessibility of side ``side`` of ``owner`` against item ``other`` (Eq. 14).
 
     Active only when the other item's box intersects the access box. BOX: exact
     penetration into the access box; SPHERE: the paper's ‖p_i − a_jk‖ − (b_i + ad_jk)
     with b and ad the half diagonals. Returns (C, nx, ny, active), n from box to other.
     """
-    depth_m = P.access_depth[owner, side]
+    depth_m = access_depth[owner, side]
     if depth_m <= 0.0:
         return 0.0, 0.0, 0.0, False
-    xo, yo, zo, ao = pose(P, pos, yaw, owner)
-    xi, yi, zi, ai = pose(P, pos, yaw, other)
-    if not z_overlap(P, zo, owner, zi, other):
+    xo, yo, zo, ao = pose(pos, yaw, owner)
+    xi, yi, zi, ai = pose(pos, yaw, other)
+    if not z_overlap(size, zo, owner, zi, other):
         return 0.0, 0.0, 0.0, False
     co = math.cos(ao)
     so = math.sin(ao)
-    hd = 0.5 * P.size[owner, 1]
-    hw = 0.5 * P.size[owner, 0]
+    hd = 0.5 * size[owner, 1]
+    hw = 0.5 * size[owner, 0]
     if side == 0 or side == 2:
         sgn = 1.0 if side == 2 else -1.0
         lx = sgn * (hd + 0.5 * depth_m)
@@ -1034,8 +1040,8 @@ def access_side(P, pos, yaw, owner, side, other, model):
     ay = yo + so * lx + co * ly
     ci = math.cos(ai)
     si = math.sin(ai)
-    hdi = 0.5 * P.size[other, 1]
-    hwi = 0.5 * P.size[other, 0]
+    hdi = 0.5 * size[other, 1]
+    hwi = 0.5 * size[other, 0]
     depth, nx, ny = sat(xi, yi, ci, si, hdi, hwi, ax, ay, co, so, bhd, bhw)
     if depth <= 0.0:
         return 0.0, 0.0, 0.0, False
@@ -1053,9 +1059,22 @@ def access_side(P, pos, yaw, owner, side, other, model):
 
 
 @njit(cache=True, inline="always")
-def access_exempt(P, i, j):
+def access_exempt(parent, i, j):
     """Members of one group (a table and its chairs) may sit in each other's access."""
-    return P.parent[i] >= 0 and P.parent[i] == P.parent[j]
+    return parent[i] >= 0 and parent[i] == parent[j]
+
+
+@njit(cache=True, inline="always")
+def access_reach(size, access_depth, pos, owner, other):
+    """Cheap reject: can ``other`` reach any access box of ``owner`` at all?"""
+    reach = (
+        0.5 * math.sqrt(size[owner, 0] ** 2 + size[owner, 1] ** 2)
+        + access_depth[owner].max()
+        + 0.5 * math.sqrt(size[other, 0] ** 2 + size[other, 1] ** 2)
+    )
+    return access_depth[owner].max() > 0.0 and (pos[owner, 0] - pos[other, 0]) ** 2 + (
+        pos[owner, 1] - pos[other, 1]
+    ) ** 2 < reach * reach
 
 
 @njit(cache=True)
@@ -1066,19 +1085,19 @@ def project_access(P, pairs, pos, yaw, acc, jac, k, model, degen):
             other = pairs[p, 1 - turn_]
             if P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
                 continue
-            if access_exempt(P, owner, other):
+            if access_exempt(P.parent, owner, other) or not access_reach(P.size, P.access_depth, pos, owner, other):
                 continue
-            wo = inv_mass_of(P, owner)
-            wi = inv_mass_of(P, other)
+            wo = P.inv_mass[P.body[owner]]
+            wi = P.inv_mass[P.body[other]]
             if wo + wi == 0.0:
                 continue
             for side in range(4):
-                C, nx, ny, active = access_side(P, pos, yaw, owner, side, other, model)
+                C, nx, ny, active = access_side(P.size, P.access_depth, pos, yaw, owner, side, other, model)
                 if not active:
                     continue
                 f = k * C / (wo + wi)
-                push(P.body[other], -wi * f * nx, -wi * f * ny, 0.0, pos, acc, jac)
-                push(P.body[owner], wo * f * nx, wo * f * ny, 0.0, pos, acc, jac)
+                push(P.body[other], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+                push(P.body[owner], wo * f * nx, wo * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True)
@@ -1091,10 +1110,10 @@ def residual_access(P, pairs, pos, yaw, model, out):
             other = pairs[p, 1 - turn_]
             if P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
                 continue
-            if access_exempt(P, owner, other):
+            if access_exempt(P.parent, owner, other) or not access_reach(P.size, P.access_depth, pos, owner, other):
                 continue
             for side in range(4):
-                C, _, _, active = access_side(P, pos, yaw, owner, side, other, model)
+                C, _, _, active = access_side(P.size, P.access_depth, pos, yaw, owner, side, other, model)
                 if active:
                     total += C * C
         out[p] = -math.sqrt(total)
@@ -1143,7 +1162,7 @@ def energy_terms(M, pos, yaw, pairs, model, weights):
 
 
 @njit(cache=True)
-def solve_loop(M, pos, yaw, max_iter, patience, tol, rate, jac, omega, order, model, k_collision,
+def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, order, model, k_collision,
                k_access, gap_m, cell_m, pad_m, weights):
     """Algorithm 1: project all constraints per iteration, keep the best layout.
 
@@ -1153,7 +1172,8 @@ def solve_loop(M, pos, yaw, max_iter, patience, tol, rate, jac, omega, order, mo
     iteration, the boundary last so every layout handed out is inside the floor.
 
     The loop stops after ``max_iter`` iterations, or once the best energy has not
-    improved by more than the fraction ``tol`` for ``patience`` iterations.
+    improved by more than the fraction ``tol`` plus ``atol`` for ``patience``
+    iterations.
 
     Returns the best positions and yaws, the energy trace (trace[l] = energy before
     iteration l + 1), the best iteration, the iterations run and degenerate counts.
@@ -1179,7 +1199,7 @@ def solve_loop(M, pos, yaw, max_iter, patience, tol, rate, jac, omega, order, mo
             best_it = it
             best_pos[:] = pos
             best_yaw[:] = yaw
-        if e < ref_e * (1.0 - tol):
+        if e < ref_e * (1.0 - tol) - atol:
             ref_e = e
             ref_it = it
         if it >= max_iter or it - ref_it >= patience:
@@ -1190,42 +1210,42 @@ def solve_loop(M, pos, yaw, max_iter, patience, tol, rate, jac, omega, order, mo
         if others:
             project_distance(D, P, pos, yaw, acc, jac, it, rate, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
             project_lane(L, P, pos, yaw, acc, jac, it, rate, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
             project_heat(H, P, pos, yaw, acc, jac, it, rate, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
             project_symmetry(S, P, pos, yaw, acc, jac, it, rate, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
             project_balance(B, P, pos, yaw, acc, jac, it, rate, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
             project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
             project_curve(U, P, pos, yaw, acc, jac, it, rate, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
         if order[row, 0]:
             project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
             project_wall_orientation(WO, R, P, pos, yaw, acc, jac, it, rate, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
         project_stack(ST, P, pos, yaw, acc, jac, it, rate, degen)
         if jac:
-            flush(pos, yaw, acc, omega)
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
         if order[row, 2]:
             kc = stiffness(k_collision, GROW, it, rate)
             project_collision(P, R, pairs, pos, yaw, acc, jac, kc, model, gap_m, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
             project_access(P, pairs, pos, yaw, acc, jac, k_access, model, degen)
             if jac:
-                flush(pos, yaw, acc, omega)
+                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
         project_boundary(R, P, pos, yaw)
     return best_pos, best_yaw, trace[: it + 1], best_it, it, degen

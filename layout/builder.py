@@ -445,6 +445,10 @@ class LayoutBuilder:
             if body[i] != i:  # members are placed by their body
                 init_pos[i] = np.nan
                 init_yaw[i] = np.nan
+        is_member = body != np.arange(n)
+        mlist = np.flatnonzero(is_member)[np.argsort(body[is_member], kind="stable")].astype(np.int64)
+        mstart = np.zeros(n + 1, np.int64)
+        mstart[1:] = np.cumsum(np.bincount(body[is_member], minlength=n))
         wall_bound = np.zeros(n, bool)
         for c in self._c["wall_distance"]:
             wall_bound[c[0]] = True
@@ -501,6 +505,8 @@ class LayoutBuilder:
             particle_bounded=(role == codes.ITEM),
             particle_wall_bound=wall_bound,
             particle_access_depth_m=np.array([r["access"] for r in p], np.float64).reshape(n, 4),
+            particle_mstart=mstart,
+            particle_mlist=mlist,
             particle_init_position_m=init_pos,
             particle_init_yaw_rad=init_yaw,
             floor_polygon_m=poly.copy(),

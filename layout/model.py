@@ -15,7 +15,8 @@ import numpy as np
 # match the model's attributes minus the kind prefix.
 Particles = namedtuple(
     "Particles",
-    "role size mass inv_mass body body_offset body_yaw parent collides bounded wall_bound access_depth",
+    "role size mass inv_mass body body_offset body_yaw parent collides bounded wall_bound access_depth "
+    "mstart mlist",
 )
 Distances = namedtuple("Distances", "pairs rest mode k0 schedule w_scale")
 Lanes = namedtuple("Lanes", "origin item start angle length half_width k0 schedule w_scale")
@@ -54,6 +55,8 @@ class Model:
     particle_bounded: np.ndarray  # (n,) bool: footprint must stay inside the floor
     particle_wall_bound: np.ndarray  # (n,) bool: has a distance-to-wall constraint
     particle_access_depth_m: np.ndarray  # (n, 4) clearance behind, left, front, right
+    particle_mstart: np.ndarray  # (n + 1,) CSR offsets into particle_mlist
+    particle_mlist: np.ndarray  # rigid members of each body (the body itself excluded)
     particle_init_position_m: np.ndarray  # (n, 3) NaN x/y where the start is random
     particle_init_yaw_rad: np.ndarray  # (n,) NaN where random
 

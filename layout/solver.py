@@ -125,6 +125,7 @@ def initial_state(model: Model, rng: np.random.Generator) -> State:
     yaw[need_yaw] = rng.uniform(-np.pi, np.pi, size=int(need_yaw.sum()))
     pos[~free] = 0.0
     yaw[~free] = 0.0
+    _start_on_curves(model, pos, yaw, rng)
     P = model.packed()[0]
     K.sync_members(P, pos, yaw)
     for base, top in model.stack_pairs:
@@ -132,6 +133,28 @@ def initial_state(model: Model, rng: np.random.Generator) -> State:
             pos[top, :2] = pos[base, :2]
             pos[top, 2] = pos[base, 2] + 0.5 * (model.particle_size_m[base, 2] + model.particle_size_m[top, 2])
     return State(pos, yaw)
+
+
+def _start_on_curves(model, pos, yaw, rng):
+    """Members of a curve group that have no start position start on their curve, in
+    random order at jittered, evenly spread curve parameters (instead of anywhere on
+    the floor): their order along the curve then matches their positions, so the
+    spacing constraints spread them instead of making them pass through each other."""
+    for c in range(len(model.curve_group)):
+        g = model.curve_group[c]
+        members = model.curve_members[model.curve_start[c]:model.curve_start[c + 1]]
+        members = members[np.isnan(model.particle_init_position_m[members, 0])]
+        n = len(members)
+        t = (rng.permutation(n) + 0.5 + rng.uniform(-0.25, 0.25, size=n)) / max(n, 1)
+        p = model.curve_params[c]
+        if model.curve_kind[c] == codes.ARC:
+            phi = p[3] + t * (p[4] - p[3])
+            local = np.stack([p[0] + p[2] * np.cos(phi), p[1] + p[2] * np.sin(phi)], axis=1)
+        else:
+            local = p[None, 0:2] + t[:, None] * (p[None, 2:4] - p[None, 0:2])
+        cg, sg = np.cos(yaw[g]), np.sin(yaw[g])
+        pos[members, 0] = pos[g, 0] + cg * local[:, 0] - sg * local[:, 1]
+        pos[members, 1] = pos[g, 1] + sg * local[:, 0] + cg * local[:, 1]
 
 
 @dataclass(frozen=True)
@@ -142,8 +165,9 @@ class Solver:
     ----------
     max_iterations : hard cap on iterations.
     patience : stop when the best energy has not improved (by more than the fraction
-        ``tolerance``) for this many iterations.
-    tolerance : relative improvement that counts for ``patience``.
+        ``tolerance`` plus ``abs_tolerance``) for this many iterations.
+    tolerance, abs_tolerance : the improvement of the energy that counts for
+        ``patience``; the best layout seen is returned either way.
     rate : M of the stiffness schedule k_l = 1 − (1 − k0)^(M/l) (and l/M for GROW).
     method : "gauss-seidel" (each correction visible at once) or "jacobi" (batch
         average per constraint kind, over-relaxed by ``omega``).
@@ -159,6 +183,7 @@ class Solver:
     max_iterations: int = 1000
     patience: int = 50
     tolerance: float = 1e-3
+    abs_tolerance: float = 5e-3
     rate: float = 30.0
     method: str = "gauss-seidel"
     omega: float = 1.2
@@ -195,6 +220,7 @@ class Solver:
             self.max_iterations,
             self.patience,
             float(self.tolerance),
+            float(self.abs_tolerance),
             float(self.rate),
             self.method == "jacobi",
             float(self.omega),

@@ -419,13 +419,37 @@ def test_jacobi_flush_averages_with_over_relaxation():
     pos = np.zeros((2, 3))
     yaw = np.zeros(2)
     acc = np.zeros((2, 6))
-    K.push(0, 1.0, 0.0, 0.0, pos, acc, True)
-    K.push(0, 3.0, 2.0, 0.0, pos, acc, True)
-    K.turn(1, 0.5, yaw, acc, True)
-    K.flush(pos, yaw, acc, 1.2)
+    no_members = (np.zeros(3, np.int64), np.zeros(0, np.int64))
+    K.push(0, 1.0, 0.0, 0.0, pos, yaw, acc, True, *no_members)
+    K.push(0, 3.0, 2.0, 0.0, pos, yaw, acc, True, *no_members)
+    K.turn(1, 0.5, pos, yaw, acc, True, *no_members)
+    assert not pos.any() and not yaw.any()  # nothing moves before the flush
+    K.flush(pos, yaw, acc, 1.2, *no_members)
     np.testing.assert_allclose(pos[0], [1.2 * 2.0, 1.2 * 1.0, 0.0])
     assert math.isclose(yaw[1], 0.6)
     assert not acc.any()
+
+
+def test_rigid_group_moves_and_turns_as_one_body():
+    b = LayoutBuilder(ROOM)
+    g = b.add_group("beds", rigid=True)
+    a = b.add_item("a", (1, 2, 0.5), group=g, offset_m=(-0.6, 0))
+    c = b.add_item("c", (1, 2, 0.5), group=g, offset_m=(0.6, 0), yaw_rad=math.pi)
+    m = b.finalize()
+    P = m.packed()[0]
+    pos, yaw = _state(m, np.zeros((3, 2)))
+    pos[g] = [5, 5, 0]
+    K.sync_members(P, pos, yaw)
+    np.testing.assert_allclose(pos[[a, c], :2], [[4.4, 5], [5.6, 5]])
+    acc = np.zeros((3, 6))
+    # A correction on a member goes to the body and carries every member along.
+    K.push(P.body[a], 0.5, 0.0, 0.0, pos, yaw, acc, False, P.mstart, P.mlist)
+    K.turn(P.body[c], math.pi / 2, pos, yaw, acc, False, P.mstart, P.mlist)
+    np.testing.assert_allclose(pos[[g, a, c], :2], [[5.5, 5], [5.5, 4.4], [5.5, 5.6]], atol=1e-12)
+    np.testing.assert_allclose(yaw[[g, a, c]], [math.pi / 2, math.pi / 2, 1.5 * math.pi])
+    expect = pos.copy()
+    K.sync_members(P, pos, yaw)  # the incremental update matches the composed pose
+    np.testing.assert_allclose(pos, expect, atol=1e-12)
 
 
 @pytest.mark.parametrize("schedule,expect", [("constant", 0.5), ("decay", 1 - 0.5 ** (30 / 60)), ("grow", 1 - 0.5 ** (60 / 30))])
