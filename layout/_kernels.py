@@ -8,7 +8,9 @@ is added to ``acc`` and :func:`flush` applies the average of each batch
 (one constraint kind) with over-relaxation ω.
 
 Formulas follow Weiss et al. 2018 (TVCG) Sec. 3 and the thesis Ch. 5; the equation
-numbers in comments are the paper's. Degenerate cases (a zero-length direction) are
+numbers in comments are the paper's. Kernels use numpy's error model (a division by
+zero gives inf, never an exception check in the hot loop); every division that could
+see a zero is guarded. Degenerate cases (a zero-length direction) are
 skipped and counted in ``degen[kind]``.
 """
 from __future__ import annotations
@@ -56,7 +58,7 @@ INSIDE_M = 1e-7
 # --------------------------------------------------------------------------- helpers
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def stiffness(k0, schedule, it, rate):
     """k_l for iteration ``it`` >= 1 and rate M (Sec. 3.1)."""
     if schedule == DECAY:
@@ -66,20 +68,31 @@ def stiffness(k0, schedule, it, rate):
     return k0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
+def stiffness_memo(k0, schedule, it, rate, memo):
+    """:func:`stiffness`, remembering the last (k0, schedule) of a kernel's loop:
+    constraints of one kind nearly always share them, and pow is not free."""
+    if k0 != memo[0] or schedule != memo[1]:
+        memo[0] = k0
+        memo[1] = schedule
+        memo[2] = stiffness(k0, schedule, it, rate)
+    return memo[2]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def wrap(a):
     """Angle wrapped to [-pi, pi)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
+    return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def pose(pos, yaw, i):
     """World pose (x, y, z, yaw) of particle ``i``: the state keeps every particle's
     world pose, rigid-group members included (see :func:`move`)."""
     return pos[i, 0], pos[i, 1], pos[i, 2], yaw[i]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def move(b, dx, dy, dz, da, pos, yaw, mstart, mlist):
     """Translate body b by (dx, dy, dz) and turn it by da about its center, carrying
     its rigid members along so every world pose stays current."""
@@ -102,7 +115,7 @@ def move(b, dx, dy, dz, da, pos, yaw, mstart, mlist):
         yaw[m] += da
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def push(b, dx, dy, dz, pos, yaw, acc, jac, mstart, mlist):
     if jac:
         acc[b, 0] += dx
@@ -113,7 +126,7 @@ def push(b, dx, dy, dz, pos, yaw, acc, jac, mstart, mlist):
         move(b, dx, dy, dz, 0.0, pos, yaw, mstart, mlist)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def turn(b, da, pos, yaw, acc, jac, mstart, mlist):
     if jac:
         acc[b, 4] += da
@@ -122,7 +135,7 @@ def turn(b, da, pos, yaw, acc, jac, mstart, mlist):
         move(b, 0.0, 0.0, 0.0, da, pos, yaw, mstart, mlist)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def flush(pos, yaw, acc, omega, mstart, mlist):
     """Apply the averaged Jacobi corrections, Δp = ω/n Σ Δp_j (thesis Eq. 3.6).
 
@@ -138,7 +151,7 @@ def flush(pos, yaw, acc, omega, mstart, mlist):
             acc[b, q] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def sync_members(P, pos, yaw):
     """Write the world pose of every rigid-group member from its body's pose."""
     for i in range(pos.shape[0]):
@@ -154,7 +167,7 @@ def sync_members(P, pos, yaw):
             yaw[i] = yaw[b] + P.body_yaw[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always", error_model="numpy")
 def nearest_on_polygon(poly, x, y):
     """Nearest boundary point (qx, qy), its edge (first found on ties) and distance."""
     m = poly.shape[0]
@@ -181,7 +194,7 @@ def nearest_on_polygon(poly, x, y):
     return bx, by, be, math.sqrt(best)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always", error_model="numpy")
 def inside_polygon(poly, x, y):
     """Crossing-number point-in-polygon test."""
     m = poly.shape[0]
@@ -200,13 +213,13 @@ def inside_polygon(poly, x, y):
     return inside
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def support(hd, hw, c, s, nx, ny):
     """Half-extent along unit direction n of a box with half depth/width and yaw (c, s)."""
     return hd * abs(c * nx + s * ny) + hw * abs(-s * nx + c * ny)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always", error_model="numpy")
 def sat(xa, ya, ca, sa, hda, hwa, xb, yb, cb, sb, hdb, hwb):
     """Separating-axis test of two oriented rectangles.
 
@@ -241,9 +254,10 @@ def sat(xa, ya, ca, sa, hda, hwa, xb, yb, cb, sb, hdb, hwb):
 # ------------------------------------------------------------------- static kinds
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_distance(D, P, pos, yaw, acc, jac, it, rate, degen):
     """Pairwise (and focal-point) distance, Eqs. (4)–(6); EQ, MIN or MAX."""
+    memo = np.array([-1.0, -1.0, 0.0])
     for c in range(D.rest.shape[0]):
         i = D.pairs[c, 0]
         j = D.pairs[c, 1]
@@ -262,12 +276,12 @@ def project_distance(D, P, pos, yaw, acc, jac, it, rate, degen):
         C = length - D.rest[c]
         if (D.mode[c] == MIN and C >= 0.0) or (D.mode[c] == MAX and C <= 0.0):
             continue
-        f = stiffness(D.k0[c], D.schedule[c], it, rate) * C / ((wi + wj) * length)
+        f = stiffness_memo(D.k0[c], D.schedule[c], it, rate, memo) * C / ((wi + wj) * length)
         push(P.body[i], -wi * f * dx, -wi * f * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
         push(P.body[j], wj * f * dx, wj * f * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_distance(D, P, pos, yaw, out):
     for c in range(D.rest.shape[0]):
         xi, yi, _, _ = pose(pos, yaw, D.pairs[c, 0])
@@ -280,7 +294,7 @@ def residual_distance(D, P, pos, yaw, out):
         out[c] = C
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def lane_geometry(L, P, pos, yaw, c):
     """Ghost point on the lane vector nearest the item, and the required clearance."""
     o = L.origin[c]
@@ -311,9 +325,10 @@ def lane_geometry(L, P, pos, yaw, c):
     return dist - need, nx, ny, dist
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_lane(L, P, pos, yaw, acc, jac, it, rate, degen):
     """Traffic lane, Eqs. (7)–(8): the item keeps clear of a vector; ghost on origin."""
+    memo = np.array([-1.0, -1.0, 0.0])
     for c in range(L.origin.shape[0]):
         i = L.item[c]
         o = L.origin[c]
@@ -326,19 +341,19 @@ def project_lane(L, P, pos, yaw, acc, jac, it, rate, degen):
         wo = P.inv_mass[P.body[o]] * L.w_scale[c, 1]
         if wi + wo == 0.0:
             continue
-        f = stiffness(L.k0[c], L.schedule[c], it, rate) * C / (wi + wo)
+        f = stiffness_memo(L.k0[c], L.schedule[c], it, rate, memo) * C / (wi + wo)
         push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
         push(P.body[o], wo * f * nx, wo * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_lane(L, P, pos, yaw, out):
     for c in range(L.origin.shape[0]):
         C, _, _, _ = lane_geometry(L, P, pos, yaw, c)
         out[c] = min(C, 0.0)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def weighted_center(P, pos, yaw, members, a, b, by_area):
     """Center of mass of members[a:b] (mass = box volume, or footprint area)."""
     mx = 0.0
@@ -354,7 +369,7 @@ def weighted_center(P, pos, yaw, members, a, b, by_area):
     return mx / total, my / total, total
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def project_center(P, pos, yaw, acc, jac, members, a, b, by_area, ex, ey, total, k):
     """Correction of C = ½‖m − p̃‖² (Eqs. 9–10): Δp_j = −k s w_j ∇_j C."""
     denom = 0.0
@@ -372,7 +387,7 @@ def project_center(P, pos, yaw, acc, jac, members, a, b, by_area, ex, ey, total,
         push(P.body[j], f * ex, f * ey, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def heat_target(H, P, pos, yaw, c):
     fr = H.frame[c]
     if fr < 0:
@@ -383,19 +398,20 @@ def heat_target(H, P, pos, yaw, c):
     return x + ca * H.target[c, 0] - sa * H.target[c, 1], y + sa * H.target[c, 0] + ca * H.target[c, 1]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_heat(H, P, pos, yaw, acc, jac, it, rate, degen):
     """Heat point: the members' center of mass goes to a point (Eq. 9)."""
+    memo = np.array([-1.0, -1.0, 0.0])
     for c in range(H.frame.shape[0]):
         a = H.start[c]
         b = H.start[c + 1]
         mx, my, total = weighted_center(P, pos, yaw, H.members, a, b, False)
         tx, ty = heat_target(H, P, pos, yaw, c)
-        k = stiffness(H.k0[c], H.schedule[c], it, rate)
+        k = stiffness_memo(H.k0[c], H.schedule[c], it, rate, memo)
         project_center(P, pos, yaw, acc, jac, H.members, a, b, False, mx - tx, my - ty, total, k)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_heat(H, P, pos, yaw, out):
     for c in range(H.frame.shape[0]):
         mx, my, _ = weighted_center(P, pos, yaw, H.members, H.start[c], H.start[c + 1], False)
@@ -403,7 +419,7 @@ def residual_heat(H, P, pos, yaw, out):
         out[c] = 0.5 * ((mx - tx) ** 2 + (my - ty) ** 2)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def symmetry_target(S, P, pos, yaw, c, mx, my):
     """Projection of the members' center onto the focal's axis (ray), Eq. (11)."""
     xf, yf, _, af = pose(pos, yaw, S.focal[c])
@@ -413,19 +429,20 @@ def symmetry_target(S, P, pos, yaw, c, mx, my):
     return xf + t * vx, yf + t * vy
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_symmetry(S, P, pos, yaw, acc, jac, it, rate, degen):
     """Focal point symmetry: members' center of mass onto the focal's axis."""
+    memo = np.array([-1.0, -1.0, 0.0])
     for c in range(S.focal.shape[0]):
         a = S.start[c]
         b = S.start[c + 1]
         mx, my, total = weighted_center(P, pos, yaw, S.members, a, b, False)
         tx, ty = symmetry_target(S, P, pos, yaw, c, mx, my)
-        k = stiffness(S.k0[c], S.schedule[c], it, rate)
+        k = stiffness_memo(S.k0[c], S.schedule[c], it, rate, memo)
         project_center(P, pos, yaw, acc, jac, S.members, a, b, False, mx - tx, my - ty, total, k)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_symmetry(S, P, pos, yaw, out):
     for c in range(S.focal.shape[0]):
         mx, my, _ = weighted_center(P, pos, yaw, S.members, S.start[c], S.start[c + 1], False)
@@ -433,27 +450,28 @@ def residual_symmetry(S, P, pos, yaw, out):
         out[c] = 0.5 * ((mx - tx) ** 2 + (my - ty) ** 2)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_balance(B, P, pos, yaw, acc, jac, it, rate, degen):
     """Visual balance, Eq. (12): footprint-weighted center to the room centroid."""
+    memo = np.array([-1.0, -1.0, 0.0])
     for c in range(B.target.shape[0]):
         a = B.start[c]
         b = B.start[c + 1]
         mx, my, total = weighted_center(P, pos, yaw, B.members, a, b, True)
-        k = stiffness(B.k0[c], B.schedule[c], it, rate)
+        k = stiffness_memo(B.k0[c], B.schedule[c], it, rate, memo)
         ex = mx - B.target[c, 0]
         ey = my - B.target[c, 1]
         project_center(P, pos, yaw, acc, jac, B.members, a, b, True, ex, ey, total, k)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_balance(B, P, pos, yaw, out):
     for c in range(B.target.shape[0]):
         mx, my, _ = weighted_center(P, pos, yaw, B.members, B.start[c], B.start[c + 1], True)
         out[c] = 0.5 * ((mx - B.target[c, 0]) ** 2 + (my - B.target[c, 1]) ** 2)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def wall_frame(R, x, y):
     """Signed distance to the walls (positive inside), inward direction, nearest edge."""
     qx, qy, e, dist = nearest_on_polygon(R.polygon, x, y)
@@ -466,9 +484,10 @@ def wall_frame(R, x, y):
     return -dist, -nx, -ny, e
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen):
     """Distance to wall, Eq. (13); the wall point has infinite mass."""
+    memo = np.array([-1.0, -1.0, 0.0])
     for c in range(W.item.shape[0]):
         i = W.item[c]
         if P.inv_mass[P.body[i]] == 0.0:
@@ -478,11 +497,11 @@ def project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen):
         C = sd - W.rest[c]
         if (W.mode[c] == MIN and C >= 0.0) or (W.mode[c] == MAX and C <= 0.0):
             continue
-        k = stiffness(W.k0[c], W.schedule[c], it, rate)
+        k = stiffness_memo(W.k0[c], W.schedule[c], it, rate, memo)
         push(P.body[i], -k * C * nx, -k * C * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_wall_distance(W, R, P, pos, yaw, out):
     for c in range(W.item.shape[0]):
         x, y, _, _ = pose(pos, yaw, W.item[c])
@@ -495,7 +514,7 @@ def residual_wall_distance(W, R, P, pos, yaw, out):
         out[c] = C
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def wall_orientation_error(O, R, P, pos, yaw, c):
     x, y, _, a = pose(pos, yaw, O.item[c])
     _, _, e, _ = nearest_on_polygon(R.polygon, x, y)
@@ -503,24 +522,25 @@ def wall_orientation_error(O, R, P, pos, yaw, c):
     return wrap(want - a)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_wall_orientation(O, R, P, pos, yaw, acc, jac, it, rate, degen):
     """Orientation to wall, Eq. (17): smallest rotation towards the wanted angle."""
+    memo = np.array([-1.0, -1.0, 0.0])
     for c in range(O.item.shape[0]):
         i = O.item[c]
         if P.inv_mass[P.body[i]] == 0.0:
             continue
-        k = stiffness(O.k0[c], O.schedule[c], it, rate)
+        k = stiffness_memo(O.k0[c], O.schedule[c], it, rate, memo)
         turn(P.body[i], k * wall_orientation_error(O, R, P, pos, yaw, c), pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_wall_orientation(O, R, P, pos, yaw, out):
     for c in range(O.item.shape[0]):
         out[c] = abs(wall_orientation_error(O, R, P, pos, yaw, c))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def orientation_errors(O, P, pos, yaw, c):
     """Smallest rotations (Δθ_i, Δθ_j) that satisfy the pair's orientation, Eq. (16)."""
     i = O.pairs[c, 0]
@@ -547,30 +567,32 @@ def orientation_errors(O, P, pos, yaw, c):
     return di, dj
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen):
+    memo = np.array([-1.0, -1.0, 0.0])
     for c in range(O.mode.shape[0]):
         i = O.pairs[c, 0]
         j = O.pairs[c, 1]
         di, dj = orientation_errors(O, P, pos, yaw, c)
-        k = stiffness(O.k0[c], O.schedule[c], it, rate)
+        k = stiffness_memo(O.k0[c], O.schedule[c], it, rate, memo)
         if P.inv_mass[P.body[i]] > 0.0:
             turn(P.body[i], k * di, pos, yaw, acc, jac, P.mstart, P.mlist)
         if P.inv_mass[P.body[j]] > 0.0:
             turn(P.body[j], k * dj, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_orientation(O, P, pos, yaw, out):
     for c in range(O.mode.shape[0]):
         di, dj = orientation_errors(O, P, pos, yaw, c)
         out[c] = math.sqrt(di * di + dj * dj)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_stack(S, P, pos, yaw, acc, jac, it, rate, degen):
     """Vertical stacking, Eqs. (18)–(19). The base rests on what is below it, so only
     the top moves vertically; x and y are shared by inverse mass."""
+    memo = np.array([-1.0, -1.0, 0.0])
     for c in range(S.k0.shape[0]):
         i = S.pairs[c, 0]
         j = S.pairs[c, 1]
@@ -580,7 +602,7 @@ def project_stack(S, P, pos, yaw, acc, jac, it, rate, degen):
         wj = P.inv_mass[P.body[j]]
         if wi + wj == 0.0:
             continue
-        k = stiffness(S.k0[c], S.schedule[c], it, rate)
+        k = stiffness_memo(S.k0[c], S.schedule[c], it, rate, memo)
         cz = zj - (zi + 0.5 * (P.size[i, 2] + P.size[j, 2]))
         cx = xj - xi
         cy = yj - yi
@@ -591,7 +613,7 @@ def project_stack(S, P, pos, yaw, acc, jac, it, rate, degen):
         push(P.body[j], -fj * cx, -fj * cy, dzj, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_stack(S, P, pos, yaw, out):
     for c in range(S.k0.shape[0]):
         i = S.pairs[c, 0]
@@ -602,7 +624,7 @@ def residual_stack(S, P, pos, yaw, out):
         out[c] = math.sqrt(cz * cz + (xj - xi) ** 2 + (yj - yi) ** 2)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def curve_point(U, c, lx, ly):
     """Nearest point on curve c (group frame) to (lx, ly), and its parameter in [0, 1]."""
     p = U.params[c]
@@ -623,7 +645,7 @@ def curve_point(U, c, lx, ly):
     return ax + t * ex, ay + t * ey, t
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def curve_offsets(U, P, pos, yaw, c, param):
     """For each member of curve c: world offset from its curve point; fills ``param``."""
     g = U.group[c]
@@ -644,7 +666,7 @@ def curve_offsets(U, P, pos, yaw, c, param):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def curve_order(param):
     """Members sorted by curve parameter (insertion sort: nearly sorted each call)."""
     n = param.shape[0]
@@ -659,16 +681,17 @@ def curve_order(param):
     return order
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_curve(U, P, pos, yaw, acc, jac, it, rate, degen):
     """Members of a non-rigid group onto its segment or arc (a distance constraint to
     the nearest curve point, Sec. 3.2), then equal spacing between neighbours in
     curve-parameter order."""
+    memo = np.array([-1.0, -1.0, 0.0])
     for c in range(U.group.shape[0]):
         g = U.group[c]
         a = U.start[c]
         b = U.start[c + 1]
-        k = stiffness(U.k0[c], U.schedule[c], it, rate)
+        k = stiffness_memo(U.k0[c], U.schedule[c], it, rate, memo)
         wg = 0.0 if U.anchor_fixed[c] else P.inv_mass[P.body[g]]
         param = np.empty(b - a)
         off = curve_offsets(U, P, pos, yaw, c, param)
@@ -707,7 +730,7 @@ def project_curve(U, P, pos, yaw, acc, jac, it, rate, degen):
             push(P.body[j], wj * f * dx, wj * f * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_curve(U, P, pos, yaw, out):
     for c in range(U.group.shape[0]):
         a = U.start[c]
@@ -728,7 +751,7 @@ def residual_curve(U, P, pos, yaw, out):
 # ------------------------------------------------------------ layout boundary
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always", error_model="numpy")
 def boundary_item(R, P, pos, yaw, i, project):
     """Keep the footprint of item i inside the floor polygon (hard, Sec. 3.3.7).
 
@@ -740,6 +763,11 @@ def boundary_item(R, P, pos, yaw, i, project):
     b = P.body[i]
     hd = 0.5 * P.size[i, 1]
     hw = 0.5 * P.size[i, 0]
+    # Quick accept: the footprint's circumcircle lies inside the floor.
+    x, y, _, _ = pose(pos, yaw, i)
+    _, _, _, wall_m = nearest_on_polygon(R.polygon, x, y)
+    if wall_m * wall_m > hd * hd + hw * hw and inside_polygon(R.polygon, x, y):
+        return 0.0
     violation = 0.0
     for rep in range(4):
         x, y, _, a = pose(pos, yaw, i)
@@ -791,14 +819,14 @@ def boundary_item(R, P, pos, yaw, i, project):
     return violation
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_boundary(R, P, pos, yaw):
     for i in range(P.role.shape[0]):
         if P.bounded[i] and P.inv_mass[P.body[i]] > 0.0:
             boundary_item(R, P, pos, yaw, i, True)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def residual_boundary(R, P, pos, yaw, out):
     for i in range(P.role.shape[0]):
         out[i] = -math.sqrt(boundary_item(R, P, pos, yaw, i, False)) if P.bounded[i] else 0.0
@@ -807,7 +835,7 @@ def residual_boundary(R, P, pos, yaw, out):
 # ------------------------------------------------- collision and accessibility
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def candidate_pairs(P, pos, yaw, cell_m, pad_m):
     """Pairs (i < j) whose padded bounding boxes overlap, from a uniform spatial hash.
 
@@ -820,7 +848,7 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
     idx = np.empty(n, np.int64)
     m = 0
     for i in range(n):
-        if P.role[i] == OBSTACLE or (P.role[i] == ITEM and (P.collides[i] or P.access_depth[i].max() > 0.0)):
+        if P.role[i] == OBSTACLE or (P.role[i] == ITEM and (P.collides[i] or P.access_max[i] > 0.0)):
             idx[m] = i
             m += 1
     lo = np.empty((m, 2))
@@ -830,8 +858,8 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
         x, y, _, a = pose(pos, yaw, i)
         c = abs(math.cos(a))
         s = abs(math.sin(a))
-        hd = 0.5 * P.size[i, 1] + P.access_depth[i].max()
-        hw = 0.5 * P.size[i, 0] + P.access_depth[i].max()
+        hd = 0.5 * P.size[i, 1] + P.access_max[i]
+        hw = 0.5 * P.size[i, 0] + P.access_max[i]
         ex = c * hd + s * hw + pad_m
         ey = s * hd + c * hw + pad_m
         lo[q, 0] = x - ex
@@ -903,41 +931,38 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
     return pairs[:npairs]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def z_overlap(size, zi, i, zj, j):
     return abs(zi - zj) < 0.5 * (size[i, 2] + size[j, 2]) - Z_TOUCH_M
 
 
-@njit(cache=True)
-def collision_pair(size, collides, pos, yaw, i, j, model, gap_m):
+@njit(cache=True, inline="always", error_model="numpy")
+def collision_pair(size, radius, collides, pos, cs, i, j, model, gap_m):
     """Collision constraint value of a pair (<= 0 when colliding) and its direction.
 
     BOX: exact penetration of the oriented footprints (SAT), pushed along the axis of
     least penetration. SPHERE: the paper's bounding circles, Eq. (15), activated when
-    the boxes overlap. Returns (C, nx, ny, active) with n pointing from j to i.
+    the boxes overlap. ``cs`` holds (cos, sin) of every yaw. Returns (C, nx, ny,
+    active) with n pointing from j to i.
     """
     if not (collides[i] and collides[j]):
         return 0.0, 0.0, 0.0, False
-    xi, yi, zi, ai = pose(pos, yaw, i)
-    xj, yj, zj, aj = pose(pos, yaw, j)
-    if not z_overlap(size, zi, i, zj, j):
+    if not z_overlap(size, pos[i, 2], i, pos[j, 2], j):
         return 0.0, 0.0, 0.0, False
-    ci = math.cos(ai)
-    si = math.sin(ai)
-    cj = math.cos(aj)
-    sj = math.sin(aj)
+    dx = pos[i, 0] - pos[j, 0]
+    dy = pos[i, 1] - pos[j, 1]
+    ri = radius[i]
+    rj = radius[j]
+    if dx * dx + dy * dy >= (ri + rj + gap_m) ** 2:
+        return 0.0, 0.0, 0.0, False
     depth, nx, ny = sat(
-        xi, yi, ci, si, 0.5 * size[i, 1], 0.5 * size[i, 0],
-        xj, yj, cj, sj, 0.5 * size[j, 1], 0.5 * size[j, 0],
+        pos[i, 0], pos[i, 1], cs[i, 0], cs[i, 1], 0.5 * size[i, 1], 0.5 * size[i, 0],
+        pos[j, 0], pos[j, 1], cs[j, 0], cs[j, 1], 0.5 * size[j, 1], 0.5 * size[j, 0],
     )
     if depth <= -gap_m:
         return 0.0, 0.0, 0.0, False
     if model == BOX:
         return -(depth + gap_m), nx, ny, True
-    ri = 0.5 * math.sqrt(size[i, 0] ** 2 + size[i, 1] ** 2)
-    rj = 0.5 * math.sqrt(size[j, 0] ** 2 + size[j, 1] ** 2)
-    dx = xi - xj
-    dy = yi - yj
     dist = math.sqrt(dx * dx + dy * dy)
     C = dist - (ri + rj)
     if C >= 0.0:
@@ -947,7 +972,16 @@ def collision_pair(size, collides, pos, yaw, i, j, model, gap_m):
     return C, dx / dist, dy / dist, True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
+def trig(yaw, cs):
+    """(cos, sin) of every yaw; collisions, access and the boundary turn nothing, so
+    one table serves a whole phase."""
+    for i in range(yaw.shape[0]):
+        cs[i, 0] = math.cos(yaw[i])
+        cs[i, 1] = math.sin(yaw[i])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def wall_points_pair(P, R, pos, yaw, i, j, model, gap_m):
     """Extra projection between the wall points of two colliding wall-bound items
     (Sec. 3.3.9, Fig. 8b): they slide apart along the wall instead of off it."""
@@ -975,12 +1009,12 @@ def wall_points_pair(P, R, pos, yaw, i, j, model, gap_m):
     return dist - need, tx, ty, True
 
 
-@njit(cache=True)
-def project_collision(P, R, pairs, pos, yaw, acc, jac, k, model, gap_m, degen):
+@njit(cache=True, error_model="numpy")
+def project_collision(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen):
     for p in range(pairs.shape[0]):
         i = pairs[p, 0]
         j = pairs[p, 1]
-        C, nx, ny, active = collision_pair(P.size, P.collides, pos, yaw, i, j, model, gap_m)
+        C, nx, ny, active = collision_pair(P.size, P.radius, P.collides, pos, cs, i, j, model, gap_m)
         if not active:
             continue
         wi = P.inv_mass[P.body[i]]
@@ -998,15 +1032,15 @@ def project_collision(P, R, pairs, pos, yaw, acc, jac, k, model, gap_m, degen):
                 push(P.body[j], wj * f * tx, wj * f * ty, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
-@njit(cache=True)
-def residual_collision(P, R, pairs, pos, yaw, model, out):
+@njit(cache=True, error_model="numpy")
+def residual_collision(P, R, pairs, pos, cs, model, out):
     for p in range(pairs.shape[0]):
-        C, _, _, active = collision_pair(P.size, P.collides, pos, yaw, pairs[p, 0], pairs[p, 1], model, 0.0)
+        C, _, _, active = collision_pair(P.size, P.radius, P.collides, pos, cs, pairs[p, 0], pairs[p, 1], model, 0.0)
         out[p] = C if active else 0.0
 
 
-@njit(cache=True)
-def access_side(size, access_depth, pos, yaw, owner, side, other, model):
+@njit(cache=True, inline="always", error_model="numpy")
+def access_side(size, access_depth, pos, cs, owner, side, other, model):
     """Accessibility of side ``side`` of ``owner`` against item ``other`` (Eq. 14).
 
     Active only when the other item's box intersects the access box. BOX: exact
@@ -1016,12 +1050,14 @@ def access_side(size, access_depth, pos, yaw, owner, side, other, model):
     depth_m = access_depth[owner, side]
     if depth_m <= 0.0:
         return 0.0, 0.0, 0.0, False
-    xo, yo, zo, ao = pose(pos, yaw, owner)
-    xi, yi, zi, ai = pose(pos, yaw, other)
-    if not z_overlap(size, zo, owner, zi, other):
+    if not z_overlap(size, pos[owner, 2], owner, pos[other, 2], other):
         return 0.0, 0.0, 0.0, False
-    co = math.cos(ao)
-    so = math.sin(ao)
+    xo = pos[owner, 0]
+    yo = pos[owner, 1]
+    xi = pos[other, 0]
+    yi = pos[other, 1]
+    co = cs[owner, 0]
+    so = cs[owner, 1]
     hd = 0.5 * size[owner, 1]
     hw = 0.5 * size[owner, 0]
     if side == 0 or side == 2:
@@ -1038,11 +1074,12 @@ def access_side(size, access_depth, pos, yaw, owner, side, other, model):
         bhw = 0.5 * depth_m
     ax = xo + co * lx - so * ly
     ay = yo + so * lx + co * ly
-    ci = math.cos(ai)
-    si = math.sin(ai)
     hdi = 0.5 * size[other, 1]
     hwi = 0.5 * size[other, 0]
-    depth, nx, ny = sat(xi, yi, ci, si, hdi, hwi, ax, ay, co, so, bhd, bhw)
+    reach = math.sqrt(hdi * hdi + hwi * hwi) + math.sqrt(bhd * bhd + bhw * bhw)
+    if (xi - ax) ** 2 + (yi - ay) ** 2 >= reach * reach:
+        return 0.0, 0.0, 0.0, False
+    depth, nx, ny = sat(xi, yi, cs[other, 0], cs[other, 1], hdi, hwi, ax, ay, co, so, bhd, bhw)
     if depth <= 0.0:
         return 0.0, 0.0, 0.0, False
     if model == BOX:
@@ -1058,41 +1095,37 @@ def access_side(size, access_depth, pos, yaw, owner, side, other, model):
     return C, dx / dist, dy / dist, True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", error_model="numpy")
 def access_exempt(parent, i, j):
     """Members of one group (a table and its chairs) may sit in each other's access."""
     return parent[i] >= 0 and parent[i] == parent[j]
 
 
-@njit(cache=True, inline="always")
-def access_reach(size, access_depth, pos, owner, other):
+@njit(cache=True, inline="always", error_model="numpy")
+def access_reach(radius, access_max, pos, owner, other):
     """Cheap reject: can ``other`` reach any access box of ``owner`` at all?"""
-    reach = (
-        0.5 * math.sqrt(size[owner, 0] ** 2 + size[owner, 1] ** 2)
-        + access_depth[owner].max()
-        + 0.5 * math.sqrt(size[other, 0] ** 2 + size[other, 1] ** 2)
-    )
-    return access_depth[owner].max() > 0.0 and (pos[owner, 0] - pos[other, 0]) ** 2 + (
+    reach = radius[owner] + access_max[owner] + radius[other]
+    return access_max[owner] > 0.0 and (pos[owner, 0] - pos[other, 0]) ** 2 + (
         pos[owner, 1] - pos[other, 1]
     ) ** 2 < reach * reach
 
 
-@njit(cache=True)
-def project_access(P, pairs, pos, yaw, acc, jac, k, model, degen):
+@njit(cache=True, error_model="numpy")
+def project_access(P, pairs, pos, yaw, cs, acc, jac, k, model, degen):
     for p in range(pairs.shape[0]):
         for turn_ in range(2):
             owner = pairs[p, turn_]
             other = pairs[p, 1 - turn_]
             if P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
                 continue
-            if access_exempt(P.parent, owner, other) or not access_reach(P.size, P.access_depth, pos, owner, other):
+            if access_exempt(P.parent, owner, other) or not access_reach(P.radius, P.access_max, pos, owner, other):
                 continue
             wo = P.inv_mass[P.body[owner]]
             wi = P.inv_mass[P.body[other]]
             if wo + wi == 0.0:
                 continue
             for side in range(4):
-                C, nx, ny, active = access_side(P.size, P.access_depth, pos, yaw, owner, side, other, model)
+                C, nx, ny, active = access_side(P.size, P.access_depth, pos, cs, owner, side, other, model)
                 if not active:
                     continue
                 f = k * C / (wo + wi)
@@ -1100,8 +1133,8 @@ def project_access(P, pairs, pos, yaw, acc, jac, k, model, degen):
                 push(P.body[owner], wo * f * nx, wo * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
-@njit(cache=True)
-def residual_access(P, pairs, pos, yaw, model, out):
+@njit(cache=True, error_model="numpy")
+def residual_access(P, pairs, pos, cs, model, out):
     """Squared-sum violation of all access sides, per candidate pair."""
     for p in range(pairs.shape[0]):
         total = 0.0
@@ -1110,10 +1143,10 @@ def residual_access(P, pairs, pos, yaw, model, out):
             other = pairs[p, 1 - turn_]
             if P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
                 continue
-            if access_exempt(P.parent, owner, other) or not access_reach(P.size, P.access_depth, pos, owner, other):
+            if access_exempt(P.parent, owner, other) or not access_reach(P.radius, P.access_max, pos, owner, other):
                 continue
             for side in range(4):
-                C, _, _, active = access_side(P.size, P.access_depth, pos, yaw, owner, side, other, model)
+                C, _, _, active = access_side(P.size, P.access_depth, pos, cs, owner, side, other, model)
                 if active:
                     total += C * C
         out[p] = -math.sqrt(total)
@@ -1122,7 +1155,7 @@ def residual_access(P, pairs, pos, yaw, model, out):
 # ------------------------------------------------------------------ energy, loop
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def energy_terms(M, pos, yaw, pairs, model, weights):
     """Weighted squared residual of each kind, Σ_j g_j C_j² (Eq. 1, before the root)."""
     P, D, L, H, S, B, W, WO, O, ST, U, R = M
@@ -1152,18 +1185,71 @@ def energy_terms(M, pos, yaw, pairs, model, weights):
     terms[K_CURVE] = (out[: U.group.shape[0]] ** 2).sum()
     residual_boundary(R, P, pos, yaw, out)
     terms[K_BOUNDARY] = (out[: P.role.shape[0]] ** 2).sum()
-    residual_collision(P, R, pairs, pos, yaw, model, out)
+    cs = np.empty((pos.shape[0], 2))
+    trig(yaw, cs)
+    residual_collision(P, R, pairs, pos, cs, model, out)
     terms[K_COLLISION] = (out[: pairs.shape[0]] ** 2).sum()
-    residual_access(P, pairs, pos, yaw, model, out)
+    residual_access(P, pairs, pos, cs, model, out)
     terms[K_ACCESS] = (out[: pairs.shape[0]] ** 2).sum()
     for k in range(N_KINDS):
         terms[k] *= weights[k]
     return terms
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
+def iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, model, k_collision, k_access, gap_m):
+    """One solver iteration ``it`` (1-based): the constraints of its row of the
+    interleaving table, then stacking, collision, accessibility and the boundary."""
+    P, D, L, H, S, B, W, WO, O, ST, U, R = M
+    row = (it - 1) % 6
+    others = order[row, 1]
+    if others:
+        project_distance(D, P, pos, yaw, acc, jac, it, rate, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        project_lane(L, P, pos, yaw, acc, jac, it, rate, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        project_heat(H, P, pos, yaw, acc, jac, it, rate, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        project_symmetry(S, P, pos, yaw, acc, jac, it, rate, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        project_balance(B, P, pos, yaw, acc, jac, it, rate, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        project_curve(U, P, pos, yaw, acc, jac, it, rate, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+    if order[row, 0]:
+        project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        project_wall_orientation(WO, R, P, pos, yaw, acc, jac, it, rate, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+    project_stack(ST, P, pos, yaw, acc, jac, it, rate, degen)
+    if jac:
+        flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+    if order[row, 2]:
+        trig(yaw, cs)
+        kc = stiffness(k_collision, GROW, it, rate)
+        project_collision(P, R, pairs, pos, yaw, cs, acc, jac, kc, model, gap_m, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        project_access(P, pairs, pos, yaw, cs, acc, jac, k_access, model, degen)
+        if jac:
+            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+    project_boundary(R, P, pos, yaw)
+
+
+@njit(cache=True, error_model="numpy")
 def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, order, model, k_collision,
-               k_access, gap_m, cell_m, pad_m, weights):
+               k_access, gap_m, cell_m, pad_m, weights, energy_every):
     """Algorithm 1: project all constraints per iteration, keep the best layout.
 
     Per iteration ``it`` (1-based) the interleaving row ``order[(it - 1) % 6]`` says
@@ -1181,6 +1267,7 @@ def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, ord
     P, D, L, H, S, B, W, WO, O, ST, U, R = M
     n = pos.shape[0]
     acc = np.zeros((n, 6))
+    cs = np.empty((n, 2))
     degen = np.zeros(N_KINDS, np.int64)
     trace = np.full(max_iter + 1, np.nan)
     best_pos = pos.copy()
@@ -1190,8 +1277,29 @@ def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, ord
     ref_e = np.inf
     ref_it = 0
     it = 0
+    reach = np.empty(n)
+    for i in range(n):
+        reach[i] = P.radius[i] + P.access_max[i]
+    ref_pos = pos.copy()
+    ref_yaw = yaw.copy()
+    pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
     while True:
-        pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
+        # Verlet list: the pairs found with padding pad_m stay valid until something
+        # has moved (or swung, at its reach) by half the padding.
+        moved = 0.0
+        for i in range(n):
+            d = math.sqrt((pos[i, 0] - ref_pos[i, 0]) ** 2 + (pos[i, 1] - ref_pos[i, 1]) ** 2)
+            d += reach[i] * abs(yaw[i] - ref_yaw[i])
+            moved = max(moved, d)
+        if moved > 0.5 * pad_m:
+            pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
+            ref_pos[:] = pos
+            ref_yaw[:] = yaw
+        if it % energy_every != 0 and it < max_iter:
+            trace[it] = trace[it - 1]
+            it += 1
+            iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, model, k_collision, k_access, gap_m)
+            continue
         e = math.sqrt(energy_terms(M, pos, yaw, pairs, model, weights).sum())
         trace[it] = e
         if e < best_e:
@@ -1205,47 +1313,5 @@ def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, ord
         if it >= max_iter or it - ref_it >= patience:
             break
         it += 1
-        row = (it - 1) % 6
-        others = order[row, 1]
-        if others:
-            project_distance(D, P, pos, yaw, acc, jac, it, rate, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-            project_lane(L, P, pos, yaw, acc, jac, it, rate, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-            project_heat(H, P, pos, yaw, acc, jac, it, rate, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-            project_symmetry(S, P, pos, yaw, acc, jac, it, rate, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-            project_balance(B, P, pos, yaw, acc, jac, it, rate, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-            project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-            project_curve(U, P, pos, yaw, acc, jac, it, rate, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-        if order[row, 0]:
-            project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-            project_wall_orientation(WO, R, P, pos, yaw, acc, jac, it, rate, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-        project_stack(ST, P, pos, yaw, acc, jac, it, rate, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-        if order[row, 2]:
-            kc = stiffness(k_collision, GROW, it, rate)
-            project_collision(P, R, pairs, pos, yaw, acc, jac, kc, model, gap_m, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-            project_access(P, pairs, pos, yaw, acc, jac, k_access, model, degen)
-            if jac:
-                flush(pos, yaw, acc, omega, P.mstart, P.mlist)
-        project_boundary(R, P, pos, yaw)
+        iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, model, k_collision, k_access, gap_m)
     return best_pos, best_yaw, trace[: it + 1], best_it, it, degen

@@ -507,6 +507,8 @@ class LayoutBuilder:
             particle_access_depth_m=np.array([r["access"] for r in p], np.float64).reshape(n, 4),
             particle_mstart=mstart,
             particle_mlist=mlist,
+            particle_radius_m=0.5 * np.hypot(size[:, 0], size[:, 1]),
+            particle_access_max_m=np.array([r["access"] for r in p], np.float64).reshape(n, 4).max(axis=1),
             particle_init_position_m=init_pos,
             particle_init_yaw_rad=init_yaw,
             floor_polygon_m=poly.copy(),

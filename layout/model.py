@@ -16,7 +16,7 @@ import numpy as np
 Particles = namedtuple(
     "Particles",
     "role size mass inv_mass body body_offset body_yaw parent collides bounded wall_bound access_depth "
-    "mstart mlist",
+    "mstart mlist radius access_max",
 )
 Distances = namedtuple("Distances", "pairs rest mode k0 schedule w_scale")
 Lanes = namedtuple("Lanes", "origin item start angle length half_width k0 schedule w_scale")
@@ -57,6 +57,8 @@ class Model:
     particle_access_depth_m: np.ndarray  # (n, 4) clearance behind, left, front, right
     particle_mstart: np.ndarray  # (n + 1,) CSR offsets into particle_mlist
     particle_mlist: np.ndarray  # rigid members of each body (the body itself excluded)
+    particle_radius_m: np.ndarray  # (n,) half diagonal of the footprint
+    particle_access_max_m: np.ndarray  # (n,) deepest clearance
     particle_init_position_m: np.ndarray  # (n, 3) NaN x/y where the start is random
     particle_init_yaw_rad: np.ndarray  # (n,) NaN where random
 

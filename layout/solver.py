@@ -178,6 +178,11 @@ class Solver:
     access_stiffness : constant stiffness of the accessibility constraints.
     gap_m : clearance the collision projection aims for, so touching boxes part.
     order : six rows of (wall, others, collision) flags, thesis Table 5.1.
+    energy_every : evaluate the energy (to keep the best layout and decide when to
+        stop) every this many iterations; 1 is the paper's every iteration. Between
+        evaluations the trace repeats the last value.
+    pad_m : padding of the collision pair list, rebuilt once anything has moved by
+        half of it.
     """
 
     max_iterations: int = 1000
@@ -192,6 +197,8 @@ class Solver:
     access_stiffness: float = 0.5
     gap_m: float = 0.002
     order: tuple = TABLE_5_1
+    energy_every: int = 1
+    pad_m: float = 0.1
 
     def __post_init__(self):
         if self.method not in ("gauss-seidel", "jacobi"):
@@ -204,6 +211,10 @@ class Solver:
             raise LayoutError(f"solver.patience: {self.patience!r} must be an integer >= 1")
         if not self.rate >= 1.0:
             raise LayoutError(f"solver.rate: {self.rate!r} must be >= 1 (the paper's M)")
+        if not (isinstance(self.energy_every, int) and self.energy_every >= 1):
+            raise LayoutError(f"solver.energy_every: {self.energy_every!r} must be an integer >= 1")
+        if not self.pad_m > 0.0:
+            raise LayoutError(f"solver.pad_m: {self.pad_m!r} must be > 0")
         for name in ("collision_stiffness", "access_stiffness"):
             if not 0.0 < getattr(self, name) <= 1.0:
                 raise LayoutError(f"solver.{name}: {getattr(self, name)!r} must lie in (0, 1]")
@@ -230,8 +241,9 @@ class Solver:
             float(self.access_stiffness),
             float(self.gap_m),
             _cell_size(model),
-            0.05,
+            float(self.pad_m),
             np.array(codes.ENERGY_WEIGHTS),
+            self.energy_every,
         )
         elapsed = time.perf_counter() - t0
         K.sync_members(model.packed()[0], best_pos, best_yaw)

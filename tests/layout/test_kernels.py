@@ -26,6 +26,10 @@ def _state(model, xy, yaw=None, z=None):
     return pos, yaw.copy()
 
 
+def _cs(yaw):
+    return np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
+
+
 def _project(kernel, arrays, model, pos, yaw, *extra):
     P = model.packed()[0]
     acc = np.zeros((model.n, 6))
@@ -331,7 +335,7 @@ def test_collision_box_and_sphere(model):
     before = pos.copy()
     pairs = K.candidate_pairs(P, pos, yaw, 1.0, 0.05)
     assert pairs.tolist() == [[0, 1]]
-    K.project_collision(P, R, pairs, pos, yaw, np.zeros((2, 6)), False, 1.0, model, 0.0,
+    K.project_collision(P, R, pairs, pos, yaw, _cs(yaw), np.zeros((2, 6)), False, 1.0, model, 0.0,
                         np.zeros(len(codes.KINDS), np.int64))
     if model == codes.BOX:
         # Depth 0.2 along x (the axis of least penetration), split equally.
@@ -341,7 +345,7 @@ def test_collision_box_and_sphere(model):
 
     def residual(p):
         out = np.zeros(1)
-        K.residual_collision(P, R, pairs, p, yaw, model, out)
+        K.residual_collision(P, R, pairs, p, _cs(yaw), model, out)
         return out[0]
 
     _check_pbd_step(m, residual, before, pos, [a, c])
@@ -362,7 +366,7 @@ def test_collision_ignores_items_at_different_heights_and_rigid_mates():
     K.sync_members(P, pos, yaw)
     pairs = K.candidate_pairs(P, pos, yaw, 1.0, 0.05)
     out = np.zeros(max(1, len(pairs)))
-    K.residual_collision(P, R, pairs, pos, yaw, codes.BOX, out)
+    K.residual_collision(P, R, pairs, pos, _cs(yaw), codes.BOX, out)
     assert np.all(out == 0.0)  # lamp rests on the desk; x and y are one rigid body
     assert desk == 0
 
@@ -377,7 +381,7 @@ def test_wall_bound_pair_slides_along_the_wall():
     P, R = m.packed()[0], m.packed()[11]
     pos, yaw = _state(m, [[0.3, 5.0], [0.3, 5.6]])
     pairs = K.candidate_pairs(P, pos, yaw, 1.0, 0.05)
-    K.project_collision(P, R, pairs, pos, yaw, np.zeros((2, 6)), False, 1.0, codes.BOX, 0.0,
+    K.project_collision(P, R, pairs, pos, yaw, _cs(yaw), np.zeros((2, 6)), False, 1.0, codes.BOX, 0.0,
                         np.zeros(len(codes.KINDS), np.int64))
     # Both keep x = 0.3 (on the wall) and end 1 m apart along it.
     np.testing.assert_allclose(pos[:, 0], [0.3, 0.3])
@@ -397,12 +401,12 @@ def test_accessibility_active_only_when_boxes_intersect(model):
     pos, yaw = _state(m, [[5, 5], [6.25, 5]])
     pairs = K.candidate_pairs(P, pos, yaw, 1.0, 0.05)
     before = pos.copy()
-    K.project_access(P, pairs, pos, yaw, acc, False, 1.0, model, degen)
+    K.project_access(P, pairs, pos, yaw, _cs(yaw), acc, False, 1.0, model, degen)
     np.testing.assert_array_equal(pos, before)
     # Now 0.1 m inside the access box.
     pos, yaw = _state(m, [[5, 5], [6.1, 5]])
     before = pos.copy()
-    K.project_access(P, pairs, pos, yaw, acc, False, 1.0, model, degen)
+    K.project_access(P, pairs, pos, yaw, _cs(yaw), acc, False, 1.0, model, degen)
     w = m.particle_inv_mass
     if model == codes.BOX:
         moved = (pos[1, 0] - before[1, 0]) - (pos[0, 0] - before[0, 0])
