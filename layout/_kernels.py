@@ -1133,6 +1133,57 @@ def project_access(P, pairs, pos, yaw, cs, acc, jac, k, model, degen):
                 push(P.body[owner], wo * f * nx, wo * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def access_in_floor(R, P, pos, yaw, cs, i, k, project):
+    """Clearances must lie on the floor too (beyond the paper): an access box whose
+    outer corners leave the floor pulls its item back by ``k`` of the excess, so a
+    trash can does not end up facing a wall. Returns the squared excess."""
+    excess = 0.0
+    hd = 0.5 * P.size[i, 1]
+    hw = 0.5 * P.size[i, 0]
+    for side in range(4):
+        depth = P.access_depth[i, side]
+        if depth <= 0.0:
+            continue
+        for end in range(2):
+            sgn = 1.0 if end == 0 else -1.0
+            if side == 0:
+                lx, ly = -hd - depth, sgn * hw
+            elif side == 2:
+                lx, ly = hd + depth, sgn * hw
+            elif side == 1:
+                lx, ly = sgn * hd, hw + depth
+            else:
+                lx, ly = sgn * hd, -hw - depth
+            c = cs[i, 0]
+            s = cs[i, 1]
+            x = pos[i, 0] + c * lx - s * ly
+            y = pos[i, 1] + s * lx + c * ly
+            if inside_polygon(R.polygon, x, y):
+                continue
+            qx, qy, _, dist = nearest_on_polygon(R.polygon, x, y)
+            excess += dist * dist
+            if project:
+                move(P.body[i], k * (qx - x), k * (qy - y), 0.0, 0.0, pos, yaw, P.mstart, P.mlist)
+    return excess
+
+
+@njit(cache=True, error_model="numpy")
+def project_access_in_floor(R, P, pos, yaw, cs, k):
+    for i in range(P.role.shape[0]):
+        if P.role[i] == ITEM and P.access_max[i] > 0.0 and P.inv_mass[P.body[i]] > 0.0:
+            access_in_floor(R, P, pos, yaw, cs, i, k, True)
+
+
+@njit(cache=True, error_model="numpy")
+def residual_access_in_floor(R, P, pos, yaw, cs):
+    total = 0.0
+    for i in range(P.role.shape[0]):
+        if P.role[i] == ITEM and P.access_max[i] > 0.0:
+            total += access_in_floor(R, P, pos, yaw, cs, i, 0.0, False)
+    return total
+
+
 @njit(cache=True, error_model="numpy")
 def residual_access(P, pairs, pos, cs, model, out):
     """Squared-sum violation of all access sides, per candidate pair."""
@@ -1190,7 +1241,7 @@ def energy_terms(M, pos, yaw, pairs, model, weights):
     residual_collision(P, R, pairs, pos, cs, model, out)
     terms[K_COLLISION] = (out[: pairs.shape[0]] ** 2).sum()
     residual_access(P, pairs, pos, cs, model, out)
-    terms[K_ACCESS] = (out[: pairs.shape[0]] ** 2).sum()
+    terms[K_ACCESS] = (out[: pairs.shape[0]] ** 2).sum() + residual_access_in_floor(R, P, pos, yaw, cs)
     for k in range(N_KINDS):
         terms[k] *= weights[k]
     return terms
@@ -1244,6 +1295,7 @@ def iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, mod
         project_access(P, pairs, pos, yaw, cs, acc, jac, k_access, model, degen)
         if jac:
             flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        project_access_in_floor(R, P, pos, yaw, cs, k_access)
     project_boundary(R, P, pos, yaw)
 
 

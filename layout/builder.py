@@ -449,9 +449,11 @@ class LayoutBuilder:
         mlist = np.flatnonzero(is_member)[np.argsort(body[is_member], kind="stable")].astype(np.int64)
         mstart = np.zeros(n + 1, np.int64)
         mstart[1:] = np.cumsum(np.bincount(body[is_member], minlength=n))
+        # A rigid group held to a wall holds all its members there (Sec. 3.3.9's
+        # wall-point projection then applies to each of them).
         wall_bound = np.zeros(n, bool)
         for c in self._c["wall_distance"]:
-            wall_bound[c[0]] = True
+            wall_bound[body == body[c[0]]] = True
         poly = self.polygon_m
         edges = np.roll(poly, -1, axis=0) - poly
         normals = np.stack([-edges[:, 1], edges[:, 0]], axis=1)

@@ -1,0 +1,363 @@
+"""Furniture kinds: default sizes, clearances and the layout rules that come with them.
+
+A :class:`Kind` gives an item its default size ``(width, depth, height)`` in meters
+(depth along the facing direction), its accessibility depths ``(back, left, front,
+right)`` in meters, whether it stands with its back against a wall, and whether it
+takes part in collisions (a rug does not). :data:`CATALOG` maps kind names to kinds;
+sizes are typical European retail dimensions.
+
+:func:`apply_default_rules` adds the constraints that make a kind behave like itself:
+a wardrobe goes against a wall, a sofa faces the TV, a coffee table stands in front
+of the sofa, nightstands flank the head of the bed, chairs around a table face it.
+"""
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from .errors import LayoutError
+
+
+@dataclass(frozen=True)
+class Kind:
+    """A furniture kind.
+
+    Attributes
+    ----------
+    name : str
+        Catalog key, e.g. ``"sofa"``.
+    size_m : (3,) tuple of float
+        Width, depth and height in meters; depth runs along the facing direction.
+    access_m : (4,) tuple of float
+        Clearance depth in meters in front of the back, left, front and right side
+        (0 = none): the space needed to use the item.
+    against_wall : bool
+        Whether the default rules put its back against a wall, facing the room.
+    collides : bool
+        False for floor coverings that other items may stand on.
+    label : str
+        Human-readable description.
+    """
+
+    name: str
+    size_m: tuple
+    access_m: tuple = (0.0, 0.0, 0.0, 0.0)
+    against_wall: bool = False
+    collides: bool = True
+    label: str = ""
+
+    @property
+    def footprint_m2(self) -> float:
+        return self.size_m[0] * self.size_m[1]
+
+
+def _k(name, size_m, access_m=(0.0, 0.0, 0.0, 0.0), against_wall=False, collides=True, label=""):
+    return name, Kind(name, tuple(float(v) for v in size_m), tuple(float(v) for v in access_m),
+                      against_wall, collides, label or name.replace("_", " "))
+
+
+#: Kind name -> :class:`Kind`. Access tuples are (back, left, front, right) in meters.
+CATALOG = dict(
+    [
+        # Bedroom.
+        _k("bed", (1.6, 2.1, 0.5), (0, 0.6, 0.6, 0.6), True, label="double bed"),
+        _k("single_bed", (0.9, 2.0, 0.5), (0, 0.6, 0.5, 0), True, label="single bed"),
+        _k("nightstand", (0.5, 0.4, 0.55), (0, 0, 0.3, 0), label="nightstand"),
+        _k("wardrobe", (1.2, 0.6, 2.0), (0, 0, 0.7, 0), True, label="wardrobe"),
+        _k("dresser", (1.0, 0.5, 0.8), (0, 0, 0.6, 0), True, label="dresser / sideboard"),
+        # Living room.
+        _k("sofa", (2.1, 0.95, 0.85), (0, 0, 0.45, 0), label="three-seat sofa"),
+        _k("armchair", (0.85, 0.85, 0.9), (0, 0, 0.4, 0), label="armchair"),
+        _k("coffee_table", (1.1, 0.6, 0.45), label="coffee table"),
+        _k("side_table", (0.5, 0.5, 0.55), label="side table"),
+        _k("tv_stand", (1.6, 0.45, 0.55), (0, 0, 0.5, 0), True, label="TV on a low stand"),
+        _k("bookcase", (0.8, 0.35, 1.9), (0, 0, 0.6, 0), True, label="bookcase"),
+        _k("plant", (0.4, 0.4, 1.0), label="indoor plant in a pot"),
+        _k("floor_lamp", (0.35, 0.35, 1.6), label="floor lamp"),
+        _k("rug", (2.0, 1.4, 0.01), collides=False, label="rug"),
+        _k("coat_rack", (0.5, 0.5, 1.8), (0, 0, 0.5, 0), True, label="coat rack"),
+        # Dining.
+        _k("dining_table", (1.6, 0.9, 0.75), (0.6, 0.6, 0.6, 0.6), label="dining table for 6"),
+        _k("round_table", (1.0, 1.0, 0.75), (0.6, 0.6, 0.6, 0.6), label="round table for 4"),
+        _k("chair", (0.45, 0.5, 0.9), (0, 0, 0.4, 0), label="chair"),
+        # Office.
+        _k("desk", (1.2, 0.7, 0.75), (0, 0, 0.7, 0), True, label="desk"),
+        _k("office_chair", (0.6, 0.6, 1.0), label="office chair on casters"),
+        # Events, games.
+        _k("stage", (4.0, 2.5, 0.6), (0, 0, 1.0, 0), label="stage"),
+        _k("seat", (0.55, 0.55, 0.9), (0, 0, 0.4, 0), label="theater seat"),
+        _k("pool_table", (2.5, 1.4, 0.8), (1.2, 1.2, 1.2, 1.2), label="8-ft pool table"),
+        _k("game_table", (1.0, 1.0, 0.75), (0.6, 0.6, 0.6, 0.6), label="card / board-game table"),
+        _k("arcade_cabinet", (0.7, 0.85, 1.8), (0, 0, 0.8, 0), True, label="arcade cabinet"),
+        # Outdoor.
+        _k("picnic_table", (1.8, 0.8, 0.75), (0.6, 0, 0.6, 0), label="picnic table"),
+        _k("bench", (1.5, 0.4, 0.45), (0, 0, 0.3, 0), label="bench"),
+        _k("grill", (1.2, 0.6, 1.1), (0, 0, 0.8, 0), label="barbecue grill"),
+        _k("trash_can", (0.6, 0.6, 1.0), (0, 0, 0.4, 0), label="outdoor trash can"),
+        _k("carousel", (6.0, 6.0, 4.0), (1.0, 1.0, 1.0, 1.0), label="fairground carousel"),
+        _k("lounge_chair", (0.7, 1.9, 0.4), (0, 0.4, 0, 0), label="sun lounger"),
+        _k("parasol", (0.5, 0.5, 2.4), label="parasol (stand footprint)"),
+        # Small items, for stacking on tables and desks.
+        _k("book", (0.15, 0.22, 0.03), label="book lying flat"),
+        _k("laptop", (0.35, 0.25, 0.02), label="closed laptop"),
+        _k("mug", (0.09, 0.09, 0.1), label="mug"),
+        _k("plate", (0.26, 0.26, 0.02), label="dinner plate"),
+        _k("pencil", (0.01, 0.18, 0.01), label="pencil"),
+        _k("binder", (0.06, 0.29, 0.32), label="upright ring binder"),
+        _k("photo_frame", (0.2, 0.1, 0.25), label="standing photo frame"),
+        _k("desk_lamp", (0.15, 0.15, 0.45), label="desk lamp"),
+    ]
+)
+
+# Kinds around which chairs of the same group gather, and the kinds that sit there.
+TABLE_KINDS = ("dining_table", "round_table", "picnic_table", "game_table")
+SEAT_KINDS = ("chair", "bench")
+
+# Comfortable viewing distance from a sofa to a TV (about 2.5 screen diagonals).
+TV_DISTANCE_M = 2.5
+# Gap between a sofa's front and the coffee table: room for legs and to pass.
+COFFEE_GAP_M = 0.6
+
+
+def kind_or_error(name, where):
+    """The catalog :class:`Kind` called ``name``.
+
+    Parameters
+    ----------
+    name : str
+    where : str
+        Where the name was read (file and entry), for the error message.
+
+    Raises
+    ------
+    LayoutError
+        When there is no such kind; the message lists close matches.
+    """
+    kind = CATALOG.get(name) if isinstance(name, str) else None
+    if kind is not None:
+        return kind
+    close = difflib.get_close_matches(str(name), CATALOG, n=3, cutoff=0.6)
+    hint = (f"did you mean {' or '.join(repr(c) for c in close)}?" if close
+            else "run `layout kinds` for the list")
+    raise LayoutError(f"{where}: kind {name!r} is not in the catalog; {hint} "
+                      "(or give an explicit size to use it as a plain label)")
+
+
+class RuleItem(NamedTuple):
+    """An item the default rules may constrain.
+
+    Attributes
+    ----------
+    index : int
+        Particle index returned by :meth:`LayoutBuilder.add_item`.
+    kind : Kind
+        Its kind, with the item's actual size (``dataclasses.replace`` the catalog
+        entry when the item overrides it).
+    group : hashable or None
+        The item's group (any id); chairs gather around a table of the same group.
+    rules : bool
+        Whether rules apply *to* this item; an item with ``rules=False`` still serves
+        as a partner (a sofa faces a TV whose own rules are off).
+    rigid : bool
+        Whether ``group`` is rigid: rules between two members of one rigid group are
+        skipped, their offsets already fix how they stand to each other.
+    """
+
+    index: int
+    kind: Kind
+    group: object = None
+    rules: bool = True
+    rigid: bool = False
+
+
+class Rule(NamedTuple):
+    """One default rule that was applied: what it did, to which item, with which partner."""
+
+    name: str
+    index: int
+    partner: int | None
+
+
+def _first(items, names, group=None, used=None):
+    """First item whose kind is in ``names``, preferring the same group and unused ones."""
+    candidates = [r for r in items if r.kind.name in names]
+    for pick in (
+        lambda r: group is not None and r.group == group and (used is None or r.index not in used),
+        lambda r: used is None or r.index not in used,
+        lambda r: True,
+    ):
+        for r in candidates:
+            if pick(r):
+                return r
+    return None
+
+
+def _same_body(a, b):
+    """Both in one rigid group: their relative pose is fixed already."""
+    return a.rigid and a.group is not None and a.group == b.group
+
+
+def pairings(items):
+    """Partners the rules link, as ``{item index: partner RuleItem}``.
+
+    Nightstands go to a bed (two per bed), office chairs to a desk (one per desk),
+    coffee tables to a sofa; a partner in the same group wins. Only items whose rules
+    are on get a partner. Used by :func:`apply_default_rules` and by the spec reader,
+    which puts unrelated partners in a common group so they may stand in each other's
+    clearance (a nightstand in the bed's side access, the chair in the desk's).
+    """
+    out = {}
+    beds = [r for r in items if r.kind.name in ("bed", "single_bed")]
+    per_bed = {b.index: 0 for b in beds}
+    desks_used = set()
+    for r in items:
+        if not r.rules:
+            continue
+        name = r.kind.name
+        if name == "nightstand" and beds:
+            mates = [b for b in beds if b.group == r.group and r.group is not None]
+            pool = mates or beds
+            # Two nightstands per bed, then wrap around (a third one shares a side).
+            bed = min(pool, key=lambda b: (per_bed[b.index] >= 2, per_bed[b.index], pool.index(b)))
+            per_bed[bed.index] += 1
+            out[r.index] = bed
+        elif name == "office_chair":
+            desk = _first(items, ("desk",), r.group, desks_used)
+            if desk is not None:
+                desks_used.add(desk.index)
+                out[r.index] = desk
+        elif name == "coffee_table":
+            sofa = _first(items, ("sofa",), r.group) or _first(items, ("armchair",), r.group)
+            if sofa is not None:
+                out[r.index] = sofa
+    return out
+
+
+def apply_default_rules(builder, items):
+    """Add each kind's default constraints to ``builder``.
+
+    Parameters
+    ----------
+    builder : LayoutBuilder
+        Holds the items already (their indices are in ``items``).
+    items : sequence of RuleItem
+        Every item of the layout that may take part in a rule.
+
+    Returns
+    -------
+    rules : list of Rule
+        The rules applied, in order (for reports and tests).
+
+    Notes
+    -----
+    * ``against_wall`` kinds: back to the nearest wall, facing the room.
+    * sofa: faces the first TV stand (and the TV faces it) at 2.5 m; armchair: faces
+      the TV from 1.5–3.2 m and stays within 1.6 m of the coffee table if any.
+    * coffee table: 0.6 m in front of its sofa (heat point in the sofa's frame),
+      parallel to it; a rug lies under the coffee table or at the foot of a bed.
+    * nightstand: beside the head of its bed (left, then right), facing like the bed.
+    * chair/bench in the same group as a table: faces it and keeps about half the
+      table's depth plus 0.25 m from its center; together they center on the table.
+    * office chair: faces its desk from 0.35 m in front of the desk's edge.
+    * theater seat: faces the first stage.
+    """
+    items = list(items)
+    applied = []
+    partner = pairings(items)
+    tv = _first(items, ("tv_stand",))
+    stage = _first(items, ("stage",))
+    tables = [r for r in items if r.kind.name in TABLE_KINDS]
+    coffee = _first(items, ("coffee_table",))
+    bed = _first(items, ("bed", "single_bed"))
+    side_seen = {}  # bed index -> nightstands placed so far
+    seats_at = {}  # table index -> seats
+
+    for r in items:
+        if not r.rules:
+            continue
+        k = r.kind
+        i = r.index
+        if k.against_wall:
+            builder.against_wall(i)
+            applied.append(Rule("against_wall", i, None))
+        name = k.name
+        if name == "sofa" and tv is not None and not _same_body(r, tv):
+            builder.face(i, tv.index, mutual=tv.rules)
+            builder.distance(i, tv.index, TV_DISTANCE_M)
+            applied.append(Rule("face_tv", i, tv.index))
+        elif name == "armchair" and tv is not None and not _same_body(r, tv):
+            builder.face(i, tv.index)
+            builder.distance(i, tv.index, 1.5, mode="min")
+            builder.distance(i, tv.index, 3.2, mode="max")
+            applied.append(Rule("face_tv", i, tv.index))
+            if coffee is not None and not _same_body(r, coffee):
+                builder.distance(i, coffee.index, 1.6, mode="max")
+                applied.append(Rule("near_coffee_table", i, coffee.index))
+        elif name == "coffee_table" and i in partner and not _same_body(r, partner[i]):
+            s = partner[i]
+            ahead = COFFEE_GAP_M + 0.5 * (s.kind.size_m[1] + k.size_m[1])
+            builder.heat([i], (ahead, 0.0), frame=s.index)
+            builder.parallel(i, s.index)
+            applied.append(Rule("in_front_of", i, s.index))
+        elif name == "rug":
+            host = coffee if coffee is not None else bed
+            if host is not None and not _same_body(r, host):
+                # Under the coffee table; half under the foot end of a bed.
+                ahead = 0.0 if host is coffee else 0.5 * host.kind.size_m[1]
+                builder.heat([i], (ahead, 0.0), frame=host.index)
+                builder.parallel(i, host.index)
+                applied.append(Rule("under", i, host.index))
+        elif name == "nightstand" and i in partner and not _same_body(r, partner[i]):
+            b = partner[i]
+            side = side_seen.get(b.index, 0)
+            side_seen[b.index] = side + 1
+            bw, bd = b.kind.size_m[:2]
+            nw, nd = k.size_m[:2]
+            # Left of the head first, then right (bed frame: x front, y left).
+            lateral = (0.5 * (bw + nw) + 0.02) * (1.0 if side % 2 == 0 else -1.0)
+            back = -0.5 * (bd - nd)
+            builder.heat([i], (back, lateral), frame=b.index)
+            # Facing like the bed, written as an angle off the direction to the bed's
+            # center (parallel would also accept facing the wall).
+            builder.face(i, b.index, angle_rad=math.atan2(lateral, -back))
+            applied.append(Rule("beside_head", i, b.index))
+        elif name in SEAT_KINDS and r.group is not None and not r.rigid:
+            table = next((t for t in tables if t.group == r.group), None)
+            if table is not None:
+                tw, td = table.kind.size_m[:2]
+                near = 0.5 * min(tw, td) + 0.25
+                far = 0.5 * max(tw, td) + 0.5 * k.size_m[1] + 0.1
+                builder.face(i, table.index)
+                if far - near < 0.2:
+                    builder.distance(i, table.index, near)
+                else:
+                    # Rectangular table: anywhere from its long side to its short end.
+                    builder.distance(i, table.index, near, mode="min")
+                    builder.distance(i, table.index, far, mode="max")
+                seats_at.setdefault(table.index, []).append(i)
+                applied.append(Rule("at_table", i, table.index))
+        elif name == "office_chair" and i in partner and not _same_body(r, partner[i]):
+            d = partner[i]
+            builder.face(i, d.index)
+            builder.heat([i], (0.5 * d.kind.size_m[1] + 0.35, 0.0), frame=d.index)
+            applied.append(Rule("at_desk", i, d.index))
+        elif name == "seat" and stage is not None and not _same_body(r, stage):
+            builder.face(i, stage.index)
+            applied.append(Rule("face_stage", i, stage.index))
+
+    # Seats spread around their table: their center of mass on the table's center.
+    for t, seats in seats_at.items():
+        if len(seats) >= 2:
+            builder.heat(seats, (0.0, 0.0), frame=t)
+            applied.append(Rule("around_table", t, None))
+    return applied
+
+
+def describe(kind: Kind) -> str:
+    """One line of the catalog table: name, size, access, flags, label."""
+    w, d, h = kind.size_m
+    acc = "/".join(f"{a:g}" for a in kind.access_m)
+    flags = ",".join(f for f, on in (("wall", kind.against_wall), ("no-collide", not kind.collides)) if on)
+    return f"{kind.name:<15} {w:5.2f} {d:5.2f} {h:5.2f}  {acc:<17} {flags:<11} {kind.label}"

@@ -1,0 +1,163 @@
+"""The ``layout`` command: solve a spec into layout suggestions, list kinds and presets.
+
+::
+
+    layout solve SPEC.toml [--suggestions 5] [--seed 0] [--out DIR] [--quiet]
+    layout kinds
+    layout presets
+
+Exit status: 0 success, 2 bad input (the message says what and where), 1 an
+unexpected failure (a bug: the traceback is printed).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+import tomllib
+import traceback
+from pathlib import Path
+
+from .errors import LayoutError
+
+EXIT_OK, EXIT_BUG, EXIT_INPUT = 0, 1, 2
+
+
+class _Usage(Exception):
+    """A command-line usage error (argparse would otherwise exit by itself)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):
+        raise _Usage(f"{self.prog}: {message}")
+
+
+def _parser():
+    p = _Parser(prog="layout", description="Furniture layout synthesis (Weiss et al. 2018).")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
+    s = sub.add_parser("solve", help="solve a spec file into layout suggestions",
+                       description="Solve SPEC (a TOML file, see layout.spec) from several random "
+                                   "starts; write layout_K.json, plan_K.png and energy.png.")
+    s.add_argument("spec", type=Path, metavar="SPEC.toml")
+    s.add_argument("--suggestions", "-n", type=int, default=5, metavar="N",
+                   help="number of suggestions (default 5)")
+    s.add_argument("--seed", type=int, default=0, help="seed of suggestion 1; K uses seed + K - 1")
+    s.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
+                   help="output folder (default out/<spec name>)")
+    s.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
+    sub.add_parser("kinds", help="list the furniture catalog")
+    sub.add_parser("presets", help="list the room presets")
+    return p
+
+
+def _progress(iterable, total, quiet):
+    """tqdm over the suggestions when stderr is a terminal, else the plain iterable."""
+    if quiet or not sys.stderr.isatty():
+        return iterable
+    from tqdm import tqdm
+
+    return tqdm(iterable, total=total, desc="solving", unit="layout", file=sys.stderr)
+
+
+def _check_out_dir(spec_path, out):
+    if out.exists() and not out.is_dir():
+        raise LayoutError(f"--out {out}: exists and is not a folder")
+    try:
+        if out.resolve() == spec_path.resolve():
+            raise LayoutError(f"--out {out}: is the spec file itself")
+    except OSError:
+        pass
+
+
+def _solve(args):
+    from . import report, spec
+    from .solver import diversity
+
+    if args.suggestions < 1:
+        raise LayoutError(f"--suggestions {args.suggestions}: must be at least 1")
+    out = args.out if args.out is not None else Path("out") / args.spec.stem
+    _check_out_dir(args.spec, out)
+    sp = spec.load_spec(args.spec)
+    model, solver = spec.build(sp)
+    layouts, reports = [], []
+    for k in _progress(range(args.suggestions), args.suggestions, args.quiet):
+        # Same seeds as Solver.suggest: suggestion k + 1 starts from seed + k.
+        lay = solver.solve(model, seed=args.seed + k)
+        layouts.append(lay)
+        reports.append(report.evaluate(lay))
+    try:
+        paths = report.write_outputs(layouts, out, reports, title=f"{args.spec.stem}: ")
+    except OSError as e:
+        raise LayoutError(f"--out {out}: cannot write there ({e.strerror or e})") from None
+    if args.quiet:
+        return EXIT_OK
+    print(f"{'K':>3} {'energy':>10} {'iters':>6} {'overlaps':>8} {'outside m²':>10} "
+          f"{'walkable':>8} {'time ms':>9}")
+    for k, (lay, rep) in enumerate(zip(layouts, reports), start=1):
+        print(f"{k:>3} {lay.energy:>10.4g} {lay.iterations:>6d} {rep['overlaps']['count']:>8d} "
+              f"{rep['outside_m2']:>10.3f} {'yes' if rep['traversable'] else 'no':>8} "
+              f"{1000 * lay.time_s:>9.1f}")
+    if len(layouts) > 1:
+        print(f"diversity: {diversity(layouts):.3f} m (mean chamfer distance between suggestions)")
+    print(f"wrote {len(paths)} files to {out}/ (layout_K.json, plan_K.png, energy.png)")
+    return EXIT_OK
+
+
+def _kinds(args):
+    from .catalog import CATALOG, describe
+
+    print(f"{'kind':<15} {'w':>5} {'d':>5} {'h':>5}  {'access b/l/f/r':<17} {'flags':<11} label")
+    for kind in CATALOG.values():
+        print(describe(kind))
+    print("sizes in meters (width, depth along the facing, height); flags: wall = "
+          "against a wall by default, no-collide = others may stand on it")
+    return EXIT_OK
+
+
+def _presets(args):
+    from .presets import DESCRIPTIONS, PRESETS
+
+    for name in PRESETS:
+        print(f"{name:<13} {DESCRIPTIONS[name]}")
+    return EXIT_OK
+
+
+def main(argv=None) -> int:
+    """Run the command line; returns the exit status."""
+    try:
+        args = _parser().parse_args(argv)
+    except _Usage as e:
+        print(f"error: {e}", file=sys.stderr)
+        return EXIT_INPUT
+    except SystemExit as e:  # --help
+        return int(e.code or 0)
+    commands = {"solve": _solve, "kinds": _kinds, "presets": _presets}
+    t0 = time.perf_counter()
+    try:
+        return commands[args.command](args)
+    except LayoutError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return EXIT_INPUT
+    except tomllib.TOMLDecodeError as e:
+        print(f"error: invalid TOML: {e}", file=sys.stderr)
+        return EXIT_INPUT
+    except FileNotFoundError as e:
+        print(f"error: {e.filename}: no such file", file=sys.stderr)
+        return EXIT_INPUT
+    except BrokenPipeError:
+        # The reader went away (`layout kinds | head`): not an error of ours.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
+    except KeyboardInterrupt:
+        print(f"error: interrupted after {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+        return 130
+    except Exception:  # noqa: BLE001 - a bug: show where, and say so
+        traceback.print_exc()
+        print("error: unexpected failure (a bug in layout); please report the traceback above",
+              file=sys.stderr)
+        return EXIT_BUG
+
+
+if __name__ == "__main__":
+    sys.exit(main())

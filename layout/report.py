@@ -1,0 +1,209 @@
+"""Quality numbers and output files of solved layouts.
+
+:func:`evaluate` measures one :class:`~layout.solver.Layout` exactly (overlaps,
+area outside the floor, door clearance, walkability); :func:`write_outputs` writes
+what ``layout solve`` hands out: ``layout_K.json`` and ``plan_K.png`` per suggestion
+and ``energy.png`` with every suggestion's energy trace.
+"""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from . import metrics, plot
+from .geometry import SIDE_NAMES, access_box_corners, box_corners
+
+# Overlaps smaller than this (m²) are contacts of touching boxes, not collisions.
+MIN_OVERLAP_M2 = 1e-4
+# Area outside the floor below this (m²) is rounding, not a misplaced item.
+MIN_OUTSIDE_M2 = 1e-4
+
+
+def _item_geometry(layout):
+    m = layout.model
+    items = m.items
+    size = m.particle_size_m[items]
+    pos = layout.position_m[items]
+    yaw = layout.yaw_rad[items]
+    corners = box_corners(pos[:, :2], yaw, size[:, 0], size[:, 1])
+    z = np.stack([pos[:, 2] - 0.5 * size[:, 2], pos[:, 2] + 0.5 * size[:, 2]], axis=1)
+    depth = m.particle_access_depth_m[items]
+    access = access_box_corners(pos[:, :2], yaw, size[:, 0], size[:, 1], depth)
+    return items, corners, z, access, depth
+
+
+def _shared_sides(model, items, corners, access, depth):
+    """Access sides taken by a member of the same group (a chair at its table): the
+    solver lets group mates stand there, so walkability does not ask for them."""
+    parent = model.particle_parent[items]
+    taken = np.zeros(depth.shape, bool)
+    for a, b in zip(*np.nonzero(parent[:, None] == parent[None, :])):
+        if a == b or parent[a] < 0 or not model.particle_collides[items[b]]:
+            continue
+        for k in np.flatnonzero(depth[a] > 0):
+            if metrics.convex_intersection_area(access[a, k], corners[b]) > MIN_OVERLAP_M2:
+                taken[a, k] = True
+    return taken
+
+
+def evaluate(layout) -> dict:
+    """Exact quality measures of a layout.
+
+    Parameters
+    ----------
+    layout : Layout
+
+    Returns
+    -------
+    report : dict (JSON-ready)
+        ``energy``; ``overlaps`` (count, ``area_m2`` total and ``pairs`` as
+        ``[id, id, area_m2]``) of colliding items whose boxes interpenetrate in 3-D;
+        ``outside_m2`` (total footprint area outside the floor) and ``outside_items``;
+        ``traversable`` (every door and every access side reachable on foot, after
+        Henderson et al.), ``components``, ``unreachable`` (``[id, side]``),
+        ``blocked_doors`` (door numbers from 1); ``door_clearance_m2`` (furniture area
+        inside each door's swing zone) and ``door_blockers`` (ids of the items there,
+        per door).
+
+    Notes
+    -----
+    Items that do not collide (rugs) block nothing. An access side covered by a member
+    of the item's own group is not required to be reachable (see
+    :func:`layout.builder.LayoutBuilder.add_group`).
+    """
+    m = layout.model
+    items, corners, z, access, depth = _item_geometry(layout)
+    ids = [m.names[i] for i in items]
+    collides = m.particle_collides[items]
+    pairs, area = metrics.box_overlaps(corners, z, collides, min_area_m2=MIN_OVERLAP_M2)
+    polygon = m.floor_polygon_m
+    outside = metrics.area_outside(polygon, corners)
+    doors = layout.corners_m(m.door_particles) if len(m.door_particles) else np.zeros((0, 4, 2))
+    required = np.where(_shared_sides(m, items, corners, access, depth), 0.0, depth)
+    trav = metrics.traversability(polygon, corners, collides, access, required, doors)
+    clearance = metrics.door_clearance(doors, corners, collides) if len(doors) else np.zeros(0)
+    blockers = [
+        [ids[i] for i in np.flatnonzero(collides)
+         if metrics.convex_intersection_area(zone, corners[i]) > MIN_OVERLAP_M2]
+        for zone in doors
+    ]
+    return {
+        "energy": float(layout.energy),
+        "iterations": int(layout.iterations),
+        "time_ms": round(1000.0 * layout.time_s, 3),
+        "overlaps": {
+            "count": int(len(pairs)),
+            "area_m2": float(area.sum()),
+            "pairs": [[ids[a], ids[b], float(s)] for (a, b), s in zip(pairs, area)],
+        },
+        "outside_m2": float(outside[outside > MIN_OUTSIDE_M2].sum()),
+        "outside_items": [ids[k] for k in np.flatnonzero(outside > MIN_OUTSIDE_M2)],
+        "traversable": bool(trav.ok),
+        "components": int(trav.n_components),
+        "unreachable": [[ids[i], SIDE_NAMES[k]] for i, k in trav.unreachable],
+        "blocked_doors": [int(d) + 1 for d in trav.blocked_doors],
+        "door_clearance_m2": [float(a) for a in clearance],
+        "door_blockers": blockers,
+    }
+
+
+def lane_segments(model, layout):
+    """(l, 2, 2) traffic-lane vectors of a layout in the floor frame, one per lane
+    (lanes shared by several items are drawn once)."""
+    seen, out = set(), []
+    for o, start, ang, length in zip(model.lane_origin, model.lane_start_m, model.lane_angle_rad,
+                                     model.lane_length_m):
+        key = (int(o), float(start[0]), float(start[1]), float(ang), float(length))
+        if key in seen:
+            continue
+        seen.add(key)
+        x, y, a = layout.position_m[o, 0], layout.position_m[o, 1], layout.yaw_rad[o]
+        c, s = np.cos(a), np.sin(a)
+        p0 = np.array([x + c * start[0] - s * start[1], y + s * start[0] + c * start[1]])
+        p1 = p0 + length * np.array([np.cos(a + ang), np.sin(a + ang)])
+        out.append([p0, p1])
+    return np.array(out, dtype=np.float64).reshape(-1, 2, 2)
+
+
+def _write_json(path, data):
+    """Write JSON atomically: a temporary file in the same folder, then a rename."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            json.dump(data, f, indent=2, allow_nan=False)
+            f.write("\n")
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
+def _finite(x):
+    """JSON has no NaN/inf: write them as null."""
+    if isinstance(x, float) and not np.isfinite(x):
+        return None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_finite(v) for v in x]
+    return x
+
+
+def write_outputs(layouts, out_dir, reports=None, title=""):
+    """Write the files of ``layout solve`` for a list of suggestions.
+
+    Parameters
+    ----------
+    layouts : sequence of Layout
+        Suggestion K (from 1) is ``layouts[K - 1]``.
+    out_dir : str or os.PathLike
+        Created if missing. Files are written atomically.
+    reports : sequence of dict, optional
+        :func:`evaluate` of each layout (computed when not given).
+    title : str
+        Prefix of the plan titles.
+
+    Returns
+    -------
+    paths : list of Path
+        ``layout_K.json`` and ``plan_K.png`` for each K, then ``energy.png``.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    reports = [evaluate(lay) for lay in layouts] if reports is None else list(reports)
+    paths = []
+    for k, (lay, rep) in enumerate(zip(layouts, reports), start=1):
+        data = lay.to_dict()
+        data["metrics"] = rep
+        data["energy_by_kind"] = dict(lay.energy_by_kind)
+        p = out / f"layout_{k}.json"
+        _write_json(p, _finite(data))
+        paths.append(p)
+        m = lay.model
+        items, corners, _, access, depth = _item_geometry(lay)
+        index = {name: n for n, name in enumerate(m.names[i] for i in items)}
+        overlap = [[index[a], index[b]] for a, b, _ in rep["overlaps"]["pairs"]]
+        doors = lay.corners_m(m.door_particles) if len(m.door_particles) else None
+        verdict = "walkable" if rep["traversable"] else "NOT walkable"
+        p = out / f"plan_{k}.png"
+        plot.plot_plan(
+            p, m.floor_polygon_m, corners, [m.names[i] for i in items], lay.yaw_rad[items],
+            door_zones_m=doors, door_segments_m=m.door_segments_m,
+            window_segments_m=m.window_segments_m, lanes_m=lane_segments(m, lay),
+            overlap_pairs=overlap, access_corners_m=access, access_depth_m=depth,
+            kinds=[m.kinds[i] for i in items],
+            title=(f"{title}suggestion {k}: E = {lay.energy:.3g}, "
+                   f"{rep['overlaps']['count']} overlaps, {verdict}"),
+        )
+        paths.append(p)
+    p = out / "energy.png"
+    traces = {f"suggestion {k}": lay.trace[np.isfinite(lay.trace)] for k, lay in enumerate(layouts, 1)}
+    plot.plot_energy(p, traces, title=f"{title}energy per iteration")
+    paths.append(p)
+    return paths

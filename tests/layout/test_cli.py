@@ -1,0 +1,149 @@
+"""The ``layout`` command line (layout.cli)."""
+import json
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from layout import cli, spec
+
+SPEC = """
+[room]
+polygon = [[0, 0], [4, 0], [4, 3], [0, 3]]
+height = 2.5
+doors = [{ at = [3.4, 0.0], width = 0.8 }]
+
+[solver]
+max_iterations = 200
+
+[[items]]
+id = "bed"
+kind = "single_bed"
+
+[[items]]
+id = "nightstand"
+kind = "nightstand"
+
+[[items]]
+id = "wardrobe"
+kind = "wardrobe"
+"""
+
+
+@pytest.fixture
+def spec_file(tmp_path):
+    path = tmp_path / "room.toml"
+    path.write_text(textwrap.dedent(SPEC))
+    return path
+
+
+def test_solve_writes_outputs_and_prints_a_summary(spec_file, tmp_path, capsys):
+    before = spec_file.read_bytes()
+    out = tmp_path / "out"
+    rc = cli.main(["solve", str(spec_file), "--suggestions", "3", "--seed", "5", "--out", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    assert captured.err == ""  # no progress bar when stderr is not a terminal
+    assert spec_file.read_bytes() == before  # the input is never touched
+    files = sorted(p.name for p in out.iterdir())
+    assert files == ["energy.png", "layout_1.json", "layout_2.json", "layout_3.json",
+                     "plan_1.png", "plan_2.png", "plan_3.png"]
+    data = json.loads((out / "layout_3.json").read_text())
+    assert data["seed"] == 7  # suggestion K uses seed + K - 1, as Solver.suggest
+    assert {i["id"] for i in data["items"]} == {"bed", "nightstand", "wardrobe"}
+    assert "traversable" in data["metrics"]
+    lines = captured.out.splitlines()
+    assert lines[0].split() == ["K", "energy", "iters", "overlaps", "outside", "m²", "walkable", "time", "ms"]
+    assert [ln.split()[0] for ln in lines[1:4]] == ["1", "2", "3"]
+    assert lines[4].startswith("diversity: ")
+    assert str(out) in lines[5]
+
+
+def test_quiet_prints_nothing(spec_file, tmp_path, capsys):
+    assert cli.main(["solve", str(spec_file), "-n", "1", "--out", str(tmp_path / "o"), "--quiet"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err == ""
+    assert (tmp_path / "o" / "plan_1.png").exists()
+
+
+def test_default_out_dir_is_named_after_the_spec(spec_file, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["solve", str(spec_file), "-n", "1", "-q"]) == 0
+    assert (tmp_path / "out" / "room" / "layout_1.json").exists()
+
+
+def test_kinds_and_presets(capsys):
+    assert cli.main(["kinds"]) == 0
+    out = capsys.readouterr().out
+    assert "sofa" in out and "2.10" in out and "arcade_cabinet" in out
+    assert cli.main(["presets"]) == 0
+    out = capsys.readouterr().out
+    for name in ("living_room", "bedroom", "dining_room", "office", "game_room", "outdoor_yard"):
+        assert name in out
+
+
+def _error(capsys, argv):
+    rc = cli.main(argv)
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert err.startswith("error: ") and "Traceback" not in err
+    assert err.count("\n") == 1
+    return err
+
+
+def test_bad_input_exits_2_with_one_line(spec_file, tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SPEC.replace('kind = "wardrobe"', 'kind = "wardrobee"'))
+    err = _error(capsys, ["solve", str(bad), "--out", str(tmp_path / "o")])
+    assert str(bad) in err and "'wardrobe'" in err
+    assert not (tmp_path / "o").exists()
+
+    broken = tmp_path / "broken.toml"
+    broken.write_text("[room\npolygon = 1\n")
+    err = _error(capsys, ["solve", str(broken)])
+    assert "invalid TOML" in err and "line 1" in err
+
+    err = _error(capsys, ["solve", str(tmp_path / "missing.toml")])
+    assert "no such file" in err
+
+    clash = tmp_path / "clash"
+    clash.write_text("a file, not a folder")
+    err = _error(capsys, ["solve", str(spec_file), "--out", str(clash)])
+    assert "not a folder" in err and clash.read_text() == "a file, not a folder"
+
+    err = _error(capsys, ["solve", str(spec_file), "--suggestions", "0"])
+    assert "--suggestions" in err
+
+
+def test_usage_errors_exit_2(capsys):
+    _error(capsys, [])
+    _error(capsys, ["solve"])
+    _error(capsys, ["solve", "x.toml", "--seed", "abc"])
+    _error(capsys, ["frobnicate"])
+
+
+def test_help_exits_0(capsys):
+    assert cli.main(["--help"]) == 0
+    assert "solve" in capsys.readouterr().out
+
+
+def test_unexpected_failure_exits_1(spec_file, tmp_path, capsys, monkeypatch):
+    def boom(*args, **kwargs):
+        raise RuntimeError("kaboom")
+
+    monkeypatch.setattr(spec, "build", boom)
+    assert cli.main(["solve", str(spec_file), "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert "kaboom" in err and "unexpected" in err
+
+
+def test_module_entry_point_reports_bad_input(tmp_path):
+    # The console script runs layout.cli:main; run the same through the module.
+    proc = subprocess.run(
+        [sys.executable, "-m", "layout.cli", "solve", str(tmp_path / "nope.toml")],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.startswith("error: ") and "no such file" in proc.stderr
+    assert "Traceback" not in proc.stderr
