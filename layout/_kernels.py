@@ -984,7 +984,8 @@ def trig(yaw, cs):
 @njit(cache=True, inline="always", error_model="numpy")
 def wall_points_pair(P, R, pos, yaw, i, j, model, gap_m):
     """Extra projection between the wall points of two colliding wall-bound items
-    (Sec. 3.3.9, Fig. 8b): they slide apart along the wall instead of off it."""
+    (Sec. 3.3.9, Fig. 8b): they slide apart along the wall instead of off it. Door
+    and window zones count as wall-bound (they have infinite mass)."""
     xi, yi, _, ai = pose(pos, yaw, i)
     xj, yj, _, aj = pose(pos, yaw, j)
     qxi, qyi, _, _ = nearest_on_polygon(R.polygon, xi, yi)
@@ -1022,7 +1023,8 @@ def project_collision(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, dege
         f = k * C / (wi + wj)
         push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
         push(P.body[j], wj * f * nx, wj * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
-        if P.wall_bound[i] and P.wall_bound[j]:
+        # Door and window zones sit on a wall too: a wall-bound item slides past them.
+        if (P.wall_bound[i] or P.role[i] == OBSTACLE) and (P.wall_bound[j] or P.role[j] == OBSTACLE):
             C2, tx, ty, ok = wall_points_pair(P, R, pos, yaw, i, j, model, gap_m)
             if not ok:
                 degen[K_COLLISION] += 1
@@ -1300,8 +1302,32 @@ def iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, mod
 
 
 @njit(cache=True, error_model="numpy")
+def polish(M, pos, yaw, rounds, model, gap_m, cell_m, pad_m):
+    """Hard constraints only, at full stiffness: collisions and the boundary, until no
+    pair collides (beyond the paper: the best layout seen may keep millimetre
+    overlaps that the quadratic energy barely notices)."""
+    P, D, L, H, S, B, W, WO, O, ST, U, R = M
+    n = pos.shape[0]
+    acc = np.zeros((n, 6))
+    cs = np.empty((n, 2))
+    degen = np.zeros(N_KINDS, np.int64)
+    for _ in range(rounds):
+        pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
+        trig(yaw, cs)
+        colliding = False
+        for p in range(pairs.shape[0]):
+            _, _, _, active = collision_pair(P.size, P.radius, P.collides, pos, cs, pairs[p, 0], pairs[p, 1], model, 0.0)
+            colliding = colliding or active
+        if not colliding:
+            return
+        project_collision(P, R, pairs, pos, yaw, cs, acc, False, 1.0, model, gap_m, degen)
+        project_stack(ST, P, pos, yaw, acc, False, 1, 1.0, degen)
+        project_boundary(R, P, pos, yaw)
+
+
+@njit(cache=True, error_model="numpy")
 def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, order, model, k_collision,
-               k_access, gap_m, cell_m, pad_m, weights, energy_every):
+               k_access, gap_m, cell_m, pad_m, weights, energy_every, polish_rounds):
     """Algorithm 1: project all constraints per iteration, keep the best layout.
 
     Per iteration ``it`` (1-based) the interleaving row ``order[(it - 1) % 6]`` says
@@ -1312,6 +1338,9 @@ def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, ord
     The loop stops after ``max_iter`` iterations, or once the best energy has not
     improved by more than the fraction ``tol`` plus ``atol`` for ``patience``
     iterations.
+
+    The best layout is then polished (:func:`polish`, ``polish_rounds`` at most) and
+    the polished one kept if it collides less.
 
     Returns the best positions and yaws, the energy trace (trace[l] = energy before
     iteration l + 1), the best iteration, the iterations run and degenerate counts.
@@ -1366,4 +1395,18 @@ def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, ord
             break
         it += 1
         iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, model, k_collision, k_access, gap_m)
+    if polish_rounds > 0:
+        pos[:] = best_pos
+        yaw[:] = best_yaw
+        polish(M, pos, yaw, polish_rounds, model, gap_m, cell_m, pad_m)
+        pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
+        # Keep the polished layout when it collides less (hard constraints first).
+        terms = energy_terms(M, pos, yaw, pairs, model, weights)
+        pairs = candidate_pairs(P, best_pos, best_yaw, cell_m, pad_m)
+        before = energy_terms(M, best_pos, best_yaw, pairs, model, weights)
+        hard_after = terms[K_COLLISION] + terms[K_BOUNDARY]
+        hard_before = before[K_COLLISION] + before[K_BOUNDARY]
+        if hard_after < hard_before or (hard_after == hard_before and terms.sum() <= before.sum()):
+            best_pos[:] = pos
+            best_yaw[:] = yaw
     return best_pos, best_yaw, trace[: it + 1], best_it, it, degen

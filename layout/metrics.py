@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
-import skimage.draw
 import skimage.measure
 import skimage.morphology
 
@@ -339,6 +339,11 @@ class Traversability:
     resolution_m: float
 
 
+# Fixed-point vertices for cv2.fillPoly: 8 fractional bits.
+_SHIFT = 8
+_SUBPIXEL = 1 << _SHIFT
+
+
 class _Raster:
     """Fills world polygons into a pixel grid whose row axis is y and column axis is x."""
 
@@ -351,7 +356,20 @@ class _Raster:
         """Row and column indices of the pixels whose centers lie in ``polygon_m``."""
         col = (polygon_m[:, 0] - self.origin_m[0]) / self.resolution_m - 0.5
         row = (polygon_m[:, 1] - self.origin_m[1]) / self.resolution_m - 0.5
-        rr, cc = skimage.draw.polygon(row, col, self.shape)
+        # OpenCV fills in C (skimage.draw.polygon builds the polygon's whole bounding
+        # grid in Python-level NumPy): rasterize in a window around the polygon with
+        # sub-pixel vertices, then keep the pixels inside the image.
+        r0 = max(int(np.floor(row.min())), 0)
+        c0 = max(int(np.floor(col.min())), 0)
+        r1 = min(int(np.ceil(row.max())) + 1, self.shape[0])
+        c1 = min(int(np.ceil(col.max())) + 1, self.shape[1])
+        rr = cc = np.zeros(0, dtype=np.intp)
+        if r1 > r0 and c1 > c0:
+            window = np.zeros((r1 - r0, c1 - c0), dtype=np.uint8)
+            pts = np.round(np.stack([col - c0, row - r0], axis=1) * _SUBPIXEL).astype(np.int32)
+            cv2.fillPoly(window, [pts], 1, lineType=cv2.LINE_8, shift=_SHIFT)
+            rr, cc = np.nonzero(window)
+            rr, cc = rr + r0, cc + c0
         if len(rr) == 0:
             # Slivers thinner than a pixel cover no center; keep the pixels they lie in.
             pts = np.vstack([polygon_m, polygon_m.mean(axis=0, keepdims=True)])
@@ -431,7 +449,9 @@ def traversability(
     for box in corners[blocks]:
         free[raster.pixels(box)] = False
     disk = skimage.morphology.disk(int(round(radius_m / resolution_m)))
-    passable = skimage.morphology.erosion(free, disk, mode="constant", cval=0.0)
+    # cv2.erode is the same binary erosion (outside the image counts as blocked), in C.
+    passable = cv2.erode(free.astype(np.uint8), disk.astype(np.uint8), borderType=cv2.BORDER_CONSTANT,
+                         borderValue=0).astype(bool)
     door_masks = [raster.mask(zone) & free for zone in doors]
     for m in door_masks:
         passable |= m

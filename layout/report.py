@@ -40,14 +40,41 @@ def _shared_sides(model, items, corners, access, depth):
     """Access sides taken by a member of the same group (a chair at its table): the
     solver lets group mates stand there, so walkability does not ask for them."""
     parent = model.particle_parent[items]
+    center = corners.mean(axis=1)
+    reach = np.linalg.norm(corners[:, 0] - center, axis=1) + depth.max(axis=1)
     taken = np.zeros(depth.shape, bool)
-    for a, b in zip(*np.nonzero(parent[:, None] == parent[None, :])):
-        if a == b or parent[a] < 0 or not model.particle_collides[items[b]]:
-            continue
-        for k in np.flatnonzero(depth[a] > 0):
-            if metrics.convex_intersection_area(access[a, k], corners[b]) > MIN_OVERLAP_M2:
-                taken[a, k] = True
+    for a in np.flatnonzero((parent >= 0) & (depth.max(axis=1) > 0)):
+        near = np.linalg.norm(center - center[a], axis=1) < reach + reach[a]
+        for b in np.flatnonzero(near & (parent == parent[a])):
+            if a == b or not model.particle_collides[items[b]]:
+                continue
+            for k in np.flatnonzero(depth[a] > 0):
+                if _apart(access[a, k], corners[b]):
+                    continue
+                if metrics.convex_intersection_area(access[a, k], corners[b]) > MIN_OVERLAP_M2:
+                    taken[a, k] = True
     return taken
+
+
+def _apart(a, b):
+    """Separating-axis test of two rectangles given by corners: True when they are
+    apart (a cheap reject before the exact intersection area)."""
+    for box in (a, b):
+        for e in (box[1] - box[0], box[3] - box[0]):
+            pa, pb = a @ e, b @ e
+            if pa.max() <= pb.min() or pb.max() <= pa.min():
+                return True
+    return False
+
+
+def walkability(layout) -> metrics.Traversability:
+    """Henderson et al.'s traversability of a layout (see :func:`layout.metrics.traversability`),
+    not asking for access sides that a group mate stands in."""
+    m = layout.model
+    items, corners, _, access, depth = _item_geometry(layout)
+    doors = layout.corners_m(m.door_particles) if len(m.door_particles) else np.zeros((0, 4, 2))
+    required = np.where(_shared_sides(m, items, corners, access, depth), 0.0, depth)
+    return metrics.traversability(m.floor_polygon_m, corners, m.particle_collides[items], access, required, doors)
 
 
 def evaluate(layout) -> dict:
@@ -83,8 +110,7 @@ def evaluate(layout) -> dict:
     polygon = m.floor_polygon_m
     outside = metrics.area_outside(polygon, corners)
     doors = layout.corners_m(m.door_particles) if len(m.door_particles) else np.zeros((0, 4, 2))
-    required = np.where(_shared_sides(m, items, corners, access, depth), 0.0, depth)
-    trav = metrics.traversability(polygon, corners, collides, access, required, doors)
+    trav = walkability(layout)
     clearance = metrics.door_clearance(doors, corners, collides) if len(doors) else np.zeros(0)
     blockers = [
         [ids[i] for i in np.flatnonzero(collides)

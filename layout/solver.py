@@ -31,6 +31,12 @@ TABLE_5_1 = (
 )
 
 
+# Kinds that make a layout unusable when violated, and the weighted energy below which
+# they count as satisfied (about a millimetre of penetration).
+HARD_KINDS = ("collision", "boundary")
+HARD_CLEAN = 1e-4
+
+
 @dataclass(frozen=True)
 class Layout:
     """One solved layout.
@@ -47,6 +53,7 @@ class Layout:
     seed : the seed of the random start.
     time_s : wall time of the solve (JIT compile excluded once warm).
     degenerate : dict of kind -> projections skipped for a zero-length direction.
+    runs : random starts it took (see ``Solver.restarts``).
     """
 
     model: Model
@@ -60,6 +67,7 @@ class Layout:
     seed: int | None
     time_s: float
     degenerate: dict = field(default_factory=dict)
+    runs: int = 1
 
     @property
     def items(self) -> np.ndarray:
@@ -183,6 +191,11 @@ class Solver:
         evaluations the trace repeats the last value.
     pad_m : padding of the collision pair list, rebuilt once anything has moved by
         half of it.
+    restarts : fresh random starts allowed when a run's best layout still collides,
+        leaves the floor or is not walkable (0: one run, as in the paper).
+    polish_rounds : after the loop, at most this many rounds of collision and
+        boundary projection at full stiffness on the best layout (kept if its energy
+        is no higher); 0 returns the best layout as seen, as in the paper.
     """
 
     max_iterations: int = 1000
@@ -199,6 +212,8 @@ class Solver:
     order: tuple = TABLE_5_1
     energy_every: int = 1
     pad_m: float = 0.1
+    polish_rounds: int = 30
+    restarts: int = 3
 
     def __post_init__(self):
         if self.method not in ("gauss-seidel", "jacobi"):
@@ -213,6 +228,10 @@ class Solver:
             raise LayoutError(f"solver.rate: {self.rate!r} must be >= 1 (the paper's M)")
         if not (isinstance(self.energy_every, int) and self.energy_every >= 1):
             raise LayoutError(f"solver.energy_every: {self.energy_every!r} must be an integer >= 1")
+        if not (isinstance(self.restarts, int) and self.restarts >= 0):
+            raise LayoutError(f"solver.restarts: {self.restarts!r} must be an integer >= 0")
+        if not (isinstance(self.polish_rounds, int) and self.polish_rounds >= 0):
+            raise LayoutError(f"solver.polish_rounds: {self.polish_rounds!r} must be an integer >= 0")
         if not self.pad_m > 0.0:
             raise LayoutError(f"solver.pad_m: {self.pad_m!r} must be > 0")
         for name in ("collision_stiffness", "access_stiffness"):
@@ -220,11 +239,49 @@ class Solver:
                 raise LayoutError(f"solver.{name}: {getattr(self, name)!r} must lie in (0, 1]")
 
     def solve(self, model: Model, seed=None, state: State | None = None) -> Layout:
-        """Solve from a random start drawn with ``seed`` (or from ``state``)."""
+        """Solve from a random start drawn with ``seed`` (or from ``state``).
+
+        When the best layout of a run still collides, leaves the floor or is not
+        walkable (:func:`layout.report.walkability`), the solver starts again from a
+        fresh random start of the same generator, up to ``restarts`` times, and
+        returns the best run: clean first, then walkable, then lowest energy. The returned layout says how many runs
+        it took; its time covers all of them.
+        """
         rng = np.random.default_rng(seed)
-        start = initial_state(model, rng) if state is None else state.copy()
+        best = None
         t0 = time.perf_counter()
-        best_pos, best_yaw, trace, best_it, iters, degen = K.solve_loop(
+        for run in range(self.restarts + 1):
+            start = initial_state(model, rng) if state is None or run > 0 else state.copy()
+            pos, yaw, trace, best_it, iters, degen = self._run(model, start)
+            K.sync_members(model.packed()[0], pos, yaw)
+            terms = energy_terms(model, State(pos, yaw), self.collision)
+            clean = sum(terms[k] for k in HARD_KINDS) <= HARD_CLEAN
+            # Walkability is only worth checking (a rasterization) for a clean layout.
+            walkable = clean and (self.restarts == 0 or _walkable(model, pos, yaw))
+            key = (not clean, not walkable, float(np.sqrt(sum(terms.values()))))
+            if best is None or key < best[0]:
+                best = (key, pos, yaw, trace, best_it, iters, degen, terms, run + 1)
+            if clean and walkable:
+                break
+        elapsed = time.perf_counter() - t0
+        _, pos, yaw, trace, best_it, iters, degen, terms, runs = best
+        return Layout(
+            model=model,
+            position_m=pos,
+            yaw_rad=(yaw + np.pi) % (2.0 * np.pi) - np.pi,
+            energy=float(np.sqrt(sum(terms.values()))),
+            energy_by_kind=terms,
+            trace=trace,
+            iterations=int(iters),
+            best_iteration=int(best_it),
+            seed=None if seed is None else int(seed),
+            time_s=elapsed,
+            degenerate={k: int(v) for k, v in zip(codes.KINDS, degen) if v},
+            runs=runs,
+        )
+
+    def _run(self, model: Model, start: State):
+        return K.solve_loop(
             model.packed(),
             np.ascontiguousarray(start.position_m, dtype=np.float64),
             np.ascontiguousarray(start.yaw_rad, dtype=np.float64),
@@ -244,22 +301,7 @@ class Solver:
             float(self.pad_m),
             np.array(codes.ENERGY_WEIGHTS),
             self.energy_every,
-        )
-        elapsed = time.perf_counter() - t0
-        K.sync_members(model.packed()[0], best_pos, best_yaw)
-        terms = energy_terms(model, State(best_pos, best_yaw), self.collision)
-        return Layout(
-            model=model,
-            position_m=best_pos,
-            yaw_rad=(best_yaw + np.pi) % (2.0 * np.pi) - np.pi,
-            energy=float(np.sqrt(sum(terms.values()))),
-            energy_by_kind=terms,
-            trace=trace,
-            iterations=int(iters),
-            best_iteration=int(best_it),
-            seed=None if seed is None else int(seed),
-            time_s=elapsed,
-            degenerate={k: int(v) for k, v in zip(codes.KINDS, degen) if v},
+            self.polish_rounds,
         )
 
     def suggest(self, model: Model, n: int, seed: int = 0) -> list[Layout]:
@@ -267,6 +309,13 @@ class Solver:
         if not (isinstance(n, int) and n >= 1):
             raise LayoutError(f"suggestions: {n!r} must be an integer >= 1")
         return [self.solve(model, seed=seed + k) for k in range(n)]
+
+
+def _walkable(model, pos, yaw) -> bool:
+    from .report import walkability  # report draws plans; import it only when needed
+
+    probe = Layout(model, pos, (yaw + np.pi) % (2.0 * np.pi) - np.pi, 0.0, {}, np.zeros(0), 0, 0, None, 0.0)
+    return walkability(probe).ok
 
 
 def _cell_size(model: Model) -> float:
