@@ -1326,7 +1326,7 @@ def polish(M, pos, yaw, rounds, model, gap_m, cell_m, pad_m):
 
 
 @njit(cache=True, error_model="numpy")
-def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, order, model, k_collision,
+def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, omega, order, model, k_collision,
                k_access, gap_m, cell_m, pad_m, weights, energy_every, polish_rounds):
     """Algorithm 1: project all constraints per iteration, keep the best layout.
 
@@ -1335,9 +1335,9 @@ def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, ord
     stacking, collision, accessibility and the layout boundary are projected every
     iteration, the boundary last so every layout handed out is inside the floor.
 
-    The loop stops after ``max_iter`` iterations, or once the best energy has not
-    improved by more than the fraction ``tol`` plus ``atol`` for ``patience``
-    iterations.
+    The loop stops after ``max_iter`` iterations, or (not before ``min_iter``) once
+    the best energy has not improved by more than the fraction ``tol`` plus ``atol``
+    for ``patience`` iterations.
 
     The best layout is then polished (:func:`polish`, ``polish_rounds`` at most) and
     the polished one kept if it collides less.
@@ -1391,7 +1391,7 @@ def solve_loop(M, pos, yaw, max_iter, patience, tol, atol, rate, jac, omega, ord
         if e < ref_e * (1.0 - tol) - atol:
             ref_e = e
             ref_it = it
-        if it >= max_iter or it - ref_it >= patience:
+        if it >= max_iter or (it >= min_iter and it - ref_it >= patience):
             break
         it += 1
         iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, model, k_collision, k_access, gap_m)

@@ -59,25 +59,27 @@ def _k(name, size_m, access_m=(0.0, 0.0, 0.0, 0.0), against_wall=False, collides
 
 
 #: Kind name -> :class:`Kind`. Access tuples are (back, left, front, right) in meters.
+#: Where a person stands or walks up to an item the clearance is at least 0.6 m: the
+#: walkability check asks for a 0.5 m wide path (Henderson et al.'s 0.25 m radius).
 CATALOG = dict(
     [
         # Bedroom.
         _k("bed", (1.6, 2.1, 0.5), (0, 0.6, 0.6, 0.6), True, label="double bed"),
-        _k("single_bed", (0.9, 2.0, 0.5), (0, 0.6, 0.5, 0), True, label="single bed"),
+        _k("single_bed", (0.9, 2.0, 0.5), (0, 0.6, 0.6, 0), True, label="single bed"),
         _k("nightstand", (0.5, 0.4, 0.55), (0, 0, 0.3, 0), label="nightstand"),
         _k("wardrobe", (1.2, 0.6, 2.0), (0, 0, 0.7, 0), True, label="wardrobe"),
         _k("dresser", (1.0, 0.5, 0.8), (0, 0, 0.6, 0), True, label="dresser / sideboard"),
         # Living room.
-        _k("sofa", (2.1, 0.95, 0.85), (0, 0, 0.45, 0), label="three-seat sofa"),
-        _k("armchair", (0.85, 0.85, 0.9), (0, 0, 0.4, 0), label="armchair"),
+        _k("sofa", (2.1, 0.95, 0.85), (0, 0, 0.6, 0), label="three-seat sofa"),
+        _k("armchair", (0.85, 0.85, 0.9), (0, 0, 0.6, 0), label="armchair"),
         _k("coffee_table", (1.1, 0.6, 0.45), label="coffee table"),
         _k("side_table", (0.5, 0.5, 0.55), label="side table"),
-        _k("tv_stand", (1.6, 0.45, 0.55), (0, 0, 0.5, 0), True, label="TV on a low stand"),
+        _k("tv_stand", (1.6, 0.45, 0.55), (0, 0, 0.6, 0), True, label="TV on a low stand"),
         _k("bookcase", (0.8, 0.35, 1.9), (0, 0, 0.6, 0), True, label="bookcase"),
         _k("plant", (0.4, 0.4, 1.0), label="indoor plant in a pot"),
         _k("floor_lamp", (0.35, 0.35, 1.6), label="floor lamp"),
         _k("rug", (2.0, 1.4, 0.01), collides=False, label="rug"),
-        _k("coat_rack", (0.5, 0.5, 1.8), (0, 0, 0.5, 0), True, label="coat rack"),
+        _k("coat_rack", (0.5, 0.5, 1.8), (0, 0, 0.6, 0), True, label="coat rack"),
         # Dining.
         _k("dining_table", (1.6, 0.9, 0.75), (0.6, 0.6, 0.6, 0.6), label="dining table for 6"),
         _k("round_table", (1.0, 1.0, 0.75), (0.6, 0.6, 0.6, 0.6), label="round table for 4"),
@@ -95,9 +97,9 @@ CATALOG = dict(
         _k("picnic_table", (1.8, 0.8, 0.75), (0.6, 0, 0.6, 0), label="picnic table"),
         _k("bench", (1.5, 0.4, 0.45), (0, 0, 0.3, 0), label="bench"),
         _k("grill", (1.2, 0.6, 1.1), (0, 0, 0.8, 0), label="barbecue grill"),
-        _k("trash_can", (0.6, 0.6, 1.0), (0, 0, 0.4, 0), label="outdoor trash can"),
+        _k("trash_can", (0.6, 0.6, 1.0), (0, 0, 0.6, 0), label="outdoor trash can"),
         _k("carousel", (6.0, 6.0, 4.0), (1.0, 1.0, 1.0, 1.0), label="fairground carousel"),
-        _k("lounge_chair", (0.7, 1.9, 0.4), (0, 0.4, 0, 0), label="sun lounger"),
+        _k("lounge_chair", (0.7, 1.9, 0.4), (0, 0.6, 0, 0), label="sun lounger"),
         _k("parasol", (0.5, 0.5, 2.4), label="parasol (stand footprint)"),
         # Small items, for stacking on tables and desks.
         _k("book", (0.15, 0.22, 0.03), label="book lying flat"),

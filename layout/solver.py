@@ -172,6 +172,9 @@ class Solver:
     Parameters
     ----------
     max_iterations : hard cap on iterations.
+    min_iterations : never stop before this many: with the default rate the growing
+        collision stiffness reaches 0.9 only after about 100 iterations, and an early
+        low-energy state still has its collisions to work out.
     patience : stop when the best energy has not improved (by more than the fraction
         ``tolerance`` plus ``abs_tolerance``) for this many iterations.
     tolerance, abs_tolerance : the improvement of the energy that counts for
@@ -199,6 +202,7 @@ class Solver:
     """
 
     max_iterations: int = 1000
+    min_iterations: int = 100
     patience: int = 50
     tolerance: float = 1e-3
     abs_tolerance: float = 5e-3
@@ -222,6 +226,8 @@ class Solver:
             raise LayoutError(f"solver.collision: {self.collision!r} is not 'box' or 'sphere'")
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
             raise LayoutError(f"solver.max_iterations: {self.max_iterations!r} must be an integer >= 1")
+        if not (isinstance(self.min_iterations, int) and 0 <= self.min_iterations <= self.max_iterations):
+            raise LayoutError(f"solver.min_iterations: {self.min_iterations!r} must be an integer in [0, max_iterations]")
         if not (isinstance(self.patience, int) and self.patience >= 1):
             raise LayoutError(f"solver.patience: {self.patience!r} must be an integer >= 1")
         if not self.rate >= 1.0:
@@ -286,6 +292,7 @@ class Solver:
             np.ascontiguousarray(start.position_m, dtype=np.float64),
             np.ascontiguousarray(start.yaw_rad, dtype=np.float64),
             self.max_iterations,
+            self.min_iterations,
             self.patience,
             float(self.tolerance),
             float(self.abs_tolerance),
