@@ -379,7 +379,8 @@ class LayoutBuilder:
         span = hi - lo
         for i in items:
             w, d = self._p[i]["size"][:2]
-            if min(w, d) > min(span) + 1e-9 and max(w, d) > max(span) + 1e-9 or min(w, d) > max(span) + 1e-9:
+            # Necessary conditions only (a long item may still fit diagonally).
+            if max(w, d) > math.hypot(*span) + 1e-9 or min(w, d) > min(span) + 1e-9:
                 raise LayoutError(
                     f"item {self._p[i]['name']!r}: footprint {w:g} x {d:g} m does not fit the floor "
                     f"({span[0]:.2f} x {span[1]:.2f} m)"

@@ -226,8 +226,8 @@ class Solver:
             raise LayoutError(f"solver.collision: {self.collision!r} is not 'box' or 'sphere'")
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
             raise LayoutError(f"solver.max_iterations: {self.max_iterations!r} must be an integer >= 1")
-        if not (isinstance(self.min_iterations, int) and 0 <= self.min_iterations <= self.max_iterations):
-            raise LayoutError(f"solver.min_iterations: {self.min_iterations!r} must be an integer in [0, max_iterations]")
+        if not (isinstance(self.min_iterations, int) and self.min_iterations >= 0):
+            raise LayoutError(f"solver.min_iterations: {self.min_iterations!r} must be an integer >= 0")
         if not (isinstance(self.patience, int) and self.patience >= 1):
             raise LayoutError(f"solver.patience: {self.patience!r} must be an integer >= 1")
         if not self.rate >= 1.0:

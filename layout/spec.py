@@ -28,7 +28,8 @@ Only the fields listed here are allowed: a misspelt field is an error, not ignor
     clearance = 0.4 }``: items taller than the sill keep ``clearance`` away.
 
 ``[solver]`` (optional)
-    Settings of :class:`layout.Solver`: ``max_iterations`` (int), ``patience`` (int),
+    Settings of :class:`layout.Solver`: ``max_iterations``, ``min_iterations``,
+    ``restarts``, ``polish_rounds``, ``energy_every`` (ints), ``patience`` (int),
     ``rate``, ``method`` ("gauss-seidel" | "jacobi"), ``omega``, ``collision``
     ("box" | "sphere"), ``collision_stiffness``, ``access_stiffness``.
 
@@ -120,6 +121,10 @@ DOOR_FIELDS = ("at", "width", "clearance", "height")
 WINDOW_FIELDS = ("at", "width", "sill", "height", "clearance")
 SOLVER_FIELDS = {
     "max_iterations": int,
+    "min_iterations": int,
+    "restarts": int,
+    "polish_rounds": int,
+    "energy_every": int,
     "patience": int,
     "rate": float,
     "method": str,

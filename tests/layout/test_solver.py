@@ -1,0 +1,152 @@
+"""The solver end to end: the paper's scenarios, determinism, groups, modes, bad input."""
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from layout import LayoutBuilder, LayoutError, Solver, diversity
+from layout.geometry import polygon_area
+from layout.report import evaluate
+from layout.spec import build, load_spec
+
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
+
+
+def _clean(layout):
+    ev = evaluate(layout)
+    return ev["overlaps"]["count"] == 0 and ev["outside_m2"] == 0.0 and ev["traversable"], ev
+
+
+@pytest.mark.parametrize(
+    "name,seeds",
+    [("living_room", (0, 1)), ("desk", (0, 1)), ("tp_bedroom", (0, 2)), ("tp_picnic", (0,)), ("picnic", (0,)),
+     ("theater", (0,)), ("l_shaped_office", (0, 1))],
+)
+def test_paper_scenarios_solve_clean(name, seeds):
+    model, solver = build(load_spec(SAMPLES / f"{name}.toml"))
+    for seed in seeds:
+        ok, ev = _clean(solver.solve(model, seed=seed))
+        assert ok, (name, seed, ev["overlaps"], ev["outside_items"], ev["unreachable"])
+
+
+def test_same_seed_same_layout_other_seed_other_layout():
+    model, solver = build(load_spec(SAMPLES / "living_room.toml"))
+    a, b, c = solver.solve(model, seed=3), solver.solve(model, seed=3), solver.solve(model, seed=4)
+    np.testing.assert_array_equal(a.position_m, b.position_m)
+    np.testing.assert_array_equal(a.yaw_rad, b.yaw_rad)
+    assert a.energy == b.energy and a.iterations == b.iterations
+    assert np.abs(a.position_m - c.position_m).max() > 0.1
+    suggestions = solver.suggest(model, 3, seed=3)
+    np.testing.assert_array_equal(suggestions[0].position_m, a.position_m)
+    assert diversity(suggestions) > 0.1
+
+
+def test_rigid_group_members_keep_their_offsets():
+    model, solver = build(load_spec(SAMPLES / "tp_picnic.toml"))
+    layout = solver.solve(model, seed=0)
+    names = list(model.names)
+    table = names.index("table_1")
+    for c, (ox, oy) in enumerate([(0.8, 0), (0, 0.8), (-0.8, 0), (0, -0.8)]):
+        chair = names.index(f"chair_1_{c + 1}")
+        yaw = layout.yaw_rad[table]
+        expect = layout.position_m[table, :2] + [ox * math.cos(yaw) - oy * math.sin(yaw),
+                                                 ox * math.sin(yaw) + oy * math.cos(yaw)]
+        np.testing.assert_allclose(layout.position_m[chair, :2], expect, atol=1e-9)
+
+
+def test_non_rigid_tier_members_sit_on_their_arc_in_order():
+    model, solver = build(load_spec(SAMPLES / "theater.toml"))
+    layout = solver.solve(model, seed=1)
+    names = list(model.names)
+    c = next(k for k in range(len(model.curve_group)) if names[model.curve_group[k]] == "center_3")
+    g = model.curve_group[c]
+    members = model.curve_members[model.curve_start[c]:model.curve_start[c + 1]]
+    cx, cy, radius = model.curve_params[c][:3]
+    center = layout.position_m[g, :2]  # the arc's center is the group's origin here
+    assert (cx, cy) == (0.0, 0.0)
+    r = np.linalg.norm(layout.position_m[members, :2] - center, axis=1)
+    np.testing.assert_allclose(r, radius, atol=0.05)
+    # Neighbours along the arc keep the tier's spacing.
+    ang = np.sort(np.arctan2(*(layout.position_m[members, :2] - center).T[::-1]))
+    np.testing.assert_allclose(np.diff(ang) * radius, model.curve_spacing_m[c], atol=0.05)
+
+
+def test_l_shaped_room_keeps_everything_inside_and_off_the_notch():
+    b = LayoutBuilder([[0, 0], [6, 0], [6, 3], [3, 3], [3, 6], [0, 6]], 2.6)
+    b.add_door((1.5, 0.0), 0.9)
+    for k in range(6):
+        i = b.add_item(f"box{k}", (1.2, 0.6, 1.0), access_m=(0, 0, 0.6, 0))
+        b.against_wall(i)
+    layout = Solver().solve(b.finalize(), seed=0)
+    ok, ev = _clean(layout)
+    assert ok, ev
+
+
+@pytest.mark.parametrize("overrides", [dict(method="jacobi"), dict(collision="sphere")])
+def test_jacobi_and_sphere_modes_solve_the_living_room(overrides):
+    model, solver = build(load_spec(SAMPLES / "living_room.toml"))
+    solver = dataclasses.replace(solver, **overrides)
+    results = [_clean(solver.solve(model, seed=s))[0] for s in range(3)]
+    assert sum(results) >= 2
+
+
+def test_restarts_are_reported_and_paper_mode_runs_once():
+    model, solver = build(load_spec(SAMPLES / "tp_bedroom.toml"))
+    paper = dataclasses.replace(solver, restarts=0)
+    runs = [paper.solve(model, seed=s).runs for s in range(3)]
+    assert runs == [1, 1, 1]
+    assert max(solver.solve(model, seed=s).runs for s in range(6)) > 1
+
+
+def test_energy_trace_and_best_layout():
+    model, solver = build(load_spec(SAMPLES / "living_room.toml"))
+    layout = dataclasses.replace(solver, restarts=0, polish_rounds=0).solve(model, seed=1)
+    assert len(layout.trace) == layout.iterations + 1
+    # The returned layout is the best seen: its energy is the trace's minimum.
+    assert math.isclose(layout.energy, np.nanmin(layout.trace), rel_tol=1e-9)
+    assert layout.trace[0] > 10 * layout.energy
+
+
+def test_builder_never_modifies_inputs():
+    poly = np.array([[0, 0], [0, 4], [5, 4], [5, 0]], dtype=float)  # clockwise
+    size = np.array([1.0, 0.5, 0.8])
+    before = poly.copy(), size.copy()
+    b = LayoutBuilder(poly)
+    b.add_item("a", size)
+    model = b.finalize()
+    np.testing.assert_array_equal(poly, before[0])
+    np.testing.assert_array_equal(size, before[1])
+    assert polygon_area(model.floor_polygon_m) > 0  # stored counter-clockwise
+
+
+@pytest.mark.parametrize(
+    "make,message",
+    [
+        (lambda: LayoutBuilder([[0, 0], [1, 1]]), "at least 3 vertices"),
+        (lambda: LayoutBuilder([[0, 0], [2, 2], [2, 0], [0, 2]]), "intersect"),
+        (lambda: LayoutBuilder([[0, 0], [1, 0], [np.nan, 1]]), "finite"),
+        (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]]).add_item("a", (1, -1, 1)), "greater than 0"),
+        (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]]).add_item("a", (1, np.nan, 1)), "not a finite"),
+        (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]]).distance(0, 1, 1.0), "no item or group"),
+        (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]], 2.5).add_item("tall", (1, 1, 3)), "exceeds the room"),
+        (lambda: Solver(method="newton"), "gauss-seidel"),
+        (lambda: Solver(restarts=-1), "restarts"),
+    ],
+)
+def test_bad_input_raises_one_clear_error(make, message):
+    with pytest.raises(LayoutError, match=message):
+        make()
+
+
+def test_items_that_cannot_fit():
+    b = LayoutBuilder([[0, 0], [2, 0], [2, 2], [0, 2]])
+    b.add_item("huge", (1.9, 1.9, 1))
+    b.add_item("other", (1.0, 1.0, 1))
+    with pytest.raises(LayoutError, match="add up to"):
+        b.finalize()
+    b = LayoutBuilder([[0, 0], [2, 0], [2, 2], [0, 2]])
+    b.add_item("long", (0.5, 3.5, 1))
+    with pytest.raises(LayoutError, match="does not fit"):
+        b.finalize()
