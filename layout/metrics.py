@@ -115,8 +115,16 @@ def _clip_batch(subject, clip):
     return poly
 
 
-def _pairwise_intersection_area(subject, clip):
-    """Areas (P,) of ``subject[p] ∩ clip[p]``: subjects (P, M, 2) simple, clips convex."""
+def pairwise_intersection_area(subject, clip):
+    """Areas (P,) in m² of ``subject[p] ∩ clip[p]`` (NumPy batch clipping).
+
+    Parameters
+    ----------
+    subject : (P, M, 2) float64
+        Simple polygons (any winding).
+    clip : (P, K, 2) float64
+        Convex polygons.
+    """
     if len(subject) == 0:
         return np.zeros(0)
     return np.abs(_signed_areas(_clip_batch(subject, _ccw(clip))))
@@ -246,7 +254,7 @@ def box_overlaps(corners_m, z_range_m, collides, min_area_m2=1e-6):
     area = np.empty(len(first))
     for s in range(0, len(first), _NARROW_CHUNK):
         sl = slice(s, s + _NARROW_CHUNK)
-        area[sl] = _pairwise_intersection_area(corners[first[sl]], corners[second[sl]])
+        area[sl] = pairwise_intersection_area(corners[first[sl]], corners[second[sl]])
     keep = area > min_area_m2
     pairs = np.sort(np.stack([first[keep], second[keep]], axis=1), axis=1).astype(np.int64)
     area = area[keep]
@@ -273,7 +281,7 @@ def area_outside(polygon_m, corners_m):
     corners = _as_boxes(corners_m)
     n = len(corners)
     box_area = np.abs(_signed_areas(corners))
-    inside = _pairwise_intersection_area(np.broadcast_to(floor, (n,) + floor.shape), corners)
+    inside = pairwise_intersection_area(np.broadcast_to(floor, (n,) + floor.shape), corners)
     return np.maximum(box_area - inside, 0.0)
 
 
@@ -298,7 +306,7 @@ def door_clearance(door_zones_m, corners_m, blocks):
     corners = _as_boxes(corners_m)
     blocking = corners[_as_flags(blocks, len(corners), "blocks")]
     d, b = len(zones), len(blocking)
-    area = _pairwise_intersection_area(
+    area = pairwise_intersection_area(
         np.repeat(blocking[None], d, axis=0).reshape(d * b, 4, 2),
         np.repeat(zones, b, axis=0),
     )

@@ -42,29 +42,18 @@ def _shared_sides(model, items, corners, access, depth):
     parent = model.particle_parent[items]
     center = corners.mean(axis=1)
     reach = np.linalg.norm(corners[:, 0] - center, axis=1) + depth.max(axis=1)
-    taken = np.zeros(depth.shape, bool)
+    triples = []  # (owner, side, mate) close enough to matter
     for a in np.flatnonzero((parent >= 0) & (depth.max(axis=1) > 0)):
         near = np.linalg.norm(center - center[a], axis=1) < reach + reach[a]
-        for b in np.flatnonzero(near & (parent == parent[a])):
-            if a == b or not model.particle_collides[items[b]]:
-                continue
-            for k in np.flatnonzero(depth[a] > 0):
-                if _apart(access[a, k], corners[b]):
-                    continue
-                if metrics.convex_intersection_area(access[a, k], corners[b]) > MIN_OVERLAP_M2:
-                    taken[a, k] = True
+        for b in np.flatnonzero(near & (parent == parent[a]) & model.particle_collides[items]):
+            if a != b:
+                triples += [(a, k, b) for k in np.flatnonzero(depth[a] > 0)]
+    taken = np.zeros(depth.shape, bool)
+    if triples:
+        a, k, b = np.array(triples).T
+        area = metrics.pairwise_intersection_area(access[a, k], corners[b])
+        taken[a[area > MIN_OVERLAP_M2], k[area > MIN_OVERLAP_M2]] = True
     return taken
-
-
-def _apart(a, b):
-    """Separating-axis test of two rectangles given by corners: True when they are
-    apart (a cheap reject before the exact intersection area)."""
-    for box in (a, b):
-        for e in (box[1] - box[0], box[3] - box[0]):
-            pa, pb = a @ e, b @ e
-            if pa.max() <= pb.min() or pb.max() <= pa.min():
-                return True
-    return False
 
 
 def walkability(layout) -> metrics.Traversability:
