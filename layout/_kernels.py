@@ -151,6 +151,13 @@ def flush(pos, yaw, acc, omega, mstart, mlist):
             acc[b, q] = 0.0
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def batch_end(jac, pos, yaw, acc, omega, P):
+    """End of a batch (one constraint kind): Jacobi applies what it gathered."""
+    if jac:
+        flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+
+
 @njit(cache=True, error_model="numpy")
 def sync_members(P, pos, yaw):
     """Write the world pose of every rigid-group member from its body's pose."""
@@ -1258,45 +1265,33 @@ def iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, mod
     others = order[row, 1]
     if others:
         project_distance(D, P, pos, yaw, acc, jac, it, rate, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
         project_lane(L, P, pos, yaw, acc, jac, it, rate, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
         project_heat(H, P, pos, yaw, acc, jac, it, rate, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
         project_symmetry(S, P, pos, yaw, acc, jac, it, rate, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
         project_balance(B, P, pos, yaw, acc, jac, it, rate, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
         project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
         project_curve(U, P, pos, yaw, acc, jac, it, rate, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
     if order[row, 0]:
         project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
         project_wall_orientation(WO, R, P, pos, yaw, acc, jac, it, rate, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
     project_stack(ST, P, pos, yaw, acc, jac, it, rate, degen)
-    if jac:
-        flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+    batch_end(jac, pos, yaw, acc, omega, P)
     if order[row, 2]:
         trig(yaw, cs)
         kc = stiffness(k_collision, GROW, it, rate)
         project_collision(P, R, pairs, pos, yaw, cs, acc, jac, kc, model, gap_m, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
         project_access(P, pairs, pos, yaw, cs, acc, jac, k_access, model, degen)
-        if jac:
-            flush(pos, yaw, acc, omega, P.mstart, P.mlist)
+        batch_end(jac, pos, yaw, acc, omega, P)
         project_access_in_floor(R, P, pos, yaw, cs, k_access)
     project_boundary(R, P, pos, yaw)
 
