@@ -4,7 +4,8 @@ Run by hand: ``python benchmarks/scenarios.py [--seeds 10] [--only theater,desk]
 Prints a table per solver mode and writes ``benchmarks/results/scenarios.{json,md}``.
 
 Modes:
-  paper   one run per seed, as in Weiss et al. (restarts=0)
+  paper   one run per seed, as in Weiss et al. (restarts=0), exact box collisions
+  sphere  the same with the paper's bounding-sphere collisions
   default Stager's defaults: up to 3 fresh restarts when a run's best layout still
           collides, leaves the floor or is not walkable (the time covers all runs)
 
@@ -33,7 +34,7 @@ SCENARIOS = {
     "tp_bedroom": ("samples/tp_bedroom.toml", 12, 0.67),
     "tp_picnic": ("samples/tp_picnic.toml", 53, 2.42),
 }
-MODES = {"paper": dict(restarts=0), "default": {}}
+MODES = {"paper": dict(restarts=0), "sphere": dict(restarts=0, collision="sphere"), "default": {}}
 
 
 def run(seeds, only):

@@ -6,7 +6,7 @@ height, doors, windows) and a furnishing spec; its output is layout suggestions.
 from .builder import LayoutBuilder
 from .errors import LayoutError
 from .model import Model, State
-from .solver import Layout, Solver, diversity, energy_terms, initial_state
+from .solver import Layout, Solver, diversity, energy_terms, initial_state, residuals
 
 __all__ = [
     "Layout",
@@ -18,4 +18,5 @@ __all__ = [
     "diversity",
     "energy_terms",
     "initial_state",
+    "residuals",
 ]

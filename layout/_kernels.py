@@ -1150,6 +1150,10 @@ def access_in_floor(R, P, pos, yaw, cs, i, k, project):
     excess = 0.0
     hd = 0.5 * P.size[i, 1]
     hw = 0.5 * P.size[i, 0]
+    # Quick accept: every clearance lies within this circle, itself inside the floor.
+    _, _, _, wall_m = nearest_on_polygon(R.polygon, pos[i, 0], pos[i, 1])
+    if wall_m > P.radius[i] + P.access_max[i] and inside_polygon(R.polygon, pos[i, 0], pos[i, 1]):
+        return 0.0
     for side in range(4):
         depth = P.access_depth[i, side]
         if depth <= 0.0:

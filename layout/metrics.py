@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import cv2
+import numba
 import numpy as np
 import skimage.measure
 import skimage.morphology
@@ -386,10 +387,73 @@ class _Raster:
             rr, cc = rc[inside, 0], rc[inside, 1]
         return rr, cc
 
+    def mask_all(self, polygons_m):
+        """Union of the masks of many small convex polygons (one OpenCV call; the
+        polygons thinner than a pixel still get the pixels :meth:`pixels` gives them)."""
+        m = np.zeros(self.shape, dtype=np.uint8)
+        if len(polygons_m) == 0:
+            return m.astype(bool)
+        col = (polygons_m[..., 0] - self.origin_m[0]) / self.resolution_m - 0.5
+        row = (polygons_m[..., 1] - self.origin_m[1]) / self.resolution_m - 0.5
+        pts = np.round(np.stack([col, row], axis=-1) * _SUBPIXEL).astype(np.int32)
+        cv2.fillPoly(m, list(pts), 1, lineType=cv2.LINE_8, shift=_SHIFT)
+        mask = m.astype(bool)
+        # Slivers: fillPoly with LINE_8 marks the pixels their edges pass through, which
+        # may differ from pixel-center filling; add the pixel of each centroid too.
+        rc = np.floor((polygons_m.mean(axis=1)[:, ::-1] - self.origin_m[::-1]) / self.resolution_m).astype(int)
+        ok = np.all((rc >= 0) & (rc < self.shape), axis=1)
+        mask[rc[ok, 0], rc[ok, 1]] = True
+        return mask
+
     def mask(self, polygon_m):
         m = np.zeros(self.shape, dtype=bool)
         m[self.pixels(polygon_m)] = True
         return m
+
+
+@numba.njit(cache=True)
+def _labels_in_quads(labels, n_labels, quads_px):
+    """For each convex quad (pixel-center coordinates), which labels its pixels carry.
+
+    A pixel belongs to a quad when its center is inside; a quad thinner than a pixel
+    that covers no center takes the pixels holding its corners and its centroid
+    (as :meth:`_Raster.pixels` does). Returns (q, n_labels + 1) bool.
+    """
+    h, w = labels.shape
+    out = np.zeros((quads_px.shape[0], n_labels + 1), dtype=np.bool_)
+    for q in range(quads_px.shape[0]):
+        quad = quads_px[q]
+        area2 = 0.0
+        for a in range(4):
+            b = (a + 1) % 4
+            area2 += quad[a, 0] * quad[b, 1] - quad[b, 0] * quad[a, 1]
+        sign = 1.0 if area2 >= 0.0 else -1.0
+        c0 = max(int(np.ceil(quad[:, 0].min())), 0)
+        c1 = min(int(np.floor(quad[:, 0].max())), w - 1)
+        r0 = max(int(np.ceil(quad[:, 1].min())), 0)
+        r1 = min(int(np.floor(quad[:, 1].max())), h - 1)
+        hit = False
+        for r in range(r0, r1 + 1):
+            for c in range(c0, c1 + 1):
+                inside = True
+                for a in range(4):
+                    b = (a + 1) % 4
+                    cross = (quad[b, 0] - quad[a, 0]) * (r - quad[a, 1]) - (quad[b, 1] - quad[a, 1]) * (c - quad[a, 0])
+                    if sign * cross < 0.0:
+                        inside = False
+                        break
+                if inside:
+                    out[q, labels[r, c]] = True
+                    hit = True
+        if not hit:
+            for a in range(5):
+                x = quad[:, 0].mean() if a == 4 else quad[a, 0]
+                y = quad[:, 1].mean() if a == 4 else quad[a, 1]
+                c = int(np.floor(x + 0.5))
+                r = int(np.floor(y + 0.5))
+                if 0 <= r < h and 0 <= c < w:
+                    out[q, labels[r, c]] = True
+    return out
 
 
 def traversability(
@@ -454,8 +518,7 @@ def traversability(
     )
     raster = _Raster(origin, resolution_m, shape)
     free = raster.mask(floor)
-    for box in corners[blocks]:
-        free[raster.pixels(box)] = False
+    free[raster.mask_all(corners[blocks])] = False
     disk = skimage.morphology.disk(int(round(radius_m / resolution_m)))
     # cv2.erode is the same binary erosion (outside the image counts as blocked), in C.
     passable = cv2.erode(free.astype(np.uint8), disk.astype(np.uint8), borderType=cv2.BORDER_CONSTANT,
@@ -472,7 +535,10 @@ def traversability(
 
     door_touch = [touched(m) for m in door_masks]
     sides = [(int(i), int(k)) for i, k in zip(*np.nonzero(depth > 0))]
-    side_touch = [touched(raster.pixels(access[i, k])) for i, k in sides]
+    quads = np.array([access[i, k] for i, k in sides], dtype=np.float64).reshape(-1, 4, 2)
+    quads_px = (quads - origin) / resolution_m - 0.5  # pixel-center coordinates (x=col, y=row)
+    side_touch = [set(np.flatnonzero(row).tolist()) - {0}
+                  for row in _labels_in_quads(labels.astype(np.int64), n_components, quads_px)]
     n_doors = np.zeros(n_components + 1, dtype=np.int64)
     n_sides = np.zeros(n_components + 1, dtype=np.int64)
     for t in door_touch:

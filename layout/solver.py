@@ -342,6 +342,53 @@ def energy_terms(model: Model, state: State, collision: str = "box") -> dict:
     return {k: float(v) for k, v in zip(codes.KINDS, terms)}
 
 
+def residuals(model: Model, state: State, collision: str = "box") -> dict:
+    """The value C_j of every constraint, by kind (0 where an inequality holds).
+
+    Parameters
+    ----------
+    model : Model
+    state : State
+        Positions (n, 3) in meters and yaws (n,) in radians, e.g. a Layout's.
+    collision : "box" or "sphere", as the solver that produced the state.
+
+    Returns
+    -------
+    dict of kind -> (c,) float64
+        Static kinds have one value per constraint, in the order they were added (the
+        CoM kinds heat, symmetry and balance give ½‖e‖² in m², the orientation kinds
+        radians, the rest meters); ``boundary`` one per particle; ``collision`` and
+        ``access`` one per candidate pair (negative = penetration depth).
+    """
+    P, D, L, H, S, B, W, WO, O, ST, U, R = model.packed()
+    pos = np.ascontiguousarray(state.position_m, dtype=np.float64)
+    yaw = np.ascontiguousarray(state.yaw_rad, dtype=np.float64)
+    pairs = K.candidate_pairs(P, pos, yaw, _cell_size(model), 0.05)
+    cs = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
+    code = codes.COLLISION_NAMES[collision]
+    calls = {
+        "distance": (len(D.rest), lambda out: K.residual_distance(D, P, pos, yaw, out)),
+        "lane": (len(L.origin), lambda out: K.residual_lane(L, P, pos, yaw, out)),
+        "heat": (len(H.frame), lambda out: K.residual_heat(H, P, pos, yaw, out)),
+        "symmetry": (len(S.focal), lambda out: K.residual_symmetry(S, P, pos, yaw, out)),
+        "balance": (len(B.target), lambda out: K.residual_balance(B, P, pos, yaw, out)),
+        "wall_distance": (len(W.item), lambda out: K.residual_wall_distance(W, R, P, pos, yaw, out)),
+        "wall_orientation": (len(WO.item), lambda out: K.residual_wall_orientation(WO, R, P, pos, yaw, out)),
+        "orientation": (len(O.mode), lambda out: K.residual_orientation(O, P, pos, yaw, out)),
+        "stack": (len(ST.k0), lambda out: K.residual_stack(ST, P, pos, yaw, out)),
+        "curve": (len(U.group), lambda out: K.residual_curve(U, P, pos, yaw, out)),
+        "boundary": (model.n, lambda out: K.residual_boundary(R, P, pos, yaw, out)),
+        "collision": (len(pairs), lambda out: K.residual_collision(P, R, pairs, pos, cs, code, out)),
+        "access": (len(pairs), lambda out: K.residual_access(P, pairs, pos, cs, code, out)),
+    }
+    result = {}
+    for kind, (count, fill) in calls.items():
+        out = np.zeros(max(count, 1))
+        fill(out)
+        result[kind] = out[:count]
+    return result
+
+
 def diversity(layouts: list[Layout]) -> float:
     """How different suggestions are: mean over pairs of layouts of the symmetric
     chamfer distance (m) between item centers of the same kind (so swapping two

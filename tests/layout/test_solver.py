@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from layout import LayoutBuilder, LayoutError, Solver, diversity
+from layout import LayoutBuilder, LayoutError, Solver, State, diversity, residuals
 from layout.geometry import polygon_area
 from layout.report import evaluate
 from layout.spec import build, load_spec
@@ -150,3 +150,17 @@ def test_items_that_cannot_fit():
     b.add_item("long", (0.5, 3.5, 1))
     with pytest.raises(LayoutError, match="does not fit"):
         b.finalize()
+
+
+def test_residuals_by_kind_match_the_energy():
+    model, solver = build(load_spec(SAMPLES / "living_room.toml"))
+    layout = solver.solve(model, seed=2)
+    res = residuals(model, State(layout.position_m, layout.yaw_rad))
+    assert len(res["distance"]) == len(model.distance_rest_m)
+    assert len(res["orientation"]) == len(model.orientation_mode)
+    # The access energy also counts clearances leaving the floor; every other kind is
+    # exactly g_j times the sum of its squared residuals.
+    from layout._codes import ENERGY_WEIGHTS, KINDS
+    for kind, g in zip(KINDS, ENERGY_WEIGHTS):
+        if kind != "access":
+            assert math.isclose(g * float((res[kind] ** 2).sum()), layout.energy_by_kind[kind], rel_tol=1e-9, abs_tol=1e-12)
