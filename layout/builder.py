@@ -400,22 +400,21 @@ class LayoutBuilder:
         # Body = the outermost rigid group an item is fixed in; offsets compose.
         body = np.arange(n, dtype=np.int32)
         offset = np.array([r["offset"] for r in p], np.float64).reshape(n, 3)
-        body_yaw = np.zeros(n)
-        for i in range(n):
-            g = parent[i]
-            if g >= 0 and rigid[g]:
-                yaw_rel = 0.0 if np.isnan(p[i]["yaw"]) else p[i]["yaw"]
-                body_yaw[i] = yaw_rel
+        # Pose of each particle in its parent's frame (rigid parents only).
+        in_rigid = (parent >= 0) & rigid[np.maximum(parent, 0)]
+        yaw_in_parent = np.where(in_rigid, np.nan_to_num(np.array([r["yaw"] for r in p], np.float64)), 0.0)
+        offset_in_parent = offset[:, :2].copy()
+        body_yaw = yaw_in_parent.copy()
         for i in range(n):
             b = i
-            off = offset[i, :2].copy()
-            yaw_acc = body_yaw[i]
-            while parent[b] >= 0 and rigid[parent[b]]:
+            off = offset_in_parent[i].copy()
+            yaw_acc = yaw_in_parent[i]
+            while in_rigid[b]:
                 g = parent[b]
-                if parent[g] >= 0 and rigid[parent[g]]:
-                    c, s = math.cos(body_yaw[g]), math.sin(body_yaw[g])
-                    off = offset[g, :2] + np.array([c * off[0] - s * off[1], s * off[0] + c * off[1]])
-                    yaw_acc += body_yaw[g]
+                if in_rigid[g]:
+                    c, s = math.cos(yaw_in_parent[g]), math.sin(yaw_in_parent[g])
+                    off = offset_in_parent[g] + np.array([c * off[0] - s * off[1], s * off[0] + c * off[1]])
+                    yaw_acc += yaw_in_parent[g]
                 b = g
             body[i] = b
             if b != i:

@@ -483,3 +483,18 @@ def test_spatial_hash_matches_brute_force(rng):
         if abs(pos[i, 0] - pos[j, 0]) <= ex[i] + ex[j] and abs(pos[i, 1] - pos[j, 1]) <= ey[i] + ey[j]
     }
     assert pairs == expect
+
+
+def test_nested_rigid_groups_compose_offsets_once():
+    b = LayoutBuilder(ROOM)
+    outer = b.add_group("outer", rigid=True)
+    mid = b.add_group("mid", rigid=True, group=outer, offset_m=(1, 0))
+    inner = b.add_group("inner", rigid=True, group=mid, offset_m=(1, 0), yaw_rad=math.pi / 2)
+    item = b.add_item("item", (0.5, 0.5, 0.5), group=inner, offset_m=(1, 0))
+    m = b.finalize()
+    pos, yaw = np.zeros((m.n, 3)), np.zeros(m.n)
+    K.sync_members(m.packed()[0], pos, yaw)
+    # (1, 0) + (1, 0) + the item's (1, 0) turned by the inner group's quarter turn.
+    np.testing.assert_allclose(pos[item, :2], [2.0, 1.0], atol=1e-12)
+    assert math.isclose(yaw[item], math.pi / 2)
+    assert m.particle_body[item] == outer
