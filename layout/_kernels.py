@@ -1353,6 +1353,7 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
     best_pos = pos.copy()
     best_yaw = yaw.copy()
     best_e = np.inf
+    best_terms = np.zeros(N_KINDS)
     best_it = 0
     ref_e = np.inf
     ref_it = 0
@@ -1375,23 +1376,23 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
             pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
             ref_pos[:] = pos
             ref_yaw[:] = yaw
-        if it % energy_every != 0 and it < max_iter:
+        if it % energy_every == 0 or it >= max_iter:
+            terms = energy_terms(M, pos, yaw, pairs, model, weights)
+            e = math.sqrt(terms.sum())
+            trace[it] = e
+            if e < best_e:
+                best_e = e
+                best_terms[:] = terms
+                best_it = it
+                best_pos[:] = pos
+                best_yaw[:] = yaw
+            if e < ref_e * (1.0 - tol) - atol:
+                ref_e = e
+                ref_it = it
+            if it >= max_iter or (it >= min_iter and it - ref_it >= patience):
+                break
+        else:
             trace[it] = trace[it - 1]
-            it += 1
-            iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, model, k_collision, k_access, gap_m)
-            continue
-        e = math.sqrt(energy_terms(M, pos, yaw, pairs, model, weights).sum())
-        trace[it] = e
-        if e < best_e:
-            best_e = e
-            best_it = it
-            best_pos[:] = pos
-            best_yaw[:] = yaw
-        if e < ref_e * (1.0 - tol) - atol:
-            ref_e = e
-            ref_it = it
-        if it >= max_iter or (it >= min_iter and it - ref_it >= patience):
-            break
         it += 1
         iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, model, k_collision, k_access, gap_m)
     if polish_rounds > 0:
@@ -1401,11 +1402,9 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
         pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
         # Keep the polished layout when it collides less (hard constraints first).
         terms = energy_terms(M, pos, yaw, pairs, model, weights)
-        pairs = candidate_pairs(P, best_pos, best_yaw, cell_m, pad_m)
-        before = energy_terms(M, best_pos, best_yaw, pairs, model, weights)
         hard_after = terms[K_COLLISION] + terms[K_BOUNDARY]
-        hard_before = before[K_COLLISION] + before[K_BOUNDARY]
-        if hard_after < hard_before or (hard_after == hard_before and terms.sum() <= before.sum()):
+        hard_before = best_terms[K_COLLISION] + best_terms[K_BOUNDARY]
+        if hard_after < hard_before or (hard_after == hard_before and terms.sum() <= best_terms.sum()):
             best_pos[:] = pos
             best_yaw[:] = yaw
     return best_pos, best_yaw, trace[: it + 1], best_it, it, degen

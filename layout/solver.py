@@ -224,20 +224,13 @@ class Solver:
             raise LayoutError(f"solver.method: {self.method!r} is not 'gauss-seidel' or 'jacobi'")
         if self.collision not in codes.COLLISION_NAMES:
             raise LayoutError(f"solver.collision: {self.collision!r} is not 'box' or 'sphere'")
-        if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
-            raise LayoutError(f"solver.max_iterations: {self.max_iterations!r} must be an integer >= 1")
-        if not (isinstance(self.min_iterations, int) and self.min_iterations >= 0):
-            raise LayoutError(f"solver.min_iterations: {self.min_iterations!r} must be an integer >= 0")
-        if not (isinstance(self.patience, int) and self.patience >= 1):
-            raise LayoutError(f"solver.patience: {self.patience!r} must be an integer >= 1")
+        for name, lowest in (("max_iterations", 1), ("min_iterations", 0), ("patience", 1),
+                             ("energy_every", 1), ("restarts", 0), ("polish_rounds", 0)):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and value >= lowest):
+                raise LayoutError(f"solver.{name}: {value!r} must be an integer >= {lowest}")
         if not self.rate >= 1.0:
             raise LayoutError(f"solver.rate: {self.rate!r} must be >= 1 (the paper's M)")
-        if not (isinstance(self.energy_every, int) and self.energy_every >= 1):
-            raise LayoutError(f"solver.energy_every: {self.energy_every!r} must be an integer >= 1")
-        if not (isinstance(self.restarts, int) and self.restarts >= 0):
-            raise LayoutError(f"solver.restarts: {self.restarts!r} must be an integer >= 0")
-        if not (isinstance(self.polish_rounds, int) and self.polish_rounds >= 0):
-            raise LayoutError(f"solver.polish_rounds: {self.polish_rounds!r} must be an integer >= 0")
         if not self.pad_m > 0.0:
             raise LayoutError(f"solver.pad_m: {self.pad_m!r} must be > 0")
         for name in ("collision_stiffness", "access_stiffness"):
