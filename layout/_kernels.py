@@ -48,6 +48,8 @@ from ._codes import (
 )
 
 N_KINDS = len(KINDS)
+# Empty memo of stiffness_memo: (k0, schedule, k).
+NO_MEMO = (-1.0, -1, 0.0)
 EPS = 1e-12
 # Vertical overlap below which two boxes count as resting on each other, not colliding.
 Z_TOUCH_M = 1e-6
@@ -70,26 +72,19 @@ def stiffness(k0, schedule, it, rate):
 
 @njit(cache=True, inline="always", error_model="numpy")
 def stiffness_memo(k0, schedule, it, rate, memo):
-    """:func:`stiffness`, remembering the last (k0, schedule) of a kernel's loop:
-    constraints of one kind nearly always share them, and pow is not free."""
-    if k0 != memo[0] or schedule != memo[1]:
-        memo[0] = k0
-        memo[1] = schedule
-        memo[2] = stiffness(k0, schedule, it, rate)
-    return memo[2]
+    """:func:`stiffness`, remembering the last (k0, schedule, k) of a kernel's loop in
+    the tuple ``memo`` (start with NO_MEMO): constraints of one kind nearly always
+    share them, and pow is not free. Returns (k, new memo)."""
+    if k0 == memo[0] and schedule == memo[1]:
+        return memo[2], memo
+    k = stiffness(k0, schedule, it, rate)
+    return k, (k0, schedule, k)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
 def wrap(a):
     """Angle wrapped to [-pi, pi)."""
     return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def pose(pos, yaw, i):
-    """World pose (x, y, z, yaw) of particle ``i``: the state keeps every particle's
-    world pose, rigid-group members included (see :func:`move`)."""
-    return pos[i, 0], pos[i, 1], pos[i, 2], yaw[i]
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -220,6 +215,34 @@ def inside_polygon(poly, x, y):
     return inside
 
 
+@njit(cache=True, error_model="numpy")
+def clearance_grid(poly, origin, cell, gx, gy):
+    """(gy, gx) grid: for each cell, a distance to the boundary that every point of the
+    cell has at least (its center's distance minus the half diagonal), 0 where the
+    cell is not entirely inside the polygon."""
+    out = np.zeros((gy, gx))
+    half_diag = cell * math.sqrt(0.5)
+    for r in range(gy):
+        y = origin[1] + (r + 0.5) * cell
+        for c in range(gx):
+            x = origin[0] + (c + 0.5) * cell
+            if inside_polygon(poly, x, y):
+                _, _, _, d = nearest_on_polygon(poly, x, y)
+                out[r, c] = max(0.0, d - half_diag)
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def clear_of_walls(R, x, y, reach):
+    """True when the disc of radius ``reach`` around (x, y) certainly lies inside the
+    floor (one grid lookup; False means "do the exact test")."""
+    c = int(math.floor((x - R.grid_origin[0]) / R.grid_cell[0]))
+    r = int(math.floor((y - R.grid_origin[1]) / R.grid_cell[0]))
+    if r < 0 or c < 0 or r >= R.clearance.shape[0] or c >= R.clearance.shape[1]:
+        return False
+    return R.clearance[r, c] > reach
+
+
 @njit(cache=True, inline="always", error_model="numpy")
 def support(hd, hw, c, s, nx, ny):
     """Half-extent along unit direction n of a box with half depth/width and yaw (c, s)."""
@@ -264,12 +287,12 @@ def sat(xa, ya, ca, sa, hda, hwa, xb, yb, cb, sb, hdb, hwb):
 @njit(cache=True, error_model="numpy")
 def project_distance(D, P, pos, yaw, acc, jac, it, rate, degen):
     """Pairwise (and focal-point) distance, Eqs. (4)–(6); EQ, MIN or MAX."""
-    memo = np.array([-1.0, -1.0, 0.0])
+    memo = NO_MEMO
     for c in range(D.rest.shape[0]):
         i = D.pairs[c, 0]
         j = D.pairs[c, 1]
-        xi, yi, _, _ = pose(pos, yaw, i)
-        xj, yj, _, _ = pose(pos, yaw, j)
+        xi, yi = pos[i, 0], pos[i, 1]
+        xj, yj = pos[j, 0], pos[j, 1]
         wi = P.inv_mass[P.body[i]] * D.w_scale[c, 0]
         wj = P.inv_mass[P.body[j]] * D.w_scale[c, 1]
         dx = xi - xj
@@ -283,7 +306,8 @@ def project_distance(D, P, pos, yaw, acc, jac, it, rate, degen):
         C = length - D.rest[c]
         if (D.mode[c] == MIN and C >= 0.0) or (D.mode[c] == MAX and C <= 0.0):
             continue
-        f = stiffness_memo(D.k0[c], D.schedule[c], it, rate, memo) * C / ((wi + wj) * length)
+        k, memo = stiffness_memo(D.k0[c], D.schedule[c], it, rate, memo)
+        f = k * C / ((wi + wj) * length)
         push(P.body[i], -wi * f * dx, -wi * f * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
         push(P.body[j], wj * f * dx, wj * f * dy, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
@@ -291,8 +315,8 @@ def project_distance(D, P, pos, yaw, acc, jac, it, rate, degen):
 @njit(cache=True, error_model="numpy")
 def residual_distance(D, P, pos, yaw, out):
     for c in range(D.rest.shape[0]):
-        xi, yi, _, _ = pose(pos, yaw, D.pairs[c, 0])
-        xj, yj, _, _ = pose(pos, yaw, D.pairs[c, 1])
+        xi, yi = pos[D.pairs[c, 0], 0], pos[D.pairs[c, 0], 1]
+        xj, yj = pos[D.pairs[c, 1], 0], pos[D.pairs[c, 1], 1]
         C = math.sqrt((xi - xj) ** 2 + (yi - yj) ** 2) - D.rest[c]
         if D.mode[c] == MIN:
             C = min(C, 0.0)
@@ -302,19 +326,19 @@ def residual_distance(D, P, pos, yaw, out):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def lane_geometry(L, P, pos, yaw, c):
-    """Ghost point on the lane vector nearest the item, and the required clearance."""
-    o = L.origin[c]
-    i = L.item[c]
-    xo, yo, _, ao = pose(pos, yaw, o)
-    xi, yi, _, ai = pose(pos, yaw, i)
+def lane_geometry(xo, yo, ao, start_x, start_y, angle, length, half_width, xi, yi, ai, wi, di):
+    """Ghost point on the lane vector nearest the item, and the required clearance.
+
+    The lane starts at (start_x, start_y) in the frame of the origin (xo, yo, ao) and
+    runs ``length`` at ``angle`` from its facing; the item is a box (xi, yi, ai) of
+    width ``wi`` and depth ``di``. Returns (C, nx, ny, dist)."""
     co = math.cos(ao)
     so = math.sin(ao)
-    sx = xo + co * L.start[c, 0] - so * L.start[c, 1]
-    sy = yo + so * L.start[c, 0] + co * L.start[c, 1]
-    vx = math.cos(ao + L.angle[c])
-    vy = math.sin(ao + L.angle[c])
-    t = min(L.length[c], max(0.0, (xi - sx) * vx + (yi - sy) * vy))  # Eq. (8), clamped
+    sx = xo + co * start_x - so * start_y
+    sy = yo + so * start_x + co * start_y
+    vx = math.cos(ao + angle)
+    vy = math.sin(ao + angle)
+    t = min(length, max(0.0, (xi - sx) * vx + (yi - sy) * vy))  # Eq. (8), clamped
     qx = sx + t * vx
     qy = sy + t * vy
     dx = xi - qx
@@ -326,20 +350,21 @@ def lane_geometry(L, P, pos, yaw, c):
         nx, ny = dx / dist, dy / dist
     # Clearance from the item's box, not its center: the half width of the lane plus
     # the item's extent towards the lane.
-    hd = 0.5 * P.size[i, 1]
-    hw = 0.5 * P.size[i, 0]
-    need = L.half_width[c] + support(hd, hw, math.cos(ai), math.sin(ai), nx, ny)
+    need = half_width + support(0.5 * di, 0.5 * wi, math.cos(ai), math.sin(ai), nx, ny)
     return dist - need, nx, ny, dist
 
 
 @njit(cache=True, error_model="numpy")
 def project_lane(L, P, pos, yaw, acc, jac, it, rate, degen):
     """Traffic lane, Eqs. (7)–(8): the item keeps clear of a vector; ghost on origin."""
-    memo = np.array([-1.0, -1.0, 0.0])
+    memo = NO_MEMO
     for c in range(L.origin.shape[0]):
         i = L.item[c]
         o = L.origin[c]
-        C, nx, ny, dist = lane_geometry(L, P, pos, yaw, c)
+        C, nx, ny, dist = lane_geometry(
+            pos[o, 0], pos[o, 1], yaw[o], L.start[c, 0], L.start[c, 1], L.angle[c], L.length[c], L.half_width[c],
+            pos[i, 0], pos[i, 1], yaw[i], P.size[i, 0], P.size[i, 1],
+        )
         if C >= 0.0:
             continue
         if dist < EPS:
@@ -348,7 +373,8 @@ def project_lane(L, P, pos, yaw, acc, jac, it, rate, degen):
         wo = P.inv_mass[P.body[o]] * L.w_scale[c, 1]
         if wi + wo == 0.0:
             continue
-        f = stiffness_memo(L.k0[c], L.schedule[c], it, rate, memo) * C / (wi + wo)
+        k, memo = stiffness_memo(L.k0[c], L.schedule[c], it, rate, memo)
+        f = k * C / (wi + wo)
         push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
         push(P.body[o], wo * f * nx, wo * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
@@ -356,7 +382,12 @@ def project_lane(L, P, pos, yaw, acc, jac, it, rate, degen):
 @njit(cache=True, error_model="numpy")
 def residual_lane(L, P, pos, yaw, out):
     for c in range(L.origin.shape[0]):
-        C, _, _, _ = lane_geometry(L, P, pos, yaw, c)
+        i = L.item[c]
+        o = L.origin[c]
+        C, _, _, _ = lane_geometry(
+            pos[o, 0], pos[o, 1], yaw[o], L.start[c, 0], L.start[c, 1], L.angle[c], L.length[c], L.half_width[c],
+            pos[i, 0], pos[i, 1], yaw[i], P.size[i, 0], P.size[i, 1],
+        )
         out[c] = min(C, 0.0)
 
 
@@ -369,7 +400,7 @@ def weighted_center(P, pos, yaw, members, a, b, by_area):
     for q in range(a, b):
         j = members[q]
         mu = P.size[j, 0] * P.size[j, 1] if by_area else P.mass[j]
-        x, y, _, _ = pose(pos, yaw, j)
+        x, y = pos[j, 0], pos[j, 1]
         mx += mu * x
         my += mu * y
         total += mu
@@ -399,7 +430,7 @@ def heat_target(H, P, pos, yaw, c):
     fr = H.frame[c]
     if fr < 0:
         return H.target[c, 0], H.target[c, 1]
-    x, y, _, a = pose(pos, yaw, fr)
+    x, y, a = pos[fr, 0], pos[fr, 1], yaw[fr]
     ca = math.cos(a)
     sa = math.sin(a)
     return x + ca * H.target[c, 0] - sa * H.target[c, 1], y + sa * H.target[c, 0] + ca * H.target[c, 1]
@@ -408,13 +439,13 @@ def heat_target(H, P, pos, yaw, c):
 @njit(cache=True, error_model="numpy")
 def project_heat(H, P, pos, yaw, acc, jac, it, rate, degen):
     """Heat point: the members' center of mass goes to a point (Eq. 9)."""
-    memo = np.array([-1.0, -1.0, 0.0])
+    memo = NO_MEMO
     for c in range(H.frame.shape[0]):
         a = H.start[c]
         b = H.start[c + 1]
         mx, my, total = weighted_center(P, pos, yaw, H.members, a, b, False)
         tx, ty = heat_target(H, P, pos, yaw, c)
-        k = stiffness_memo(H.k0[c], H.schedule[c], it, rate, memo)
+        k, memo = stiffness_memo(H.k0[c], H.schedule[c], it, rate, memo)
         project_center(P, pos, yaw, acc, jac, H.members, a, b, False, mx - tx, my - ty, total, k)
 
 
@@ -429,7 +460,7 @@ def residual_heat(H, P, pos, yaw, out):
 @njit(cache=True, inline="always", error_model="numpy")
 def symmetry_target(S, P, pos, yaw, c, mx, my):
     """Projection of the members' center onto the focal's axis (ray), Eq. (11)."""
-    xf, yf, _, af = pose(pos, yaw, S.focal[c])
+    xf, yf, af = pos[S.focal[c], 0], pos[S.focal[c], 1], yaw[S.focal[c]]
     vx = math.cos(af + S.angle[c])
     vy = math.sin(af + S.angle[c])
     t = max(0.0, (mx - xf) * vx + (my - yf) * vy)
@@ -439,13 +470,13 @@ def symmetry_target(S, P, pos, yaw, c, mx, my):
 @njit(cache=True, error_model="numpy")
 def project_symmetry(S, P, pos, yaw, acc, jac, it, rate, degen):
     """Focal point symmetry: members' center of mass onto the focal's axis."""
-    memo = np.array([-1.0, -1.0, 0.0])
+    memo = NO_MEMO
     for c in range(S.focal.shape[0]):
         a = S.start[c]
         b = S.start[c + 1]
         mx, my, total = weighted_center(P, pos, yaw, S.members, a, b, False)
         tx, ty = symmetry_target(S, P, pos, yaw, c, mx, my)
-        k = stiffness_memo(S.k0[c], S.schedule[c], it, rate, memo)
+        k, memo = stiffness_memo(S.k0[c], S.schedule[c], it, rate, memo)
         project_center(P, pos, yaw, acc, jac, S.members, a, b, False, mx - tx, my - ty, total, k)
 
 
@@ -460,12 +491,12 @@ def residual_symmetry(S, P, pos, yaw, out):
 @njit(cache=True, error_model="numpy")
 def project_balance(B, P, pos, yaw, acc, jac, it, rate, degen):
     """Visual balance, Eq. (12): footprint-weighted center to the room centroid."""
-    memo = np.array([-1.0, -1.0, 0.0])
+    memo = NO_MEMO
     for c in range(B.target.shape[0]):
         a = B.start[c]
         b = B.start[c + 1]
         mx, my, total = weighted_center(P, pos, yaw, B.members, a, b, True)
-        k = stiffness_memo(B.k0[c], B.schedule[c], it, rate, memo)
+        k, memo = stiffness_memo(B.k0[c], B.schedule[c], it, rate, memo)
         ex = mx - B.target[c, 0]
         ey = my - B.target[c, 1]
         project_center(P, pos, yaw, acc, jac, B.members, a, b, True, ex, ey, total, k)
@@ -494,24 +525,24 @@ def wall_frame(R, x, y):
 @njit(cache=True, error_model="numpy")
 def project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen):
     """Distance to wall, Eq. (13); the wall point has infinite mass."""
-    memo = np.array([-1.0, -1.0, 0.0])
+    memo = NO_MEMO
     for c in range(W.item.shape[0]):
         i = W.item[c]
         if P.inv_mass[P.body[i]] == 0.0:
             continue
-        x, y, _, _ = pose(pos, yaw, i)
+        x, y = pos[i, 0], pos[i, 1]
         sd, nx, ny, _ = wall_frame(R, x, y)
         C = sd - W.rest[c]
         if (W.mode[c] == MIN and C >= 0.0) or (W.mode[c] == MAX and C <= 0.0):
             continue
-        k = stiffness_memo(W.k0[c], W.schedule[c], it, rate, memo)
+        k, memo = stiffness_memo(W.k0[c], W.schedule[c], it, rate, memo)
         push(P.body[i], -k * C * nx, -k * C * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
 @njit(cache=True, error_model="numpy")
 def residual_wall_distance(W, R, P, pos, yaw, out):
     for c in range(W.item.shape[0]):
-        x, y, _, _ = pose(pos, yaw, W.item[c])
+        x, y = pos[W.item[c], 0], pos[W.item[c], 1]
         sd, _, _, _ = wall_frame(R, x, y)
         C = sd - W.rest[c]
         if W.mode[c] == MIN:
@@ -523,7 +554,7 @@ def residual_wall_distance(W, R, P, pos, yaw, out):
 
 @njit(cache=True, inline="always", error_model="numpy")
 def wall_orientation_error(O, R, P, pos, yaw, c):
-    x, y, _, a = pose(pos, yaw, O.item[c])
+    x, y, a = pos[O.item[c], 0], pos[O.item[c], 1], yaw[O.item[c]]
     _, _, e, _ = nearest_on_polygon(R.polygon, x, y)
     want = math.atan2(R.edge_normal[e, 1], R.edge_normal[e, 0]) + O.angle[c]
     return wrap(want - a)
@@ -532,12 +563,12 @@ def wall_orientation_error(O, R, P, pos, yaw, c):
 @njit(cache=True, error_model="numpy")
 def project_wall_orientation(O, R, P, pos, yaw, acc, jac, it, rate, degen):
     """Orientation to wall, Eq. (17): smallest rotation towards the wanted angle."""
-    memo = np.array([-1.0, -1.0, 0.0])
+    memo = NO_MEMO
     for c in range(O.item.shape[0]):
         i = O.item[c]
         if P.inv_mass[P.body[i]] == 0.0:
             continue
-        k = stiffness_memo(O.k0[c], O.schedule[c], it, rate, memo)
+        k, memo = stiffness_memo(O.k0[c], O.schedule[c], it, rate, memo)
         turn(P.body[i], k * wall_orientation_error(O, R, P, pos, yaw, c), pos, yaw, acc, jac, P.mstart, P.mlist)
 
 
@@ -548,26 +579,24 @@ def residual_wall_orientation(O, R, P, pos, yaw, out):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def orientation_errors(O, P, pos, yaw, c):
-    """Smallest rotations (Δθ_i, Δθ_j) that satisfy the pair's orientation, Eq. (16)."""
-    i = O.pairs[c, 0]
-    j = O.pairs[c, 1]
-    xi, yi, _, ai = pose(pos, yaw, i)
-    xj, yj, _, aj = pose(pos, yaw, j)
+def orientation_errors(xi, yi, ai, wi, xj, yj, aj, wj, mode, angle_i, angle_j):
+    """Smallest rotations (Δθ_i, Δθ_j) that satisfy a pair's orientation, Eq. (16).
+
+    FACE: i's front points ``angle_i`` off the direction to j (j likewise with
+    ``angle_j``; NaN = free). PARALLEL: yaw_i − yaw_j = ``angle_i`` (mod π), the turn
+    shared by the inverse masses ``wi`` and ``wj``.
+    """
     di = 0.0
     dj = 0.0
-    if O.mode[c] == FACE:
+    if mode == FACE:
         toward_j = math.atan2(yj - yi, xj - xi)
-        if not math.isnan(O.angle[c, 0]):
-            di = wrap(O.angle[c, 0] - (ai - toward_j))
-        if not math.isnan(O.angle[c, 1]):
-            dj = wrap(O.angle[c, 1] - (aj - toward_j - math.pi))
+        if not math.isnan(angle_i):
+            di = wrap(angle_i - (ai - toward_j))
+        if not math.isnan(angle_j):
+            dj = wrap(angle_j - (aj - toward_j - math.pi))
     else:
-        # Parallel: yaw_i - yaw_j = angle (mod pi), shared by inverse mass.
-        err = O.angle[c, 0] - (ai - aj)
+        err = angle_i - (ai - aj)
         err = (err + 0.5 * math.pi) % math.pi - 0.5 * math.pi
-        wi = P.inv_mass[P.body[i]]
-        wj = P.inv_mass[P.body[j]]
         if wi + wj > 0.0:
             di = err * wi / (wi + wj)
             dj = -err * wj / (wi + wj)
@@ -575,41 +604,52 @@ def orientation_errors(O, P, pos, yaw, c):
 
 
 @njit(cache=True, error_model="numpy")
-def project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen):
-    memo = np.array([-1.0, -1.0, 0.0])
+def orientation_pass(O, P, pos, yaw, acc, jac, it, rate, out, project):
+    memo = NO_MEMO
+    inv_mass = P.inv_mass
+    body = P.body
     for c in range(O.mode.shape[0]):
         i = O.pairs[c, 0]
         j = O.pairs[c, 1]
-        di, dj = orientation_errors(O, P, pos, yaw, c)
-        k = stiffness_memo(O.k0[c], O.schedule[c], it, rate, memo)
-        if P.inv_mass[P.body[i]] > 0.0:
-            turn(P.body[i], k * di, pos, yaw, acc, jac, P.mstart, P.mlist)
-        if P.inv_mass[P.body[j]] > 0.0:
-            turn(P.body[j], k * dj, pos, yaw, acc, jac, P.mstart, P.mlist)
+        wi = inv_mass[body[i]]
+        wj = inv_mass[body[j]]
+        di, dj = orientation_errors(pos[i, 0], pos[i, 1], yaw[i], wi, pos[j, 0], pos[j, 1], yaw[j], wj,
+                                    O.mode[c], O.angle[c, 0], O.angle[c, 1])
+        if not project:
+            out[c] = math.sqrt(di * di + dj * dj)
+            continue
+        k, memo = stiffness_memo(O.k0[c], O.schedule[c], it, rate, memo)
+        if wi > 0.0:
+            turn(body[i], k * di, pos, yaw, acc, jac, P.mstart, P.mlist)
+        if wj > 0.0:
+            turn(body[j], k * dj, pos, yaw, acc, jac, P.mstart, P.mlist)
+
+
+@njit(cache=True, error_model="numpy")
+def project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen):
+    orientation_pass(O, P, pos, yaw, acc, jac, it, rate, np.empty(0), True)
 
 
 @njit(cache=True, error_model="numpy")
 def residual_orientation(O, P, pos, yaw, out):
-    for c in range(O.mode.shape[0]):
-        di, dj = orientation_errors(O, P, pos, yaw, c)
-        out[c] = math.sqrt(di * di + dj * dj)
+    orientation_pass(O, P, pos, yaw, np.empty((0, 6)), False, 1, 1.0, out, False)
 
 
 @njit(cache=True, error_model="numpy")
 def project_stack(S, P, pos, yaw, acc, jac, it, rate, degen):
     """Vertical stacking, Eqs. (18)–(19). The base rests on what is below it, so only
     the top moves vertically; x and y are shared by inverse mass."""
-    memo = np.array([-1.0, -1.0, 0.0])
+    memo = NO_MEMO
     for c in range(S.k0.shape[0]):
         i = S.pairs[c, 0]
         j = S.pairs[c, 1]
-        xi, yi, zi, _ = pose(pos, yaw, i)
-        xj, yj, zj, _ = pose(pos, yaw, j)
+        xi, yi, zi = pos[i, 0], pos[i, 1], pos[i, 2]
+        xj, yj, zj = pos[j, 0], pos[j, 1], pos[j, 2]
         wi = P.inv_mass[P.body[i]]
         wj = P.inv_mass[P.body[j]]
         if wi + wj == 0.0:
             continue
-        k = stiffness_memo(S.k0[c], S.schedule[c], it, rate, memo)
+        k, memo = stiffness_memo(S.k0[c], S.schedule[c], it, rate, memo)
         cz = zj - (zi + 0.5 * (P.size[i, 2] + P.size[j, 2]))
         cx = xj - xi
         cy = yj - yi
@@ -625,25 +665,25 @@ def residual_stack(S, P, pos, yaw, out):
     for c in range(S.k0.shape[0]):
         i = S.pairs[c, 0]
         j = S.pairs[c, 1]
-        xi, yi, zi, _ = pose(pos, yaw, i)
-        xj, yj, zj, _ = pose(pos, yaw, j)
+        xi, yi, zi = pos[i, 0], pos[i, 1], pos[i, 2]
+        xj, yj, zj = pos[j, 0], pos[j, 1], pos[j, 2]
         cz = zj - (zi + 0.5 * (P.size[i, 2] + P.size[j, 2]))
         out[c] = math.sqrt(cz * cz + (xj - xi) ** 2 + (yj - yi) ** 2)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def curve_point(U, c, lx, ly):
-    """Nearest point on curve c (group frame) to (lx, ly), and its parameter in [0, 1]."""
-    p = U.params[c]
-    if U.kind[c] == ARC:
-        cx, cy, r, a0, a1 = p[0], p[1], p[2], p[3], p[4]
+def curve_point(kind, p0, p1, p2, p3, p4, lx, ly):
+    """Nearest point on a curve (group frame) to (lx, ly), and its parameter in [0, 1].
+    ARC: center (p0, p1), radius p2, angles p3 to p4; SEGMENT: (p0, p1) to (p2, p3)."""
+    if kind == ARC:
+        cx, cy, r, a0, a1 = p0, p1, p2, p3, p4
         phi = math.atan2(ly - cy, lx - cx)
         mid = 0.5 * (a0 + a1)
         phi = mid + wrap(phi - mid)
         phi = min(max(phi, min(a0, a1)), max(a0, a1))
         t = (phi - a0) / (a1 - a0) if a1 != a0 else 0.0
         return cx + r * math.cos(phi), cy + r * math.sin(phi), t
-    ax, ay, bx, by = p[0], p[1], p[2], p[3]
+    ax, ay, bx, by = p0, p1, p2, p3
     ex = bx - ax
     ey = by - ay
     ll = ex * ex + ey * ey
@@ -656,17 +696,19 @@ def curve_point(U, c, lx, ly):
 def curve_offsets(U, P, pos, yaw, c, param):
     """For each member of curve c: world offset from its curve point; fills ``param``."""
     g = U.group[c]
-    xg, yg, _, ag = pose(pos, yaw, g)
+    xg, yg, ag = pos[g, 0], pos[g, 1], yaw[g]
     cg = math.cos(ag)
     sg = math.sin(ag)
     a = U.start[c]
     b = U.start[c + 1]
     out = np.empty((b - a, 2))
+    kind = U.kind[c]
+    p0, p1, p2, p3, p4 = U.params[c, 0], U.params[c, 1], U.params[c, 2], U.params[c, 3], U.params[c, 4]
     for q in range(a, b):
-        x, y, _, _ = pose(pos, yaw, U.members[q])
+        x, y = pos[U.members[q], 0], pos[U.members[q], 1]
         lx = cg * (x - xg) + sg * (y - yg)
         ly = -sg * (x - xg) + cg * (y - yg)
-        px, py, t = curve_point(U, c, lx, ly)
+        px, py, t = curve_point(kind, p0, p1, p2, p3, p4, lx, ly)
         param[q - a] = t
         out[q - a, 0] = x - (xg + cg * px - sg * py)
         out[q - a, 1] = y - (yg + sg * px + cg * py)
@@ -693,12 +735,12 @@ def project_curve(U, P, pos, yaw, acc, jac, it, rate, degen):
     """Members of a non-rigid group onto its segment or arc (a distance constraint to
     the nearest curve point, Sec. 3.2), then equal spacing between neighbours in
     curve-parameter order."""
-    memo = np.array([-1.0, -1.0, 0.0])
+    memo = NO_MEMO
     for c in range(U.group.shape[0]):
         g = U.group[c]
         a = U.start[c]
         b = U.start[c + 1]
-        k = stiffness_memo(U.k0[c], U.schedule[c], it, rate, memo)
+        k, memo = stiffness_memo(U.k0[c], U.schedule[c], it, rate, memo)
         wg = 0.0 if U.anchor_fixed[c] else P.inv_mass[P.body[g]]
         param = np.empty(b - a)
         off = curve_offsets(U, P, pos, yaw, c, param)
@@ -720,8 +762,8 @@ def project_curve(U, P, pos, yaw, acc, jac, it, rate, degen):
         for q in range(order.shape[0] - 1):
             i = U.members[a + order[q]]
             j = U.members[a + order[q + 1]]
-            xi, yi, _, _ = pose(pos, yaw, i)
-            xj, yj, _, _ = pose(pos, yaw, j)
+            xi, yi = pos[i, 0], pos[i, 1]
+            xj, yj = pos[j, 0], pos[j, 1]
             wi = P.inv_mass[P.body[i]]
             wj = P.inv_mass[P.body[j]]
             dx = xi - xj
@@ -749,8 +791,8 @@ def residual_curve(U, P, pos, yaw, out):
         if U.spacing[c] > 0.0:
             order = curve_order(param)
             for q in range(order.shape[0] - 1):
-                xi, yi, _, _ = pose(pos, yaw, U.members[a + order[q]])
-                xj, yj, _, _ = pose(pos, yaw, U.members[a + order[q + 1]])
+                xi, yi = pos[U.members[a + order[q]], 0], pos[U.members[a + order[q]], 1]
+                xj, yj = pos[U.members[a + order[q + 1]], 0], pos[U.members[a + order[q + 1]], 1]
                 total += (math.sqrt((xi - xj) ** 2 + (yi - yj) ** 2) - U.spacing[c]) ** 2
         out[c] = math.sqrt(total)
 
@@ -771,13 +813,15 @@ def boundary_item(R, P, pos, yaw, i, project):
     hd = 0.5 * P.size[i, 1]
     hw = 0.5 * P.size[i, 0]
     # Quick accept: the footprint's circumcircle lies inside the floor.
-    x, y, _, _ = pose(pos, yaw, i)
+    if clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
+        return 0.0
+    x, y = pos[i, 0], pos[i, 1]
     _, _, _, wall_m = nearest_on_polygon(R.polygon, x, y)
-    if wall_m * wall_m > hd * hd + hw * hw and inside_polygon(R.polygon, x, y):
+    if wall_m > P.radius[i] and inside_polygon(R.polygon, x, y):
         return 0.0
     violation = 0.0
     for rep in range(4):
-        x, y, _, a = pose(pos, yaw, i)
+        x, y, a = pos[i, 0], pos[i, 1], yaw[i]
         c = math.cos(a)
         s = math.sin(a)
         moved = False
@@ -799,7 +843,7 @@ def boundary_item(R, P, pos, yaw, i, project):
                 break
         if not project or not moved:
             break
-    x, y, _, a = pose(pos, yaw, i)
+    x, y, a = pos[i, 0], pos[i, 1], yaw[i]
     c = math.cos(a)
     s = math.sin(a)
     for v in range(R.polygon.shape[0]):
@@ -822,21 +866,24 @@ def boundary_item(R, P, pos, yaw, i, project):
         else:
             sg = -1.0 if ly > 0.0 else 1.0
             move(b, -sg * (py + INSIDE_M) * s, sg * (py + INSIDE_M) * c, 0.0, 0.0, pos, yaw, P.mstart, P.mlist)
-        x, y, _, a = pose(pos, yaw, i)
+        x, y, a = pos[i, 0], pos[i, 1], yaw[i]
     return violation
 
 
 @njit(cache=True, error_model="numpy")
 def project_boundary(R, P, pos, yaw):
     for i in range(P.role.shape[0]):
-        if P.bounded[i] and P.inv_mass[P.body[i]] > 0.0:
+        if P.bounded[i] and P.inv_mass[P.body[i]] > 0.0 and not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
             boundary_item(R, P, pos, yaw, i, True)
 
 
 @njit(cache=True, error_model="numpy")
 def residual_boundary(R, P, pos, yaw, out):
     for i in range(P.role.shape[0]):
-        out[i] = -math.sqrt(boundary_item(R, P, pos, yaw, i, False)) if P.bounded[i] else 0.0
+        if P.bounded[i] and not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
+            out[i] = -math.sqrt(boundary_item(R, P, pos, yaw, i, False))
+        else:
+            out[i] = 0.0
 
 
 # ------------------------------------------------- collision and accessibility
@@ -862,7 +909,7 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
     hi = np.empty((m, 2))
     for q in range(m):
         i = idx[q]
-        x, y, _, a = pose(pos, yaw, i)
+        x, y, a = pos[i, 0], pos[i, 1], yaw[i]
         c = abs(math.cos(a))
         s = abs(math.sin(a))
         hd = 0.5 * P.size[i, 1] + P.access_max[i]
@@ -939,33 +986,23 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def z_overlap(size, zi, i, zj, j):
-    return abs(zi - zj) < 0.5 * (size[i, 2] + size[j, 2]) - Z_TOUCH_M
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def collision_pair(size, radius, collides, pos, cs, i, j, model, gap_m):
+def collision_pair(xi, yi, zi, ci, si, wi, di, hi, ri, xj, yj, zj, cj, sj, wj, dj, hj, rj, model, gap_m):
     """Collision constraint value of a pair (<= 0 when colliding) and its direction.
 
-    BOX: exact penetration of the oriented footprints (SAT), pushed along the axis of
-    least penetration. SPHERE: the paper's bounding circles, Eq. (15), activated when
-    the boxes overlap. ``cs`` holds (cos, sin) of every yaw. Returns (C, nx, ny,
+    Each item is given by its center, (cos, sin) of its yaw, width, depth, height and
+    circumradius: scalars, because array arguments to a helper called per pair cost
+    more than the test itself in numba. BOX: exact penetration of the oriented
+    footprints (SAT), pushed along the axis of least penetration. SPHERE: the paper's
+    bounding circles, Eq. (15), activated when the boxes overlap. Returns (C, nx, ny,
     active) with n pointing from j to i.
     """
-    if not (collides[i] and collides[j]):
+    if abs(zi - zj) >= 0.5 * (hi + hj) - Z_TOUCH_M:
         return 0.0, 0.0, 0.0, False
-    if not z_overlap(size, pos[i, 2], i, pos[j, 2], j):
-        return 0.0, 0.0, 0.0, False
-    dx = pos[i, 0] - pos[j, 0]
-    dy = pos[i, 1] - pos[j, 1]
-    ri = radius[i]
-    rj = radius[j]
+    dx = xi - xj
+    dy = yi - yj
     if dx * dx + dy * dy >= (ri + rj + gap_m) ** 2:
         return 0.0, 0.0, 0.0, False
-    depth, nx, ny = sat(
-        pos[i, 0], pos[i, 1], cs[i, 0], cs[i, 1], 0.5 * size[i, 1], 0.5 * size[i, 0],
-        pos[j, 0], pos[j, 1], cs[j, 0], cs[j, 1], 0.5 * size[j, 1], 0.5 * size[j, 0],
-    )
+    depth, nx, ny = sat(xi, yi, ci, si, 0.5 * di, 0.5 * wi, xj, yj, cj, sj, 0.5 * dj, 0.5 * wj)
     if depth <= -gap_m:
         return 0.0, 0.0, 0.0, False
     if model == BOX:
@@ -993,8 +1030,8 @@ def wall_points_pair(P, R, pos, yaw, i, j, model, gap_m):
     """Extra projection between the wall points of two colliding wall-bound items
     (Sec. 3.3.9, Fig. 8b): they slide apart along the wall instead of off it. Door
     and window zones count as wall-bound (they have infinite mass)."""
-    xi, yi, _, ai = pose(pos, yaw, i)
-    xj, yj, _, aj = pose(pos, yaw, j)
+    xi, yi, ai = pos[i, 0], pos[i, 1], yaw[i]
+    xj, yj, aj = pos[j, 0], pos[j, 1], yaw[j]
     qxi, qyi, _, _ = nearest_on_polygon(R.polygon, xi, yi)
     qxj, qyj, _, _ = nearest_on_polygon(R.polygon, xj, yj)
     dx = qxi - qxj
@@ -1018,12 +1055,31 @@ def wall_points_pair(P, R, pos, yaw, i, j, model, gap_m):
 
 
 @njit(cache=True, error_model="numpy")
-def project_collision(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen):
+def collision_pass(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen, out, project):
+    """Every candidate pair once: with ``project``, push colliding pairs apart by ``k``
+    of their penetration (Gauss–Seidel or Jacobi); without, write each pair's C
+    (0 when apart) to ``out``. Returns the number of colliding pairs."""
+    size = P.size
+    radius = P.radius
+    collides = P.collides
+    colliding = 0
     for p in range(pairs.shape[0]):
         i = pairs[p, 0]
         j = pairs[p, 1]
-        C, nx, ny, active = collision_pair(P.size, P.radius, P.collides, pos, cs, i, j, model, gap_m)
+        if not project:
+            out[p] = 0.0
+        if not (collides[i] and collides[j]):
+            continue
+        C, nx, ny, active = collision_pair(
+            pos[i, 0], pos[i, 1], pos[i, 2], cs[i, 0], cs[i, 1], size[i, 0], size[i, 1], size[i, 2], radius[i],
+            pos[j, 0], pos[j, 1], pos[j, 2], cs[j, 0], cs[j, 1], size[j, 0], size[j, 1], size[j, 2], radius[j],
+            model, gap_m,
+        )
         if not active:
+            continue
+        colliding += 1
+        if not project:
+            out[p] = C
             continue
         wi = P.inv_mass[P.body[i]]
         wj = P.inv_mass[P.body[j]]
@@ -1039,36 +1095,33 @@ def project_collision(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, dege
                 f = k * C2 / (wi + wj)
                 push(P.body[i], -wi * f * tx, -wi * f * ty, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
                 push(P.body[j], wj * f * tx, wj * f * ty, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+    return colliding
+
+
+@njit(cache=True, error_model="numpy")
+def project_collision(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen):
+    return collision_pass(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen, np.empty(0), True)
 
 
 @njit(cache=True, error_model="numpy")
 def residual_collision(P, R, pairs, pos, cs, model, out):
-    for p in range(pairs.shape[0]):
-        C, _, _, active = collision_pair(P.size, P.radius, P.collides, pos, cs, pairs[p, 0], pairs[p, 1], model, 0.0)
-        out[p] = C if active else 0.0
+    # The projection-only arguments are placeholders here.
+    return collision_pass(P, R, pairs, pos, np.empty(0), cs, np.empty((0, 6)), False, 0.0, model, 0.0,
+                          np.zeros(N_KINDS, np.int64), out, False)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def access_side(size, access_depth, pos, cs, owner, side, other, model):
-    """Accessibility of side ``side`` of ``owner`` against item ``other`` (Eq. 14).
+def access_side(xo, yo, co, so, wo, do, depth_m, side, xi, yi, ci, si, wi, di, model):
+    """Accessibility of side ``side`` of an owner against another item (Eq. 14).
 
-    Active only when the other item's box intersects the access box. BOX: exact
-    penetration into the access box; SPHERE: the paper's ‖p_i − a_jk‖ − (b_i + ad_jk)
-    with b and ad the half diagonals. Returns (C, nx, ny, active), n from box to other.
+    Both boxes come as scalars (center, cos/sin of yaw, width, depth; ``depth_m`` is
+    the clearance of that side). Active only when the other item's box intersects the
+    access box. BOX: exact penetration into the access box; SPHERE: the paper's
+    ‖p_i − a_jk‖ − (b_i + ad_jk) with b and ad the half diagonals. Returns (C, nx, ny,
+    active), n from the access box to the other item.
     """
-    depth_m = access_depth[owner, side]
-    if depth_m <= 0.0:
-        return 0.0, 0.0, 0.0, False
-    if not z_overlap(size, pos[owner, 2], owner, pos[other, 2], other):
-        return 0.0, 0.0, 0.0, False
-    xo = pos[owner, 0]
-    yo = pos[owner, 1]
-    xi = pos[other, 0]
-    yi = pos[other, 1]
-    co = cs[owner, 0]
-    so = cs[owner, 1]
-    hd = 0.5 * size[owner, 1]
-    hw = 0.5 * size[owner, 0]
+    hd = 0.5 * do
+    hw = 0.5 * wo
     if side == 0 or side == 2:
         sgn = 1.0 if side == 2 else -1.0
         lx = sgn * (hd + 0.5 * depth_m)
@@ -1083,12 +1136,12 @@ def access_side(size, access_depth, pos, cs, owner, side, other, model):
         bhw = 0.5 * depth_m
     ax = xo + co * lx - so * ly
     ay = yo + so * lx + co * ly
-    hdi = 0.5 * size[other, 1]
-    hwi = 0.5 * size[other, 0]
+    hdi = 0.5 * di
+    hwi = 0.5 * wi
     reach = math.sqrt(hdi * hdi + hwi * hwi) + math.sqrt(bhd * bhd + bhw * bhw)
     if (xi - ax) ** 2 + (yi - ay) ** 2 >= reach * reach:
         return 0.0, 0.0, 0.0, False
-    depth, nx, ny = sat(xi, yi, cs[other, 0], cs[other, 1], hdi, hwi, ax, ay, co, so, bhd, bhw)
+    depth, nx, ny = sat(xi, yi, ci, si, hdi, hwi, ax, ay, co, so, bhd, bhw)
     if depth <= 0.0:
         return 0.0, 0.0, 0.0, False
     if model == BOX:
@@ -1096,7 +1149,7 @@ def access_side(size, access_depth, pos, cs, owner, side, other, model):
     dx = xi - ax
     dy = yi - ay
     dist = math.sqrt(dx * dx + dy * dy)
-    C = dist - (math.sqrt(hdi * hdi + hwi * hwi) + math.sqrt(bhd * bhd + bhw * bhw))
+    C = dist - reach
     if C >= 0.0:
         return 0.0, 0.0, 0.0, False
     if dist < EPS:
@@ -1104,42 +1157,59 @@ def access_side(size, access_depth, pos, cs, owner, side, other, model):
     return C, dx / dist, dy / dist, True
 
 
-@njit(cache=True, inline="always", error_model="numpy")
-def access_exempt(parent, i, j):
-    """Members of one group (a table and its chairs) may sit in each other's access."""
-    return parent[i] >= 0 and parent[i] == parent[j]
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def access_reach(radius, access_max, pos, owner, other):
-    """Cheap reject: can ``other`` reach any access box of ``owner`` at all?"""
-    reach = radius[owner] + access_max[owner] + radius[other]
-    return access_max[owner] > 0.0 and (pos[owner, 0] - pos[other, 0]) ** 2 + (
-        pos[owner, 1] - pos[other, 1]
-    ) ** 2 < reach * reach
-
-
 @njit(cache=True, error_model="numpy")
-def project_access(P, pairs, pos, yaw, cs, acc, jac, k, model, degen):
+def access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, out, project):
+    """Accessibility of both items of every candidate pair: with ``project``, push the
+    intruder out of each access box it enters by ``k`` of the depth (the owner takes
+    its share by mass); without, write each pair's -sqrt(Σ C²) to ``out``.
+
+    Members of one group (a table and its chairs) may sit in each other's access.
+    """
+    size = P.size
+    radius = P.radius
+    access_max = P.access_max
+    depth = P.access_depth
     for p in range(pairs.shape[0]):
+        total = 0.0
         for turn_ in range(2):
             owner = pairs[p, turn_]
             other = pairs[p, 1 - turn_]
-            if P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
+            if access_max[owner] <= 0.0 or P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
                 continue
-            if access_exempt(P.parent, owner, other) or not access_reach(P.radius, P.access_max, pos, owner, other):
+            if P.parent[owner] >= 0 and P.parent[owner] == P.parent[other]:
+                continue
+            reach = radius[owner] + access_max[owner] + radius[other]
+            if (pos[owner, 0] - pos[other, 0]) ** 2 + (pos[owner, 1] - pos[other, 1]) ** 2 >= reach * reach:
+                continue
+            if abs(pos[owner, 2] - pos[other, 2]) >= 0.5 * (size[owner, 2] + size[other, 2]) - Z_TOUCH_M:
                 continue
             wo = P.inv_mass[P.body[owner]]
             wi = P.inv_mass[P.body[other]]
-            if wo + wi == 0.0:
+            if project and wo + wi == 0.0:
                 continue
             for side in range(4):
-                C, nx, ny, active = access_side(P.size, P.access_depth, pos, cs, owner, side, other, model)
+                if depth[owner, side] <= 0.0:
+                    continue
+                C, nx, ny, active = access_side(
+                    pos[owner, 0], pos[owner, 1], cs[owner, 0], cs[owner, 1], size[owner, 0], size[owner, 1],
+                    depth[owner, side], side,
+                    pos[other, 0], pos[other, 1], cs[other, 0], cs[other, 1], size[other, 0], size[other, 1], model,
+                )
                 if not active:
+                    continue
+                if not project:
+                    total += C * C
                     continue
                 f = k * C / (wo + wi)
                 push(P.body[other], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
                 push(P.body[owner], wo * f * nx, wo * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+        if not project:
+            out[p] = -math.sqrt(total)
+
+
+@njit(cache=True, error_model="numpy")
+def project_access(P, pairs, pos, yaw, cs, acc, jac, k, model, degen):
+    access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -1151,6 +1221,8 @@ def access_in_floor(R, P, pos, yaw, cs, i, k, project):
     hd = 0.5 * P.size[i, 1]
     hw = 0.5 * P.size[i, 0]
     # Quick accept: every clearance lies within this circle, itself inside the floor.
+    if clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i] + P.access_max[i]):
+        return 0.0
     _, _, _, wall_m = nearest_on_polygon(R.polygon, pos[i, 0], pos[i, 1])
     if wall_m > P.radius[i] + P.access_max[i] and inside_polygon(R.polygon, pos[i, 0], pos[i, 1]):
         return 0.0
@@ -1185,7 +1257,8 @@ def access_in_floor(R, P, pos, yaw, cs, i, k, project):
 def project_access_in_floor(R, P, pos, yaw, cs, k):
     for i in range(P.role.shape[0]):
         if P.role[i] == ITEM and P.access_max[i] > 0.0 and P.inv_mass[P.body[i]] > 0.0:
-            access_in_floor(R, P, pos, yaw, cs, i, k, True)
+            if not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i] + P.access_max[i]):
+                access_in_floor(R, P, pos, yaw, cs, i, k, True)
 
 
 @njit(cache=True, error_model="numpy")
@@ -1200,23 +1273,18 @@ def residual_access_in_floor(R, P, pos, yaw, cs):
 @njit(cache=True, error_model="numpy")
 def residual_access(P, pairs, pos, cs, model, out):
     """Squared-sum violation of all access sides, per candidate pair."""
-    for p in range(pairs.shape[0]):
-        total = 0.0
-        for turn_ in range(2):
-            owner = pairs[p, turn_]
-            other = pairs[p, 1 - turn_]
-            if P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
-                continue
-            if access_exempt(P.parent, owner, other) or not access_reach(P.radius, P.access_max, pos, owner, other):
-                continue
-            for side in range(4):
-                C, _, _, active = access_side(P.size, P.access_depth, pos, cs, owner, side, other, model)
-                if active:
-                    total += C * C
-        out[p] = -math.sqrt(total)
+    access_pass(P, pairs, pos, np.empty(0), cs, np.empty((0, 6)), False, 0.0, model, out, False)
 
 
 # ------------------------------------------------------------------ energy, loop
+
+
+@njit(cache=True, error_model="numpy")
+def sumsq(values, n):
+    total = 0.0
+    for i in range(n):
+        total += values[i] * values[i]
+    return total
 
 
 @njit(cache=True, error_model="numpy")
@@ -1227,34 +1295,45 @@ def energy_terms(M, pos, yaw, pairs, model, weights):
     out = np.empty(max(P.role.shape[0], pairs.shape[0], D.rest.shape[0], L.origin.shape[0],
                        H.frame.shape[0], S.focal.shape[0], B.target.shape[0], W.item.shape[0],
                        WO.item.shape[0], O.mode.shape[0], ST.k0.shape[0], U.group.shape[0], 1))
-    residual_distance(D, P, pos, yaw, out)
-    terms[K_DISTANCE] = (out[: D.rest.shape[0]] ** 2).sum()
-    residual_lane(L, P, pos, yaw, out)
-    terms[K_LANE] = (out[: L.origin.shape[0]] ** 2).sum()
-    residual_heat(H, P, pos, yaw, out)
-    terms[K_HEAT] = (out[: H.frame.shape[0]] ** 2).sum()
-    residual_symmetry(S, P, pos, yaw, out)
-    terms[K_SYMMETRY] = (out[: S.focal.shape[0]] ** 2).sum()
-    residual_balance(B, P, pos, yaw, out)
-    terms[K_BALANCE] = (out[: B.target.shape[0]] ** 2).sum()
-    residual_wall_distance(W, R, P, pos, yaw, out)
-    terms[K_WALL_DISTANCE] = (out[: W.item.shape[0]] ** 2).sum()
-    residual_wall_orientation(WO, R, P, pos, yaw, out)
-    terms[K_WALL_ORIENTATION] = (out[: WO.item.shape[0]] ** 2).sum()
-    residual_orientation(O, P, pos, yaw, out)
-    terms[K_ORIENTATION] = (out[: O.mode.shape[0]] ** 2).sum()
-    residual_stack(ST, P, pos, yaw, out)
-    terms[K_STACK] = (out[: ST.k0.shape[0]] ** 2).sum()
-    residual_curve(U, P, pos, yaw, out)
-    terms[K_CURVE] = (out[: U.group.shape[0]] ** 2).sum()
+    if D.rest.shape[0] > 0:
+        residual_distance(D, P, pos, yaw, out)
+        terms[K_DISTANCE] = sumsq(out, D.rest.shape[0])
+    if L.origin.shape[0] > 0:
+        residual_lane(L, P, pos, yaw, out)
+        terms[K_LANE] = sumsq(out, L.origin.shape[0])
+    if H.frame.shape[0] > 0:
+        residual_heat(H, P, pos, yaw, out)
+        terms[K_HEAT] = sumsq(out, H.frame.shape[0])
+    if S.focal.shape[0] > 0:
+        residual_symmetry(S, P, pos, yaw, out)
+        terms[K_SYMMETRY] = sumsq(out, S.focal.shape[0])
+    if B.target.shape[0] > 0:
+        residual_balance(B, P, pos, yaw, out)
+        terms[K_BALANCE] = sumsq(out, B.target.shape[0])
+    if W.item.shape[0] > 0:
+        residual_wall_distance(W, R, P, pos, yaw, out)
+        terms[K_WALL_DISTANCE] = sumsq(out, W.item.shape[0])
+    if WO.item.shape[0] > 0:
+        residual_wall_orientation(WO, R, P, pos, yaw, out)
+        terms[K_WALL_ORIENTATION] = sumsq(out, WO.item.shape[0])
+    if O.mode.shape[0] > 0:
+        residual_orientation(O, P, pos, yaw, out)
+        terms[K_ORIENTATION] = sumsq(out, O.mode.shape[0])
+    if ST.k0.shape[0] > 0:
+        residual_stack(ST, P, pos, yaw, out)
+        terms[K_STACK] = sumsq(out, ST.k0.shape[0])
+    if U.group.shape[0] > 0:
+        residual_curve(U, P, pos, yaw, out)
+        terms[K_CURVE] = sumsq(out, U.group.shape[0])
     residual_boundary(R, P, pos, yaw, out)
-    terms[K_BOUNDARY] = (out[: P.role.shape[0]] ** 2).sum()
+    terms[K_BOUNDARY] = sumsq(out, P.role.shape[0])
     cs = np.empty((pos.shape[0], 2))
     trig(yaw, cs)
-    residual_collision(P, R, pairs, pos, cs, model, out)
-    terms[K_COLLISION] = (out[: pairs.shape[0]] ** 2).sum()
+    if pairs.shape[0] > 0:
+        residual_collision(P, R, pairs, pos, cs, model, out)
+        terms[K_COLLISION] = sumsq(out, pairs.shape[0])
     residual_access(P, pairs, pos, cs, model, out)
-    terms[K_ACCESS] = (out[: pairs.shape[0]] ** 2).sum() + residual_access_in_floor(R, P, pos, yaw, cs)
+    terms[K_ACCESS] = sumsq(out, pairs.shape[0]) + residual_access_in_floor(R, P, pos, yaw, cs)
     for k in range(N_KINDS):
         terms[k] *= weights[k]
     return terms
@@ -1263,32 +1342,44 @@ def energy_terms(M, pos, yaw, pairs, model, weights):
 @njit(cache=True, error_model="numpy")
 def iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, model, k_collision, k_access, gap_m):
     """One solver iteration ``it`` (1-based): the constraints of its row of the
-    interleaving table, then stacking, collision, accessibility and the boundary."""
+    interleaving table, then stacking, collision, accessibility and the boundary.
+    Kinds without constraints are skipped: a kernel call costs a few hundred
+    nanoseconds of argument passing, which adds up in a ten-item room."""
     P, D, L, H, S, B, W, WO, O, ST, U, R = M
     row = (it - 1) % 6
     others = order[row, 1]
     if others:
-        project_distance(D, P, pos, yaw, acc, jac, it, rate, degen)
-        batch_end(jac, pos, yaw, acc, omega, P)
-        project_lane(L, P, pos, yaw, acc, jac, it, rate, degen)
-        batch_end(jac, pos, yaw, acc, omega, P)
-        project_heat(H, P, pos, yaw, acc, jac, it, rate, degen)
-        batch_end(jac, pos, yaw, acc, omega, P)
-        project_symmetry(S, P, pos, yaw, acc, jac, it, rate, degen)
-        batch_end(jac, pos, yaw, acc, omega, P)
-        project_balance(B, P, pos, yaw, acc, jac, it, rate, degen)
-        batch_end(jac, pos, yaw, acc, omega, P)
-        project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen)
-        batch_end(jac, pos, yaw, acc, omega, P)
-        project_curve(U, P, pos, yaw, acc, jac, it, rate, degen)
-        batch_end(jac, pos, yaw, acc, omega, P)
+        if D.rest.shape[0] > 0:
+            project_distance(D, P, pos, yaw, acc, jac, it, rate, degen)
+            batch_end(jac, pos, yaw, acc, omega, P)
+        if L.origin.shape[0] > 0:
+            project_lane(L, P, pos, yaw, acc, jac, it, rate, degen)
+            batch_end(jac, pos, yaw, acc, omega, P)
+        if H.frame.shape[0] > 0:
+            project_heat(H, P, pos, yaw, acc, jac, it, rate, degen)
+            batch_end(jac, pos, yaw, acc, omega, P)
+        if S.focal.shape[0] > 0:
+            project_symmetry(S, P, pos, yaw, acc, jac, it, rate, degen)
+            batch_end(jac, pos, yaw, acc, omega, P)
+        if B.target.shape[0] > 0:
+            project_balance(B, P, pos, yaw, acc, jac, it, rate, degen)
+            batch_end(jac, pos, yaw, acc, omega, P)
+        if O.mode.shape[0] > 0:
+            project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen)
+            batch_end(jac, pos, yaw, acc, omega, P)
+        if U.group.shape[0] > 0:
+            project_curve(U, P, pos, yaw, acc, jac, it, rate, degen)
+            batch_end(jac, pos, yaw, acc, omega, P)
     if order[row, 0]:
-        project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen)
+        if W.item.shape[0] > 0:
+            project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen)
+            batch_end(jac, pos, yaw, acc, omega, P)
+        if WO.item.shape[0] > 0:
+            project_wall_orientation(WO, R, P, pos, yaw, acc, jac, it, rate, degen)
+            batch_end(jac, pos, yaw, acc, omega, P)
+    if ST.k0.shape[0] > 0:
+        project_stack(ST, P, pos, yaw, acc, jac, it, rate, degen)
         batch_end(jac, pos, yaw, acc, omega, P)
-        project_wall_orientation(WO, R, P, pos, yaw, acc, jac, it, rate, degen)
-        batch_end(jac, pos, yaw, acc, omega, P)
-    project_stack(ST, P, pos, yaw, acc, jac, it, rate, degen)
-    batch_end(jac, pos, yaw, acc, omega, P)
     if order[row, 2]:
         trig(yaw, cs)
         kc = stiffness(k_collision, GROW, it, rate)
@@ -1313,11 +1404,7 @@ def polish(M, pos, yaw, rounds, model, gap_m, cell_m, pad_m):
     for _ in range(rounds):
         pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
         trig(yaw, cs)
-        colliding = False
-        for p in range(pairs.shape[0]):
-            _, _, _, active = collision_pair(P.size, P.radius, P.collides, pos, cs, pairs[p, 0], pairs[p, 1], model, 0.0)
-            colliding = colliding or active
-        if not colliding:
+        if residual_collision(P, R, pairs, pos, cs, model, np.empty(pairs.shape[0])) == 0:
             return
         project_collision(P, R, pairs, pos, yaw, cs, acc, False, 1.0, model, gap_m, degen)
         project_stack(ST, P, pos, yaw, acc, False, 1, 1.0, degen)

@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from . import _codes as codes
+from . import _kernels as K
 from .errors import LayoutError
 from .geometry import box_corners, polygon_area, polygon_centroid, self_intersection
 from .model import Model
@@ -460,6 +461,13 @@ class LayoutBuilder:
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)
         prev = poly - np.roll(poly, 1, axis=0)
         reflex = (prev[:, 0] * edges[:, 1] - prev[:, 1] * edges[:, 0]) < 0
+        # At most ~250k cells of at least 5 cm: one lookup then settles "far inside"
+        # for most items, instead of a walk over every wall.
+        lo, hi = poly.min(0), poly.max(0)
+        grid_cell = max(0.05, float(np.sqrt(np.prod(hi - lo) / 250_000.0)))
+        grid_origin = lo - grid_cell
+        gx, gy = (np.ceil((hi - lo) / grid_cell).astype(int) + 2)
+        clearance = K.clearance_grid(poly, grid_origin, grid_cell, int(gx), int(gy))
         # Group sizes (for pictures): bounding box of member footprints in group frame.
         for g in np.flatnonzero(role == codes.GROUP)[::-1]:
             members = np.flatnonzero(parent == g)
@@ -516,6 +524,9 @@ class LayoutBuilder:
             floor_polygon_m=poly.copy(),
             floor_edge_normal=normals,
             floor_reflex=reflex,
+            floor_clearance_m=clearance,
+            floor_grid_origin_m=grid_origin,
+            floor_grid_cell_m=np.array([grid_cell]),
             wall_height_m=self.wall_height_m,
             door_segments_m=np.array([d[0] for d in doors], np.float64).reshape(len(doors), 2, 2),
             door_particles=np.array([d[1] for d in doors], np.int32),

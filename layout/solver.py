@@ -214,7 +214,7 @@ class Solver:
     access_stiffness: float = 0.5
     gap_m: float = 0.002
     order: tuple = TABLE_5_1
-    energy_every: int = 1
+    energy_every: int = 3
     pad_m: float = 0.1
     polish_rounds: int = 30
     restarts: int = 3
