@@ -812,9 +812,8 @@ def boundary_item(R, P, pos, yaw, i, project):
     b = P.body[i]
     hd = 0.5 * P.size[i, 1]
     hw = 0.5 * P.size[i, 0]
-    # Quick accept: the footprint's circumcircle lies inside the floor.
-    if clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
-        return 0.0
+    # Quick accept: the footprint's circumcircle lies inside the floor. (Callers first
+    # ask the clearance grid, which settles most items without this call.)
     x, y = pos[i, 0], pos[i, 1]
     _, _, _, wall_m = nearest_on_polygon(R.polygon, x, y)
     if wall_m > P.radius[i] and inside_polygon(R.polygon, x, y):
@@ -1221,8 +1220,7 @@ def access_in_floor(R, P, pos, yaw, cs, i, k, project):
     hd = 0.5 * P.size[i, 1]
     hw = 0.5 * P.size[i, 0]
     # Quick accept: every clearance lies within this circle, itself inside the floor.
-    if clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i] + P.access_max[i]):
-        return 0.0
+    # (Callers first ask the clearance grid, which settles most items without this call.)
     _, _, _, wall_m = nearest_on_polygon(R.polygon, pos[i, 0], pos[i, 1])
     if wall_m > P.radius[i] + P.access_max[i] and inside_polygon(R.polygon, pos[i, 0], pos[i, 1]):
         return 0.0
@@ -1266,7 +1264,8 @@ def residual_access_in_floor(R, P, pos, yaw, cs):
     total = 0.0
     for i in range(P.role.shape[0]):
         if P.role[i] == ITEM and P.access_max[i] > 0.0:
-            total += access_in_floor(R, P, pos, yaw, cs, i, 0.0, False)
+            if not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i] + P.access_max[i]):
+                total += access_in_floor(R, P, pos, yaw, cs, i, 0.0, False)
     return total
 
 

@@ -31,7 +31,8 @@ from . import _codes as codes
 from . import _kernels as K
 from .errors import LayoutError
 from .model import Model, State
-from .solver import Layout, _cell_size, initial_state
+from .geometry import polygon_area
+from .solver import Layout, _cell_size, energy_terms, initial_state
 
 
 @dataclass(frozen=True)
@@ -93,7 +94,7 @@ class Annealer:
         ).astype(np.int64)
         if len(bodies) == 0:
             raise LayoutError("annealer: the layout has nothing that may move")
-        step = self.step_m * math.sqrt(abs(_area(model.floor_polygon_m)))
+        step = self.step_m * math.sqrt(abs(polygon_area(model.floor_polygon_m)))
         t0 = time.perf_counter()
         pos, yaw, trace, best_it, iters = _anneal(
             model.packed(),
@@ -115,16 +116,13 @@ class Annealer:
             float(self.pad_m),
         )
         elapsed = time.perf_counter() - t0
-        P = model.packed()[0]
-        pairs = K.candidate_pairs(P, pos, yaw, _cell_size(model), 0.05)
-        terms = K.energy_terms(model.packed(), pos, yaw, pairs, codes.COLLISION_NAMES[self.collision],
-                               np.array(codes.ENERGY_WEIGHTS))
+        terms = energy_terms(model, State(pos, yaw), self.collision)
         return Layout(
             model=model,
             position_m=pos,
             yaw_rad=(yaw + np.pi) % (2.0 * np.pi) - np.pi,
-            energy=float(np.sqrt(terms.sum())),
-            energy_by_kind={k: float(v) for k, v in zip(codes.KINDS, terms)},
+            energy=float(np.sqrt(sum(terms.values()))),
+            energy_by_kind=terms,
             trace=trace,
             iterations=int(iters),
             best_iteration=int(best_it),
@@ -133,19 +131,15 @@ class Annealer:
         )
 
 
-def _area(polygon):
-    x, y = polygon[:, 0], polygon[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-
-
 @njit(cache=True, error_model="numpy")
-def _save(b, pos, yaw, mstart, mlist, keep_pos, keep_yaw):
-    keep_pos[b] = pos[b]
-    keep_yaw[b] = yaw[b]
+def _copy_body(b, src_pos, src_yaw, mstart, mlist, dst_pos, dst_yaw):
+    """Copy the pose of body b and its rigid members (to save or to restore it)."""
+    dst_pos[b] = src_pos[b]
+    dst_yaw[b] = src_yaw[b]
     for q in range(mstart[b], mstart[b + 1]):
         m = mlist[q]
-        keep_pos[m] = pos[m]
-        keep_yaw[m] = yaw[m]
+        dst_pos[m] = src_pos[m]
+        dst_yaw[m] = src_yaw[m]
 
 
 @njit(cache=True, error_model="numpy")
@@ -193,13 +187,13 @@ def _anneal(M, pos, yaw, bodies, iterations, t_start, step_m, step_rad, p_rotate
         b = bodies[np.random.randint(bodies.shape[0])]
         b2 = -1
         u = np.random.random()
-        _save(b, pos, yaw, mstart, mlist, keep_pos, keep_yaw)
+        _copy_body(b, pos, yaw, mstart, mlist, keep_pos, keep_yaw)
         if u < p_swap and bodies.shape[0] > 1:
             b2 = bodies[np.random.randint(bodies.shape[0])]
             if b2 == b:
                 b2 = -1
             else:
-                _save(b2, pos, yaw, mstart, mlist, keep_pos, keep_yaw)
+                _copy_body(b2, pos, yaw, mstart, mlist, keep_pos, keep_yaw)
                 dx = pos[b2, 0] - pos[b, 0]
                 dy = pos[b2, 1] - pos[b, 1]
                 K.move(b, dx, dy, 0.0, 0.0, pos, yaw, mstart, mlist)
@@ -229,9 +223,9 @@ def _anneal(M, pos, yaw, bodies, iterations, t_start, step_m, step_rad, p_rotate
                 best_pos[:] = pos
                 best_yaw[:] = yaw
         else:
-            _save(b, keep_pos, keep_yaw, mstart, mlist, pos, yaw)
+            _copy_body(b, keep_pos, keep_yaw, mstart, mlist, pos, yaw)
             if b2 >= 0:
-                _save(b2, keep_pos, keep_yaw, mstart, mlist, pos, yaw)
+                _copy_body(b2, keep_pos, keep_yaw, mstart, mlist, pos, yaw)
             if rebuilt:
                 pairs = K.candidate_pairs(P, pos, yaw, cell_m, pad_m)
                 ref_pos[:] = pos
