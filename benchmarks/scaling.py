@@ -11,17 +11,14 @@ and writes ``benchmarks/results/scaling.{json,md,png}`` (a log-log plot).
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import platform
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import results_io  # noqa: E402
 import scenes  # noqa: E402
 
 HEADER = "| scene | items | median s per solve | median ms per iteration | iterations | E median |"
@@ -105,19 +102,15 @@ def main():
     fits = exponents(rows)
     for scene, f in fits.items():
         print(f"{scene}: growth exponent per solve {f['solve']:.2f}, per iteration {f['iteration']:.2f}")
-    out = ROOT / "benchmarks" / "results"
-    out.mkdir(parents=True, exist_ok=True)
-    meta = dict(machine=platform.platform(), cpu_count=os.cpu_count(), python=platform.python_version(),
-                date=time.strftime("%Y-%m-%d"), seeds=args.seeds)
-    (out / "scaling.json").write_text(json.dumps(dict(meta=meta, rows=rows, exponents=fits), indent=2) + "\n")
+    meta = results_io.machine(seeds=args.seeds)
     md = ["# Scaling of the PBD solver (benchmarks/scaling.py)", "",
           f"{meta['machine']}, {meta['cpu_count']} cores, {meta['date']}; median of {args.seeds} seeds.", "",
           HEADER, "|" + "---|" * 6, *[_line(r) for r in rows], "",
           *[f"- {s}: growth exponent per solve {f['solve']:.2f}, per iteration {f['iteration']:.2f}"
             for s, f in fits.items()], "", "![log-log plot](scaling.png)"]
-    (out / "scaling.md").write_text("\n".join(md) + "\n")
-    plot(rows, fits, out / "scaling.png")
-    print(f"wrote {out / 'scaling.json'}, {out / 'scaling.md'} and {out / 'scaling.png'}")
+    paths = results_io.write("scaling", dict(meta=meta, rows=rows, exponents=fits), md)
+    plot(rows, fits, results_io.RESULTS / "scaling.png")
+    print("wrote", *paths, results_io.RESULTS / "scaling.png")
 
 
 if __name__ == "__main__":

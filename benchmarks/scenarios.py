@@ -15,14 +15,13 @@ connected). Times are medians after JIT warm-up; compile time is reported once.
 """
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import json
-import platform
 import time
 from pathlib import Path
 
 import numpy as np
+
+import results_io
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = {
@@ -90,25 +89,17 @@ def _line(r):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--seeds", type=int, default=10)
-    parser.add_argument("--only", default="", help="comma-separated scenario names")
-    args = parser.parse_args()
-    only = {s for s in args.only.split(",") if s}
+    seeds, only = results_io.scenario_args(__doc__)
     print(HEADER)
     print("|" + "---|" * 14)
-    compile_s, rows = run(args.seeds, only)
+    compile_s, rows = run(seeds, only)
     print(f"\nfirst solve in a fresh process (JIT compile or cache load): {compile_s:.1f} s")
-    out = ROOT / "benchmarks" / "results"
-    out.mkdir(parents=True, exist_ok=True)
-    meta = dict(machine=platform.platform(), python=platform.python_version(), cpu_count=__import__("os").cpu_count(),
-                compile_or_cache_s=compile_s, date=time.strftime("%Y-%m-%d"))
-    (out / "scenarios.json").write_text(json.dumps(dict(meta=meta, rows=rows), indent=2) + "\n")
+    meta = results_io.machine(compile_or_cache_s=compile_s)
     md = ["# Paper scenarios, 10 seeds (benchmarks/scenarios.py)", "", f"{meta['machine']}, {meta['date']}", "",
           HEADER, "|" + "---|" * 14, *[_line(r) for r in rows], "",
           f"First solve in a fresh process: {compile_s:.1f} s (JIT compile, or loading numba's disk cache)."]
-    (out / "scenarios.md").write_text("\n".join(md) + "\n")
-    print(f"wrote {out / 'scenarios.json'} and {out / 'scenarios.md'}")
+    paths = results_io.write("scenarios", dict(meta=meta, rows=rows), md)
+    print("wrote", *paths)
 
 
 if __name__ == "__main__":

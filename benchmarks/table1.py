@@ -14,15 +14,13 @@ packed picnic, both methods in one plot (the paper's Fig. 17),
 """
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import json
-import os
-import platform
 import time
 from pathlib import Path
 
 import numpy as np
+
+import results_io
 
 ROOT = Path(__file__).resolve().parents[1]
 # name: (spec, the paper's Table 1: objects, PBD s, SA-McMC s)
@@ -96,30 +94,23 @@ def _line(r):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--seeds", type=int, default=10)
-    parser.add_argument("--only", default="", help="comma-separated scenario names")
-    args = parser.parse_args()
-    only = {s for s in args.only.split(",") if s}
-    out = ROOT / "benchmarks" / "results"
-    out.mkdir(parents=True, exist_ok=True)
+    seeds, only = results_io.scenario_args(__doc__)
+    results_io.RESULTS.mkdir(parents=True, exist_ok=True)
+    trace_png = results_io.RESULTS / "energy_trace_tp_picnic.png"
     t_all = time.perf_counter()
     print(HEADER)
     print("|" + "---|" * 11)
-    compile_s, rows = run(args.seeds, only, out / "energy_trace_tp_picnic.png")
+    compile_s, rows = run(seeds, only, trace_png)
     total_s = time.perf_counter() - t_all
-    meta = dict(machine=platform.platform(), processor=platform.processor(), cpu_count=os.cpu_count(),
-                python=platform.python_version(), date=time.strftime("%Y-%m-%d"),
-                compile_or_cache_s=compile_s, total_s=total_s)
+    meta = results_io.machine(compile_or_cache_s=compile_s, total_s=total_s)
     print(f"\nJIT compile or cache load (once): {compile_s:.1f} s; whole run {total_s / 60:.1f} min")
-    (out / "table1.json").write_text(json.dumps(dict(meta=meta, rows=rows), indent=2) + "\n")
     md = ["# Table 1 side by side: PBD vs SA-McMC (benchmarks/table1.py)", "",
-          f"{meta['machine']}, {meta['cpu_count']} cores, {meta['date']}; {args.seeds} seeds, same starts for both.", "",
+          f"{meta['machine']}, {meta['cpu_count']} cores, {meta['date']}; {seeds} seeds, same starts for both.", "",
           HEADER, "|" + "---|" * 11, *[_line(r) for r in rows], "",
           f"JIT compile or cache load, once: {compile_s:.1f} s. Whole run: {total_s / 60:.1f} min.",
           "Paper s: the paper's Table 1 (mean of 10 runs, Python + Cython, 2.5 GHz i7)."]
-    (out / "table1.md").write_text("\n".join(md) + "\n")
-    print(f"wrote {out / 'table1.json'}, {out / 'table1.md'} and {out / 'energy_trace_tp_picnic.png'}")
+    paths = results_io.write("table1", dict(meta=meta, rows=rows), md)
+    print("wrote", *paths, trace_png)
 
 
 if __name__ == "__main__":

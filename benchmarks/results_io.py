@@ -1,0 +1,38 @@
+"""What the hand-run benchmarks share: the results folder, the machine description,
+atomic JSON + Markdown writing, and the --seeds/--only command line."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def machine(**extra) -> dict:
+    """Where and when the numbers were taken, plus ``extra`` (compile time, seeds...)."""
+    return dict(machine=platform.platform(), cpu_count=os.cpu_count(), python=platform.python_version(),
+                date=time.strftime("%Y-%m-%d"), **extra)
+
+
+def write(stem: str, data: dict, md_lines: list[str]) -> tuple[Path, Path]:
+    """Write ``results/<stem>.json`` and ``results/<stem>.md``, each atomically."""
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    paths = RESULTS / f"{stem}.json", RESULTS / f"{stem}.md"
+    for path, text in zip(paths, (json.dumps(data, indent=2) + "\n", "\n".join(md_lines) + "\n")):
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    return paths
+
+
+def scenario_args(doc: str) -> tuple[int, set[str]]:
+    """Parse ``--seeds N`` (default 10) and ``--only a,b`` (scenario names)."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--only", default="", help="comma-separated scenario names")
+    args = parser.parse_args()
+    return args.seeds, {s for s in args.only.split(",") if s}
