@@ -9,6 +9,8 @@ import platform
 import time
 from pathlib import Path
 
+from layout.fileio import write_atomic
+
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
@@ -23,9 +25,7 @@ def write(stem: str, data: dict, md_lines: list[str]) -> tuple[Path, Path]:
     RESULTS.mkdir(parents=True, exist_ok=True)
     paths = RESULTS / f"{stem}.json", RESULTS / f"{stem}.md"
     for path, text in zip(paths, (json.dumps(data, indent=2) + "\n", "\n".join(md_lines) + "\n")):
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(text)
-        os.replace(tmp, path)
+        write_atomic(path, text)
     return paths
 
 

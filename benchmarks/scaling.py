@@ -11,7 +11,6 @@ and writes ``benchmarks/results/scaling.{json,md,png}`` (a log-log plot).
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -19,6 +18,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import results_io  # noqa: E402
+from layout.fileio import atomic_path  # noqa: E402
 import scenes  # noqa: E402
 
 HEADER = "| scene | items | median s per solve | median ms per iteration | iterations | E median |"
@@ -84,10 +84,9 @@ def plot(rows, fits, path):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    tmp = path.with_suffix(".tmp.png")
-    fig.savefig(tmp)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png")
     plt.close(fig)
-    os.replace(tmp, path)
 
 
 def main():

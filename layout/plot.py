@@ -6,8 +6,6 @@ a reader never sees a half-written image.
 """
 from __future__ import annotations
 
-import os
-import tempfile
 import zlib
 from pathlib import Path
 
@@ -15,6 +13,8 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon as PolygonPatch
+
+from .fileio import atomic_path
 
 DPI = 120
 # Longest side of the plan's axes box; the margins for labels come on top of it.
@@ -59,16 +59,8 @@ def _optional(value, shape, name):
 
 def _save_atomic(fig, path):
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_path(path) as tmp:
         fig.savefig(tmp, format=path.suffix[1:] or "png", dpi=DPI, bbox_inches="tight")
-        # mkstemp creates the file private; an image is meant to be shared.
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
 
 
 def plan_figure(

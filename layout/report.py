@@ -8,13 +8,12 @@ and ``energy.png`` with every suggestion's energy trace.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from . import metrics, plot
+from .fileio import write_atomic
 from .geometry import SIDE_NAMES, access_box_corners, box_corners
 
 # Overlaps smaller than this (m²) are contacts of touching boxes, not collisions.
@@ -145,18 +144,7 @@ def lane_segments(model, layout):
 
 
 def _write_json(path, data):
-    """Write JSON atomically: a temporary file in the same folder, then a rename."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump(data, f, indent=2, allow_nan=False)
-            f.write("\n")
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    write_atomic(path, json.dumps(data, indent=2, allow_nan=False) + "\n")
 
 
 def _finite(x):

@@ -1,0 +1,208 @@
+"""The one place that loads pyrender: headless GL backend, NumPy 2 shim, camera conventions.
+
+Backend selection. ``PYOPENGL_PLATFORM`` is respected when set. Otherwise EGL is used when
+its libraries are installed (Mesa's llvmpipe renders on a CPU, and EGL draws about twice
+as fast as OSMesa here), then OSMesa. PyOpenGL reads the variable once, on first import,
+so it is settled here before anything imports ``pyrender`` or ``OpenGL``.
+
+Camera conventions. Stager's cameras follow OpenCV: x right, y down, z forward, pixel
+centers at integer coordinates. OpenGL cameras look down -z with y up and put pixel
+centers at half-integers; :func:`pyrender_camera` and :func:`gl_from_cv_pose` convert,
+so a point projected with ``K`` lands exactly where the renderer draws it.
+"""
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import os
+from pathlib import Path
+
+import numpy as np
+
+# Debian packages behind each backend, for the error message when none loads.
+_EGL_PACKAGES = "libegl1 libegl-mesa0 libgl1-mesa-dri"
+_OSMESA_PACKAGES = "libosmesa6"
+# libglvnd's EGL finds Mesa through this vendor file (package libegl-mesa0).
+_MESA_EGL_VENDOR = Path("/usr/share/glvnd/egl_vendor.d/50_mesa.json")
+
+# Near and far clipping planes for all renders, meters: rooms are at most ~12 m across.
+ZNEAR_M = 0.05
+ZFAR_M = 40.0
+
+
+def _loads(name: str) -> bool:
+    try:
+        ctypes.CDLL(name)
+    except OSError:
+        return False
+    return True
+
+
+def select_platform() -> str:
+    """Pick and export the headless GL backend (``egl`` or ``osmesa``).
+
+    Returns
+    -------
+    platform : str
+        The value now in ``os.environ["PYOPENGL_PLATFORM"]``.
+
+    Raises
+    ------
+    ImportError
+        When neither backend's libraries are installed; names the Debian packages.
+    """
+    chosen = os.environ.get("PYOPENGL_PLATFORM")
+    if chosen:
+        return chosen
+    if _loads("libEGL.so.1") and _MESA_EGL_VENDOR.exists():
+        chosen = "egl"
+    elif _loads("libOSMesa.so.8") or ctypes.util.find_library("OSMesa"):
+        chosen = "osmesa"
+    else:
+        raise ImportError(
+            "no headless OpenGL found: install the Debian packages "
+            f"`{_EGL_PACKAGES}` (EGL) or `{_OSMESA_PACKAGES}` (OSMesa), "
+            "e.g. `sudo apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6`"
+        )
+    os.environ["PYOPENGL_PLATFORM"] = chosen
+    return chosen
+
+
+def _import_pyrender():
+    select_platform()
+    # pyrender 0.1.45 (2021) still spells np.inf as np.infty (removed in NumPy 2) in
+    # Mesh.bounds, which shadows and scene bounds use.
+    if not hasattr(np, "infty"):
+        np.infty = np.inf
+    import pyrender
+
+    return pyrender
+
+
+pyrender = _import_pyrender()
+
+# Shadow-pass depth offset (glPolygonOffset factor, units). pyrender's own bias is too
+# small for walls lit at a grazing angle and leaves stripes of "shadow acne" on them.
+SHADOW_OFFSET = (2.0, 8.0)
+
+
+def _by_name(node):
+    return node.name or ""
+
+
+class Scene(pyrender.Scene):
+    """A pyrender scene that draws its meshes and sums its lights in node-name order.
+
+    pyrender keeps nodes in sets and iterates them in memory-address order, so two renders
+    of one scene can differ where surfaces meet (the first drawn wins a tie) and in the
+    last bit of summed light. Name every node uniquely and the render is repeatable.
+    """
+
+    @property
+    def mesh_nodes(self):
+        return sorted(self._mesh_nodes, key=_by_name)
+
+    @property
+    def light_nodes(self):
+        return sorted(self._point_light_nodes | self._spot_light_nodes | self._directional_light_nodes,
+                      key=_by_name)
+
+
+def pyrender_camera(K: np.ndarray) -> "pyrender.IntrinsicsCamera":
+    """An OpenGL camera that draws exactly what ``K`` (OpenCV convention) projects.
+
+    Parameters
+    ----------
+    K : (3, 3) float
+        Intrinsics in pixels, pixel centers at integer coordinates.
+    """
+    K = np.asarray(K, dtype=np.float64)
+    # OpenGL's pixel (i, j) covers [i, i+1): its center is i + 0.5, OpenCV's is i.
+    return pyrender.IntrinsicsCamera(
+        fx=K[0, 0], fy=K[1, 1], cx=K[0, 2] + 0.5, cy=K[1, 2] + 0.5,
+        znear=ZNEAR_M, zfar=ZFAR_M,
+    )
+
+
+# Flips y and z: OpenCV camera axes (x right, y down, z forward) to OpenGL's (y up, -z forward).
+_CV_TO_GL = np.diag([1.0, -1.0, -1.0, 1.0])
+
+
+def gl_from_cv_pose(world_from_camera: np.ndarray) -> np.ndarray:
+    """The pyrender camera pose for an OpenCV-convention ``world_from_camera`` (4, 4)."""
+    return np.asarray(world_from_camera, dtype=np.float64) @ _CV_TO_GL
+
+
+def _with_shadow_offset(shadow_pass):
+    """Wrap one renderer's shadow pass so it writes depths pushed back by SHADOW_OFFSET
+    (slope-scaled, so grazing surfaces get more)."""
+    from OpenGL import GL
+
+    def offset_pass(*args, **kwargs):
+        GL.glEnable(GL.GL_POLYGON_OFFSET_FILL)
+        GL.glPolygonOffset(*SHADOW_OFFSET)
+        try:
+            return shadow_pass(*args, **kwargs)
+        finally:
+            GL.glDisable(GL.GL_POLYGON_OFFSET_FILL)
+
+    return offset_pass
+
+
+class Renderer:
+    """One offscreen GL context, reused for every image (contexts are costly and some
+    drivers fail when they are re-created). Use as a context manager.
+
+    Parameters
+    ----------
+    width_px, height_px : int
+        Initial viewport; :meth:`render` resizes as needed.
+    """
+
+    def __init__(self, width_px: int = 640, height_px: int = 480):
+        try:
+            self._offscreen = pyrender.OffscreenRenderer(width_px, height_px)
+        except Exception as error:  # the GL stack raises many types; all mean "no context"
+            platform = os.environ.get("PYOPENGL_PLATFORM")
+            other = "osmesa" if platform == "egl" else "egl"
+            raise ImportError(
+                f"could not create an offscreen OpenGL context with PYOPENGL_PLATFORM={platform} "
+                f"({type(error).__name__}: {error}). Install `{_EGL_PACKAGES}` and "
+                f"`{_OSMESA_PACKAGES}`, or try PYOPENGL_PLATFORM={other}."
+            ) from error
+        self._offscreen._renderer._shadow_mapping_pass = _with_shadow_offset(
+            self._offscreen._renderer._shadow_mapping_pass)
+
+    def render(self, scene, width_px: int, height_px: int, flags=None, seg_node_map=None,
+               shadow_map_px: int = 2048):
+        """Render ``scene`` from its main camera.
+
+        ``shadow_map_px`` (a power of two) sizes the shadow maps of lights rendered for
+        the first time: pyrender fixes it at 2048, which is most of the cost of a small
+        image on a CPU and more detail than a 320 x 240 frame can show.
+
+        Returns
+        -------
+        color : (height_px, width_px, 3) uint8
+        depth_m : (height_px, width_px) float32
+            Distance along the optical axis, 0 where nothing was drawn.
+        """
+        if flags is None:
+            flags = pyrender.RenderFlags.NONE
+        # pyrender reads this module constant when it makes a light's shadow texture and
+        # when it sets the shadow pass viewport; both happen inside this call.
+        pyrender.light.SHADOW_TEX_SZ = pyrender.renderer.SHADOW_TEX_SZ = int(shadow_map_px)
+        self._offscreen.viewport_width = int(width_px)
+        self._offscreen.viewport_height = int(height_px)
+        return self._offscreen.render(scene, flags=flags, seg_node_map=seg_node_map)
+
+    def close(self) -> None:
+        if self._offscreen is not None:
+            self._offscreen.delete()
+            self._offscreen = None
+
+    def __enter__(self) -> "Renderer":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

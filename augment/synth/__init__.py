@@ -1,0 +1,195 @@
+"""Synthetic room photographer: rendered photos of empty rooms with a checkerboard on the
+floor, and their exact ground truth. The fixture factory for every image-stage test and
+the training-data source of the floor model.
+
+One image: :func:`render_sample` samples a room (:mod:`.rooms`), a hand-held camera and a
+board pose in view (:mod:`.camera`), clutter out of the board's way, materials and lights
+(:mod:`.scene`), renders color and a label pass with pyrender, and degrades the render
+like a phone would (:mod:`.photo`). Everything random comes from one seed, so the same
+seed gives the same image. ``python -m augment.synth`` writes datasets.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from layout.fileio import write_atomic
+
+from ..board import Board
+from ..gl import Renderer, pyrender
+from .camera import Shot, place_board, random_shot, random_size
+from .photo import degrade
+from .rooms import Room, add_clutter, random_room
+from .scene import SEG_CEILING, SEG_FLOOR, SEG_WALL, build_scene
+
+FORMAT = "stager-synth-1"
+# Label image values (``Sample.labels``).
+OTHER, FLOOR, WALL, CEILING = 0, 1, 2, 3
+# A board corner counts as visible when the render's depth there is within this of the
+# board's own depth (anything nearer is an occluder).
+_VISIBLE_DEPTH_TOL_M = 0.02
+
+
+@dataclass
+class Sample:
+    """One synthetic photo and its ground truth.
+
+    image : (h, w, 3) uint8 RGB, degraded (JPEG is applied when written).
+    floor_mask : (h, w) bool, visible floor pixels, the board included.
+    labels : (h, w) uint8, OTHER / FLOOR / WALL / CEILING.
+    depth_m : (h, w) float32, distance along the optical axis; 0 where the sky shows.
+    truth : dict, the JSON written beside the image.
+    """
+
+    image: np.ndarray
+    floor_mask: np.ndarray
+    labels: np.ndarray
+    depth_m: np.ndarray
+    truth: dict
+
+
+def _texture_px(size_px) -> int:
+    longest = max(size_px)
+    return 256 if longest <= 480 else 512 if longest <= 1280 else 1024
+
+
+def _keep_out(shot: Shot, outline_m: np.ndarray) -> list[np.ndarray]:
+    """Floor regions clutter must avoid: the board (with room to spare) and the wedge from
+    the camera to it, so nothing hides a corner."""
+    center = outline_m.mean(axis=0)
+    grown = center + (outline_m - center) * 1.6
+    cam = shot.world_from_camera[:2, 3]
+    ring = cam + 0.4 * np.column_stack([np.cos(np.arange(8) * np.pi / 4), np.sin(np.arange(8) * np.pi / 4)])
+    hull = cv2.convexHull(np.vstack([grown, ring]).astype(np.float32))[:, 0, :].astype(np.float64)
+    return [hull]
+
+
+def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = None,
+                  board: Board | None = None, clutter: bool = True, photographic: bool = True) -> Sample:
+    """Render one synthetic room photo with its ground truth.
+
+    Parameters
+    ----------
+    seed : int or sequence of int
+        Everything random derives from ``np.random.default_rng(seed)``.
+    renderer : Renderer
+        The process's GL context.
+    size_px : (width, height), optional
+        Image size; random (landscape or portrait phone sizes) when None.
+    board : Board, optional
+        Checkerboard; the CLI default when None.
+    clutter : bool
+        Allow cartons and radiators on the floor.
+    photographic : bool
+        Apply exposure, white balance, vignetting, blur and noise (JPEG happens on write).
+    """
+    board = Board() if board is None else board
+    rng = np.random.default_rng(seed)
+    size_px = random_size(rng) if size_px is None else (int(size_px[0]), int(size_px[1]))
+    for _ in range(100):
+        room = random_room(rng)
+        shot = random_shot(rng, room, size_px)
+        world_from_board = place_board(rng, room, shot, board)
+        if world_from_board is not None:
+            break
+    else:
+        raise RuntimeError(f"seed {seed}: found no camera that sees a {board.cols}x{board.rows} board")
+    outline = (board.outline_m() @ world_from_board[:3, :3].T + world_from_board[:3, 3])[:, :2]
+    if clutter:
+        room = add_clutter(rng, room, _keep_out(shot, outline))
+
+    built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px))
+    width, height = size_px
+    flags = pyrender.RenderFlags.SHADOWS_DIRECTIONAL | pyrender.RenderFlags.SHADOWS_SPOT
+    # Small frames cannot show a 2048-texel shadow map's detail; it would cost half the time.
+    shadow_px = 1024 if max(size_px) <= 800 else 2048
+    color, depth_m = renderer.render(built.scene, width, height, flags=flags, shadow_map_px=shadow_px)
+    seg, _ = renderer.render(built.scene, width, height, flags=pyrender.RenderFlags.SEG,
+                             seg_node_map=built.seg_node_map)
+    labels = np.zeros((height, width), np.uint8)
+    for value, rgb in ((FLOOR, SEG_FLOOR), (WALL, SEG_WALL), (CEILING, SEG_CEILING)):
+        labels[seg[..., int(np.argmax(rgb))] > 127] = value
+
+    if photographic:
+        image, photo_params = degrade(rng, color)
+    else:
+        image, photo_params = color, {"jpeg_quality": 95}
+
+    corners_world = board.corners_m() @ world_from_board[:3, :3].T + world_from_board[:3, 3]
+    corners_px, corner_depth = shot.project(corners_world)
+    ij = np.round(corners_px).astype(int)
+    inside = (ij[:, 0] >= 0) & (ij[:, 0] < width) & (ij[:, 1] >= 0) & (ij[:, 1] < height)
+    visible = inside.copy()
+    seen = depth_m[ij[inside, 1], ij[inside, 0]]
+    visible[inside] = np.abs(seen - corner_depth[inside]) < _VISIBLE_DEPTH_TOL_M
+    truth = _truth(seed, room, shot, board, world_from_board, corners_px, visible, built.info, photo_params)
+    return Sample(image, labels == FLOOR, labels, depth_m, truth)
+
+
+def _openings_json(room: Room, kind: str) -> list[dict]:
+    return [{"segment_m": o.segment_m(room.polygon_m).round(4).tolist(), "wall": o.wall,
+             "bottom_m": round(o.bottom_m, 4), "top_m": round(o.top_m, 4)}
+            for o in room.openings if o.kind == kind]
+
+
+def _truth(seed, room, shot, board, world_from_board, corners_px, visible, info, photo_params) -> dict:
+    R = shot.world_from_camera[:3, :3]
+    forward, right = R[:, 2], R[:, 0]
+    pitch = np.arcsin(-forward[2])
+    return {
+        "format": FORMAT,
+        "seed": np.asarray(seed).tolist(),
+        "size_px": list(shot.size_px),
+        "K": shot.K.tolist(),
+        "distortion": [0.0] * 5,
+        "camera_from_world": shot.camera_from_world.tolist(),
+        "camera": {
+            "height_m": float(shot.world_from_camera[2, 3]),
+            "pitch_down_deg": float(np.degrees(pitch)),
+            "roll_deg": float(np.degrees(np.arcsin(np.clip(-right[2] / np.cos(pitch), -1, 1)))),
+            "hfov_deg": float(np.degrees(2 * np.arctan(shot.size_px[0] / 2 / shot.K[0, 0]))),
+        },
+        "room": {
+            "polygon_m": room.polygon_m.round(6).tolist(),
+            "height_m": room.height_m,
+            "doors": _openings_json(room, "door"),
+            "windows": _openings_json(room, "window"),
+            "clutter": [{"kind": c.kind, "footprint_m": c.footprint_m().round(4).tolist(),
+                         "height_m": round(c.size_m[2], 4)} for c in room.clutter],
+        },
+        "board": {
+            "inner_corners": [board.cols, board.rows],
+            "square_mm": board.square_mm,
+            "margin_mm": board.margin_mm,
+            "world_from_board": world_from_board.tolist(),
+            "corners_px": corners_px.round(4).tolist(),
+            "corners_visible": visible.tolist(),
+        },
+        "render": info,
+        "photo": photo_params,
+    }
+
+
+def write_sample(sample: Sample, out_dir, stem: str) -> dict[str, Path]:
+    """Write ``stem.jpg``, ``stem_floor.png`` (255 = floor) and ``stem.json``, atomically.
+
+    The JSON is written last, so a complete JSON means a complete sample.
+    """
+    out_dir = Path(out_dir)
+    quality = int(sample.truth["photo"]["jpeg_quality"])
+    ok, jpg = cv2.imencode(".jpg", cv2.cvtColor(sample.image, cv2.COLOR_RGB2BGR),
+                           [cv2.IMWRITE_JPEG_QUALITY, quality])
+    ok2, png = cv2.imencode(".png", sample.floor_mask.astype(np.uint8) * 255)
+    if not (ok and ok2):
+        raise RuntimeError(f"could not encode sample {stem}")
+    paths = {"image": out_dir / f"{stem}.jpg", "floor_mask": out_dir / f"{stem}_floor.png",
+             "truth": out_dir / f"{stem}.json"}
+    write_atomic(paths["image"], jpg.tobytes())
+    write_atomic(paths["floor_mask"], png.tobytes())
+    truth = dict(sample.truth, image=paths["image"].name, floor_mask=paths["floor_mask"].name)
+    write_atomic(paths["truth"], json.dumps(truth, indent=1) + "\n")
+    return paths

@@ -1,0 +1,76 @@
+"""Ground truth derived from geometry alone, to check renders against (and for overlays)."""
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+_NEAR_M = 0.01
+_SHIFT = 4  # cv2.fillPoly fixed-point bits: polygons drawn to 1/16 pixel
+
+
+def project_floor_polygon(polygon_m: np.ndarray, K: np.ndarray, camera_from_world: np.ndarray) -> np.ndarray:
+    """The floor polygon (z = 0) as the camera sees it, clipped at the camera plane.
+
+    Parameters
+    ----------
+    polygon_m : (n, 2) float
+        Floor outline, world meters.
+    K : (3, 3) float
+    camera_from_world : (4, 4) float
+        OpenCV camera axes.
+
+    Returns
+    -------
+    polygon_px : (k, 2) float64
+        Image points (x, y); empty when the floor is behind the camera.
+    """
+    world = np.column_stack([polygon_m, np.zeros(len(polygon_m))])
+    cam = world @ camera_from_world[:3, :3].T + camera_from_world[:3, 3]
+    # The floor behind the camera would project through infinity and flip.
+    clipped = _clip(cam, 2, _NEAR_M, keep_above=True)
+    if len(clipped) == 0:
+        return np.zeros((0, 2))
+    uvw = clipped @ np.asarray(K, dtype=np.float64).T
+    return uvw[:, :2] / uvw[:, 2:3]
+
+
+def _clip(points: np.ndarray, axis: int, bound: float, keep_above: bool) -> np.ndarray:
+    """Sutherland-Hodgman: the part of a polygon (k, d) on one side of ``x[axis] = bound``."""
+    out = []
+    for i in range(len(points)):
+        p, q = points[i], points[(i + 1) % len(points)]
+        p_in = (p[axis] >= bound) if keep_above else (p[axis] <= bound)
+        q_in = (q[axis] >= bound) if keep_above else (q[axis] <= bound)
+        if p_in:
+            out.append(p)
+        if p_in != q_in:
+            out.append(p + (bound - p[axis]) / (q[axis] - p[axis]) * (q - p))
+    return np.array(out).reshape(-1, points.shape[1])
+
+
+def polygon_mask(polygon_px: np.ndarray, size_px: tuple[int, int]) -> np.ndarray:
+    """Pixels whose centers fall inside ``polygon_px``; (height, width) bool."""
+    width, height = size_px
+    mask = np.zeros((height, width), np.uint8)
+    # Clip to a margin around the image: far vertices (floor near the horizon, or just in
+    # front of the camera) would overflow cv2's fixed-point coordinates.
+    pts = np.asarray(polygon_px, dtype=np.float64)
+    for axis, extent in ((0, width), (1, height)):
+        pts = _clip(pts, axis, -extent, keep_above=True) if len(pts) else pts
+        pts = _clip(pts, axis, 2 * extent, keep_above=False) if len(pts) else pts
+    if len(pts) >= 3:
+        cv2.fillPoly(mask, [np.round(pts * (1 << _SHIFT)).astype(np.int32)], 1, cv2.LINE_8, _SHIFT)
+    return mask.astype(bool)
+
+
+def overlay(photo: np.ndarray, floor_mask: np.ndarray, corners_px: np.ndarray) -> np.ndarray:
+    """The photo with the floor tinted and the board corners marked (a new array)."""
+    out = photo.copy()
+    tint = np.array([40, 200, 60], np.float32)
+    out[floor_mask] = (0.55 * out[floor_mask] + 0.45 * tint).astype(np.uint8)
+    contours, _ = cv2.findContours(floor_mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    cv2.drawContours(out, contours, -1, (20, 120, 30), max(1, photo.shape[1] // 400), cv2.LINE_AA)
+    radius = max(2, photo.shape[1] // 250)
+    for x, y in np.asarray(corners_px):
+        cv2.circle(out, (int(round(x * 16)), int(round(y * 16))), radius * 16, (230, 30, 30), -1, cv2.LINE_AA, 4)
+    return out

@@ -1,0 +1,206 @@
+"""The synthetic photographer's ground truth, checked against the renders themselves."""
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from augment.board import Board
+from augment.gl import Renderer
+from augment.synth import CEILING, FLOOR, render_sample, write_sample
+from augment.synth.__main__ import main as synth_main
+from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, ROLL_DEG, look_pose,
+                                  random_shot)
+from augment.synth.rooms import ROOM_SIDE_M, WALL_HEIGHT_M, random_room
+from augment.synth.truth import polygon_mask, project_floor_polygon
+
+SEEDS = range(6)
+
+
+@pytest.fixture(scope="module")
+def renderer():
+    with Renderer() as r:
+        yield r
+
+
+@pytest.fixture(scope="module")
+def samples(renderer):
+    return [render_sample(seed, renderer, size_px=(640, 480)) for seed in SEEDS]
+
+
+def _unproject(sample, mask):
+    """World points (k, 3) of the pixels in ``mask``, from the rendered depth."""
+    K = np.array(sample.truth["K"])
+    world_from_camera = np.linalg.inv(np.array(sample.truth["camera_from_world"]))
+    v, u = np.nonzero(mask & (sample.depth_m > 0))
+    z = sample.depth_m[v, u].astype(np.float64)
+    cam = np.column_stack([(u - K[0, 2]) / K[0, 0] * z, (v - K[1, 2]) / K[1, 1] * z, z])
+    return cam @ world_from_camera[:3, :3].T + world_from_camera[:3, 3]
+
+
+def test_board_corners_reproject_onto_detected_corners(samples, tmp_path):
+    """Corners projected with the true K and pose land on OpenCV's detections in the
+    written JPEG (< 0.5 px), with no systematic offset (a half-pixel convention slip
+    would show as a bias of 0.5 px). Detections are refined with cornerSubPix, as the
+    calibration does: the SB detector alone is off by up to 0.5 px on 9 px squares."""
+    detected = 0
+    offsets = []
+    for k, sample in enumerate(samples):
+        paths = write_sample(sample, tmp_path, f"{k:05d}")
+        gray = cv2.imread(str(paths["image"]), cv2.IMREAD_GRAYSCALE)
+        cols, rows = sample.truth["board"]["inner_corners"]
+        found, corners = cv2.findChessboardCornersSB(gray, (cols, rows), flags=cv2.CALIB_CB_ACCURACY)
+        if not found:
+            continue
+        detected += 1
+        truth_px = np.array(sample.truth["board"]["corners_px"])
+        step_px = np.linalg.norm(np.diff(truth_px.reshape(rows, cols, 2), axis=1), axis=-1).min()
+        half = int(np.clip(0.4 * step_px, 2, 8))
+        corners = cv2.cornerSubPix(gray, corners.reshape(-1, 1, 2).astype(np.float32), (half, half), (-1, -1),
+                                   (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-3)).reshape(-1, 2)
+        assert all(sample.truth["board"]["corners_visible"])
+        d = corners[:, None, :] - truth_px[None]
+        nearest = np.argmin(np.linalg.norm(d, axis=-1), axis=1)
+        assert len(set(nearest)) == cols * rows  # one-to-one
+        err = corners - truth_px[nearest]
+        assert np.linalg.norm(err, axis=1).max() < 0.5, (k, np.linalg.norm(err, axis=1).max())
+        offsets.append(err.mean(axis=0))
+    assert detected >= 4, f"board found in only {detected} of {len(samples)} renders"
+    assert np.abs(np.mean(offsets, axis=0)).max() < 0.1
+
+
+def test_floor_mask_matches_the_reprojected_floor_polygon(renderer):
+    """Without clutter, the rendered floor is the floor polygon seen through K and the
+    pose, less thin baseboards and door casings along the walls."""
+    for seed in (10, 11, 12):
+        sample = render_sample(seed, renderer, size_px=(640, 480), clutter=False, photographic=False)
+        t = sample.truth
+        poly_px = project_floor_polygon(np.array(t["room"]["polygon_m"]), np.array(t["K"]),
+                                        np.array(t["camera_from_world"]))
+        expected = polygon_mask(poly_px, tuple(t["size_px"]))
+        iou = (expected & sample.floor_mask).sum() / (expected | sample.floor_mask).sum()
+        assert iou > 0.97, (seed, iou)
+        # Floor pixels outside the polygon are only anti-aliasing slivers at its edge.
+        assert (sample.floor_mask & ~expected).sum() < 0.002 * expected.sum()
+
+
+def test_board_pixels_count_as_floor(samples):
+    for sample in samples:
+        b = sample.truth["board"]
+        pose = np.array(b["world_from_board"])
+        board = Board(*b["inner_corners"], b["square_mm"], b["margin_mm"])
+        outline = board.outline_m() @ pose[:3, :3].T + pose[:3, 3]
+        K, cfw = np.array(sample.truth["K"]), np.array(sample.truth["camera_from_world"])
+        inside = polygon_mask(project_floor_polygon(outline[:, :2], K, cfw), tuple(sample.truth["size_px"]))
+        assert sample.floor_mask[inside].mean() > 0.98
+
+
+def test_wall_height_seen_in_the_image_agrees(samples):
+    """Ceiling pixels lie at the recorded wall height, floor pixels at zero."""
+    for sample in samples:
+        height = sample.truth["room"]["height_m"]
+        ceiling = _unproject(sample, sample.labels == CEILING)
+        floor = _unproject(sample, sample.labels == FLOOR)
+        assert len(floor) > 1000
+        assert np.median(np.abs(floor[:, 2])) < 0.005
+        if len(ceiling) > 200:
+            assert np.median(np.abs(ceiling[:, 2] - height)) < 0.01
+
+
+def test_same_seed_same_photo_and_truth(renderer):
+    a = render_sample(3, renderer, size_px=(320, 240))
+    b = render_sample(3, renderer, size_px=(320, 240))
+    c = render_sample(4, renderer, size_px=(320, 240))
+    assert np.array_equal(a.image, b.image) and a.truth == b.truth
+    assert not np.array_equal(a.image, c.image)
+
+
+def test_rooms_and_cameras_stay_in_their_ranges():
+    for seed in range(60):
+        rng = np.random.default_rng(seed)
+        room = random_room(rng)
+        extent = room.polygon_m.max(axis=0) - room.polygon_m.min(axis=0)
+        assert ROOM_SIDE_M[0] <= extent.min() and extent.max() <= ROOM_SIDE_M[1]
+        assert WALL_HEIGHT_M[0] <= room.height_m <= WALL_HEIGHT_M[1]
+        for o in room.openings:
+            assert 0 <= o.bottom_m < o.top_m < room.height_m
+        shot = random_shot(rng, room, (640, 480))
+        R, t = shot.world_from_camera[:3, :3], shot.world_from_camera[:3, 3]
+        assert np.allclose(R.T @ R, np.eye(3)) and np.isclose(np.linalg.det(R), 1.0)
+        assert CAMERA_HEIGHT_M[0] <= t[2] <= CAMERA_HEIGHT_M[1]
+        pitch = np.degrees(np.arcsin(-R[2, 2]))
+        assert PITCH_DOWN_DEG[0] - 1e-9 <= pitch <= PITCH_DOWN_DEG[1] + 1e-9
+        hfov = np.degrees(2 * np.arctan(320 / shot.K[0, 0]))
+        assert HFOV_DEG[0] - 1e-9 <= hfov <= HFOV_DEG[1] + 1e-9
+
+
+def test_look_pose_by_hand():
+    # Level camera at 1 m looking along +y with a 3 degree roll: forward is +y, and the
+    # image x axis dips by 3 degrees.
+    pose = look_pose([0.0, 0.0, 1.0], np.pi / 2, 0.0, np.radians(3))
+    assert np.allclose(pose[:3, 2], [0, 1, 0])
+    assert np.isclose(abs(np.degrees(np.arcsin(pose[2, 0]))), 3.0)
+    # 30 degrees down, no roll: the image x axis stays level and y points down-forward.
+    pose = look_pose([0.0, 0.0, 1.5], 0.0, np.radians(30), 0.0)
+    assert np.allclose(pose[:3, 0], [0, -1, 0])
+    assert np.allclose(pose[:3, 2], [np.cos(np.pi / 6), 0, -0.5])
+    assert pose[2, 1] < 0
+
+
+def test_project_floor_polygon_by_hand():
+    """A level camera 1 m up at the origin, looking along +x, f = 100 px, c = (50, 50):
+    the floor point (4, -1) is 1 m right of and 1 m below the axis at 4 m depth, so at
+    (75, 75); the part of the rectangle behind the camera is clipped away."""
+    K = np.array([[100.0, 0, 50], [0, 100.0, 50], [0, 0, 1]])
+    camera_from_world = np.linalg.inv(look_pose([0.0, 0.0, 1.0], 0.0, 0.0, 0.0))
+    rectangle = np.array([[-1.0, -1.0], [4.0, -1.0], [4.0, 1.0], [-1.0, 1.0]])
+    px = project_floor_polygon(rectangle, K, camera_from_world)
+    assert np.isfinite(px).all() and len(px) == 4
+    assert np.allclose(px[1], [75.0, 75.0]) and np.allclose(px[2], [25.0, 75.0])
+    # The clipped edge lies at 1 cm depth: far below the image.
+    assert (px[[0, 3], 1] > 1000).all()
+    mask = polygon_mask(px, (100, 100))
+    assert mask[80:, 30:70].all() and not mask[:75].any()
+
+
+def test_board_geometry():
+    board = Board(7, 5, 50)
+    corners = board.corners_m()
+    assert corners.shape == (35, 3)
+    assert np.allclose(corners[1] - corners[0], [0.05, 0, 0]) and np.allclose(corners[7] - corners[0], [0, 0.05, 0])
+    assert np.allclose(corners.mean(axis=0), 0)
+    assert np.allclose(board.size_m, (0.5, 0.4))
+    image = board.image(px_per_square=10)
+    assert image.shape == (6 * 10 + 20, 8 * 10 + 20)
+    assert image[0].min() == 255 and image[10, 10] == 0 and image[10, 20] == 255
+    with pytest.raises(ValueError, match="inner corners"):
+        Board(1, 5, 50)
+
+
+def test_cli_writes_a_dataset_and_a_contact_sheet(tmp_path, capsys):
+    out = tmp_path / "ds"
+    sheet = tmp_path / "sheet.png"
+    code = synth_main(["--count", "3", "--seed", "5", "--out", str(out), "--size", "160x120",
+                       "--workers", "1", "--sheet", str(sheet), "--quiet"])
+    assert code == 0 and capsys.readouterr().out == ""
+    for i in range(3):
+        truth = json.loads((out / f"{i:05d}.json").read_text())
+        assert truth["size_px"] == [160, 120] and truth["seed"] == [5, i]
+        image = cv2.imread(str(out / truth["image"]))
+        mask = cv2.imread(str(out / truth["floor_mask"]), cv2.IMREAD_GRAYSCALE)
+        assert image.shape == (120, 160, 3) and mask.shape == (120, 160)
+        assert set(np.unique(mask)) <= {0, 255} and (mask == 255).any()
+    assert cv2.imread(str(sheet)).shape[0] > 100
+    assert not list(out.glob(".*tmp"))  # atomic writes leave no temporaries
+
+
+def test_cli_rejects_bad_arguments(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        synth_main(["--count", "2", "--out", str(tmp_path), "--size", "640by480"])
+    assert exit_info.value.code == 2
+    assert "--size '640by480'" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        synth_main(["--count", "0", "--out", str(tmp_path)])
+    assert "--count 0" in capsys.readouterr().err
