@@ -21,7 +21,7 @@ from layout.fileio import write_atomic
 
 from ..board import Board
 from ..gl import Renderer, pyrender
-from .camera import Shot, place_board, random_shot, random_size
+from .camera import Shot, place_board, random_handling, random_shot, random_size
 from .photo import degrade
 from .rooms import Room, add_clutter, random_room
 from .scene import SEG_CEILING, SEG_FLOOR, SEG_WALL, build_scene
@@ -90,10 +90,18 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     board = Board() if board is None else board
     rng = np.random.default_rng(seed)
     size_px = random_size(rng) if size_px is None else (int(size_px[0]), int(size_px[1]))
-    for _ in range(100):
-        room = random_room(rng)
-        shot = random_shot(rng, room, size_px)
-        world_from_board = place_board(rng, room, shot, board)
+    # The phone's handling is drawn once, so pitch, height and lens keep their stated
+    # distributions; rooms and standpoints are redrawn until the board lies in view.
+    # Only a handling that never shows a board (rare: nearly level and narrow) is redrawn.
+    world_from_board = None
+    for _ in range(20):
+        handling = random_handling(rng, size_px)
+        for _ in range(30):
+            room = random_room(rng)
+            shot = random_shot(rng, room, handling)
+            world_from_board = place_board(rng, room, shot, board)
+            if world_from_board is not None:
+                break
         if world_from_board is not None:
             break
     else:

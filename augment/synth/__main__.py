@@ -23,7 +23,7 @@ from tqdm import tqdm
 from layout.fileio import write_atomic
 
 from ..board import DEFAULT_INNER_CORNERS, DEFAULT_SQUARE_MM, Board
-from .dataset import contact_sheet, init_worker, render_one
+from .dataset import contact_sheet, init_worker, render_one, truth_view
 
 def _parse_size(text: str) -> tuple[int, int]:
     try:
@@ -61,7 +61,8 @@ def main(argv=None) -> int:
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="render processes (default: one per core)")
     parser.add_argument("--sheet", type=Path, default=None,
-                        help="also write a contact sheet PNG of the first 16 images here")
+                        help="also write a contact sheet PNG of the first 16 images here, and beside it "
+                             "NAME_truth.png with their floor masks and board corners drawn on")
     parser.add_argument("--quiet", action="store_true", help="print only errors")
     args = parser.parse_args(argv)
     if args.count < 1:
@@ -95,10 +96,13 @@ def main(argv=None) -> int:
     bar.close()
     seconds = time.perf_counter() - start
     if args.sheet is not None:
-        images = [cv2.imread(str(args.out / f"{i:05d}.jpg")) for i in range(min(16, args.count))]
-        ok, png = cv2.imencode(".png", contact_sheet(images))
+        stems = [f"{i:05d}" for i in range(min(16, args.count))]
         args.sheet.parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(args.sheet, png.tobytes())
+        truth_path = args.sheet.with_name(args.sheet.stem + "_truth.png")
+        for path, images in ((args.sheet, [cv2.imread(str(args.out / f"{s}.jpg")) for s in stems]),
+                             (truth_path, [truth_view(args.out, s) for s in stems])):
+            ok, png = cv2.imencode(".png", contact_sheet(images))
+            write_atomic(path, png.tobytes())
     if not args.quiet:
         print(f"wrote {args.count} images to {args.out}/ in {seconds:.1f} s "
               f"({args.count / seconds:.1f} images/s, {workers} worker{'s' if workers > 1 else ''})"

@@ -18,6 +18,7 @@ HFOV_DEG = (50.0, 80.0)
 # Landscape sizes of phone photos (4:3 and 16:9); portrait swaps them.
 IMAGE_SIZES_PX = ((640, 480), (800, 600), (1024, 768), (1280, 720), (1280, 960),
                   (1600, 1200), (1920, 1080), (2016, 1512))
+MIN_SQUARE_PX = 6.0
 # Paper lies on the floor; rendering it this high keeps it from fighting with the floor's depth.
 BOARD_LIFT_M = 0.001
 
@@ -92,10 +93,28 @@ def _camera_position(rng, room: Room):
     raise RuntimeError("no camera position inside the room")  # a 2.5 m room always has one
 
 
-def random_shot(rng: np.random.Generator, room: Room, size_px: tuple[int, int]) -> Shot:
-    """A hand-held camera inside ``room``, looking into it."""
+@dataclass(frozen=True)
+class Handling:
+    """How the photographer holds the phone: everything but where they stand and aim."""
+
+    K: np.ndarray
+    size_px: tuple[int, int]
+    height_m: float
+    pitch_down_rad: float
+    roll_rad: float
+
+
+def random_handling(rng: np.random.Generator, size_px: tuple[int, int]) -> Handling:
+    """Lens (horizontal FOV 50-80 degrees), height 1.0-1.8 m, pitch 5-40 degrees down,
+    roll within 5 degrees, all uniform."""
     width, height = size_px
-    K = camera_matrix(width, height, np.radians(rng.uniform(*HFOV_DEG)))
+    return Handling(camera_matrix(width, height, np.radians(rng.uniform(*HFOV_DEG))), (width, height),
+                    float(rng.uniform(*CAMERA_HEIGHT_M)), float(np.radians(rng.uniform(*PITCH_DOWN_DEG))),
+                    float(np.radians(rng.uniform(*ROLL_DEG))))
+
+
+def random_shot(rng: np.random.Generator, room: Room, handling: Handling) -> Shot:
+    """Stand somewhere inside ``room`` and aim across it, holding the phone as ``handling``."""
     xy = _camera_position(rng, room)
     # Photographers aim across the room, not at the nearest wall.
     lo, hi = room.polygon_m.min(axis=0), room.polygon_m.max(axis=0)
@@ -106,9 +125,8 @@ def random_shot(rng: np.random.Generator, room: Room, size_px: tuple[int, int]) 
             target = t
             break
     yaw = np.arctan2(*(target - xy)[::-1]) + np.radians(rng.normal(0, 15))
-    pose = look_pose([xy[0], xy[1], rng.uniform(*CAMERA_HEIGHT_M)], yaw,
-                     np.radians(rng.uniform(*PITCH_DOWN_DEG)), np.radians(rng.uniform(*ROLL_DEG)))
-    return Shot(K, pose, (width, height))
+    pose = look_pose([xy[0], xy[1], handling.height_m], yaw, handling.pitch_down_rad, handling.roll_rad)
+    return Shot(handling.K, pose, handling.size_px)
 
 
 def place_board(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
@@ -118,12 +136,14 @@ def place_board(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     """
     width, height = shot.size_px
     margin_px = max(8.0, 0.03 * max(width, height))
-    min_step_px = 0.012 * max(width, height)
+    # Squares smaller than this (along their foreshortened side) defeat corner detectors;
+    # small training frames only need the board visible.
+    min_step_px = MIN_SQUARE_PX if max(width, height) >= 640 else MIN_SQUARE_PX / 2
     R, origin = shot.world_from_camera[:3, :3], shot.world_from_camera[:3, 3]
     K_inv = np.linalg.inv(shot.K)
     corners = board.corners_m()
     for _ in range(tries):
-        uv = rng.uniform([0.2 * width, 0.45 * height], [0.8 * width, 0.92 * height])
+        uv = rng.uniform([0.15 * width, 0.4 * height], [0.85 * width, 0.94 * height])
         ray = R @ (K_inv @ [uv[0], uv[1], 1.0])
         if ray[2] > -1e-3:
             continue

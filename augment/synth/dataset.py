@@ -29,7 +29,7 @@ def render_one(index: int) -> tuple[int, dict]:
     return index, {k: str(v) for k, v in paths.items()}
 
 
-def contact_sheet(images: list[np.ndarray], columns: int = 4, cell_px: tuple[int, int] = (400, 300)) -> np.ndarray:
+def contact_sheet(images: list[np.ndarray], columns: int = 4, cell_px: tuple[int, int] = (320, 240)) -> np.ndarray:
     """Tile images (any sizes and orientations) into a grid, each fitted into its cell.
 
     Returns
@@ -49,3 +49,18 @@ def contact_sheet(images: list[np.ndarray], columns: int = 4, cell_px: tuple[int
         x = gap + c * (cw + gap) + (cw - small.shape[1]) // 2
         sheet[y:y + small.shape[0], x:x + small.shape[1]] = small
     return sheet
+
+
+def truth_view(folder, stem: str) -> np.ndarray:
+    """A written sample's photo with its floor mask tinted and board corners marked (BGR)."""
+    import json
+    from pathlib import Path
+
+    from .truth import overlay
+
+    folder = Path(folder)
+    truth = json.loads((folder / f"{stem}.json").read_text())
+    photo = cv2.imread(str(folder / truth["image"]))
+    mask = cv2.imread(str(folder / truth["floor_mask"]), cv2.IMREAD_GRAYSCALE) > 127
+    corners = np.array(truth["board"]["corners_px"])[np.array(truth["board"]["corners_visible"])]
+    return overlay(photo[..., ::-1], mask, corners)[..., ::-1]

@@ -12,7 +12,7 @@ from augment.gl import Renderer
 from augment.synth import CEILING, FLOOR, render_sample, write_sample
 from augment.synth.__main__ import main as synth_main
 from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, ROLL_DEG, look_pose,
-                                  random_shot)
+                                  random_handling, random_shot)
 from augment.synth.rooms import ROOM_SIDE_M, WALL_HEIGHT_M, random_room
 from augment.synth.truth import polygon_mask, project_floor_polygon
 
@@ -27,7 +27,7 @@ def renderer():
 
 @pytest.fixture(scope="module")
 def samples(renderer):
-    return [render_sample(seed, renderer, size_px=(640, 480)) for seed in SEEDS]
+    return [render_sample(seed, renderer, size_px=(1280, 960)) for seed in SEEDS]
 
 
 def _unproject(sample, mask):
@@ -44,7 +44,8 @@ def test_board_corners_reproject_onto_detected_corners(samples, tmp_path):
     """Corners projected with the true K and pose land on OpenCV's detections in the
     written JPEG (< 0.5 px), with no systematic offset (a half-pixel convention slip
     would show as a bias of 0.5 px). Detections are refined with cornerSubPix, as the
-    calibration does: the SB detector alone is off by up to 0.5 px on 9 px squares."""
+    calibration does: the SB detector alone is off by up to 0.5 px on 9 px squares.
+    Measured at 1280 x 960: median 0.03-0.1 px, worst corner 0.45 px, mean offset 0.02 px."""
     detected = 0
     offsets = []
     for k, sample in enumerate(samples):
@@ -73,17 +74,25 @@ def test_board_corners_reproject_onto_detected_corners(samples, tmp_path):
 
 def test_floor_mask_matches_the_reprojected_floor_polygon(renderer):
     """Without clutter, the rendered floor is the floor polygon seen through K and the
-    pose, less thin baseboards and door casings along the walls."""
-    for seed in (10, 11, 12):
+    pose, less thin baseboards and door casings along the walls. In L- and U-shaped
+    rooms a wall can hide part of the floor, so the full match is checked on rectangles
+    and containment on every room."""
+    rectangles = 0
+    for seed in range(10, 30):
         sample = render_sample(seed, renderer, size_px=(640, 480), clutter=False, photographic=False)
         t = sample.truth
-        poly_px = project_floor_polygon(np.array(t["room"]["polygon_m"]), np.array(t["K"]),
-                                        np.array(t["camera_from_world"]))
+        polygon = np.array(t["room"]["polygon_m"])
+        poly_px = project_floor_polygon(polygon, np.array(t["K"]), np.array(t["camera_from_world"]))
         expected = polygon_mask(poly_px, tuple(t["size_px"]))
-        iou = (expected & sample.floor_mask).sum() / (expected | sample.floor_mask).sum()
-        assert iou > 0.97, (seed, iou)
         # Floor pixels outside the polygon are only anti-aliasing slivers at its edge.
-        assert (sample.floor_mask & ~expected).sum() < 0.002 * expected.sum()
+        assert (sample.floor_mask & ~expected).sum() < 0.002 * expected.sum(), seed
+        if len(polygon) == 4:
+            rectangles += 1
+            iou = (expected & sample.floor_mask).sum() / (expected | sample.floor_mask).sum()
+            assert iou > 0.97, (seed, iou)
+            if rectangles == 3:
+                break
+    assert rectangles == 3
 
 
 def test_board_pixels_count_as_floor(samples):
@@ -97,16 +106,23 @@ def test_board_pixels_count_as_floor(samples):
         assert sample.floor_mask[inside].mean() > 0.98
 
 
-def test_wall_height_seen_in_the_image_agrees(samples):
+def test_wall_height_seen_in_the_image_agrees(samples, renderer):
     """Ceiling pixels lie at the recorded wall height, floor pixels at zero."""
     for sample in samples:
-        height = sample.truth["room"]["height_m"]
-        ceiling = _unproject(sample, sample.labels == CEILING)
         floor = _unproject(sample, sample.labels == FLOOR)
         assert len(floor) > 1000
         assert np.median(np.abs(floor[:, 2])) < 0.005
-        if len(ceiling) > 200:
-            assert np.median(np.abs(ceiling[:, 2] - height)) < 0.01
+    # The ceiling shows in about one photo in six (the phone tilts 5-40 degrees down).
+    with_ceiling = 0
+    for seed in range(40):
+        sample = render_sample(seed, renderer, size_px=(320, 240), clutter=False, photographic=False)
+        ceiling = _unproject(sample, sample.labels == CEILING)
+        if len(ceiling) > 100:
+            with_ceiling += 1
+            assert np.median(np.abs(ceiling[:, 2] - sample.truth["room"]["height_m"])) < 0.01
+            if with_ceiling == 3:
+                break
+    assert with_ceiling == 3
 
 
 def test_same_seed_same_photo_and_truth(renderer):
@@ -126,7 +142,7 @@ def test_rooms_and_cameras_stay_in_their_ranges():
         assert WALL_HEIGHT_M[0] <= room.height_m <= WALL_HEIGHT_M[1]
         for o in room.openings:
             assert 0 <= o.bottom_m < o.top_m < room.height_m
-        shot = random_shot(rng, room, (640, 480))
+        shot = random_shot(rng, room, random_handling(rng, (640, 480)))
         R, t = shot.world_from_camera[:3, :3], shot.world_from_camera[:3, 3]
         assert np.allclose(R.T @ R, np.eye(3)) and np.isclose(np.linalg.det(R), 1.0)
         assert CAMERA_HEIGHT_M[0] <= t[2] <= CAMERA_HEIGHT_M[1]
@@ -192,7 +208,9 @@ def test_cli_writes_a_dataset_and_a_contact_sheet(tmp_path, capsys):
         mask = cv2.imread(str(out / truth["floor_mask"]), cv2.IMREAD_GRAYSCALE)
         assert image.shape == (120, 160, 3) and mask.shape == (120, 160)
         assert set(np.unique(mask)) <= {0, 255} and (mask == 255).any()
-    assert cv2.imread(str(sheet)).shape[0] > 100
+    photos, truths = cv2.imread(str(sheet)), cv2.imread(str(tmp_path / "sheet_truth.png"))
+    assert photos.shape == truths.shape and photos.shape[0] > 100
+    assert not np.array_equal(photos, truths)  # the floor is tinted
     assert not list(out.glob(".*tmp"))  # atomic writes leave no temporaries
 
 

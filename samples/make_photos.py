@@ -1,0 +1,35 @@
+"""Write samples/photos/: four synthetic room photos with their ground truth.
+
+Rendered by the synthetic photographer (``augment.synth``) until real sample photos are
+added: image K is seed ``[2026, INDEX]`` at 1280 x 960 with the default 7x5 board of
+50 mm squares, picked from ``python -m augment.synth --count 16 --seed 2026 --size
+1280x960`` because they look like real phone photos and differ: carpet with a door, a
+window and a carton; wood under a window; sunlit tiles with window shadows across the
+board; an L-shaped room with clutter.
+
+Run ``python samples/make_photos.py`` to regenerate them.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from augment.gl import Renderer
+from augment.synth import render_sample, write_sample
+
+SEED = 2026
+PICKS = (10, 5, 14, 0)
+SIZE_PX = (1280, 960)
+
+
+def main() -> None:
+    out = Path(__file__).resolve().parent / "photos"
+    out.mkdir(exist_ok=True)
+    with Renderer() as renderer:
+        for k, index in enumerate(PICKS, start=1):
+            sample = render_sample([SEED, index], renderer, size_px=SIZE_PX)
+            paths = write_sample(sample, out, f"room_{k}")
+            print(paths["image"])
+
+
+if __name__ == "__main__":
+    main()
