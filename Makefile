@@ -32,7 +32,10 @@ test: setup
 
 demo: setup
 	$(VENV)/bin/layout solve samples/living_room.toml --suggestions 4 --seed 0 --out out/demo
+	$(PY) -m augment.synth --count 4 --seed 2026 --size 640x480 --out out/demo/photos --sheet out/demo/photos.png --quiet
 	@echo "plans written to $(CURDIR)/out/demo (plan_1.png ... plan_4.png, layout_K.json)"
+	@echo "synthetic room photos with ground truth in $(CURDIR)/out/demo/photos (contact sheets photos.png, photos_truth.png)"
+	@echo "sample photos for the image stage: $(CURDIR)/samples/photos/room_1.jpg ... room_4.jpg"
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

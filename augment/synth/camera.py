@@ -139,29 +139,29 @@ def place_board(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     # Squares smaller than this (along their foreshortened side) defeat corner detectors;
     # small training frames only need the board visible.
     min_step_px = MIN_SQUARE_PX if max(width, height) >= 640 else MIN_SQUARE_PX / 2
+    # All candidates at once, tested in order: the first that passes every test wins.
+    uv = rng.uniform([0.15 * width, 0.4 * height], [0.85 * width, 0.94 * height], size=(tries, 2))
+    yaw = rng.uniform(0, 2 * np.pi, size=tries)
     R, origin = shot.world_from_camera[:3, :3], shot.world_from_camera[:3, 3]
-    K_inv = np.linalg.inv(shot.K)
+    rays = np.column_stack([uv, np.ones(tries)]) @ np.linalg.inv(shot.K).T @ R.T
+    down = rays[:, 2] < -1e-3
+    centers = origin + rays * (-origin[2] / np.where(down, rays[:, 2], -1.0))[:, None]
+    ok = down & (np.linalg.norm(centers[:, :2] - origin[:2], axis=1) <= 4.5)
+    c, s_ = np.cos(yaw), np.sin(yaw)
+    rot = np.stack([np.stack([c, -s_], -1), np.stack([s_, c], -1)], -2)  # (tries, 2, 2)
+    outline = np.einsum("tij,kj->tki", rot, board.outline_m()[:, :2]) + centers[:, None, :2]
+    ok &= contains(room.polygon_m, outline.reshape(-1, 2), margin_m=0.05).reshape(tries, 4).all(axis=1)
+    lifted = np.concatenate([outline, np.full((tries, 4, 1), BOARD_LIFT_M)], axis=2)
+    px, depth = shot.project(lifted.reshape(-1, 3))
+    px, depth = px.reshape(tries, 4, 2), depth.reshape(tries, 4)
+    ok &= (depth > 0.2).all(axis=1) & (px >= margin_px).all(axis=(1, 2)) \
+        & (px[..., 0] <= width - 1 - margin_px).all(axis=1) & (px[..., 1] <= height - 1 - margin_px).all(axis=1)
     corners = board.corners_m()
-    for _ in range(tries):
-        uv = rng.uniform([0.15 * width, 0.4 * height], [0.85 * width, 0.94 * height])
-        ray = R @ (K_inv @ [uv[0], uv[1], 1.0])
-        if ray[2] > -1e-3:
-            continue
-        center = origin + ray * (-origin[2] / ray[2])
-        if np.linalg.norm(center[:2] - origin[:2]) > 4.5:
-            continue
-        pose = board_pose(center, rng.uniform(0, 2 * np.pi))
-        outline = board.outline_m() @ pose[:3, :3].T + pose[:3, 3]
-        if not contains(room.polygon_m, outline[:, :2], margin_m=0.05).all():
-            continue
-        px, depth = shot.project(outline)
-        if (depth <= 0.2).any() or (px < margin_px).any() or (px[:, 0] > width - 1 - margin_px).any() \
-                or (px[:, 1] > height - 1 - margin_px).any():
-            continue
+    for t in np.flatnonzero(ok):
+        pose = board_pose(centers[t], yaw[t])
         grid = shot.project(corners @ pose[:3, :3].T + pose[:3, 3])[0].reshape(board.rows, board.cols, 2)
         step = min(np.linalg.norm(np.diff(grid, axis=0), axis=-1).min(),
                    np.linalg.norm(np.diff(grid, axis=1), axis=-1).min())
-        if step < min_step_px:
-            continue
-        return pose
+        if step >= min_step_px:
+            return pose
     return None

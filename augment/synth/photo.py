@@ -8,6 +8,10 @@ import numpy as np
 from .scene import kelvin_rgb
 
 
+# sRGB-ish gamma 2.2 to linear, for every 8-bit value.
+_TO_LINEAR = ((np.arange(256, dtype=np.float32) / 255.0) ** 2.2).astype(np.float32)
+
+
 def degrade(rng: np.random.Generator, image: np.ndarray) -> tuple[np.ndarray, dict]:
     """Apply random photographic degradations.
 
@@ -23,18 +27,19 @@ def degrade(rng: np.random.Generator, image: np.ndarray) -> tuple[np.ndarray, di
         What was applied, JSON-ready; ``jpeg_quality`` is for the writer.
     """
     h, w = image.shape[:2]
-    linear = (image.astype(np.float32) / 255.0) ** 2.2
+    linear = _TO_LINEAR[image]
     exposure_ev = float(np.clip(rng.normal(0.0, 0.3), -0.7, 0.7))
     # Auto white balance that missed: the illuminant it assumed vs 6500 K, plus a green tint.
     assumed_k = float(rng.uniform(4800, 8500))
     gains = kelvin_rgb(6500) / kelvin_rgb(assumed_k)
     gains = gains / gains[1] * np.array([1.0, 1.0 + rng.normal(0, 0.02), 1.0])
     vignetting = float(rng.uniform(0.0, 0.35))
-    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
-    r2 = ((xx - (w - 1) / 2) ** 2 + (yy - (h - 1) / 2) ** 2) / ((w / 2) ** 2 + (h / 2) ** 2)
-    scale = (2.0 ** exposure_ev) * (1.0 - vignetting * r2)
-    linear = linear * scale[..., None] * gains.astype(np.float32)
-    out = np.clip(linear, 0, 1) ** (1 / 2.2)
+    x2 = ((np.arange(w, dtype=np.float32) - (w - 1) / 2) ** 2)[None, :]
+    y2 = ((np.arange(h, dtype=np.float32) - (h - 1) / 2) ** 2)[:, None]
+    scale = np.float32(2.0 ** exposure_ev) * (1.0 - np.float32(vignetting / ((w / 2) ** 2 + (h / 2) ** 2)) * (x2 + y2))
+    linear *= scale[..., None]
+    linear *= gains.astype(np.float32)
+    out = cv2.pow(np.clip(linear, 0, 1, out=linear), 1 / 2.2)
 
     blur_sigma_px = float(rng.uniform(0.0, 1.0)) * max(1.0, max(h, w) / 1000)
     if blur_sigma_px > 0.3:

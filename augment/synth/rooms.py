@@ -111,7 +111,7 @@ def random_polygon(rng: np.random.Generator) -> np.ndarray:
         poly = np.array([[0, 0], [w, 0], [w, d - nd], [w - nw, d - nd], [w - nw, d], [0, d]])
     elif shape == "U" and w >= 3.5:
         # A notch in the middle of the far wall, leaving two arms at least 1 m wide.
-        nw = rng.uniform(0.25, 0.45) * w
+        nw = rng.uniform(0.25 * w, min(0.45 * w, w - 2.2))
         x0 = rng.uniform(1.0, w - 1.0 - nw)
         nd = d * rng.uniform(0.25, 0.5)
         poly = np.array([[0, 0], [w, 0], [w, d], [x0 + nw, d], [x0 + nw, d - nd],

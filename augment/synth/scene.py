@@ -197,7 +197,9 @@ class Scene:
     info: dict
 
 
-def _walls(room: Room, batch: _Batch, reveal: _Batch, tile_m: float):
+def _walls(room: Room, batch: _Batch, tile_m: float):
+    """Wall quads with the openings cut out, and each opening's reveal (its sides, head
+    and sill through the wall's thickness)."""
     poly, height = room.polygon_m, room.height_m
     for wall in range(len(poly)):
         a, b = wall_ends(poly, wall)
@@ -222,11 +224,11 @@ def _walls(room: Room, batch: _Batch, reveal: _Batch, tile_m: float):
         t = WALL_THICKNESS_M
         for o in ops:
             s0, s1, z0, z1 = o.start_m, o.end_m, o.bottom_m, o.top_m
-            reveal.quad([point(s0, z0), point(s0, z1), point(s0, z1, t), point(s0, z0, t)], u)
-            reveal.quad([point(s1, z0), point(s1, z1), point(s1, z1, t), point(s1, z0, t)], -u)
-            reveal.quad([point(s0, z1), point(s1, z1), point(s1, z1, t), point(s0, z1, t)], -np.array([0, 0, 1.0]))
+            batch.quad([point(s0, z0), point(s0, z1), point(s0, z1, t), point(s0, z0, t)], u)
+            batch.quad([point(s1, z0), point(s1, z1), point(s1, z1, t), point(s1, z0, t)], -u)
+            batch.quad([point(s0, z1), point(s1, z1), point(s1, z1, t), point(s0, z1, t)], -np.array([0, 0, 1.0]))
             if z0 > 0:
-                reveal.quad([point(s0, z0), point(s1, z0), point(s1, z0, t), point(s0, z0, t)], np.array([0, 0, 1.0]))
+                batch.quad([point(s0, z0), point(s1, z0), point(s1, z0, t), point(s0, z0, t)], np.array([0, 0, 1.0]))
 
 
 def _openings(rng, room: Room, frames: _Batch, doors: _Batch, baseboards: _Batch):
@@ -353,11 +355,9 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
 
     # Walls and ceiling
     wall_img, wall_tile = textures.wall_texture(_own(rng), max(64, texture_px // 2))
-    walls, reveal = _Batch(), _Batch()
-    _walls(room, walls, reveal, wall_tile)
-    wall_material = _material(rng, np.ones(3), wall_img, roughness=(0.7, 1.0))
-    add(walls.mesh(wall_material), SEG_WALL)
-    add(reveal.mesh(wall_material), SEG_WALL)
+    walls = _Batch()
+    _walls(room, walls, wall_tile)
+    add(walls.mesh(_material(rng, np.ones(3), wall_img, roughness=(0.7, 1.0))), SEG_WALL)
     ceil_img, ceil_tile = textures.ceiling_texture(_own(rng), 64)
     ceiling = _Batch()
     ceiling.polygon(poly, room.height_m, False, lambda xy: xy / ceil_tile)

@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 
 from augment.board import Board
+from layout.geometry import self_intersection
 from augment.gl import Renderer
 from augment.synth import CEILING, FLOOR, render_sample, write_sample
 from augment.synth.__main__ import main as synth_main
 from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, ROLL_DEG, look_pose,
                                   random_handling, random_shot)
-from augment.synth.rooms import ROOM_SIDE_M, WALL_HEIGHT_M, random_room
+from augment.synth.rooms import ROOM_SIDE_M, WALL_HEIGHT_M, random_polygon, random_room
 from augment.synth.truth import polygon_mask, project_floor_polygon
 
 SEEDS = range(6)
@@ -131,6 +132,19 @@ def test_same_seed_same_photo_and_truth(renderer):
     c = render_sample(4, renderer, size_px=(320, 240))
     assert np.array_equal(a.image, b.image) and a.truth == b.truth
     assert not np.array_equal(a.image, c.image)
+
+
+def test_floor_polygons_are_simple_and_counter_clockwise():
+    shapes = set()
+    for seed in range(2000):
+        poly = random_polygon(np.random.default_rng(seed))
+        shapes.add(len(poly))
+        x, y = poly[:, 0], poly[:, 1]
+        assert 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) > 2.5 ** 2 * 0.4  # CCW, not a sliver
+        assert self_intersection(poly) is None
+        # Every wall at least 0.5 m long, so doors and windows have room.
+        assert np.linalg.norm(np.roll(poly, -1, axis=0) - poly, axis=1).min() > 0.5
+    assert shapes == {4, 6, 8}  # rectangles, L and U shapes all occur
 
 
 def test_rooms_and_cameras_stay_in_their_ranges():
