@@ -172,6 +172,12 @@ class Renderer:
             ) from error
         self._offscreen._renderer._shadow_mapping_pass = _with_shadow_offset(
             self._offscreen._renderer._shadow_mapping_pass)
+        # pyrender uploads textures as tightly packed rows; GL's default assumes rows padded
+        # to 4 bytes, which skews any RGB texture whose width is not a multiple of 4 and
+        # reads past the end of its buffer.
+        from OpenGL import GL
+
+        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
 
     def render(self, scene, width_px: int, height_px: int, flags=None, seg_node_map=None,
                shadow_map_px: int = 2048):

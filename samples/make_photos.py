@@ -1,8 +1,8 @@
 """Write samples/photos/: four synthetic room photos with their ground truth.
 
 Rendered by the synthetic photographer (``augment.synth``) until real sample photos are
-added: image K is seed ``[2026, INDEX]`` at 1280 x 960 with the default 7x5 board of
-50 mm squares, picked from ``python -m augment.synth --count 16 --seed 2026 --size
+added: image K is seed ``[2026, INDEX]`` at 1280 x 960 with the default board (7x5
+inner corners, 45 mm squares on an A3 sheet), picked from ``python -m augment.synth --count 16 --seed 2026 --size
 1280x960`` because they look like real phone photos and differ: carpet with a door, a
 window and a radiator; sunlight and window shadows beside a carton; tiles under a
 window; cartons and a sunlit patch on carpet.

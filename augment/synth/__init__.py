@@ -172,7 +172,7 @@ def _truth(seed, room, shot, board, world_from_board, corners_px, visible, info,
         "board": {
             "inner_corners": [board.cols, board.rows],
             "square_mm": board.square_mm,
-            "margin_mm": board.margin_mm,
+            "sheet_mm": list(board.sheet_mm),
             "world_from_board": world_from_board.tolist(),
             "corners_px": corners_px.round(4).tolist(),
             "corners_visible": visible.tolist(),

@@ -136,9 +136,10 @@ def place_board(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     """
     width, height = shot.size_px
     margin_px = max(8.0, 0.03 * max(width, height))
-    # Squares smaller than this (along their foreshortened side) defeat corner detectors;
-    # small training frames only need the board visible.
-    min_step_px = MIN_SQUARE_PX if max(width, height) >= 640 else MIN_SQUARE_PX / 2
+    # Squares smaller than this (along their foreshortened side) defeat corner detectors.
+    # Small training frames only need the board visible: they get the framing of a 640 px
+    # photo, scaled down.
+    min_step_px = MIN_SQUARE_PX * min(1.0, max(width, height) / 640)
     # All candidates at once, tested in order: the first that passes every test wins.
     uv = rng.uniform([0.15 * width, 0.4 * height], [0.85 * width, 0.94 * height], size=(tries, 2))
     yaw = rng.uniform(0, 2 * np.pi, size=tries)

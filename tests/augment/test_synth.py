@@ -100,7 +100,7 @@ def test_board_pixels_count_as_floor(samples):
     for sample in samples:
         b = sample.truth["board"]
         pose = np.array(b["world_from_board"])
-        board = Board(*b["inner_corners"], b["square_mm"], b["margin_mm"])
+        board = Board(*b["inner_corners"], b["square_mm"], tuple(b["sheet_mm"]))
         outline = board.outline_m() @ pose[:3, :3].T + pose[:3, 3]
         K, cfw = np.array(sample.truth["K"]), np.array(sample.truth["camera_from_world"])
         inside = polygon_mask(project_floor_polygon(outline[:, :2], K, cfw), tuple(sample.truth["size_px"]))
@@ -201,12 +201,27 @@ def test_board_geometry():
     assert corners.shape == (35, 3)
     assert np.allclose(corners[1] - corners[0], [0.05, 0, 0]) and np.allclose(corners[7] - corners[0], [0, 0.05, 0])
     assert np.allclose(corners.mean(axis=0), 0)
-    assert np.allclose(board.size_m, (0.5, 0.4))
+    assert np.allclose(board.size_m, (0.5, 0.4))  # one-square margins
     image = board.image(px_per_square=10)
     assert image.shape == (6 * 10 + 20, 8 * 10 + 20)
     assert image[0].min() == 255 and image[10, 10] == 0 and image[10, 20] == 255
     with pytest.raises(ValueError, match="inner corners"):
         Board(1, 5, 50)
+
+
+def test_default_board_fills_an_a3_sheet():
+    board = Board()
+    assert (board.cols, board.rows, board.square_mm) == (7, 5, 45.0)
+    assert board.sheet_mm == (420.0, 297.0)
+    image = board.image(px_per_square=45)  # 1 px per mm
+    # 8 x 6 squares of 45 mm centered: margins of 30 mm left and right, 13.5 mm top and
+    # bottom (whole pixels: 14, so the sheet image is 1 px taller than the paper).
+    assert image.shape[1] == 420 and abs(image.shape[0] - 297) <= 1
+    dark_rows, dark_cols = np.nonzero(image == 0)
+    assert (dark_cols.min(), dark_cols.max()) == (30, 30 + 8 * 45 - 1)
+    assert abs(dark_rows.min() - 13.5) <= 0.5 and dark_rows.max() - dark_rows.min() == 6 * 45 - 1
+    with pytest.raises(ValueError, match="more than the 420 x 297 mm sheet"):
+        Board(7, 5, 50, sheet_mm=(420.0, 297.0))
 
 
 def test_cli_writes_a_dataset_and_a_contact_sheet(tmp_path, capsys):
