@@ -315,7 +315,7 @@ def _no_simplify(path: MplPath) -> MplPath:
 
 def _squares_path(board: Board, sheet_mm) -> MplPath:
     s = board.square_mm
-    x0 = (sheet_mm[0] - (board.cols + 1) * s) / 2 + 0.2
+    x0 = (sheet_mm[0] - (board.cols + 1) * s) / 2
     y_top = (sheet_mm[1] + (board.rows + 1) * s) / 2
     vertices, codes = [], []
     for j in range(board.rows + 1):
@@ -392,7 +392,8 @@ def board_figure(board: Board, paper: str) -> Figure:
     ax.set_xlim(0.0, sheet_mm[0])
     ax.set_ylim(0.0, sheet_mm[1])
     ax.set_axis_off()
-    # Snapping would round edges to whole points (0.35 mm) and break the exact scale.
+    # Snapping moves edges to pixel boundaries, which would distort raster previews of the
+    # page; the PDF is unaffected either way.
     ax.add_patch(PathPatch(_squares_path(board, sheet_mm), facecolor="black", edgecolor="none",
                            linewidth=0.0, snap=False, clip_on=False, gid="squares"))
     for placed in plan:
