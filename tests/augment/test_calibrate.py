@@ -153,3 +153,22 @@ def test_unreadable_photo(tmp_path):
         read_photo(bad)
     with pytest.raises(CalibrationError, match="does not exist"):
         read_photo(tmp_path / "missing.jpg")
+
+
+def test_exif_focal_length_is_used_before_the_board(tmp_path, renders):
+    """A photo whose EXIF says 26 mm (35 mm equivalent) gets f = 26 / 43.27 x diagonal."""
+    from PIL import Image
+
+    sample = renders[0]
+    exif = Image.Exif()
+    exif.get_ifd(0x8769)[0xA405] = 26  # FocalLengthIn35mmFilm
+    path = tmp_path / "phone.jpg"
+    Image.fromarray(sample.image).save(path, quality=92, exif=exif)
+    c = calibrate_file(path, Board())
+    w, h = sample.truth["size_px"]
+    assert c.intrinsics.source == "exif"
+    assert np.isclose(c.intrinsics.K[0, 0], 26 / np.hypot(36, 24) * np.hypot(w, h))
+    # Without EXIF the same pixels fall back to the board.
+    plain = tmp_path / "plain.jpg"
+    Image.fromarray(sample.image).save(plain, quality=92)
+    assert calibrate_file(plain, Board()).intrinsics.source == "single-view"
