@@ -517,7 +517,8 @@ def camera_profile(paths, board: Board) -> dict:
         obj, img, size, K0, np.zeros(5), flags=flags)
     return {
         "K": K.tolist(), "distortion": dist.ravel().tolist(), "size_px": list(size), "rms_px": float(rms),
-        "focal_uncertainty": float(std_intr[0, 0] / K[0, 0]),
+        # With a fixed aspect ratio OpenCV reports the deviation on fx or fy, by version.
+        "focal_uncertainty": float(np.nanmax(std_intr[:2, 0]) / K[0, 0]),
         "per_view_rms_px": per_view.ravel().round(4).tolist(),
         "images": used, "skipped": skipped,
         "board": {"inner_corners": [board.cols, board.rows], "square_mm": board.square_mm},

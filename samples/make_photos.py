@@ -2,10 +2,10 @@
 
 Rendered by the synthetic photographer (``augment.synth``) until real sample photos are
 added: image K is seed ``[2026, INDEX]`` at 1280 x 960 with the default board (7x5
-inner corners, 45 mm squares on an A3 sheet), picked from ``python -m augment.synth --count 16 --seed 2026 --size
-1280x960`` because they look like real phone photos and differ: carpet with a door, a
-window and a radiator; sunlight and window shadows beside a carton; tiles under a
-window; cartons and a sunlit patch on carpet.
+inner corners, 45 mm squares on an A3 sheet), picked from ``python -m augment.synth --count 24 --seed 2026 --size
+1280x960`` because they look like real phone photos, differ (wood under a window with a radiator;
+sunlight and window shadows on carpet with cartons; an L-shaped room; a sunlit floor
+with a door and a window), and calibrate from the board alone (`stage check`).
 
 Run ``python samples/make_photos.py`` to regenerate them.
 """
@@ -17,7 +17,7 @@ from augment.gl import Renderer
 from augment.synth import render_sample, write_sample
 
 SEED = 2026
-PICKS = (10, 2, 13, 4)
+PICKS = (5, 4, 0, 14)
 SIZE_PX = (1280, 960)
 
 

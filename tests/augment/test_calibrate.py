@@ -36,6 +36,7 @@ def test_profile_from_opencv_photos_matches_their_calibration():
     assert abs(K[0, 0] - ref[0, 0]) / ref[0, 0] < 0.01
     assert abs(K[0, 2] - ref[0, 2]) < 3 and abs(K[1, 2] - ref[1, 2]) < 3
     assert profile["rms_px"] < 0.5
+    assert 0 < profile["focal_uncertainty"] < 0.01
     # Barrel distortion like OpenCV's (k1 = -0.266).
     assert -0.32 < profile["distortion"][0] < -0.22
 

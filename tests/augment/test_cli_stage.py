@@ -1,0 +1,203 @@
+"""The ``stage`` command line (augment.cli) and the calibration overlay (augment.overlay)."""
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from augment import cli
+from augment.board import Board
+from augment.calibrate import calibrate_file, read_photo
+from augment.gl import Renderer
+from augment.overlay import calibration_overlay
+from augment.synth import render_sample, write_sample
+
+OPENCV_DATA = Path(__file__).resolve().parents[1] / "data" / "opencv-chessboard"
+# From left_intrinsics.yml (OpenCV's own calibration of these photos).
+OPENCV_FX, OPENCV_CX, OPENCV_CY = 535.916, 342.283, 235.571
+# A synthetic room whose board the detector finds (seed [2026, 4] is samples/photos/room_4).
+SYNTH_SEED = [2026, 4]
+
+
+@pytest.fixture(scope="module")
+def synth_photo(tmp_path_factory):
+    """(path of the JPEG, ground truth) of one rendered room photo, 1280 x 960."""
+    folder = tmp_path_factory.mktemp("synth")
+    with Renderer() as renderer:
+        sample = render_sample(SYNTH_SEED, renderer, size_px=(1280, 960))
+    paths = write_sample(sample, folder, "room")
+    return paths["image"], sample.truth
+
+
+@pytest.fixture(scope="module")
+def synth_calibration(synth_photo):
+    path, _ = synth_photo
+    return read_photo(path), calibrate_file(path, Board())
+
+
+def run(argv, capsys):
+    code = cli.main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+# --------------------------------------------------------------------------- stage board
+
+
+@pytest.mark.parametrize("paper, expected_pt", [("A4", (841.89, 595.28)), ("A3", (1190.55, 841.89))])
+def test_board_writes_the_paper_sized_pdf(tmp_path, capsys, paper, expected_pt):
+    out = tmp_path / "new folder" / "board.pdf"
+    code, stdout, err = run(["board", "--paper", paper, "--out", out], capsys)
+    assert code == 0, err
+    pdf = out.read_bytes()
+    assert pdf.startswith(b"%PDF")
+    (box,) = re.findall(rb"/MediaBox\s*\[\s*([-\d.\s]+)\]", pdf)
+    x0, y0, x1, y1 = (float(v) for v in box.split())
+    assert (x0, y0) == (0.0, 0.0)
+    assert (x1, y1) == pytest.approx(expected_pt, abs=0.1)
+    square = {"A4": "30", "A3": "45"}[paper]
+    assert f"--square {square}" in stdout
+
+
+def test_board_that_does_not_fit_is_refused(tmp_path, capsys):
+    code, _, err = run(["board", "--paper", "A4", "--square", "60", "--out", tmp_path / "b.pdf"], capsys)
+    assert code == 2
+    assert err.startswith("error: ") and "--square 32" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- stage calibrate
+
+
+def test_calibrate_matches_opencvs_reference_profile(tmp_path, capsys):
+    shots = sorted(OPENCV_DATA.glob("left*.jpg"))
+    assert len(shots) >= 10
+    out = tmp_path / "profile.json"
+    code, stdout, err = run(["calibrate", *shots, "--board", "9x6", "--square", "25", "--out", out], capsys)
+    assert code == 0, err
+    profile = json.loads(out.read_text())
+    K = np.array(profile["K"])
+    assert K[0, 0] == pytest.approx(OPENCV_FX, rel=0.01)
+    assert K[1, 1] == pytest.approx(OPENCV_FX, rel=0.01)
+    assert K[0, 2] == pytest.approx(OPENCV_CX, abs=0.01 * 640)
+    assert K[1, 2] == pytest.approx(OPENCV_CY, abs=0.01 * 480)
+    assert profile["rms_px"] < 0.5
+    assert len(profile["images"]) == len(shots)
+    assert "fx" in stdout and "RMS" in stdout and str(out) in stdout
+
+
+def test_calibrate_quiet_prints_nothing(tmp_path, capsys):
+    shots = sorted(OPENCV_DATA.glob("left*.jpg"))[:4]
+    code, stdout, err = run(["calibrate", *shots, "--board", "9x6", "--square", "25", "-q",
+                             "--out", tmp_path / "p.json"], capsys)
+    assert (code, stdout, err) == (0, "", "")
+
+
+# --------------------------------------------------------------------------- stage check
+
+
+def test_check_writes_calibration_and_overlay(synth_photo, tmp_path, capsys):
+    path, truth = synth_photo
+    out = tmp_path / "out" / "check"
+    code, stdout, err = run(["check", path, "--out", out], capsys)
+    assert code == 0, err
+    report = json.loads((out / "calibration.json").read_text())
+    assert report["camera_height_m"] == pytest.approx(truth["camera"]["height_m"], rel=0.03)
+    assert report["board"]["inner_corners"] == [7, 5]
+    photo = read_photo(path)
+    overlay = read_photo(out / "overlay_calibration.png")
+    assert overlay.shape == photo.shape
+    assert np.mean(np.any(overlay != photo, axis=2)) > 0.05
+    assert "camera" in stdout and "RMS" in stdout
+    assert sorted(p.name for p in out.iterdir()) == ["calibration.json", "overlay_calibration.png"]
+
+
+def test_overlay_draws_axes_and_grid_and_leaves_the_photo_alone(synth_calibration):
+    photo, calibration = synth_calibration
+    before = photo.copy()
+    overlay = calibration_overlay(photo, calibration)
+    np.testing.assert_array_equal(photo, before)
+    assert overlay.shape == photo.shape and overlay.dtype == np.uint8
+    assert overlay is not photo and not np.shares_memory(overlay, photo)
+    h, w = photo.shape[:2]
+
+    def changed_near(px, radius=3):
+        x, y = np.round(px).astype(int)
+        a = overlay[max(0, y - radius):y + radius + 1, max(0, x - radius):x + radius + 1].astype(int)
+        b = photo[max(0, y - radius):y + radius + 1, max(0, x - radius):x + radius + 1].astype(int)
+        return np.abs(a - b).max() > 40
+
+    origin = calibration.pixels_from_floor(np.zeros((1, 3)))[0]
+    assert 0 <= origin[0] < w and 0 <= origin[1] < h
+    assert changed_near(origin)
+    # Along the x axis, outside the board's squares: red.
+    x_axis = calibration.pixels_from_floor(np.array([[0.3, 0.0, 0.0]]))[0]
+    r, g, b = overlay[int(round(x_axis[1])), int(round(x_axis[0]))].astype(int)
+    assert r > 150 and r > g + 60 and r > b + 60
+    # The z axis stands up: blue above the origin.
+    z_axis = calibration.pixels_from_floor(np.array([[0.0, 0.0, 0.3]]))[0]
+    assert z_axis[1] < origin[1]
+    r, g, b = overlay[int(round(z_axis[1])), int(round(z_axis[0]))].astype(int)
+    assert b > 150 and b > r + 60
+    # A grid line 1 m from the board, where it shows in the lower half away from the caption.
+    along = np.linspace(-3, 3, 121)
+    points = np.vstack([np.column_stack([np.full_like(along, 1.0), along]),
+                        np.column_stack([along, np.full_like(along, -1.0)])])
+    px = calibration.pixels_from_floor(points)
+    inside = (px[:, 0] > 20) & (px[:, 0] < w - 20) & (px[:, 1] > h / 2) & (px[:, 1] < h - 20)
+    assert inside.sum() >= 5
+    assert np.mean([changed_near(p, radius=1) for p in px[inside]]) > 0.9
+
+
+def test_overlay_refuses_an_image_of_another_size(synth_calibration):
+    photo, calibration = synth_calibration
+    with pytest.raises(ValueError, match="1280x960"):
+        calibration_overlay(photo[:, :-2], calibration)
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def test_missing_photo(tmp_path, capsys):
+    missing = tmp_path / "no such photo.jpg"
+    code, stdout, err = run(["check", missing, "--out", tmp_path / "out"], capsys)
+    assert code == 2
+    assert err.startswith("error: ") and str(missing) in err and "Traceback" not in err
+    assert stdout == ""
+    assert not (tmp_path / "out").exists()
+
+
+def test_photo_without_a_board(tmp_path, capsys):
+    gray = tmp_path / "gray.png"
+    ok, png = cv2.imencode(".png", np.full((480, 640, 3), 128, np.uint8))
+    gray.write_bytes(png.tobytes())
+    code, _, err = run(["check", gray, "--out", tmp_path / "out"], capsys)
+    assert code == 2
+    assert "no 7x5 checkerboard" in err and str(gray) in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("text", ["7*5", "1x5", "7x", "seven"])
+def test_bad_board_text(tmp_path, capsys, text):
+    code, _, err = run(["check", tmp_path / "photo.jpg", "--board", text], capsys)
+    assert code == 2
+    assert "--board" in err and repr(text) in err and "inner corners" in err and "Traceback" not in err
+
+
+def test_unwritable_out(synth_photo, tmp_path, capsys):
+    path, _ = synth_photo
+    blocker = tmp_path / "a file"
+    blocker.write_text("")
+    code, _, err = run(["check", path, "--out", blocker / "sub"], capsys)
+    assert code == 2
+    assert "--out" in err and "is a file" in err
+
+
+def test_no_arguments_prints_usage(capsys):
+    code, stdout, _ = run([], capsys)
+    assert code == 0 and "calibrate" in stdout and "check" in stdout and "board" in stdout
