@@ -214,10 +214,6 @@ def _suggest_sizes(image: np.ndarray, board: Board) -> list[tuple[int, int]]:
     return found
 
 
-def _centered_points(corners_px: np.ndarray, principal_px) -> np.ndarray:
-    return corners_px - np.asarray(principal_px)
-
-
 def _focal_from_homography(H: np.ndarray) -> float | None:
     """Closed-form f from a plane homography whose image coordinates are centered on the
     principal point, assuming square pixels and no skew (Zhang's two constraints).
@@ -273,10 +269,13 @@ def single_view_intrinsics(corners_px: np.ndarray, board: Board, size_px: tuple[
             "the board is seen almost face-on, so its perspective does not tell the focal length. "
             "Take the photo from standing height looking across the floor (the board well "
             f"foreshortened), or: {advice}")
-    plain = _fit_focal(obj, corners_px, size_px, f0, center, radial=False)
-    radial = _fit_focal(obj, corners_px, size_px, f0, center, radial=True)
-    use_radial = plain[0] > 0.5 and radial[0] < (2 / 3) * plain[0]
-    rms, K, dist, R, f_std = radial if use_radial else plain
+    fit = _fit_focal(obj, corners_px, size_px, f0, center, radial=False)
+    use_radial = False
+    if fit[0] > 0.5:
+        radial = _fit_focal(obj, corners_px, size_px, f0, center, radial=True)
+        if radial[0] < (2 / 3) * fit[0]:
+            fit, use_radial = radial, True
+    rms, K, dist, R, f_std = fit
     f = float(K[0, 0])
     tilt_deg = float(np.degrees(np.arccos(min(1.0, abs(R[2, 2])))))
     if tilt_deg < MIN_TILT_DEG or tilt_deg > MAX_TILT_DEG:

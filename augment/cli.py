@@ -18,16 +18,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import re
 import sys
-import time
-import traceback
 from pathlib import Path
+
+from layout.command import EXIT_OK, Parser, dispatch, parse
 
 from .board import DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM, PAPER_MM
 
-EXIT_OK, EXIT_BUG, EXIT_INPUT = 0, 1, 2
 PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".webp", ".bmp")
 DEFAULT_PROFILE = "profile.json"
 DEFAULT_BOARD_PDF = "board.pdf"
@@ -35,15 +33,6 @@ DEFAULT_BOARD_PDF = "board.pdf"
 
 class StageError(Exception):
     """Bad input: the message names the file, flag or value and says what would work."""
-
-
-class _Usage(Exception):
-    """A command-line usage error (argparse would otherwise exit by itself)."""
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):
-        raise _Usage(f"{self.prog}: {message}")
 
 
 def parse_board(text: str) -> tuple[int, int]:
@@ -87,10 +76,10 @@ def _add_board_args(p, square_help=None):
 
 
 def _parser():
-    p = _Parser(prog="stage", description="Furnish a photo of an empty room: print a checkerboard, lay it "
+    p = Parser(prog="stage", description="Furnish a photo of an empty room: print a checkerboard, lay it "
                                           "on the floor, photograph the room. Layout synthesis alone: see "
                                           "`layout --help`.")
-    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
 
     b = sub.add_parser("board", help="write the checkerboard to print (PDF)",
                        description="Write the checkerboard as a one-page PDF at exact scale, with a 100 mm "
@@ -296,35 +285,16 @@ def _check_cmd(args):
 def main(argv=None) -> int:
     """Run the command line; returns the exit status."""
     parser = _parser()
-    try:
-        args = parser.parse_args(argv)
-    except _Usage as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_INPUT
-    except SystemExit as e:  # --help
-        return int(e.code or 0)
+    args = parse(parser, argv)
+    if isinstance(args, int):
+        return args
     if args.command is None:
         parser.print_help()
         return EXIT_OK
     from .calibrate import CalibrationError
 
     commands = {"board": _board_cmd, "calibrate": _calibrate_cmd, "check": _check_cmd}
-    t0 = time.perf_counter()
-    try:
-        return commands[args.command](args)
-    except (StageError, CalibrationError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_INPUT
-    except BrokenPipeError:
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return EXIT_OK
-    except KeyboardInterrupt:
-        print(f"error: interrupted after {time.perf_counter() - t0:.1f} s", file=sys.stderr)
-        return 130
-    except Exception:  # noqa: BLE001 - a bug: show where, and say so
-        traceback.print_exc()
-        print("error: unexpected failure (a bug in stage); please report the traceback above", file=sys.stderr)
-        return EXIT_BUG
+    return dispatch(commands[args.command], args, "stage", [((StageError, CalibrationError), str)])
 
 
 if __name__ == "__main__":

@@ -117,18 +117,7 @@ class Annealer:
         )
         elapsed = time.perf_counter() - t0
         terms = energy_terms(model, State(pos, yaw), self.collision)
-        return Layout(
-            model=model,
-            position_m=pos,
-            yaw_rad=(yaw + np.pi) % (2.0 * np.pi) - np.pi,
-            energy=float(np.sqrt(sum(terms.values()))),
-            energy_by_kind=terms,
-            trace=trace,
-            iterations=int(iters),
-            best_iteration=int(best_it),
-            seed=None if seed is None else int(seed),
-            time_s=elapsed,
-        )
+        return Layout.from_state(model, pos, yaw, terms, trace, iters, best_it, seed, elapsed)
 
 
 @njit(cache=True, error_model="numpy")

@@ -11,31 +11,17 @@ unexpected failure (a bug: the traceback is printed).
 """
 from __future__ import annotations
 
-import argparse
-import os
 import sys
-import time
 import tomllib
-import traceback
 from pathlib import Path
 
+from .command import EXIT_OK, Parser, dispatch, parse
 from .errors import LayoutError
-
-EXIT_OK, EXIT_BUG, EXIT_INPUT = 0, 1, 2
-
-
-class _Usage(Exception):
-    """A command-line usage error (argparse would otherwise exit by itself)."""
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):
-        raise _Usage(f"{self.prog}: {message}")
 
 
 def _parser():
-    p = _Parser(prog="layout", description="Furniture layout synthesis (Weiss et al. 2018).")
-    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
+    p = Parser(prog="layout", description="Furniture layout synthesis (Weiss et al. 2018).")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=Parser)
     s = sub.add_parser("solve", help="solve a spec file into layout suggestions",
                        description="Solve SPEC (a TOML file, see layout.spec) from several random "
                                    "starts; write layout_K.json, plan_K.png and energy.png.")
@@ -125,38 +111,15 @@ def _presets(args):
 
 def main(argv=None) -> int:
     """Run the command line; returns the exit status."""
-    try:
-        args = _parser().parse_args(argv)
-    except _Usage as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_INPUT
-    except SystemExit as e:  # --help
-        return int(e.code or 0)
+    args = parse(_parser(), argv)
+    if isinstance(args, int):
+        return args
     commands = {"solve": _solve, "kinds": _kinds, "presets": _presets}
-    t0 = time.perf_counter()
-    try:
-        return commands[args.command](args)
-    except LayoutError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return EXIT_INPUT
-    except tomllib.TOMLDecodeError as e:
-        print(f"error: invalid TOML: {e}", file=sys.stderr)
-        return EXIT_INPUT
-    except FileNotFoundError as e:
-        print(f"error: {e.filename}: no such file", file=sys.stderr)
-        return EXIT_INPUT
-    except BrokenPipeError:
-        # The reader went away (`layout kinds | head`): not an error of ours.
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return EXIT_OK
-    except KeyboardInterrupt:
-        print(f"error: interrupted after {time.perf_counter() - t0:.1f} s", file=sys.stderr)
-        return 130
-    except Exception:  # noqa: BLE001 - a bug: show where, and say so
-        traceback.print_exc()
-        print("error: unexpected failure (a bug in layout); please report the traceback above",
-              file=sys.stderr)
-        return EXIT_BUG
+    return dispatch(commands[args.command], args, "layout", [
+        (LayoutError, str),
+        (tomllib.TOMLDecodeError, lambda e: f"invalid TOML: {e}"),
+        (FileNotFoundError, lambda e: f"{e.filename}: no such file"),
+    ])
 
 
 if __name__ == "__main__":

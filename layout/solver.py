@@ -69,6 +69,23 @@ class Layout:
     degenerate: dict = field(default_factory=dict)
     runs: int = 1
 
+    @classmethod
+    def from_state(cls, model, pos, yaw, terms, trace, iterations, best_iteration, seed, time_s, **extra):
+        """A Layout from solver state: yaw wrapped to [-pi, pi), energy from its terms."""
+        return cls(
+            model=model,
+            position_m=pos,
+            yaw_rad=(yaw + np.pi) % (2.0 * np.pi) - np.pi,
+            energy=float(np.sqrt(sum(terms.values()))),
+            energy_by_kind=terms,
+            trace=trace,
+            iterations=int(iterations),
+            best_iteration=int(best_iteration),
+            seed=None if seed is None else int(seed),
+            time_s=time_s,
+            **extra,
+        )
+
     @property
     def items(self) -> np.ndarray:
         return self.model.items
@@ -264,20 +281,8 @@ class Solver:
                 break
         elapsed = time.perf_counter() - t0
         _, pos, yaw, trace, best_it, iters, degen, terms, runs = best
-        return Layout(
-            model=model,
-            position_m=pos,
-            yaw_rad=(yaw + np.pi) % (2.0 * np.pi) - np.pi,
-            energy=float(np.sqrt(sum(terms.values()))),
-            energy_by_kind=terms,
-            trace=trace,
-            iterations=int(iters),
-            best_iteration=int(best_it),
-            seed=None if seed is None else int(seed),
-            time_s=elapsed,
-            degenerate={k: int(v) for k, v in zip(codes.KINDS, degen) if v},
-            runs=runs,
-        )
+        return Layout.from_state(model, pos, yaw, terms, trace, iters, best_it, seed, elapsed,
+                                 degenerate={k: int(v) for k, v in zip(codes.KINDS, degen) if v}, runs=runs)
 
     def _run(self, model: Model, start: State):
         return K.solve_loop(
@@ -314,7 +319,7 @@ class Solver:
 def _walkable(model, pos, yaw) -> bool:
     from .report import walkability  # report draws plans; import it only when needed
 
-    probe = Layout(model, pos, (yaw + np.pi) % (2.0 * np.pi) - np.pi, 0.0, {}, np.zeros(0), 0, 0, None, 0.0)
+    probe = Layout.from_state(model, pos, yaw, {}, np.zeros(0), 0, 0, None, 0.0)
     return walkability(probe).ok
 
 

@@ -23,6 +23,7 @@ from tqdm import tqdm
 from layout.fileio import write_atomic
 
 from ..board import DEFAULT_INNER_CORNERS, DEFAULT_SQUARE_MM, Board
+from ..cli import parse_board
 from .dataset import contact_sheet, init_worker, render_one, truth_view
 
 def _parse_size(text: str) -> tuple[int, int]:
@@ -35,16 +36,6 @@ def _parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
-def _parse_board(text: str) -> tuple[int, int]:
-    try:
-        cols, rows = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--board {text!r}: expected COLSxROWS inner corners, e.g. 7x5")
-    if cols < 2 or rows < 2:
-        raise argparse.ArgumentTypeError(f"--board {text!r}: needs at least 2x2 inner corners")
-    return cols, rows
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m augment.synth", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -53,7 +44,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, required=True, help="output folder (created)")
     parser.add_argument("--size", type=_parse_size, default=None,
                         help="WIDTHxHEIGHT; default: random phone sizes 640x480-2016x1512, landscape and portrait")
-    parser.add_argument("--board", type=_parse_board, default=DEFAULT_INNER_CORNERS,
+    parser.add_argument("--board", type=parse_board, default=DEFAULT_INNER_CORNERS,
                         help="inner corners COLSxROWS (default %dx%d)" % DEFAULT_INNER_CORNERS)
     parser.add_argument("--square", type=float, default=DEFAULT_SQUARE_MM,
                         help=f"square size in mm (default {DEFAULT_SQUARE_MM:g})")

@@ -5,8 +5,13 @@ them by module name.
 """
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import cv2
 import numpy as np
+
+from .truth import overlay
 
 _worker = {}
 
@@ -53,11 +58,6 @@ def contact_sheet(images: list[np.ndarray], columns: int = 4, cell_px: tuple[int
 
 def truth_view(folder, stem: str) -> np.ndarray:
     """A written sample's photo with its floor mask tinted and board corners marked (BGR)."""
-    import json
-    from pathlib import Path
-
-    from .truth import overlay
-
     folder = Path(folder)
     truth = json.loads((folder / f"{stem}.json").read_text())
     photo = cv2.imread(str(folder / truth["image"]))

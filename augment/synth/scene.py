@@ -231,7 +231,9 @@ def _walls(room: Room, batch: _Batch, tile_m: float):
                 batch.quad([point(s0, z0), point(s1, z0), point(s1, z0, t), point(s0, z0, t)], np.array([0, 0, 1.0]))
 
 
-def _openings(rng, room: Room, frames: _Batch, doors: _Batch, baseboards: _Batch):
+def _openings(rng, room: Room, frames: _Batch, doors: _Batch):
+    """Door leaves and thresholds into ``doors``; casings, window frames and sills and the
+    baseboards (all trim paint) into ``frames``."""
     poly = room.polygon_m
     t = WALL_THICKNESS_M
     casing_m = rng.uniform(0.05, 0.09)
@@ -282,7 +284,7 @@ def _openings(rng, room: Room, frames: _Batch, doors: _Batch, baseboards: _Batch
         for c0, c1 in cuts + [(length, length)]:
             if c0 - s > 0.02:
                 center = a + u2 * (s + c0) / 2 + n2 * (base_d / 2 - _EMBED_M)
-                baseboards.box([center[0], center[1], base_h / 2 - _EMBED_M], (c0 - s, base_d, base_h),
+                frames.box([center[0], center[1], base_h / 2 - _EMBED_M], (c0 - s, base_d, base_h),
                                float(np.arctan2(u2[1], u2[0])))
             s = c1
 
@@ -364,9 +366,8 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     add(ceiling.mesh(_material(rng, np.ones(3), ceil_img, roughness=(0.8, 1.0))), SEG_CEILING)
 
     # Doors, window frames, baseboards
-    # Frames and baseboards share the trim paint, so they share a mesh.
     frames, doors = _Batch(), _Batch()
-    _openings(rng, room, frames, doors, frames)
+    _openings(rng, room, frames, doors)
     white = _random_tint(rng, [0.85, 0.85, 0.83], 0.03)
     trim = white if rng.random() < 0.7 else _random_tint(rng, [0.45, 0.3, 0.18], 0.08)
     if frames.positions:

@@ -1,0 +1,67 @@
+"""Command-line plumbing shared by ``layout`` and ``stage``: exit statuses, an argparse
+parser that reports usage errors instead of exiting, and the one place that turns a
+command's exceptions into an exit status and a message.
+
+Exit status: 0 success, 2 bad input (one ``error:`` line on stderr), 1 an unexpected
+failure (a bug: the traceback is printed), 130 interrupted.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+import traceback
+from collections.abc import Callable, Sequence
+
+EXIT_OK, EXIT_BUG, EXIT_INPUT = 0, 1, 2
+
+
+class UsageError(Exception):
+    """A command-line usage error (argparse would otherwise exit by itself)."""
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message):
+        raise UsageError(f"{self.prog}: {message}")
+
+
+def parse(parser: argparse.ArgumentParser, argv) -> argparse.Namespace | int:
+    """Parsed arguments, or the exit status when parsing ends the run (a usage error,
+    reported on stderr, or ``--help``)."""
+    try:
+        return parser.parse_args(argv)
+    except UsageError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return EXIT_INPUT
+    except SystemExit as e:  # --help
+        return int(e.code or 0)
+
+
+def dispatch(command: Callable[[argparse.Namespace], int], args: argparse.Namespace, program: str,
+             input_errors: Sequence[tuple[type | tuple[type, ...], Callable[[Exception], str]]]) -> int:
+    """Run ``command(args)`` and return its exit status.
+
+    ``input_errors`` pairs exception types that mean bad input with how to word them;
+    the first match is printed as one ``error:`` line (status 2). Anything else is a bug
+    in ``program``: its traceback is printed (status 1).
+    """
+    t0 = time.perf_counter()
+    try:
+        return command(args)
+    except BrokenPipeError:
+        # The reader went away (`layout kinds | head`): not an error of ours.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
+    except KeyboardInterrupt:
+        print(f"error: interrupted after {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+        return 130
+    except Exception as e:  # noqa: BLE001 - sorted into bad input and bugs below
+        for types, describe in input_errors:
+            if isinstance(e, types):
+                print(f"error: {describe(e)}", file=sys.stderr)
+                return EXIT_INPUT
+        traceback.print_exc()
+        print(f"error: unexpected failure (a bug in {program}); please report the traceback above",
+              file=sys.stderr)
+        return EXIT_BUG
