@@ -1,8 +1,17 @@
-"""The printed checkerboard: its geometry in its own frame and its printable image.
+"""The printed board: its geometry in its own frame and its printable image.
+
+Two kinds. A plain checkerboard (``"chessboard"``, the default) must be seen whole. A
+ChArUco board (``"charuco"``) is the same checkerboard with an ArUco marker of the fixed
+dictionary :data:`CHARUCO_DICTIONARY` printed in each white square (OpenCV's
+``cv2.aruco.CharucoBoard``), so every inner corner it shows is known by its number: a
+board partly hidden by a chair leg or cut by the frame still calibrates.
 
 Board frame: origin at the center of the squares, x along a row of inner corners
 (``cols`` of them), y along a column (``rows``), z out of the printed face; meters. Inner
 corner ``k = j * cols + i`` lies at ``((i - (cols - 1) / 2) * s, (j - (rows - 1) / 2) * s, 0)``.
+Seen from above, the board face up, x points right and y up: the printed page's top edge
+is at +y, so corner row ``j`` is printed row ``rows - 1 - j`` counted from the top
+(:meth:`Board.corner_ids` turns OpenCV's ChArUco corner numbers into these).
 
 Defaults. The standard board has 7x5 inner corners (8 x 6 squares). With 45 mm squares it
 fills an A3 sheet (360 x 270 mm of squares on 420 x 297 mm paper, margins 30 and
@@ -12,6 +21,7 @@ are 30 mm. The synthetic photographer and every ``stage`` command share these de
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -19,11 +29,35 @@ PAPER_MM = {"A4": (297.0, 210.0), "A3": (420.0, 297.0)}
 DEFAULT_INNER_CORNERS = (7, 5)
 DEFAULT_PAPER = "A3"
 DEFAULT_SQUARE_MM = {"A3": 45.0, "A4": 30.0}[DEFAULT_PAPER]
+BOARD_KINDS = ("chessboard", "charuco")
+# ChArUco: 4x4-bit markers are the easiest to read when small; 50 of them cover boards up
+# to 100 squares (the default 8 x 6 squares use 24). The marker, its black border
+# included (6 bits), fills 3/4 of its square: one bit of white on each side.
+CHARUCO_DICTIONARY = "DICT_4X4_50"
+CHARUCO_MARKER_BITS = 6
+CHARUCO_BITS_PER_SQUARE = 8
+
+
+@lru_cache(maxsize=8)
+def _dictionary():
+    import cv2
+
+    return cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, CHARUCO_DICTIONARY))
+
+
+@lru_cache(maxsize=8)
+def charuco_board(cols: int, rows: int):
+    """OpenCV's ``CharucoBoard`` of ``cols`` x ``rows`` inner corners, in square units
+    (the pattern does not depend on the square size)."""
+    import cv2
+
+    return cv2.aruco.CharucoBoard((cols + 1, rows + 1), 1.0, CHARUCO_MARKER_BITS / CHARUCO_BITS_PER_SQUARE,
+                                  _dictionary())
 
 
 @dataclass(frozen=True)
 class Board:
-    """A checkerboard of ``cols`` x ``rows`` inner corners printed on a sheet.
+    """A board of ``cols`` x ``rows`` inner corners printed on a sheet.
 
     Parameters
     ----------
@@ -34,14 +68,20 @@ class Board:
     sheet_mm : (width, height), optional
         The paper, landscape, squares centered on it. Default: the A3 sheet for the
         default board, otherwise the squares with a one-square white margin.
+    kind : str
+        ``"chessboard"`` (default) or ``"charuco"`` (markers of
+        :data:`CHARUCO_DICTIONARY` in the white squares).
     """
 
     cols: int = DEFAULT_INNER_CORNERS[0]
     rows: int = DEFAULT_INNER_CORNERS[1]
     square_mm: float = DEFAULT_SQUARE_MM
     sheet_mm: tuple[float, float] | None = None
+    kind: str = "chessboard"
 
     def __post_init__(self):
+        if self.kind not in BOARD_KINDS:
+            raise ValueError(f"board kind {self.kind!r}: choose one of {', '.join(BOARD_KINDS)}")
         if int(self.cols) < 2 or int(self.rows) < 2:
             raise ValueError(
                 f"board {self.cols}x{self.rows}: needs at least 2x2 inner corners "
@@ -49,6 +89,12 @@ class Board:
             )
         if not self.square_mm > 0:
             raise ValueError(f"board square size {self.square_mm} mm: must be positive, e.g. {DEFAULT_SQUARE_MM:g}")
+        if self.kind == "charuco":
+            available = _dictionary().bytesList.shape[0]
+            if self.marker_count > available:
+                raise ValueError(
+                    f"ChArUco board {self.cols}x{self.rows} needs {self.marker_count} markers, one per white "
+                    f"square, but {CHARUCO_DICTIONARY} has {available}; use fewer corners, e.g. charuco:9x6")
         squares_mm = ((self.cols + 1) * self.square_mm, (self.rows + 1) * self.square_mm)
         if self.sheet_mm is None:
             default = (self.cols, self.rows, self.square_mm) == (*DEFAULT_INNER_CORNERS, DEFAULT_SQUARE_MM)
@@ -70,6 +116,27 @@ class Board:
         """The sheet's width and height (x, y), meters."""
         return self.sheet_mm[0] / 1000.0, self.sheet_mm[1] / 1000.0
 
+    @property
+    def corner_count(self) -> int:
+        return self.cols * self.rows
+
+    @property
+    def marker_count(self) -> int:
+        """ChArUco markers: one per white square (the top-left square is black)."""
+        return (self.cols + 1) * (self.rows + 1) // 2
+
+    @property
+    def spec(self) -> str:
+        """The board as the ``--board`` flag writes it: ``7x5`` or ``charuco:7x5``."""
+        size = f"{self.cols}x{self.rows}"
+        return size if self.kind == "chessboard" else f"{self.kind}:{size}"
+
+    def describe(self) -> str:
+        """``"7x5 checkerboard"`` or ``"7x5 ChArUco board (DICT_4X4_50)"``, for messages."""
+        if self.kind == "chessboard":
+            return f"{self.cols}x{self.rows} checkerboard"
+        return f"{self.cols}x{self.rows} ChArUco board ({CHARUCO_DICTIONARY})"
+
     def corners_m(self) -> np.ndarray:
         """Inner corners in the board frame, (cols * rows, 3) float64, row by row."""
         i, j = np.meshgrid(np.arange(self.cols), np.arange(self.rows))
@@ -77,23 +144,72 @@ class Board:
         y = (j.ravel() - (self.rows - 1) / 2) * self.square_m
         return np.column_stack([x, y, np.zeros_like(x)])
 
+    def corner_ids(self, charuco_ids) -> np.ndarray:
+        """Board corner numbers ``k`` (n,) int64 of OpenCV's ChArUco corner ids (n,), which
+        count printed rows from the top of the page."""
+        c = np.asarray(charuco_ids, dtype=np.int64).ravel()
+        return (self.rows - 1 - c // self.cols) * self.cols + c % self.cols
+
     def outline_m(self) -> np.ndarray:
         """The sheet's four corners in the board frame, (4, 3), counter-clockwise."""
         w, h = self.size_m
         return np.array([[-w / 2, -h / 2, 0], [w / 2, -h / 2, 0],
                          [w / 2, h / 2, 0], [-w / 2, h / 2, 0]])
 
+    def markers(self) -> list[tuple[int, int, int, np.ndarray]]:
+        """The ChArUco markers as printed: ``(marker id, square column, square row from the
+        top of the page, bits)`` with ``bits`` (6, 6) bool, True black, row 0 the marker's
+        top; empty for a checkerboard. The marker fills the middle 6/8 of its square."""
+        if self.kind != "charuco":
+            return []
+        import cv2
+
+        out = []
+        white = [(i, j) for j in range(self.rows + 1) for i in range(self.cols + 1) if (i + j) % 2 == 1]
+        for marker_id, (i, j) in zip(charuco_board(self.cols, self.rows).getIds().ravel(), white):
+            bits = cv2.aruco.generateImageMarker(_dictionary(), int(marker_id), CHARUCO_MARKER_BITS, borderBits=1)
+            out.append((int(marker_id), i, j, bits == 0))
+        return out
+
+    def printed_image(self, px_per_square: int = 32) -> np.ndarray:
+        """The squares (and markers) as printed, without the paper margin: (h, w) uint8,
+        row 0 the top of the page, the top-left square black.
+
+        Marker bits (1/8 of a square) are exact when ``px_per_square`` is a multiple of 8,
+        otherwise their edges are rounded to whole pixels; square edges are always exact."""
+        a = np.arange(self.cols + 1)
+        b = np.arange(self.rows + 1)
+        squares = ((a[None, :] + b[:, None]) % 2).astype(np.uint8) * 255
+        page = np.kron(squares, np.ones((px_per_square, px_per_square), np.uint8))
+        if self.kind == "charuco":
+            # Pixel k of a square lies in bit floor(k * 8 / px) of its 8 bit widths.
+            bit = (np.arange(px_per_square) * CHARUCO_BITS_PER_SQUARE) // px_per_square
+            margin = (CHARUCO_BITS_PER_SQUARE - CHARUCO_MARKER_BITS) // 2
+            inside = (bit >= margin) & (bit < margin + CHARUCO_MARKER_BITS)
+            cell = np.clip(bit - margin, 0, CHARUCO_MARKER_BITS - 1)
+            for _, i, j, bits in self.markers():
+                square = np.where(bits[cell[:, None], cell[None, :]], 0, 255).astype(np.uint8)
+                square[~(inside[:, None] & inside[None, :])] = 255
+                page[j * px_per_square:(j + 1) * px_per_square, i * px_per_square:(i + 1) * px_per_square] = square
+        return page
+
     def image(self, px_per_square: int = 32) -> np.ndarray:
-        """The sheet as a grayscale image, (h, w) uint8; row 0 is board -y.
+        """The sheet as a grayscale image in board coordinates, (h, w) uint8; row 0 is
+        board -y (the texture the synthetic photographer lays on the floor).
+
+        For a ChArUco board this is :meth:`printed_image` upside down (row order reversed),
+        so that seen from above the markers read as printed. The plain checkerboard keeps
+        the array Stager has always rendered, top-left square black: seen from above it
+        is the print mirrored, which for a checkerboard at most swaps the colors, something
+        no detector tells apart, and earlier synthetic photos stay the same.
 
         Square edges fall on pixel edges and the margins are equal on opposite sides, so a
         texture made of it keeps the corners exact; the sheet may come out up to half a
         pixel per side smaller or larger than ``size_m``.
         """
-        a = np.arange(self.cols + 1)
-        b = np.arange(self.rows + 1)
-        squares = ((a[None, :] + b[:, None]) % 2).astype(np.uint8) * 255
-        pattern = np.kron(squares, np.ones((px_per_square, px_per_square), np.uint8))
+        pattern = self.printed_image(px_per_square)
+        if self.kind == "charuco":
+            pattern = pattern[::-1]
         px_per_mm = px_per_square / self.square_mm
         pad_x = int(round((self.sheet_mm[0] / 2 - (self.cols + 1) * self.square_mm / 2) * px_per_mm))
         pad_y = int(round((self.sheet_mm[1] / 2 - (self.rows + 1) * self.square_mm / 2) * px_per_mm))

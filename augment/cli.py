@@ -2,14 +2,21 @@
 
 ::
 
-    stage board [--paper A3|A4] [--board 7x5] [--square MM] [--out board.pdf] [--quiet]
+    stage board [--paper A3|A4] [--board 7x5|charuco:7x5] [--square MM] [--out board.pdf] [--quiet]
     stage calibrate SHOT... [--board 7x5] [--square 45] [--out profile.json] [--quiet]
     stage check PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
+    stage segment PHOTO [--model M.onnx] [--method onnx|grabcut] [--board ...] [--out MASK.png] [--quiet]
+    stage measure PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
 
-``board`` writes the checkerboard to print; ``calibrate`` makes a camera profile from
+``--board`` counts inner corners, ``COLSxROWS`` for a plain checkerboard (the default
+7x5), ``charuco:COLSxROWS`` for a ChArUco board (ArUco markers of DICT_4X4_50 in the
+white squares), which still calibrates when part of it is hidden or out of the frame.
+
+``board`` writes the board to print; ``calibrate`` makes a camera profile from
 several photos of it (any angle, e.g. held up or on a table); ``check`` calibrates one
-photo of the board lying on the floor and draws the result over it. The later
-``measure`` and ``furnish`` commands build on ``check``.
+photo of the board lying on the floor and draws the result over it; ``segment`` finds
+the floor (mask, overlay, and the floor polygon in meters when the board is found);
+``measure`` does both and measures the wall height: "measure my room" without furniture.
 
 Exit status: 0 success, 2 bad input (one ``error:`` line on stderr saying what and
 where, and what would work), 1 an unexpected failure (a bug: the traceback is printed).
@@ -21,10 +28,11 @@ import json
 import re
 import sys
 from pathlib import Path
+from typing import NamedTuple
 
 from layout.command import EXIT_OK, Parser, dispatch, parse
 
-from .board import DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM, PAPER_MM
+from .board import BOARD_KINDS, CHARUCO_DICTIONARY, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM, PAPER_MM
 
 PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".webp", ".bmp")
 DEFAULT_PROFILE = "profile.json"
@@ -35,17 +43,36 @@ class StageError(Exception):
     """Bad input: the message names the file, flag or value and says what would work."""
 
 
-def parse_board(text: str) -> tuple[int, int]:
-    """``"7x5"`` -> ``(7, 5)``: inner corners per row and per column."""
-    match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
+class BoardSpec(NamedTuple):
+    """A ``--board`` value: inner corners per row and per column, and the board's kind."""
+
+    cols: int
+    rows: int
+    kind: str = "chessboard"
+
+
+DEFAULT_BOARD = BoardSpec(*DEFAULT_INNER_CORNERS)
+_KIND_NAMES = {"chessboard": "chessboard", "checkerboard": "chessboard", "charuco": "charuco"}
+
+
+def parse_board(text: str) -> BoardSpec:
+    """``"7x5"`` -> ``BoardSpec(7, 5, "chessboard")``, ``"charuco:7x5"`` ->
+    ``BoardSpec(7, 5, "charuco")``: inner corners per row and per column."""
+    match = re.fullmatch(r"\s*(?:([A-Za-z]+)\s*:\s*)?(\d+)\s*[xX]\s*(\d+)\s*", text)
     counting = ("it counts inner corners, where four squares meet, not squares: "
                 "a board of 8 x 6 squares is --board 7x5")
     if match is None:
-        raise argparse.ArgumentTypeError(f"{text!r} is not COLSxROWS like 7x5; {counting}")
-    cols, rows = int(match[1]), int(match[2])
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not COLSxROWS like 7x5 (a checkerboard) or charuco:7x5 (a ChArUco board); {counting}")
+    kind = _KIND_NAMES.get((match[1] or "chessboard").lower())
+    if kind is None:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: unknown board kind {match[1]!r}; write COLSxROWS for a checkerboard or "
+            f"charuco:COLSxROWS for a ChArUco board ({', '.join(BOARD_KINDS)})")
+    cols, rows = int(match[2]), int(match[3])
     if cols < 2 or rows < 2:
         raise argparse.ArgumentTypeError(f"{text!r}: needs at least 2x2 inner corners; {counting}")
-    return cols, rows
+    return BoardSpec(cols, rows, kind)
 
 
 def _square_mm(text: str) -> float:
@@ -67,9 +94,10 @@ def _paper(text: str) -> str:
 
 
 def _add_board_args(p, square_help=None):
-    p.add_argument("--board", type=parse_board, default=DEFAULT_INNER_CORNERS, metavar="COLSxROWS",
+    p.add_argument("--board", type=parse_board, default=DEFAULT_BOARD, metavar="[charuco:]COLSxROWS",
                    help="inner corners per row and column, where four squares meet (default %dx%d: "
-                        "a board of 8 x 6 squares)" % DEFAULT_INNER_CORNERS)
+                        "a checkerboard of 8 x 6 squares); charuco:COLSxROWS for a ChArUco board, "
+                        "which may be partly hidden" % DEFAULT_INNER_CORNERS)
     p.add_argument("--square", type=_square_mm, default=None, metavar="MM",
                    help=square_help or f"side of one printed square, millimeters (default {DEFAULT_SQUARE_MM:g}); "
                                        "measure the print")
@@ -81,10 +109,12 @@ def _parser():
                                           "`layout --help`.")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
 
-    b = sub.add_parser("board", help="write the checkerboard to print (PDF)",
-                       description="Write the checkerboard as a one-page PDF at exact scale, with a 100 mm "
-                                   "ruler to check the print. Print it at actual size (100 %%, no 'fit to "
-                                   "page') and lay it flat on the floor.")
+    b = sub.add_parser("board", help="write the board to print (PDF)",
+                       description="Write the board as a one-page PDF at exact scale, with a 100 mm ruler "
+                                   "to check the print and the --board/--square values (and a ChArUco "
+                                   "board's marker dictionary) in the margin. Print it at actual size "
+                                   "(100 %, no 'fit to page') and lay it flat on the floor. "
+                                   "--board charuco:7x5 prints a ChArUco board.")
     b.add_argument("--paper", type=_paper, default=DEFAULT_PAPER,
                    help=f"A3 or A4, used landscape (default {DEFAULT_PAPER})")
     _add_board_args(b, square_help="side of one square, millimeters (default 45 on A3, 30 on A4)")
@@ -119,16 +149,90 @@ def _parser():
     k.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
                    help="output folder (default out/<photo name>; created)")
     k.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
+
+    g = sub.add_parser("segment", help="find the floor: mask, overlay and floor polygon",
+                       description="Find the floor in PHOTO with the floor model refined by GrabCut (or GrabCut "
+                                   "alone). Writes MASK.png (255 = floor, the photo's size), MASK_overlay.png "
+                                   "and, when the board is found, MASK.json with the floor polygon in meters.")
+    g.add_argument("photo", type=Path, metavar="PHOTO")
+    _add_board_args(g)
+    g.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
+                   help="camera profile from `stage calibrate`")
+    g.add_argument("--method", choices=("onnx", "grabcut"), default="onnx",
+                   help="onnx: the model, refined by GrabCut (default); grabcut: GrabCut alone, seeded "
+                        "from the board and the horizon (needs the board)")
+    g.add_argument("--no-refine", dest="refine", action="store_false",
+                   help="take the model's mask as it is, without GrabCut")
+    g.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
+                   help="an ONNX segmentation model (default: Stager's models/floor_segnet.onnx). Its "
+                        "input and classes are read from MODEL.json beside it, else these options:")
+    g.add_argument("--input-size", type=_size_px, default=None, metavar="WxH",
+                   help="fixed model input size (default: long side 256, sides multiples of 32)")
+    g.add_argument("--mean", type=_triple, default=None, metavar="R,G,B",
+                   help="input mean after scaling to 0..1 (default 0.485,0.456,0.406)")
+    g.add_argument("--std", type=_triple, default=None, metavar="R,G,B",
+                   help="input standard deviation (default 0.229,0.224,0.225)")
+    g.add_argument("--channel-order", choices=("RGB", "BGR"), default=None)
+    g.add_argument("--floor-class", type=_classes, default=None, metavar="K[,K...]",
+                   help="output class(es) meaning floor, e.g. 2 for a SUN RGB-D 37-class model, 3,28 "
+                        "for ADE20K's floor and rug (default 1)")
+    g.add_argument("--output-kind", dest="output", choices=("logits", "probabilities"), default=None,
+                   help="whether the model's output needs a softmax (default logits)")
+    g.add_argument("--out", "-o", type=Path, default=None, metavar="MASK.png",
+                   help="the mask to write (default out/<photo name>/floor.png; folder created)")
+    g.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
+
+    m = sub.add_parser("measure", help="measure the room: camera, floor polygon and wall height",
+                       description="Calibrate PHOTO from the board, find the floor and its polygon, and "
+                                   "measure the wall height from vertical edges. Writes DIR/report.json and "
+                                   "the three overlays overlay_calibration.png, overlay_floor.png, "
+                                   "overlay_height.png.")
+    m.add_argument("photo", type=Path, metavar="PHOTO")
+    _add_board_args(m)
+    m.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
+                   help="camera profile from `stage calibrate`")
+    m.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
+                   help="floor model (default: Stager's models/floor_segnet.onnx, with its MODEL.json)")
+    m.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
+                   help="output folder (default out/<photo name>; created)")
+    m.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
     return p
+
+
+def _size_px(text: str) -> tuple[int, int]:
+    match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
+    if match is None or min(int(match[1]), int(match[2])) < 16:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected WIDTHxHEIGHT in pixels, e.g. 320x240")
+    return int(match[2]), int(match[1])  # (rows, cols)
+
+
+def _triple(text: str) -> tuple[float, float, float]:
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected three numbers R,G,B, e.g. 0.485,0.456,0.406")
+    return values
+
+
+def _classes(text: str) -> tuple[int, ...]:
+    try:
+        values = tuple(int(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if not values or min(values) < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected class indices like 2 or 3,28")
+    return values
 
 
 def _board(args, square_default=DEFAULT_SQUARE_MM):
     from .board import Board
 
-    cols, rows = args.board
+    cols, rows, kind = args.board
     square = square_default if args.square is None else args.square
     try:
-        return Board(cols, rows, square)
+        return Board(cols, rows, square, kind=kind)
     except ValueError as error:
         raise StageError(str(error)) from None
 
@@ -175,12 +279,13 @@ def _board_cmd(args):
     from .printable import DEFAULT_SQUARE_BY_PAPER_MM, board_for_paper, write_board_pdf
 
     _prepare_file_out(args.out, DEFAULT_BOARD_PDF)
-    cols, rows = args.board
+    cols, rows, kind = args.board
     try:
-        board = board_for_paper(args.paper, cols, rows, args.square)
+        board = board_for_paper(args.paper, cols, rows, args.square, kind)
     except ValueError as error:
         square = DEFAULT_SQUARE_BY_PAPER_MM[args.paper] if args.square is None else args.square
-        raise StageError(f"--paper {args.paper} --board {cols}x{rows} --square {square:g}: {error}") from None
+        spec = f"{cols}x{rows}" if kind == "chessboard" else f"{kind}:{cols}x{rows}"
+        raise StageError(f"--paper {args.paper} --board {spec} --square {square:g}: {error}") from None
     _mkdir(args.out.parent, "--out", args.out)
     try:
         write_board_pdf(args.out, board, args.paper)
@@ -188,10 +293,11 @@ def _board_cmd(args):
         raise StageError(f"--out {args.out}: cannot write it ({error.strerror or error}); "
                          "choose a folder you can write to") from None
     if not args.quiet:
-        print(f"wrote {args.out}: {board.cols}x{board.rows} inner corners ({board.cols + 1} x {board.rows + 1} "
-              f"squares of {board.square_mm:g} mm) on {args.paper}")
+        what = "checkerboard" if board.kind == "chessboard" else f"ChArUco board (markers {CHARUCO_DICTIONARY})"
+        print(f"wrote {args.out}: {what}, {board.cols}x{board.rows} inner corners "
+              f"({board.cols + 1} x {board.rows + 1} squares of {board.square_mm:g} mm) on {args.paper}")
         print(f"print at actual size (100 %, no 'fit to page'), check the 100 mm ruler, then use "
-              f"--board {board.cols}x{board.rows} --square {board.square_mm:g}")
+              f"--board {board.spec} --square {board.square_mm:g}")
     return EXIT_OK
 
 
@@ -226,7 +332,7 @@ def _calibrate_cmd(args):
     worst = max(range(len(per_view)), key=per_view.__getitem__)
     k1, k2, p1, p2, k3 = (profile["distortion"] + [0.0] * 5)[:5]
     print(f"images      {len(used)} used, {len(skipped)} skipped"
-          + (f" (no {board.cols}x{board.rows} board found): {', '.join(skipped)}" if skipped else ""))
+          + (f" (no {board.describe()} found): {', '.join(skipped)}" if skipped else ""))
     print(f"size        {w} x {h} px")
     sigma = profile.get("focal_uncertainty") or 0.0
     print(f"focal       fx {K[0][0]:.2f}  fy {K[1][1]:.2f} px"
@@ -270,8 +376,9 @@ def _check_cmd(args):
         return EXIT_OK
     i = calibration.intrinsics
     w, h = calibration.size_px
-    print(f"photo       {args.photo}: {w} x {h} px, {board.cols}x{board.rows} board found "
-          f"({calibration.detector} detector)")
+    seen = len(calibration.corner_ids)
+    print(f"photo       {args.photo}: {w} x {h} px, {board.describe()} found ({calibration.detector} detector"
+          + (f", {seen} of {board.corner_count} corners" if seen < board.corner_count else "") + ")")
     print(f"focal       {i.K[0, 0]:.1f} px \u00b1 {100 * i.focal_uncertainty:.1f} % from {i.source}"
           + (f" ({i.note})" if i.note else ""))
     print(f"camera      {calibration.camera_height_m:.3f} m above the floor")
@@ -280,6 +387,159 @@ def _check_cmd(args):
         print(f"warning: {warning}", file=sys.stderr)
     print(f"wrote {paths[0]} and {paths[1]}")
     return EXIT_OK
+
+
+def _load_model(args):
+    from dataclasses import replace
+
+    from .segment import DEFAULT_MODEL, FloorModel, ModelSpec
+
+    path = args.model if args.model is not None else DEFAULT_MODEL
+    if not path.is_file():
+        hint = "use --method grabcut" if args.model is not None else \
+            "the repository's models/floor_segnet.onnx is missing; reinstall, or use --method grabcut"
+        raise StageError(f"--model {path}: no such file; {hint}")
+    sidecar = path.with_suffix(".json")
+    spec = ModelSpec.from_json(sidecar) if sidecar.is_file() else ModelSpec()
+    given = {k: getattr(args, k) for k in ("input_size", "mean", "std", "channel_order", "floor_class", "output")
+             if getattr(args, k) is not None}
+    return FloorModel(path, spec=replace(spec, **given))
+
+
+def _segment_cmd(args):
+    import cv2
+
+    from .calibrate import CalibrationError, calibrate_file, read_photo
+    from .floor import floor_overlay, floor_polygon
+    from .segment import segment_floor
+
+    board = _board(args)
+    out = args.out if args.out is not None else Path("out") / args.photo.stem / "floor.png"
+    if out.suffix.lower() != ".png":
+        raise StageError(f"--out {out}: the mask is written as PNG; give a name ending in .png, e.g. floor.png")
+    _prepare_file_out(out, "floor.png")
+    image = read_photo(args.photo)
+    model = _load_model(args) if args.method == "onnx" else None
+    warnings = []
+    try:
+        calibration = calibrate_file(args.photo, board, profile=args.camera)
+    except CalibrationError as error:
+        if args.method == "grabcut":
+            raise StageError(f"--method grabcut needs the board to seed the floor: {error}") from None
+        calibration = None
+        warnings.append(f"no calibration ({error}); the floor is found without the board and horizon, "
+                        "and no floor polygon is made")
+    seg = segment_floor(image, model, calibration, method=args.method, refine=args.refine)
+    warnings += seg.warnings
+    polygon = None
+    if calibration is not None and seg.mask.any():
+        try:
+            polygon = floor_polygon(seg.mask, calibration)
+        except ValueError as error:
+            warnings.append(f"no floor polygon: {error}")
+    overlay = floor_overlay(image, seg.mask, polygon, calibration)
+    files = {out: cv2.imencode(".png", seg.mask.astype("uint8") * 255)[1].tobytes(),
+             out.with_name(out.stem + "_overlay.png"): cv2.imencode(".png", overlay[..., ::-1])[1].tobytes()}
+    if polygon is not None:
+        report = {"photo": str(args.photo), "method": seg.method, "floor_fraction": float(seg.mask.mean()),
+                  "floor": polygon.to_json(), "warnings": warnings}
+        files[out.with_suffix(".json")] = json.dumps(report, indent=2) + "\n"
+    _write_all(files, out.parent)
+    if not args.quiet:
+        print(f"floor       {100 * seg.mask.mean():.1f} % of the photo ({seg.method})")
+        if polygon is not None:
+            print(f"polygon     {len(polygon.polygon_m)} corners, {polygon.area_m2:.2f} m\u00b2 visible")
+            if polygon.caveat:
+                print(f"note        {polygon.caveat}")
+        print("wrote " + ", ".join(str(p) for p in files))
+    for warning in warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    return EXIT_OK
+
+
+def _png(image) -> bytes:
+    import cv2
+
+    ok, data = cv2.imencode(".png", image[..., ::-1] if image.ndim == 3 else image)
+    if not ok:
+        raise RuntimeError("OpenCV could not encode a PNG")
+    return data.tobytes()
+
+
+def _measure_cmd(args):
+    import time
+
+    from . import __version__
+    from .calibrate import calibrate_file, read_photo
+    from .floor import floor_overlay, floor_polygon
+    from .height import measure_height
+    from .overlay import calibration_overlay
+    from .overlay_height import height_overlay
+    from .segment import segment_floor
+
+    board = _board(args)
+    out = args.out if args.out is not None else Path("out") / args.photo.stem
+    _prepare_dir_out(out)
+    if args.camera is not None and args.photo.is_file() and not args.camera.is_file():
+        raise StageError(f"--camera {args.camera}: no such file; make a camera profile with "
+                         f"`stage calibrate SHOT... --out {args.camera}`")
+    for name in ("input_size", "mean", "std", "channel_order", "floor_class", "output"):
+        setattr(args, name, None)  # measure takes a model with its sidecar as it is
+    timings = {}
+    start = time.perf_counter()
+    image = read_photo(args.photo)
+    calibration = calibrate_file(args.photo, board, profile=args.camera)
+    timings["calibrate_s"] = time.perf_counter() - start
+    start = time.perf_counter()
+    seg = segment_floor(image, _load_model(args), calibration)
+    warnings = list(calibration.warnings) + list(seg.warnings)
+    if not seg.mask.any():
+        raise StageError(f"photo {args.photo}: no floor found; the floor must show around the board")
+    polygon = floor_polygon(seg.mask, calibration)
+    timings["segment_s"] = time.perf_counter() - start
+    start = time.perf_counter()
+    height = measure_height(image, calibration, floor_mask=seg.mask)
+    timings["height_s"] = time.perf_counter() - start
+    if height.fallback:
+        warnings.append(f"wall height not measured: {height.reason}")
+    report = {"photo": str(args.photo), "stager_version": __version__,
+              "calibration": calibration.to_json(),
+              "floor": {"method": seg.method, **polygon.to_json()},
+              "height": height.to_json(),
+              "timings": {k: round(v, 3) for k, v in timings.items()},
+              "warnings": warnings}
+    files = {out / "report.json": json.dumps(report, indent=2) + "\n",
+             out / "overlay_calibration.png": _png(calibration_overlay(image, calibration)),
+             out / "overlay_floor.png": _png(floor_overlay(image, seg.mask, polygon, calibration)),
+             out / "overlay_height.png": _png(height_overlay(image, calibration, height))}
+    _write_all(files, out)
+    if not args.quiet:
+        i = calibration.intrinsics
+        print(f"focal       {i.K[0, 0]:.1f} px \u00b1 {100 * i.focal_uncertainty:.1f} % from {i.source}")
+        print(f"camera      {calibration.camera_height_m:.3f} m above the floor, RMS {calibration.rms_px:.2f} px")
+        print(f"floor       {polygon.area_m2:.2f} m\u00b2 visible, {len(polygon.polygon_m)} corners ({seg.method})")
+        if polygon.caveat:
+            print(f"note        {polygon.caveat}")
+        state = "assumed (fallback)" if height.fallback else f"confidence {height.confidence:.2f}"
+        print(f"walls       {height.height_m:.2f} m high, {state}")
+        print(f"wrote {out}/report.json and overlay_calibration.png, overlay_floor.png, overlay_height.png")
+    for warning in warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    return EXIT_OK
+
+
+def _write_all(files: dict, folder: Path) -> None:
+    """Write every file or none: a failure removes the ones already written."""
+    _mkdir(folder, "--out", folder)
+    done = []
+    try:
+        for path, data in files.items():
+            _write(path, data, "--out", folder)
+            done.append(path)
+    except StageError:
+        for path in done:
+            path.unlink(missing_ok=True)
+        raise
 
 
 def main(argv=None) -> int:
@@ -292,9 +552,12 @@ def main(argv=None) -> int:
         parser.print_help()
         return EXIT_OK
     from .calibrate import CalibrationError
+    from .segment import SegmentationError
 
-    commands = {"board": _board_cmd, "calibrate": _calibrate_cmd, "check": _check_cmd}
-    return dispatch(commands[args.command], args, "stage", [((StageError, CalibrationError), str)])
+    commands = {"board": _board_cmd, "calibrate": _calibrate_cmd, "check": _check_cmd, "segment": _segment_cmd,
+                "measure": _measure_cmd}
+    return dispatch(commands[args.command], args, "stage",
+                    [((StageError, CalibrationError, SegmentationError), str)])
 
 
 if __name__ == "__main__":

@@ -3,7 +3,8 @@
 :func:`calibration_overlay` draws, on a copy of the photo:
 
 * the detected board corners, colored row by row and joined in the detector's order, the
-  first corner ringed in white (where the board frame starts);
+  first corner ringed in white (where the board frame starts); a ChArUco board shows the
+  corners it was seen by, and the caption says how many of all;
 * the outline of the printed squares where the calibration puts them;
 * a 1 m grid on the floor (``GRID_HALF_SPAN_M`` around the board), only where the floor
   is in front of the camera and below the horizon, bent by the lens distortion like
@@ -29,7 +30,7 @@ import cv2
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from .calibrate import Calibration
+from .calibrate import Calibration, corner_spacing_px
 
 GRID_STEP_M = 1.0
 GRID_HALF_SPAN_M = 6.0
@@ -340,15 +341,20 @@ def _draw_axes(out, calibration, style, labels):
 
 
 def _draw_corners(out, calibration, style, transform=None, spacing=None, light=False):
-    """Corners colored by row, joined in the detector's order, the first one ringed.
+    """Corners colored by board row, joined along their rows and from each row's end to the
+    next row's start (the order a checkerboard detector lists them), the board's first
+    corner (or the first one seen) ringed.
 
     ``transform`` maps photo pixels to ``out``'s (for the inset); ``light`` draws small
     dots only (the inset shows the detail)."""
     board = calibration.board
     corners = np.asarray(calibration.corners_px, dtype=np.float64).reshape(-1, 2)
+    ids = np.asarray(calibration.corner_ids)
     if transform is not None:
         corners = transform(corners)
-    corners = corners.reshape(board.rows, board.cols, 2)
+    grid = np.full((board.rows * board.cols, 2), np.nan)
+    grid[ids] = corners
+    grid = grid.reshape(board.rows, board.cols, 2)
     if spacing is None:
         spacing = _corner_spacing_px(calibration)
     radius = float(np.clip(0.25 * spacing, 1.5, 6 * style.s))
@@ -356,23 +362,28 @@ def _draw_corners(out, calibration, style, transform=None, spacing=None, light=F
     hues = np.linspace(0, 150, board.rows, endpoint=False).astype(np.uint8)
     colors = cv2.cvtColor(np.stack([hues, np.full_like(hues, 255), np.full_like(hues, 255)], axis=1)[None],
                           cv2.COLOR_HSV2RGB)[0]
-    path = corners.reshape(-1, 2)
     thin = max(1, style.thin)
+    # Polylines through neighbors both seen: a hidden corner breaks its row.
+    path = grid.reshape(-1, 2)
+    pieces = [path[r] for r in _runs(np.all(np.isfinite(path), axis=1))]
     if not light:
-        _polyline(out, path, (0, 0, 0), thin + 2)
+        for piece in pieces:
+            _polyline(out, piece, (0, 0, 0), thin + 2)
     for j in range(board.rows):
         color = tuple(int(v) for v in colors[j])
+        row = grid[j][np.all(np.isfinite(grid[j]), axis=1)]
         if light:
-            for p in corners[j]:
+            for p in row:
                 cv2.circle(out, tuple(_fixed(p)), round(1.2 * _ONE), color, -1, cv2.LINE_AA, _SHIFT)
             continue
-        _polyline(out, corners[j], color, thin)
-        if j + 1 < board.rows:  # the jump to the next row's start, as the detector lists them
-            _polyline(out, np.array([corners[j, -1], corners[j + 1, 0]]), color, thin)
-        for p in corners[j]:
+        for r in _runs(np.all(np.isfinite(grid[j]), axis=1)):
+            _polyline(out, grid[j][r], color, thin)
+        if j + 1 < board.rows and np.all(np.isfinite([grid[j, -1], grid[j + 1, 0]])):
+            _polyline(out, np.array([grid[j, -1], grid[j + 1, 0]]), color, thin)  # the jump to the next row
+        for p in row:
             cv2.circle(out, tuple(_fixed(p)), round(radius * _ONE), (0, 0, 0), thin + 2, cv2.LINE_AA, _SHIFT)
             cv2.circle(out, tuple(_fixed(p)), round(radius * _ONE), color, thin, cv2.LINE_AA, _SHIFT)
-    first = tuple(_fixed(path[0]))
+    first = tuple(_fixed(corners[np.argmin(ids)]))
     big = max(radius * 1.6, 3.0 if light else 4.0)
     cv2.circle(out, first, round(big * _ONE), (0, 0, 0), thin + 3, cv2.LINE_AA, _SHIFT)
     cv2.circle(out, first, round(big * _ONE), (255, 255, 255), thin + 1, cv2.LINE_AA, _SHIFT)
@@ -383,10 +394,12 @@ def _caption_lines(calibration: Calibration, horizon: bool) -> list[list[tuple[s
     i = calibration.intrinsics
     board = calibration.board
     white = TEXT_RGB
+    count = len(calibration.corner_ids)
+    seen = f"{count} of {board.corner_count} corners, " if count < board.corner_count else ""
     return [
         [(f"focal {i.K[0, 0]:.0f} px \u00b1 {100 * i.focal_uncertainty:.1f} % ({i.source})", white)],
         [(f"camera {calibration.camera_height_m:.2f} m above the floor", white)],
-        [(f"board {board.cols}x{board.rows}, {board.square_mm:g} mm: RMS {calibration.rms_px:.2f} px", white)],
+        [(f"board {board.spec}, {board.square_mm:g} mm: " + seen + f"RMS {calibration.rms_px:.2f} px", white)],
         [(f"grid {GRID_STEP_M:g} m, axes {AXIS_M:g} m: ", white), ("x ", AXIS_RGB["x"]), ("y ", AXIS_RGB["y"]),
          ("z", AXIS_RGB["z"])] + ([("  horizon", HORIZON_RGB)] if horizon else []),
     ]
@@ -451,10 +464,7 @@ def _board_rect_px(calibration: Calibration, lens: _Lens) -> tuple[float, float,
 
 
 def _corner_spacing_px(calibration: Calibration) -> float:
-    board = calibration.board
-    grid = np.asarray(calibration.corners_px, dtype=np.float64).reshape(board.rows, board.cols, 2)
-    return float(min(np.hypot(*np.diff(grid, axis=0).reshape(-1, 2).T).min(),
-                     np.hypot(*np.diff(grid, axis=1).reshape(-1, 2).T).min()))
+    return corner_spacing_px(calibration.corners_px, calibration.corner_ids, calibration.board)
 
 
 def _inset(photo, calibration, lens, style, board_rect, width_px):

@@ -7,7 +7,8 @@ trusts that a square on paper is ``square_mm`` wide. So the page is drawn in mil
 is a common default), plus a caption with the command-line flags matching the print.
 
 Page layout. The squares are centered on the landscape sheet, top-left square black, as
-in :meth:`augment.board.Board.image`. The ruler and the caption go into the margins around
+in :meth:`augment.board.Board.printed_image`; a ChArUco board's markers sit in the white
+squares, drawn bit by bit. The ruler and the caption go into the margins around
 the squares, never closer than :data:`PRINTER_MARGIN_MM` to the paper edge (most printers
 cannot print there) nor than :data:`QUIET_ZONE_MM` to the squares (the corner detector
 needs white around the outer squares). They are placed automatically: the ruler under the
@@ -20,6 +21,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 from matplotlib.backends.backend_pdf import FigureCanvasPdf
 from matplotlib.figure import Figure
 from matplotlib.font_manager import FontProperties
@@ -27,7 +29,8 @@ from matplotlib.patches import PathPatch
 from matplotlib.path import Path as MplPath
 from matplotlib.textpath import TextToPath
 
-from augment.board import DEFAULT_INNER_CORNERS, PAPER_MM, Board
+from augment.board import (CHARUCO_BITS_PER_SQUARE, CHARUCO_DICTIONARY, CHARUCO_MARKER_BITS, DEFAULT_INNER_CORNERS,
+                           PAPER_MM, Board)
 from layout.fileio import atomic_path
 
 DEFAULT_SQUARE_BY_PAPER_MM = {"A3": 45.0, "A4": 30.0}
@@ -68,7 +71,7 @@ def _paper_mm(paper: str) -> tuple[str, tuple[float, float]]:
 
 
 def board_for_paper(paper: str, cols: int | None = None, rows: int | None = None,
-                    square_mm: float | None = None) -> Board:
+                    square_mm: float | None = None, kind: str = "chessboard") -> Board:
     """The board printed on ``paper``, checked to fit.
 
     Parameters
@@ -80,6 +83,8 @@ def board_for_paper(paper: str, cols: int | None = None, rows: int | None = None
     square_mm : float, optional
         Side of one square, millimeters; default the paper's entry in
         :data:`DEFAULT_SQUARE_BY_PAPER_MM` (45 mm on A3, 30 mm on A4).
+    kind : str
+        ``"chessboard"`` or ``"charuco"`` (see :class:`augment.board.Board`).
 
     Returns
     -------
@@ -100,21 +105,21 @@ def board_for_paper(paper: str, cols: int | None = None, rows: int | None = None
     square_mm = DEFAULT_SQUARE_BY_PAPER_MM[paper] if square_mm is None else float(square_mm)
     # A board on its own default sheet always fits, so this checks only the counts and
     # the square size, leaving the paper to the message below.
-    _check_fits(Board(cols, rows, square_mm), paper)
-    return Board(cols, rows, square_mm, sheet_mm)
+    _check_fits(Board(cols, rows, square_mm, kind=kind), paper)
+    return Board(cols, rows, square_mm, sheet_mm, kind)
 
 
 def _check_fits(board: Board, paper: str) -> None:
     """Raise the ValueError of :func:`board_for_paper` when ``board`` does not fit."""
     paper, sheet_mm = _paper_mm(paper)
-    if _plan(board.cols, board.rows, board.square_mm, paper) is not None:
+    if _plan(board, paper) is not None:
         return
     squares_mm = ((board.cols + 1) * board.square_mm, (board.rows + 1) * board.square_mm)
     inside_mm = tuple(s - 2 * PRINTER_MARGIN_MM for s in sheet_mm)
     # Whole millimeters are what a user types; the bound below is where the squares alone
     # touch the printer margins, and the ruler and caption may need a little less.
     largest = math.floor(min(inside_mm[0] / (board.cols + 1), inside_mm[1] / (board.rows + 1)))
-    while largest >= 1 and _plan(board.cols, board.rows, float(largest), paper) is None:
+    while largest >= 1 and _plan(Board(board.cols, board.rows, float(largest), kind=board.kind), paper) is None:
         largest -= 1
     if largest >= 1:
         advice = (f"use squares of {largest} mm or less (--square {largest}), "
@@ -216,6 +221,8 @@ def _ruler_item() -> _Item:
 def caption_lines(board: Board, paper: str) -> tuple[str, str]:
     """The two lines of the caption: what the sheet is and how to print it, then the flags.
 
+    A ChArUco board names its marker dictionary, which a detector must be given.
+
     Parameters
     ----------
     board : Board
@@ -225,9 +232,11 @@ def caption_lines(board: Board, paper: str) -> tuple[str, str]:
     -------
     tuple of str
     """
-    description = (f"Stager board {board.cols}x{board.rows} inner corners, {board.square_mm:g} mm "
+    what = "board" if board.kind == "chessboard" else "ChArUco board"
+    markers = "" if board.kind == "chessboard" else f" (markers {CHARUCO_DICTIONARY})"
+    description = (f"Stager {what} {board.cols}x{board.rows} inner corners{markers}, {board.square_mm:g} mm "
                    f"squares, {paper} - print at 100 % (actual size); check the ruler: {RULER_MM} mm")
-    flags = f"command-line flags: --board {board.cols}x{board.rows} --square {board.square_mm:g}"
+    flags = f"command-line flags: --board {board.spec} --square {board.square_mm:g}"
     return description, flags
 
 
@@ -278,15 +287,15 @@ def _overlap(a, b) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
 
-def _plan(cols: int, rows: int, square_mm: float, paper: str) -> list[_Placed] | None:
+def _plan(board: Board, paper: str) -> list[_Placed] | None:
     """Where the ruler and the caption go, or None when the board does not fit."""
     sheet_mm = PAPER_MM[paper]
-    squares_mm = ((cols + 1) * square_mm, (rows + 1) * square_mm)
+    squares_mm = ((board.cols + 1) * board.square_mm, (board.rows + 1) * board.square_mm)
     if any(s + 2 * PRINTER_MARGIN_MM > p for s, p in zip(squares_mm, sheet_mm)):
         return None
     bands = _bands(sheet_mm, squares_mm)
     ruler = _ruler_item()
-    captions = list(_caption_items(Board(cols, rows, square_mm, sheet_mm), paper))
+    captions = list(_caption_items(Board(board.cols, board.rows, board.square_mm, sheet_mm, board.kind), paper))
     for ruler_band, caption_bands in _PREFERENCES.items():
         for caption_band in caption_bands:
             for caption in captions:
@@ -326,6 +335,28 @@ def _squares_path(board: Board, sheet_mm) -> MplPath:
             vertices += [(x, y), (x + s, y), (x + s, y + s), (x, y + s), (x, y)]
             codes += [MplPath.MOVETO, MplPath.LINETO, MplPath.LINETO, MplPath.LINETO,
                       MplPath.CLOSEPOLY]
+    return _no_simplify(MplPath(vertices, codes))
+
+
+def _markers_path(board: Board, sheet_mm) -> MplPath:
+    """The black bits of the ChArUco markers, one rectangle per run of black bits in a row
+    of a marker, 1/8 of a square each (as :meth:`Board.printed_image` draws them)."""
+    s = board.square_mm
+    bit = s / CHARUCO_BITS_PER_SQUARE
+    margin = (CHARUCO_BITS_PER_SQUARE - CHARUCO_MARKER_BITS) / 2 * bit
+    x0 = (sheet_mm[0] - (board.cols + 1) * s) / 2
+    y_top = (sheet_mm[1] + (board.rows + 1) * s) / 2
+    vertices, codes = [], []
+    for _, i, j, bits in board.markers():
+        left, top = x0 + i * s + margin, y_top - j * s - margin
+        for r, row in enumerate(bits):
+            padded = np.concatenate([[False], row, [False]]).astype(np.int8)
+            edges = np.flatnonzero(np.diff(padded))
+            for a, b in zip(edges[::2], edges[1::2]):
+                x, y = left + a * bit, top - (r + 1) * bit
+                w = (b - a) * bit
+                vertices += [(x, y), (x + w, y), (x + w, y + bit), (x, y + bit), (x, y)]
+                codes += [MplPath.MOVETO, MplPath.LINETO, MplPath.LINETO, MplPath.LINETO, MplPath.CLOSEPOLY]
     return _no_simplify(MplPath(vertices, codes))
 
 
@@ -386,7 +417,7 @@ def board_figure(board: Board, paper: str) -> Figure:
     """
     paper, sheet_mm = _paper_mm(paper)
     _check_fits(board, paper)
-    plan = _plan(board.cols, board.rows, board.square_mm, paper)
+    plan = _plan(board, paper)
     fig = Figure(figsize=(sheet_mm[0] / MM_PER_INCH, sheet_mm[1] / MM_PER_INCH), facecolor="white")
     ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
     ax.set_xlim(0.0, sheet_mm[0])
@@ -396,6 +427,9 @@ def board_figure(board: Board, paper: str) -> Figure:
     # page; the PDF is unaffected either way.
     ax.add_patch(PathPatch(_squares_path(board, sheet_mm), facecolor="black", edgecolor="none",
                            linewidth=0.0, snap=False, clip_on=False, gid="squares"))
+    if board.kind == "charuco":
+        ax.add_patch(PathPatch(_markers_path(board, sheet_mm), facecolor="black", edgecolor="none",
+                               linewidth=0.0, snap=False, clip_on=False, gid="markers"))
     for placed in plan:
         (_draw_ruler if placed.item.kind == "ruler" else _draw_caption)(ax, placed)
     return fig
@@ -432,7 +466,7 @@ def write_board_pdf(path, board: Board, paper: str) -> Path:
         raise FileNotFoundError(f"cannot write {path}: folder {path.parent} does not exist")
     paper, _ = _paper_mm(paper)
     fig = board_figure(board, paper)
-    title = f"Stager board {board.cols}x{board.rows}, {board.square_mm:g} mm squares, {paper}"
+    title = f"Stager board {board.spec}, {board.square_mm:g} mm squares, {paper}"
     with atomic_path(path) as tmp:
         # No creation date: the same board gives the same bytes.
         FigureCanvasPdf(fig).print_pdf(str(tmp), metadata={

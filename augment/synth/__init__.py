@@ -11,7 +11,7 @@ seed gives the same image. ``python -m augment.synth`` writes datasets.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import cv2
@@ -19,11 +19,11 @@ import numpy as np
 
 from layout.fileio import write_atomic
 
-from ..board import Board
+from ..board import CHARUCO_DICTIONARY, Board
 from ..gl import Renderer, pyrender
 from .camera import Shot, place_board, random_handling, random_shot, random_size
 from .photo import degrade
-from .rooms import Room, add_clutter, random_room
+from .rooms import Clutter, Room, add_clutter, random_room
 from .scene import SEG_CEILING, SEG_FLOOR, SEG_WALL, build_scene
 
 FORMAT = "stager-synth-1"
@@ -68,8 +68,22 @@ def _keep_out(shot: Shot, outline_m: np.ndarray) -> list[np.ndarray]:
     return [hull]
 
 
+def _board_cover(board: Board, world_from_board: np.ndarray, fraction: float) -> Clutter:
+    """A flat carton (3 cm high) over ``fraction`` of the board's squares, from its +x edge
+    to 5 cm past the sheet's, and 5 cm past the sheet on both sides."""
+    if not 0 < fraction < 1:
+        raise ValueError(f"board_hidden {fraction}: expected a fraction of the board between 0 and 1")
+    squares_m = (board.cols + 1) * board.square_m
+    sheet_w, sheet_h = board.size_m
+    x0, x1 = squares_m / 2 - fraction * squares_m, sheet_w / 2 + 0.05
+    center = world_from_board[:3, :3] @ [(x0 + x1) / 2, 0.0, 0.0] + world_from_board[:3, 3]
+    yaw = float(np.arctan2(world_from_board[1, 0], world_from_board[0, 0]))
+    return Clutter("box", (float(center[0]), float(center[1])), (x1 - x0, sheet_h + 0.1, 0.03), yaw)
+
+
 def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = None,
-                  board: Board | None = None, clutter: bool = True, photographic: bool = True) -> Sample:
+                  board: Board | None = None, clutter: bool = True, photographic: bool = True,
+                  board_hidden: float = 0.0) -> Sample:
     """Render one synthetic room photo with its ground truth.
 
     Parameters
@@ -81,11 +95,15 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     size_px : (width, height), optional
         Image size; random (landscape or portrait phone sizes) when None.
     board : Board, optional
-        Checkerboard; the CLI default when None.
+        Checkerboard or ChArUco board; the CLI default when None.
     clutter : bool
         Allow cartons and radiators on the floor.
     photographic : bool
         Apply exposure, white balance, vignetting, blur and noise (JPEG happens on write).
+    board_hidden : float
+        Put a flat carton over this fraction of the board's squares (across its width, from
+        its +x edge): a partly hidden board, as ChArUco boards allow. The truth's
+        ``corners_visible`` says which corners the render shows.
     """
     board = Board() if board is None else board
     rng = np.random.default_rng(seed)
@@ -109,6 +127,8 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     outline = (board.outline_m() @ world_from_board[:3, :3].T + world_from_board[:3, 3])[:, :2]
     if clutter:
         room = add_clutter(rng, room, _keep_out(shot, outline))
+    if board_hidden > 0:
+        room = replace(room, clutter=room.clutter + (_board_cover(board, world_from_board, board_hidden),))
 
     built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px))
     width, height = size_px
@@ -170,6 +190,8 @@ def _truth(seed, room, shot, board, world_from_board, corners_px, visible, info,
                          "height_m": round(c.size_m[2], 4)} for c in room.clutter],
         },
         "board": {
+            "kind": board.kind,
+            **({"dictionary": CHARUCO_DICTIONARY} if board.kind == "charuco" else {}),
             "inner_corners": [board.cols, board.rows],
             "square_mm": board.square_mm,
             "sheet_mm": list(board.sheet_mm),

@@ -23,7 +23,7 @@ from tqdm import tqdm
 from layout.fileio import write_atomic
 
 from ..board import DEFAULT_INNER_CORNERS, DEFAULT_SQUARE_MM, Board
-from ..cli import parse_board
+from ..cli import DEFAULT_BOARD, parse_board
 from .dataset import contact_sheet, init_worker, render_one, truth_view
 
 def _parse_size(text: str) -> tuple[int, int]:
@@ -44,8 +44,9 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, required=True, help="output folder (created)")
     parser.add_argument("--size", type=_parse_size, default=None,
                         help="WIDTHxHEIGHT; default: random phone sizes 640x480-2016x1512, landscape and portrait")
-    parser.add_argument("--board", type=parse_board, default=DEFAULT_INNER_CORNERS,
-                        help="inner corners COLSxROWS (default %dx%d)" % DEFAULT_INNER_CORNERS)
+    parser.add_argument("--board", type=parse_board, default=DEFAULT_BOARD,
+                        help="inner corners COLSxROWS (default %dx%d), or charuco:COLSxROWS for a ChArUco "
+                             "board" % DEFAULT_INNER_CORNERS)
     parser.add_argument("--square", type=float, default=DEFAULT_SQUARE_MM,
                         help=f"square size in mm (default {DEFAULT_SQUARE_MM:g})")
     parser.add_argument("--no-clutter", dest="clutter", action="store_false", help="keep floors clean")
@@ -70,7 +71,7 @@ def main(argv=None) -> int:
         return 2
 
     options = dict(seed=args.seed, size=args.size, out=args.out, clutter=args.clutter,
-                   board=Board(args.board[0], args.board[1], args.square))
+                   board=Board(args.board.cols, args.board.rows, args.square, kind=args.board.kind))
     workers = max(1, min(args.workers, args.count))
     start = time.perf_counter()
     bar = tqdm(total=args.count, unit="img", disable=args.quiet or not sys.stderr.isatty())

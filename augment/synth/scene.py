@@ -161,15 +161,34 @@ def _in_triangle(p, a, b, c) -> bool:
     return (d1 >= 0) and (d2 >= 0) and (d3 >= 0)
 
 
-def _material(rng, color, texture=None, roughness=(0.6, 0.95), wrap=True, emissive=None, closed=False):
+class _SharpTexture(pyrender.Texture):
+    """A texture sampled anisotropically (up to 16 texels along the foreshortened direction).
+
+    Plain trilinear mipmapping picks its level by the foreshortened direction and so
+    blurs a print lying on the floor across as much as along: a checkerboard survives
+    that, the bits of a ChArUco marker do not, though any phone lens resolves them."""
+
+    def _add_to_context(self):
+        super()._add_to_context()
+        from OpenGL import GL
+        from OpenGL.GL.EXT.texture_filter_anisotropic import GL_TEXTURE_MAX_ANISOTROPY_EXT
+
+        GL.glBindTexture(self.tex_type, self._texid)
+        GL.glTexParameterf(self.tex_type, GL_TEXTURE_MAX_ANISOTROPY_EXT, 16.0)
+        GL.glBindTexture(self.tex_type, 0)
+
+
+def _material(rng, color, texture=None, roughness=(0.6, 0.95), wrap=True, emissive=None, closed=False,
+              sharp=False):
     """A PBR material. ``closed`` meshes (boxes) are drawn one-sided: their faces that
     touch a wall, the floor or the ceiling face away from the camera and are culled, so
-    no two coplanar surfaces fight over a pixel in an order pyrender leaves to chance."""
+    no two coplanar surfaces fight over a pixel in an order pyrender leaves to chance.
+    ``sharp`` filters the texture anisotropically (:class:`_SharpTexture`)."""
     tex = None
     if texture is not None:
         mode = pyrender.GLTF.REPEAT if wrap else pyrender.GLTF.CLAMP_TO_EDGE
-        tex = pyrender.Texture(source=texture, source_channels="RGB",
-                               sampler=pyrender.Sampler(wrapS=mode, wrapT=mode))
+        tex = (_SharpTexture if sharp else pyrender.Texture)(
+            source=texture, source_channels="RGB", sampler=pyrender.Sampler(wrapS=mode, wrapT=mode))
     return pyrender.MetallicRoughnessMaterial(
         baseColorFactor=np.append(np.asarray(color, dtype=np.float64), 1.0),
         baseColorTexture=tex, metallicFactor=0.0,
@@ -395,7 +414,9 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     paper.quad([[-w_m / 2, -h_m / 2, 0], [w_m / 2, -h_m / 2, 0], [w_m / 2, h_m / 2, 0], [-w_m / 2, h_m / 2, 0]],
                [0, 0, 1.0], [[0, 1], [1, 1], [1, 0], [0, 0]])
     ink = np.repeat(sheet[..., None], 3, axis=2)
-    add(paper.mesh(_material(rng, np.full(3, rng.uniform(0.8, 0.95)), ink, roughness=(0.6, 0.9), wrap=False)),
+    # Only the ChArUco board is filtered sharply: checkerboard photos stay as they were.
+    add(paper.mesh(_material(rng, np.full(3, rng.uniform(0.8, 0.95)), ink, roughness=(0.6, 0.9), wrap=False,
+                             sharp=board.kind == "charuco")),
         SEG_FLOOR, pose=world_from_board)
 
     # Lights. One exposure factor scales them all, like the camera's exposure would.

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from augment.board import Board
-from augment.calibrate import (CalibrationError, _focal_from_homography, calibrate_file, calibrate_photo,
-                               camera_profile, detect_board, exif_intrinsics, load_profile, read_photo,
-                               single_view_intrinsics)
+from augment.calibrate import (CalibrationError, _find_chessboard, _focal_from_homography, _saddle_refine,
+                               calibrate_file, calibrate_photo, camera_profile, detect_board, exif_intrinsics,
+                               load_profile, read_photo, single_view_intrinsics)
 from augment.gl import Renderer
 from augment.synth import render_sample
 from augment.synth.camera import look_pose
@@ -43,15 +43,16 @@ def test_profile_from_opencv_photos_matches_their_calibration():
 
 def test_single_view_focal_on_real_photos():
     """No photo of the set is near face-on (17-42 degrees of tilt), so none is refused;
-    with k1 fit from the board the focal errors stay within 6 %, median about 1 %."""
+    with k1 and k2 fit from the board the focal errors stay within the issue's 5 % (left06,
+    whose principal point is 23 px off center, is the worst at 4.7 %), median about 1 %."""
     ref = _reference()[0, 0]
     errors = []
     for path in LEFT:
         c = calibrate_file(path, OPENCV)
-        assert c.intrinsics.source == "single-view" and "k1" in c.intrinsics.note
+        assert c.intrinsics.source == "single-view" and "k1" in c.intrinsics.note and "k2" in c.intrinsics.note
         errors.append(abs(c.intrinsics.K[0, 0] - ref) / ref)
         assert c.rms_px < 0.5
-    assert max(errors) < 0.06 and np.median(errors) < 0.015
+    assert max(errors) < 0.05 and np.median(errors) < 0.015
 
 
 def test_face_on_board_is_refused_not_guessed():
@@ -104,18 +105,33 @@ def test_pose_height_and_horizon_with_true_intrinsics(renders):
         assert np.allclose(c.pixels_from_floor(floor), c.corners_px, atol=1e-6)
 
 
+def _corner_errors_px(corners_px, ids, truth_px, board=Board()):
+    """Distances of checkerboard corners to the true ones. A checkerboard's corners are
+    only known up to the grid's symmetries (a detector may start at any of its corners), so
+    the best of the four readings counts."""
+    row, col = np.divmod(np.asarray(ids), board.cols)
+    flip_rows, flip_cols = board.rows - 1 - row, board.cols - 1 - col
+    readings = [row * board.cols + col, flip_rows * board.cols + col, row * board.cols + flip_cols,
+                flip_rows * board.cols + flip_cols]
+    truth_px = np.asarray(truth_px)
+    return min((np.linalg.norm(corners_px - truth_px[k], axis=1) for k in readings), key=lambda e: e.max())
+
+
 def test_single_view_on_synthetic_photos(renders):
-    """From the board alone: focal length and camera height within 2.5 %."""
+    """From the board alone: corners within 0.1 px RMS of the truth, focal length and camera
+    height within 1 % (cornerSubPix's corners left errors of up to 2 % on these)."""
     for sample in renders:
         t = sample.truth
         image = sample.image.copy()
         c = calibrate_photo(image, Board())
         assert np.array_equal(image, sample.image)  # input untouched
         assert c.intrinsics.source == "single-view"
+        errors = _corner_errors_px(c.corners_px, c.corner_ids, t["board"]["corners_px"])
+        assert np.sqrt(np.mean(errors ** 2)) < 0.1
         f = t["K"][0][0]
-        assert abs(c.intrinsics.K[0, 0] - f) / f < 0.025
+        assert abs(c.intrinsics.K[0, 0] - f) / f < 0.01
         height = t["camera"]["height_m"] - 0.001
-        assert abs(c.camera_height_m - height) / height < 0.025
+        assert abs(c.camera_height_m - height) / height < 0.01
         assert c.rms_px < 0.3
 
 
@@ -123,6 +139,9 @@ def test_wrong_board_size_is_named_and_the_right_one_suggested():
     image = read_photo(LEFT[0])
     with pytest.raises(CalibrationError, match=r"no 7x5 checkerboard .*use --board 9x6"):
         calibrate_photo(image, Board(7, 5, 25), where=str(LEFT[0]))
+    # A plain checkerboard photographed, a ChArUco board given: the plain one is suggested.
+    with pytest.raises(CalibrationError, match=r"no 9x6 ChArUco board \(DICT_4X4_50\) .*use --board 9x6"):
+        calibrate_photo(image, Board(9, 6, 25, kind="charuco"), where=str(LEFT[0]))
     gray = np.full((480, 640), 128, np.uint8)
     with pytest.raises(CalibrationError, match="inner corners"):
         calibrate_photo(gray, Board())
@@ -173,3 +192,104 @@ def test_exif_focal_length_is_used_before_the_board(tmp_path, renders):
     plain = tmp_path / "plain.jpg"
     Image.fromarray(sample.image).save(plain, quality=92)
     assert calibrate_file(plain, Board()).intrinsics.source == "single-view"
+
+
+# --------------------------------------------------------------------------- corners
+
+
+def test_saddle_refinement_finds_a_blurred_skewed_corner():
+    """An X-junction of two edges at 15 and 70 degrees (a foreshortened square's corner) at
+    (20.37, 19.71), drawn 8x supersampled, blurred (sigma 1.3 px) and through a 2.2 gamma:
+    the saddle point is found within 0.02 px from a start 1.5 px away."""
+    n, ss = 41, 8
+    center = np.array([20.37, 19.71])
+    sub = (np.arange(n * ss) + 0.5) / ss - 0.5
+    x, y = np.meshgrid(sub - center[0], sub - center[1])
+    a, b = np.radians(15.0), np.radians(70.0)
+    side = np.sign(x * np.sin(a) - y * np.cos(a)) * np.sign(x * np.sin(b) - y * np.cos(b))
+    white = (side > 0).astype(np.float64).reshape(n, ss, n, ss).mean(axis=(1, 3))
+    image = cv2.GaussianBlur(0.1 + 0.8 * white, (0, 0), 1.3) ** (1 / 2.2)
+    gray = np.round(255 * image).astype(np.uint8)
+    refined, converged = _saddle_refine(gray, np.array([center + [1.2, -0.9]]), radius=6)
+    assert converged[0]
+    assert np.linalg.norm(refined[0] - center) < 0.02
+
+
+def test_small_board_missed_on_the_whole_photo_is_found_on_a_crop():
+    """Seed [99, 4]: a 7x5 board 76 px across in a 640x480 room photo. OpenCV's detectors
+    miss it on the whole photo; on a crop around the strongest saddle points SB finds it,
+    and the corners land within 0.3 px of the truth."""
+    with Renderer() as renderer:
+        sample = render_sample([99, 4], renderer, size_px=(640, 480))
+    gray = cv2.cvtColor(sample.image, cv2.COLOR_RGB2GRAY)
+    assert _find_chessboard(gray, (7, 5))[0] is None
+    detection = detect_board(sample.image, Board())
+    assert detection is not None and detection.detector.endswith("crop")
+    errors = _corner_errors_px(detection.corners_px, detection.ids, sample.truth["board"]["corners_px"])
+    assert errors.max() < 0.3
+
+
+# --------------------------------------------------------------------------- ChArUco
+
+CHARUCO = Board(kind="charuco")
+# The photographer lays this board near enough for its markers to read (squares ~27 px).
+CHARUCO_SEED = [7, 60]
+
+
+@pytest.fixture(scope="module")
+def charuco_renders():
+    """The default ChArUco board in a 1280x960 room photo, whole and 40 % under a carton."""
+    with Renderer() as renderer:
+        return [render_sample(CHARUCO_SEED, renderer, size_px=(1280, 960), board=CHARUCO, board_hidden=hidden)
+                for hidden in (0.0, 0.4)]
+
+
+def _pose_error(c, truth):
+    """Rotation (degrees) and translation (m) between the calibrated and true camera_from_board."""
+    true = np.array(truth["camera_from_world"]) @ np.array(truth["board"]["world_from_board"])
+    R = c.camera_from_floor[:3, :3].T @ true[:3, :3]
+    angle = np.degrees(np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1)))
+    return angle, np.linalg.norm(c.camera_from_floor[:3, 3] - true[:3, 3])
+
+
+def test_charuco_render_is_detected_with_the_true_corner_ids(charuco_renders):
+    """The photographer's ChArUco texture reads as printed: every corner OpenCV numbers is
+    the truth's corner of that number."""
+    sample = charuco_renders[0]
+    detection = detect_board(sample.image, CHARUCO)
+    assert detection.detector == "charuco" and len(detection.ids) >= 33
+    truth = np.array(sample.truth["board"]["corners_px"])
+    errors = np.linalg.norm(detection.corners_px - truth[detection.ids], axis=1)
+    assert errors.max() < 1.0 and np.sqrt(np.mean(errors ** 2)) < 0.35
+    assert sample.truth["board"]["kind"] == "charuco" and sample.truth["board"]["dictionary"] == "DICT_4X4_50"
+
+
+def test_partly_hidden_charuco_board_still_calibrates(charuco_renders):
+    """40 % of the board's width under a carton (15 of 35 corners hidden): the corners in
+    view give the pose (within 0.3 degrees and 5 mm given the true focal length) and, from
+    the board alone, a focal length within twice its reported uncertainty (3 % here)."""
+    sample = charuco_renders[1]
+    t = sample.truth
+    visible = np.array(t["board"]["corners_visible"])
+    assert (~visible).sum() >= 14
+    f = t["K"][0][0]
+    c = calibrate_photo(sample.image, CHARUCO, intrinsics=exif_intrinsics(f, tuple(t["size_px"])))
+    assert len(c.corner_ids) >= 12 and visible[c.corner_ids].all()
+    angle, offset = _pose_error(c, t)
+    assert angle < 0.3 and offset < 0.005
+    height = t["camera"]["height_m"] - 0.001
+    assert abs(c.camera_height_m - height) / height < 0.005
+    assert any(f"{len(c.corner_ids)} of the board's 35 corners" in w for w in c.warnings)
+
+    alone = calibrate_photo(sample.image, CHARUCO)
+    assert alone.intrinsics.source == "single-view"
+    error = abs(alone.intrinsics.K[0, 0] - f) / f
+    assert error < 2 * alone.intrinsics.focal_uncertainty and alone.intrinsics.focal_uncertainty < 0.05
+    assert abs(alone.camera_height_m - height) / height < 2 * alone.intrinsics.focal_uncertainty
+
+
+def test_hidden_checkerboard_is_refused_naming_charuco():
+    with Renderer() as renderer:
+        sample = render_sample([99, 4], renderer, size_px=(640, 480), board_hidden=0.4)
+    with pytest.raises(CalibrationError, match=r"no 7x5 checkerboard .*--board charuco:7x5, may be partly hidden"):
+        calibrate_photo(sample.image, Board())

@@ -70,6 +70,14 @@ def test_board_that_does_not_fit_is_refused(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_board_writes_a_charuco_board(tmp_path, capsys):
+    out = tmp_path / "charuco.pdf"
+    code, stdout, err = run(["board", "--paper", "A4", "--board", "charuco:7x5", "--out", out], capsys)
+    assert code == 0, err
+    assert out.read_bytes().startswith(b"%PDF")
+    assert "ChArUco board (markers DICT_4X4_50)" in stdout and "--board charuco:7x5 --square 30" in stdout
+
+
 # --------------------------------------------------------------------------- stage calibrate
 
 
@@ -189,6 +197,19 @@ def test_bad_board_text(tmp_path, capsys, text):
     assert "--board" in err and repr(text) in err and "inner corners" in err and "Traceback" not in err
 
 
+@pytest.mark.parametrize("text, named", [("aruco:7x5", "'aruco'"), ("charuco:7*5", "charuco:7x5")])
+def test_bad_board_kind(tmp_path, capsys, text, named):
+    code, _, err = run(["check", tmp_path / "photo.jpg", "--board", text], capsys)
+    assert code == 2
+    assert "--board" in err and named in err and "ChArUco" in err and "Traceback" not in err
+
+
+def test_parse_board():
+    assert cli.parse_board("7x5") == (7, 5, "chessboard")
+    assert cli.parse_board(" ChArUco : 9X6 ") == (9, 6, "charuco")
+    assert cli.parse_board("checkerboard:7x5") == (7, 5, "chessboard")
+
+
 def test_unwritable_out(synth_photo, tmp_path, capsys):
     path, _ = synth_photo
     blocker = tmp_path / "a file"
@@ -201,3 +222,44 @@ def test_unwritable_out(synth_photo, tmp_path, capsys):
 def test_no_arguments_prints_usage(capsys):
     code, stdout, _ = run([], capsys)
     assert code == 0 and "calibrate" in stdout and "check" in stdout and "board" in stdout
+
+
+# --------------------------------------------------------------------------- ChArUco
+
+
+@pytest.fixture(scope="module")
+def charuco_photo(tmp_path_factory):
+    """(path, truth) of a 1280x960 room photo with the default ChArUco board 40 % under a
+    carton (seed [7, 60] lays the board near enough for its markers to read)."""
+    folder = tmp_path_factory.mktemp("charuco")
+    with Renderer() as renderer:
+        sample = render_sample([7, 60], renderer, size_px=(1280, 960), board=Board(kind="charuco"), board_hidden=0.4)
+    paths = write_sample(sample, folder, "room")
+    return paths["image"], sample.truth
+
+
+def test_check_a_partly_hidden_charuco_board(charuco_photo, tmp_path, capsys):
+    path, truth = charuco_photo
+    out = tmp_path / "check"
+    code, stdout, err = run(["check", path, "--board", "charuco:7x5", "--out", out], capsys)
+    assert code == 0, err
+    report = json.loads((out / "calibration.json").read_text())
+    assert report["board"] == {"kind": "charuco", "inner_corners": [7, 5], "square_mm": 45.0,
+                               "dictionary": "DICT_4X4_50"}
+    seen = report["corner_ids"]
+    assert 12 <= len(seen) < 35 and len(report["corners_px"]) == len(seen)
+    assert all(truth["board"]["corners_visible"][k] for k in seen)
+    assert report["camera_height_m"] == pytest.approx(truth["camera"]["height_m"], rel=0.03)
+    assert f"{len(seen)} of 35 corners" in stdout and "ChArUco" in stdout
+    assert "corners were seen" in err
+
+
+def test_overlay_marks_the_corners_seen_on_a_partial_board(charuco_photo):
+    path, _ = charuco_photo
+    photo = read_photo(path)
+    calibration = calibrate_file(path, Board(kind="charuco"))
+    overlay = calibration_overlay(photo, calibration)
+    for x, y in np.round(calibration.corners_px).astype(int):
+        # A ring of the corner's row color around it (radius about a quarter of the spacing).
+        patch = np.abs(overlay[y - 6:y + 7, x - 6:x + 7].astype(int) - photo[y - 6:y + 7, x - 6:x + 7]).max(axis=2)
+        assert (patch > 60).mean() > 0.1

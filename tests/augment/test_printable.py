@@ -327,3 +327,58 @@ def test_write_to_missing_folder_names_it(tmp_path):
     with pytest.raises(FileNotFoundError, match=re.escape(str(missing))):
         write_board_pdf(missing / "board.pdf", board_for_paper("A3"), "A3")
     assert list(tmp_path.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- ChArUco
+
+
+def test_charuco_markers_are_written_bit_by_bit_at_exact_scale(tmp_path):
+    """The black areas of the ChArUco PDF, sampled at the middle of each 1/8-square bit
+    cell, are the page OpenCV generates (Board.printed_image, checked against OpenCV in
+    test_board); the squares stay where a checkerboard's are."""
+    board = board_for_paper("A4", kind="charuco")
+    with matplotlib.rc_context({"pdf.compression": 0}):
+        pdf = write_board_pdf(tmp_path / "board.pdf", board, "A4").read_bytes()
+    boxes = black_squares_mm(painted_paths(page_content(pdf)))
+    s = board.square_mm
+    sheet_w, sheet_h = PAPER_MM["A4"]
+    x0 = (sheet_w - (board.cols + 1) * s) / 2
+    y_top = (sheet_h + (board.rows + 1) * s) / 2
+    cells = 8 * np.array([board.rows + 1, board.cols + 1])
+    # Cell (r, c) center on the page, mm.
+    cx = x0 + (np.arange(cells[1]) + 0.5) * s / 8
+    cy = y_top - (np.arange(cells[0]) + 0.5) * s / 8
+    inside = ((boxes[:, None, None, 0] < cx[None, None, :]) & (cx[None, None, :] < boxes[:, None, None, 2])
+              & (boxes[:, None, None, 1] < cy[None, :, None]) & (cy[None, :, None] < boxes[:, None, None, 3]))
+    black = inside.any(axis=0)
+    np.testing.assert_array_equal(black, board.printed_image(8) == 0)
+    # Nothing black outside the squares' area.
+    assert boxes[:, 0].min() == pytest.approx(x0, abs=0.05) and boxes[:, 3].max() == pytest.approx(y_top, abs=0.05)
+
+
+def test_charuco_caption_names_the_dictionary_and_the_flags():
+    board = board_for_paper("A3", kind="charuco")
+    description, flags = printable.caption_lines(board, "A3")
+    assert "ChArUco" in description and "DICT_4X4_50" in description and "45 mm squares, A3" in description
+    assert flags.endswith("--board charuco:7x5 --square 45")
+
+
+def test_printed_charuco_page_is_detected_where_the_board_frame_says():
+    """The page as a printer would put it on paper (rasterized at 60 dpi), read by the
+    ChArUco detector: all 35 corners, each where Board.corners_m puts it on the sheet (board
+    x to the right, y up the page, origin at the squares' center)."""
+    from augment.calibrate import detect_board
+
+    board = board_for_paper("A4", kind="charuco")
+    fig = board_figure(board, "A4")
+    fig.set_dpi(60)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    page = np.asarray(canvas.buffer_rgba())[..., :3].copy()
+    detection = detect_board(page, board)
+    assert detection is not None and len(detection.ids) == board.corner_count
+    px_per_mm = page.shape[1] / PAPER_MM["A4"][0]
+    corners_mm = board.corners_m()[detection.ids, :2] * 1000
+    expected = np.column_stack([PAPER_MM["A4"][0] / 2 + corners_mm[:, 0],
+                                PAPER_MM["A4"][1] / 2 - corners_mm[:, 1]]) * px_per_mm - 0.5
+    np.testing.assert_allclose(detection.corners_px, expected, atol=0.5)

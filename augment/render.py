@@ -1,0 +1,1196 @@
+"""Render a furnished layout back into the photo it was measured from.
+
+:func:`render_staged` takes the photo, its :class:`~augment.calibrate.Calibration` and the
+placed items of a layout (floor frame: the board's, z up, meters) and returns the staged
+photo at full resolution, with an optional RGBA layer of furniture and shadows.
+
+How. The furniture (:mod:`augment.furniture`) is drawn with pyrender through
+:mod:`augment.gl` with the calibrated intrinsics and pose (lens distortion applied by
+warping the render), only over the part of the frame it and its shadows can reach,
+antialiased by the renderer's 4x multisampling and by supersampling where the pixel
+budget allows. The light is estimated from the photo (:func:`estimate_lighting`):
+exposure and colour from the white squares of the board, paper of known whiteness lying
+on the floor; a key light from the brightest window, or from overhead behind the camera
+when there is none. It is computed per vertex (key light with a highlight, sky, room,
+floor bounce, ambient, baked occlusion near the floor) and drawn with pyrender's flat
+shader, which llvmpipe runs several times faster than its physically based one; the key
+light's shadows on the furniture come per pixel from a depth map seen from the light.
+
+Shadows on the real floor are differential: the floor's irradiance is computed with and
+without the furniture in a top-down raster of the floor (the key light's cast shadow,
+averaged over directions across the light's extent so it is soft and hardens toward
+contact; ambient occlusion from what stands over and beside each floor point), and the
+photo is multiplied by their ratio (in the photo's gamma, the 2.2 power the renderer
+also uses). Floor-level items (rugs) take the same shadows.
+
+Occlusion. The photo hides furniture where its walls or objects stand in front of it. With
+a floor mask, a pixel that shows something other than floor shows a vertical thing
+standing on the first floor pixel below it (along the image of the vertical through it):
+furniture farther from the camera than that is hidden. Wall segments (the boundary edges
+of the floor polygon) hide what lies beyond them. Without either, furniture is drawn
+wherever it projects.
+
+Image convention: arrays are (row, col); points are (x, y) pixels, pixel centers at
+integers (OpenCV). Colours are RGB uint8.
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+import time
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from numba import njit, prange
+
+from layout.fileio import write_atomic
+
+from .furniture import furniture_for, placed_items, world_from_item
+from .gl import ZNEAR_M, Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
+
+GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
+PAPER_ALBEDO = 0.85         # the board's white squares: office paper
+JPEG_QUALITY = 92
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Every threshold of the renderer in one place (meters unless named otherwise)."""
+
+    occlusion_m: float = 0.06          # furniture this much behind an occluder still shows
+    occlusion_rel: float = 0.03        # ... plus this fraction of the occluder's distance
+    floor_level_m: float = 0.02        # furniture pixels this low take the floor's shadows
+    caster_min_height_m: float = 0.03  # parts lower than this cast no shadow (rugs)
+    shadow_samples: int = 10           # key-light directions averaged for a soft shadow
+    ao_strength: float = 0.8           # share of the ambient light occlusion removes at most
+    side_ao_weight: float = 0.45       # occlusion by the sides of things, relative to overhead
+    floor_cell_max_px: int = 900       # floor raster: at most this many cells a side
+    floor_cell_min_m: float = 0.004    # ... and cells no finer than this
+    occlusion_long_px: int = 800       # the floor mask is read at most this large
+    render_budget_px: float = 1.4e6    # rendered pixels (after supersampling) per image
+    max_supersample: float = 2.0
+    min_render_scale: float = 0.6      # large photos are rendered at this scale at least, then upsampled
+    margin_px: int = 6                 # around the region furniture and shadows can reach
+
+
+TOL = Tolerances()
+
+
+# --------------------------------------------------------------------------------------
+# Light from the photo
+# --------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Lighting:
+    """The light the photo was taken in, as far as one photo tells.
+
+    Attributes
+    ----------
+    irradiance_rgb : (3,) tuple of float
+        Linear RGB a white (albedo 1) floor would show under this light: the photo's
+        exposure and white balance.
+    direction : (3,) tuple of float
+        Unit vector along which the key light travels, floor frame (z < 0: downward).
+    key_fraction : float
+        Share of the floor's irradiance that comes from the key light; the rest is
+        sky light from above and ambient.
+    softness_rad : float
+        Angular radius of the key light (0.01: the sun; 0.3: a big window or a lamp
+        shade): how soft its shadows are.
+    floor_rgb : (3,) tuple of float
+        Linear RGB of the floor in the photo (light bounced from it onto furniture).
+    source : str
+        ``"window"`` (key light from the brightest window) or ``"default"``.
+    """
+
+    irradiance_rgb: tuple
+    direction: tuple
+    key_fraction: float
+    softness_rad: float
+    floor_rgb: tuple
+    source: str
+
+
+def _to_linear(rgb_uint8) -> np.ndarray:
+    return (np.asarray(rgb_uint8, dtype=np.float64) / 255.0) ** GAMMA
+
+
+def _camera(calibration):
+    K = np.asarray(calibration.intrinsics.K, dtype=np.float64)
+    dist = np.asarray(calibration.intrinsics.distortion, dtype=np.float64).ravel()
+    pose = np.asarray(calibration.camera_from_floor, dtype=np.float64)
+    return K, dist, pose
+
+
+def _project(points_m, K, camera_from_floor, dist=None):
+    """Pixels (n, 2) and camera depths (n,) of floor-frame points (n, 3)."""
+    p = np.asarray(points_m, dtype=np.float64).reshape(-1, 3)
+    cam = p @ camera_from_floor[:3, :3].T + camera_from_floor[:3, 3]
+    z = cam[:, 2]
+    if dist is not None and np.any(dist):
+        px, _ = cv2.projectPoints(p.reshape(-1, 1, 3), cv2.Rodrigues(camera_from_floor[:3, :3])[0],
+                                  camera_from_floor[:3, 3], K, dist)
+        return px.reshape(-1, 2), z
+    uv = cam @ K.T
+    return uv[:, :2] / np.where(np.abs(uv[:, 2:]) < 1e-12, 1e-12, uv[:, 2:]), z
+
+
+def _sample_rgb(image, px, radius=1):
+    """Mean RGB (n, 3) of the (2r+1)^2 pixels around each point; NaN outside the image."""
+    h, w = image.shape[:2]
+    out = np.full((len(px), 3), np.nan)
+    for k, (x, y) in enumerate(np.round(px).astype(int)):
+        if radius <= x < w - radius and radius <= y < h - radius:
+            out[k] = image[y - radius:y + radius + 1, x - radius:x + radius + 1].reshape(-1, 3).mean(axis=0)
+    return out
+
+
+def _floor_region(shape, K, pose, max_m=8.0):
+    """Boolean (h, w) of the pixels below the horizon that the floor plane puts within
+    ``max_m`` of the camera (where the floor is when no mask says so)."""
+    h, w = shape
+    ys, xs = np.mgrid[0:h, 0:w]
+    rays = np.linalg.inv(K) @ np.stack([xs.ravel(), ys.ravel(), np.ones(h * w)])
+    world = pose[:3, :3].T @ rays
+    cam_z = -(pose[:3, :3].T @ pose[:3, 3])[2]
+    down = world[2] < -1e-6
+    t = np.where(down, cam_z / np.maximum(-world[2], 1e-9), np.inf)
+    reach = t * np.hypot(world[0], world[1])
+    return (down & (reach < max_m)).reshape(h, w)
+
+
+def _window(small, candidates, f_small):
+    """The brightest window-like blob: (centroid xy, angular radius) or None."""
+    lum = small @ np.array([0.299, 0.587, 0.114])
+    if candidates.sum() < 0.01 * lum.size:
+        return None
+    # A window is the brightest thing in view and clearly brighter than the walls around.
+    peak = float(np.percentile(lum[candidates], 99.5))
+    thresh = max(120.0, 0.85 * peak, 1.35 * float(np.median(lum[candidates])))
+    bright = (lum >= thresh) & candidates
+    n, labels, stats, centroids = cv2.connectedComponentsWithStats(bright.astype(np.uint8), connectivity=8)
+    if n <= 1:
+        return None
+    k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    area = int(stats[k, cv2.CC_STAT_AREA])
+    if area < 0.003 * lum.size:
+        return None
+    return centroids[k], math.sqrt(area / math.pi) / f_small
+
+
+def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | None = None) -> Lighting:
+    """Estimate exposure, colour and the key light's direction from a calibrated photo.
+
+    Parameters
+    ----------
+    image : (h, w, 3) uint8
+        The photo, RGB. Not modified.
+    calibration : Calibration
+        Of this photo (:func:`augment.calibrate.calibrate_photo`): its board gives the
+        exposure (white paper on the floor).
+    floor_mask : (h, w) bool, optional
+        Visible floor; else the floor is taken below the horizon, within 8 m.
+
+    Returns
+    -------
+    Lighting
+    """
+    image = _check_image(image)
+    K, dist, pose = _camera(calibration)
+    h, w = image.shape[:2]
+    # Exposure and white balance: the white squares of the board.
+    board = calibration.board
+    s = board.square_m
+    i, j = np.meshgrid(np.arange(board.cols + 1), np.arange(board.rows + 1))
+    centers = np.column_stack([(i.ravel() - board.cols / 2) * s, (j.ravel() - board.rows / 2) * s,
+                               np.zeros(i.size)])
+    px, _ = _project(centers, K, pose, dist)
+    radius = int(np.clip(0.2 * np.min(np.linalg.norm(np.diff(px[:2], axis=0), axis=1)), 0, 4))
+    rgb = _sample_rgb(image, px, radius)
+    rgb = rgb[~np.isnan(rgb[:, 0])]
+    if len(rgb) == 0:
+        raise ValueError("the board's squares are not in the photo: cannot read its exposure from the board")
+    lum = rgb @ np.array([0.299, 0.587, 0.114])
+    white = rgb[lum >= np.percentile(lum, 60)]
+    paper = np.median(_to_linear(white), axis=0)
+    irradiance = paper / PAPER_ALBEDO
+
+    # The board may lie in a sunny patch or a shadow: scale to the floor at large.
+    small_scale = min(1.0, 320.0 / max(h, w))
+    small = cv2.resize(image, (max(1, round(w * small_scale)), max(1, round(h * small_scale))),
+                       interpolation=cv2.INTER_AREA).astype(np.float64)
+    if floor_mask is not None:
+        region_small = cv2.resize(floor_mask.astype(np.uint8), small.shape[1::-1],
+                                  interpolation=cv2.INTER_NEAREST) > 0
+    else:
+        region_small = _floor_region(small.shape[:2], _scaled_K(K, small_scale), pose)
+    floor_lin = _to_linear(small[region_small]) if region_small.any() else _to_linear(white)
+    floor_rgb = np.median(floor_lin, axis=0)
+    near = _project(np.column_stack([0.5 * np.cos(np.linspace(0, 2 * np.pi, 24)),
+                                     0.5 * np.sin(np.linspace(0, 2 * np.pi, 24)), np.zeros(24)]), K, pose, dist)[0]
+    ring = _sample_rgb(image, near, max(radius, 1))
+    ring = ring[~np.isnan(ring[:, 0])]
+    if len(ring) >= 6:
+        ring_lum = float(np.median(_to_linear(ring) @ [0.299, 0.587, 0.114]))
+        all_lum = float(floor_rgb @ [0.299, 0.587, 0.114])
+        irradiance = irradiance * float(np.clip(all_lum / max(ring_lum, 1e-6), 0.6, 1.4))
+
+    # Key light: from the brightest window-like region that is not floor.
+    R = pose[:3, :3]
+    forward = R.T @ np.array([0, 0, 1.0])
+    found = _window(small, ~region_small, K[0, 0] * small_scale)
+    horiz = forward[:2] / max(np.linalg.norm(forward[:2]), 1e-9)
+    if found is not None:
+        (cx, cy), ang = found
+        ray = R.T @ np.linalg.solve(K, [cx / small_scale, cy / small_scale, 1.0])
+        toward = ray[:2] / max(np.linalg.norm(ray[:2]), 1e-9)
+        elev = math.radians(35.0)
+        direction = np.append(-toward * math.cos(elev), -math.sin(elev))
+        # Sunlit floor (a bright patch well above the floor's median) means direct sun.
+        floor_l = floor_lin @ [0.299, 0.587, 0.114]
+        sunny = floor_l.size > 0 and np.mean(floor_l > 2.2 * np.median(floor_l)) > 0.03
+        key, soft, source = (0.6, 0.03, "window") if sunny else (0.45, float(np.clip(ang, 0.06, 0.3)), "window")
+    else:
+        elev = math.radians(65.0)
+        direction = np.append(horiz * math.cos(elev), -math.sin(elev))
+        key, soft, source = 0.3, 0.3, "default"
+    return Lighting(tuple(float(v) for v in irradiance), tuple(float(v) for v in direction), key, soft,
+                    tuple(float(v) for v in floor_rgb), source)
+
+
+# --------------------------------------------------------------------------------------
+# The furniture passes (pyrender)
+# --------------------------------------------------------------------------------------
+#
+# Light is computed per vertex and drawn with pyrender's flat shader (colour = vertex
+# colour x base colour x texture), which llvmpipe runs several times faster than its
+# physically based one. Two passes: the fill light (sky, room, floor bounce, ambient,
+# emission) and the key light alone, so the key light can be shadowed per pixel from a
+# depth map seen from the light. Vertex colours are the linear light to the power 1/2.2,
+# the photo's encoding; pixel = (fill + key x visibility) in linear light.
+
+# Share of the non-key light that comes from the sky (above) rather than from all round.
+_SKY_SHARE = 0.55
+_FRONT_FILL = 0.18   # light from the room behind the camera, relative to the irradiance
+_BOUNCE = 0.5        # light off the floor, relative to the floor's brightness
+_METAL_ENV = 0.5     # what a metal mirrors of the room, relative to the irradiance
+
+
+def _vertex_occlusion(z_m, normals, item_height_m):
+    """Baked ambient occlusion per vertex (n,): darker near the item's base (over 5 cm,
+    less for small things) and facing down. ``item_height_m`` per vertex or scalar."""
+    small = np.minimum(1.0, np.asarray(item_height_m) / 0.5)
+    ao = 1.0 - 0.3 * small * np.exp(-np.maximum(z_m, 0.0) / (0.05 * small))
+    return ao * (1.0 - 0.35 * np.maximum(-normals[:, 2], 0.0))
+
+
+def _vertex_light(v, n, albedo, roughness, metal, emissive, ao, lighting: Lighting, cam_pos, forward_xy):
+    """Linear light leaving each vertex toward the camera: (fill (n, 3), key (n, 3)).
+
+    Per vertex (n,) or (n, 3) arrays: positions, unit normals, albedo (linear RGB),
+    roughness, metalness, emission, occlusion. Scaled so that a white (albedo 1) floor
+    facing up shows ``lighting.irradiance_rgb``: key f (n . l) / sin(elevation), sky
+    (1 - f) s (1 + n_z) / 2, ambient (1 - f)(1 - s), with f the key fraction and s the
+    sky share; plus light from behind the camera and off the floor, a Blinn-Phong
+    highlight of the key light (exponent from the roughness), and for metals a share of
+    the room mirrored."""
+    E = np.asarray(lighting.irradiance_rgb, dtype=np.float64)
+    floor = np.asarray(lighting.floor_rgb, dtype=np.float64)
+    d = np.asarray(lighting.direction, dtype=np.float64)
+    l = -d / np.linalg.norm(d)
+    sin_e = max(l[2], 0.15)
+    f_key = lighting.key_fraction
+    rest = 1.0 - f_key
+    diffuse = albedo * (1.0 - 0.96 * metal)[:, None]
+    nz = n[:, 2]
+    front = np.append(-forward_xy, 0.35)
+    front /= np.linalg.norm(front)
+    around = rest * _SKY_SHARE * (0.5 + 0.5 * nz) + rest * (1.0 - _SKY_SHARE) + _FRONT_FILL * np.maximum(n @ front, 0)
+    fill = (around[:, None] * E + _BOUNCE * floor * (0.5 - 0.5 * nz)[:, None]) * diffuse
+    fill += (_METAL_ENV * metal * (0.6 + 0.4 * np.maximum(nz, 0.0)))[:, None] * albedo * E
+    ndl = np.maximum(n @ l, 0.0)
+    key = (f_key * ndl / sin_e)[:, None] * E * diffuse
+    # Highlight: normalized Blinn-Phong with Schlick's Fresnel.
+    view = cam_pos - v
+    view /= np.maximum(np.linalg.norm(view, axis=1, keepdims=True), 1e-9)
+    half = view + l
+    half /= np.maximum(np.linalg.norm(half, axis=1, keepdims=True), 1e-9)
+    alpha = np.maximum(roughness, 0.08) ** 2
+    power = 2.0 / alpha ** 2 - 2.0
+    f0 = 0.04 * (1.0 - metal)[:, None] + albedo * metal[:, None]
+    fresnel = f0 + (1.0 - f0) * ((1.0 - np.clip((view * half).sum(1), 0, 1)) ** 5)[:, None]
+    lobe = (power + 8.0) / (8.0 * np.pi) * np.clip((n * half).sum(1), 0, 1) ** power * ndl
+    key += np.minimum(lobe, 50.0)[:, None] * fresnel * (f_key * np.pi / sin_e) * E
+    return fill * ao[:, None] + emissive * float(E.max()), key * ao[:, None]
+
+
+def _encode(linear):
+    """Vertex colours (n, 4) float32: linear light in the photo's gamma, alpha 1."""
+    return np.column_stack([np.clip(linear, 0.0, 1.0) ** (1.0 / GAMMA), np.ones(len(linear))]).astype(np.float32)
+
+
+def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy):
+    """The furniture as pyrender meshes in the floor frame, lit: (all light, key light
+    alone), one primitive per texture (all untextured parts share one)."""
+    groups: dict = {}
+    for item, furniture in placed:
+        T = world_from_item(item)
+        for part in furniture.parts:
+            groups.setdefault(part.material.texture_key, []).append((part, T, item.size_m[2]))
+    fills, keys = [], []
+    for tex_key, members in groups.items():
+        vs, ns, fs, hs, per = [], [], [], [], []
+        count = 0
+        for part, T, height in members:
+            vs.append(part.vertices @ T[:3, :3].T + T[:3, 3])
+            ns.append(part.normals @ T[:3, :3].T)
+            hs.append(np.full(len(part.vertices), T[2, 3]))
+            fs.append(part.faces + count)
+            m = part.material
+            per.append((len(part.vertices), np.ones(3) if m.texture is not None else m.color_rgb, m.roughness,
+                        m.metallic, m.emissive_rgb, height))
+            count += len(part.vertices)
+        v, n = np.concatenate(vs), np.concatenate(ns)
+        sizes = [p[0] for p in per]
+        albedo = np.repeat(np.array([p[1] for p in per], dtype=np.float64), sizes, axis=0)
+        rough = np.repeat([p[2] for p in per], sizes)
+        metal = np.repeat([p[3] for p in per], sizes)
+        emissive = np.repeat(np.array([p[4] for p in per], dtype=np.float64), sizes, axis=0)
+        ao = _vertex_occlusion(v[:, 2] - np.concatenate(hs), n, np.repeat([p[5] for p in per], sizes))
+        fill, key = _vertex_light(v, n, albedo, rough, metal, emissive, ao, lighting, cam_pos, forward_xy)
+        positions, normals = v.astype(np.float32), n.astype(np.float32)
+        indices = np.concatenate(fs).astype(np.uint32)
+        texture = members[0][0].material if tex_key else None
+        uv = np.concatenate([p.uv for p, _, _ in members]).astype(np.float32) if tex_key else None
+        for colors, out in ((fill + key, fills), (key, keys)):
+            tex = None if texture is None else pyrender.Texture(source=texture.texture, source_channels="RGB")
+            material = pyrender.MetallicRoughnessMaterial(baseColorFactor=(1.0, 1.0, 1.0, 1.0), baseColorTexture=tex)
+            out.append(pyrender.Mesh([pyrender.Primitive(
+                positions=positions, normals=normals, texcoord_0=uv, color_0=_encode(colors), indices=indices,
+                material=material, mode=pyrender.GLTF.TRIANGLES)]))
+    return fills, keys
+
+
+def _flat_scene(meshes, camera, camera_pose_gl):
+    scene = Scene(bg_color=(0.0, 0.0, 0.0, 0.0))
+    for k, mesh in enumerate(meshes):
+        scene.add(mesh, name=f"furniture{k:03d}")
+    scene.add(camera, pose=camera_pose_gl, name="camera")
+    return scene
+
+
+@dataclass(frozen=True)
+class _LightView:
+    """A nearly orthographic camera looking along the key light (a perspective camera
+    100 m away, so pyrender's depth is exact), and its depth map."""
+
+    camera_from_floor: np.ndarray
+    K: np.ndarray
+    depth_m: np.ndarray
+    texel_m: float
+
+
+_LIGHT_DISTANCE_M = 100.0
+
+
+def _light_view(renderer, meshes, lighting: Lighting, lo_m, hi_m, size_px) -> _LightView:
+    d = np.asarray(lighting.direction, dtype=np.float64)
+    d /= np.linalg.norm(d)
+    center = 0.5 * (np.asarray(lo_m) + np.asarray(hi_m))
+    radius = max(0.5 * float(np.linalg.norm(np.asarray(hi_m) - np.asarray(lo_m))), 0.05)
+    eye = center - d * _LIGHT_DISTANCE_M
+    x = np.cross(d, [0, 0, 1.0]) if abs(d[2]) < 0.99 else np.array([1.0, 0, 0])
+    x /= np.linalg.norm(x)
+    y = np.cross(d, x)
+    R = np.stack([x, y, d])  # OpenCV axes: z along the light
+    pose = np.eye(4)
+    pose[:3, :3], pose[:3, 3] = R, -R @ eye
+    f = 0.5 * size_px * _LIGHT_DISTANCE_M / radius
+    c = 0.5 * size_px - 0.5
+    K = np.array([[f, 0, c], [0, f, c], [0, 0, 1.0]])
+    camera = pyrender.IntrinsicsCamera(fx=f, fy=f, cx=c + 0.5, cy=c + 0.5, znear=_LIGHT_DISTANCE_M - 2 * radius,
+                                       zfar=_LIGHT_DISTANCE_M + 2 * radius)
+    scene = _flat_scene(meshes, camera, gl_from_cv_pose(np.linalg.inv(pose)))
+    depth = renderer.render(scene, size_px, size_px, flags=pyrender.RenderFlags.DEPTH_ONLY)
+    return _LightView(pose, K, np.ascontiguousarray(depth, dtype=np.float32), 2.0 * radius / size_px)
+
+
+def _shadow_receivers(world, lit, cam_pos, lighting: Lighting, texel_m, radius_px):
+    """Where to test the key light's shadow: the points of the ``lit`` pixels of a world
+    image (h, w, 3), NaN where empty, pushed off their surface by a texel and a half
+    along its normal (from the neighbouring pixels), and a depth bias growing with the
+    surface's slope to the light over the filter's reach, so surfaces do not shadow
+    themselves in stripes ("acne"). Returns (rows, cols, points (n, 3), bias (n,))."""
+    h, w = lit.shape
+    y, x = np.nonzero(lit)
+    p = world[y, x].astype(np.float64)
+
+    def diff(dy, dx):
+        ahead = world[np.minimum(y + dy, h - 1), np.minimum(x + dx, w - 1)] - p
+        behind = p - world[np.maximum(y - dy, 0), np.maximum(x - dx, 0)]
+        return np.where(np.isnan(ahead), behind, ahead)
+    n = np.cross(diff(0, 1), diff(1, 0))
+    norm = np.linalg.norm(n, axis=1)
+    l = -np.asarray(lighting.direction, dtype=np.float64)
+    l /= np.linalg.norm(l)
+    ok = np.isfinite(norm) & (norm > 1e-12)
+    n = np.where(ok[:, None], n / np.where(ok, norm, 1.0)[:, None], l)  # unknown: facing the light
+    n *= np.where((n * (cam_pos - p)).sum(axis=1) < 0, -1.0, 1.0)[:, None]
+    ndl = np.clip(n @ l, 0.05, 1.0)
+    slope = np.minimum(np.sqrt(1.0 - ndl ** 2) / ndl, 4.0)
+    return y, x, p + n * (1.5 * texel_m), 0.003 + texel_m * (1.0 + radius_px * slope)
+
+
+@njit(cache=True, parallel=True)
+def _key_visibility(points, bias_m, R, t, K, depth, radius_px):
+    """Share of the key light reaching each floor-frame point (n, 3): nine depth
+    comparisons spread over ``radius_px`` texels of the light's depth map, each point with
+    its own depth bias (n,)."""
+    n = points.shape[0]
+    h, w = depth.shape
+    out = np.ones(n, np.float32)
+    for k in prange(n):
+        x = R[0, 0] * points[k, 0] + R[0, 1] * points[k, 1] + R[0, 2] * points[k, 2] + t[0]
+        y = R[1, 0] * points[k, 0] + R[1, 1] * points[k, 1] + R[1, 2] * points[k, 2] + t[1]
+        z = R[2, 0] * points[k, 0] + R[2, 1] * points[k, 1] + R[2, 2] * points[k, 2] + t[2]
+        u = K[0, 0] * x / z + K[0, 2]
+        v = K[1, 1] * y / z + K[1, 2]
+        lit = 0.0
+        for dy in (-1.0, 0.0, 1.0):
+            for dx in (-1.0, 0.0, 1.0):
+                i = int(v + dy * radius_px + 0.5)
+                j = int(u + dx * radius_px + 0.5)
+                if i < 0 or j < 0 or i >= h or j >= w:
+                    lit += 1.0
+                elif depth[i, j] <= 0.0 or z - bias_m[k] <= depth[i, j]:
+                    lit += 1.0
+        out[k] = lit / 9.0
+    return out
+
+
+# Gamma tables for _combine: 8-bit code -> linear, and linear -> code by the square root
+# of the linear value (even steps there are fine enough everywhere, for linear interpolation).
+_DECODE = ((np.arange(256) / 255.0) ** GAMMA).astype(np.float32)
+_ENCODE_STEPS = 4096
+_ENCODE = (255.0 * (np.arange(_ENCODE_STEPS + 2) / _ENCODE_STEPS).clip(0, 1) ** (2.0 / GAMMA)).astype(np.float32)
+
+
+@njit(cache=True, parallel=True)
+def _combine(full, key, visibility, decode, encode, out):
+    """Premultiplied RGBA (h, w, 4) uint8 of the full light less the key light's shadowed
+    share, in linear light: full - key x (1 - visibility). ``full`` and ``key`` are the
+    two passes, premultiplied by coverage (``full``'s alpha); ``visibility`` (h, w)."""
+    h, w = full.shape[0], full.shape[1]
+    steps = encode.shape[0] - 2
+    for i in prange(h):
+        for j in range(w):
+            cov = full[i, j, 3]
+            out[i, j, 3] = cov
+            shade = 1.0 - visibility[i, j]
+            if cov == 0 or shade <= 1e-3:
+                for c in range(3):
+                    out[i, j, c] = full[i, j, c]
+                continue
+            for c in range(3):
+                if cov == 255:
+                    lin = decode[full[i, j, c]] - shade * decode[key[i, j, c]]
+                else:
+                    scale = 1.0 / cov
+                    lin = (full[i, j, c] * scale) ** 2.2 - shade * (key[i, j, c] * scale) ** 2.2
+                t = np.sqrt(max(lin, 0.0)) * steps
+                k = min(int(t), steps)
+                f = t - k
+                value = (encode[k] * (1.0 - f) + encode[k + 1] * f) * (cov / 255.0) + 0.5
+                out[i, j, c] = 255 if value >= 255.0 else np.uint8(value)
+
+
+# --------------------------------------------------------------------------------------
+# Shadows on the floor: a top-down raster of irradiance ratios
+# --------------------------------------------------------------------------------------
+
+@dataclass
+class _Caster:
+    """What one part contributes to the floor's shading, floor frame."""
+
+    points: np.ndarray             # (n, 3) vertices
+    triangles: np.ndarray | None   # (m, 3, 3) for non-convex parts, else None
+    z_bottom: float
+    z_top: float
+
+
+def _casters(placed, tol: Tolerances):
+    out = []
+    for item, furniture in placed:
+        T = world_from_item(item)
+        for part in furniture.parts:
+            if not part.casts_shadow:
+                continue
+            v = part.vertices @ T[:3, :3].T + T[:3, 3]
+            if v[:, 2].max() < tol.caster_min_height_m:
+                continue
+            tri = None if part.convex else v[part.faces]
+            out.append(_Caster(v, tri, float(v[:, 2].min()), float(v[:, 2].max())))
+    return out
+
+
+@dataclass(frozen=True)
+class _FloorGrid:
+    """A raster over the floor: cell (col, row) covers [origin + (col, row) * cell, + cell)."""
+
+    origin_m: np.ndarray
+    cell_m: float
+    shape: tuple  # rows, cols
+
+    def to_px(self, xy):
+        """Continuous raster coordinates (col, row) of floor points; cell centers at +0.5."""
+        return (np.asarray(xy)[..., :2] - self.origin_m) / self.cell_m
+
+    def floor_from_raster(self) -> np.ndarray:
+        """3x3 map from raster (col, row, 1), cell centers at integers, to floor (x, y, 1)."""
+        return np.array([[self.cell_m, 0, self.origin_m[0] + 0.5 * self.cell_m],
+                         [0, self.cell_m, self.origin_m[1] + 0.5 * self.cell_m], [0, 0, 1.0]])
+
+
+_SUB = 4  # fixed-point bits for cv2's polygon filling
+
+
+class _Footprints:
+    """The casters' points gathered once, so each light direction projects them all in one
+    go and fills one convex hull per convex part and all triangles of the others."""
+
+    def __init__(self, casters):
+        convex = [c for c in casters if c.triangles is None]
+        self.points = np.concatenate([c.points for c in convex]) if convex else np.zeros((0, 3))
+        self.ends = np.cumsum([len(c.points) for c in convex])
+        tris = [c.triangles.reshape(-1, 3) for c in casters if c.triangles is not None]
+        self.triangles = np.concatenate(tris) if tris else np.zeros((0, 3))
+
+    def fill(self, raster, grid, direction=None):
+        """Fill the casters' shadows along ``direction`` (their footprints when None)."""
+        for pts, convex in ((self.points, True), (self.triangles, False)):
+            if not len(pts):
+                continue
+            xy = pts[:, :2] if direction is None else pts[:, :2] - (pts[:, 2:3] / direction[2]) * direction[:2]
+            fixed = np.rint((grid.to_px(xy) - 0.5) * (1 << _SUB)).astype(np.int32)
+            if convex:
+                for part in np.split(fixed, self.ends[:-1]):
+                    cv2.fillConvexPoly(raster, cv2.convexHull(part), 1, lineType=cv2.LINE_8, shift=_SUB)
+            else:
+                cv2.fillPoly(raster, list(fixed.reshape(-1, 3, 2)), 1, lineType=cv2.LINE_8, shift=_SUB)
+
+
+def _blur(image, sigma_px):
+    """Gaussian blur whose cost does not grow with sigma (large ones go through a smaller copy)."""
+    if sigma_px <= 3.0:
+        return cv2.GaussianBlur(image, (0, 0), max(sigma_px, 0.3))
+    h, w = image.shape[:2]
+    f = sigma_px / 2.5
+    small = cv2.resize(image, (max(1, round(w / f)), max(1, round(h / f))), interpolation=cv2.INTER_AREA)
+    return cv2.resize(cv2.GaussianBlur(small, (0, 0), 2.5), (w, h), interpolation=cv2.INTER_LINEAR)
+
+
+def _shadow_directions(direction, softness_rad, n):
+    """``n`` directions spread evenly over a disk of angular radius ``softness_rad`` about ``direction``."""
+    d = np.asarray(direction, dtype=np.float64)
+    d = d / np.linalg.norm(d)
+    a = np.cross(d, [0, 0, 1.0]) if abs(d[2]) < 0.99 else np.array([1.0, 0, 0])
+    a /= np.linalg.norm(a)
+    b = np.cross(d, a)
+    golden = math.pi * (3 - math.sqrt(5))
+    out = []
+    for k in range(n):
+        r = softness_rad * math.sqrt((k + 0.5) / n)
+        v = d + math.tan(r) * (math.cos(k * golden) * a + math.sin(k * golden) * b)
+        out.append(v / np.linalg.norm(v))
+    return out
+
+
+# Ambient occlusion bins: parts grouped by the height of their underside (what hides the
+# sky from the floor below) and by their own height (what hides it from the floor beside).
+_AO_BINS_M = np.array([0.0, 0.06, 0.15, 0.3, 0.55, 0.9, 1.5, 1e9])
+
+
+def _floor_gain(casters, lighting: Lighting, extent_m, tol: Tolerances):
+    """What the floor's brightness is multiplied by, in the photo's gamma: (irradiance with
+    the furniture / without) ** (1 / 2.2), as a (rows, cols) float32 raster over the floor
+    rectangle ``extent_m`` ((xmin, ymin), (xmax, ymax)); and its grid.
+
+    The key light's shadow is the average of hard shadows cast along directions spread
+    over the light's angular size (soft, and sharper near contact); ambient occlusion
+    blurs each part's footprint by the height of its underside (a plate at height z hides
+    a cosine-weighted share of sky that falls off over about z) and, less, by its height
+    (the sides of things hide the sky near their base)."""
+    lo, hi = np.asarray(extent_m[0], dtype=np.float64), np.asarray(extent_m[1], dtype=np.float64)
+    size = hi - lo
+    cell = max(tol.floor_cell_min_m, float(size.max()) / tol.floor_cell_max_px)
+    shape = (int(math.ceil(size[1] / cell)) + 1, int(math.ceil(size[0] / cell)) + 1)
+    grid = _FloorGrid(lo, cell, shape)
+    if not casters:
+        return np.ones(shape, np.float32), grid
+    shadow = np.zeros(shape, np.float32)
+    layer = np.zeros(shape, np.uint8)
+    dirs = [d for d in _shadow_directions(lighting.direction, lighting.softness_rad, tol.shadow_samples)
+            if d[2] < -0.05]
+    footprints = _Footprints(casters)
+    for d in dirs:
+        layer[:] = 0
+        footprints.fill(layer, grid, d)
+        shadow += layer
+    if dirs:
+        shadow /= len(dirs)
+        # The samples are discrete copies; blur by about their spacing at a typical height.
+        height = float(np.median([c.z_top for c in casters]))
+        spacing = height * math.tan(lighting.softness_rad) * 2.0 / math.sqrt(len(dirs))
+        shadow = _blur(shadow, max(0.5, 0.35 * spacing / cell))
+    k = max(1, int(round(0.02 / cell)))  # occlusion is smooth: a 2 cm raster
+    coarse = _FloorGrid(lo, cell * k, (shape[0] // k + 1, shape[1] // k + 1))
+    nb = len(_AO_BINS_M) - 1
+    free = np.ones(coarse.shape, np.float32)
+    raster = np.zeros(coarse.shape, np.uint8)
+    bottoms = np.array([c.z_bottom for c in casters])
+    heights = np.array([c.z_top - c.z_bottom for c in casters])
+    for key, sigma_of, weight in ((bottoms, lambda z: max(0.015, 0.45 * z), 0.8),
+                                  (heights, lambda z: float(np.clip(0.12 * z, 0.015, 0.1)), tol.side_ao_weight)):
+        bins = np.clip(np.searchsorted(_AO_BINS_M, key, side="right") - 1, 0, nb - 1)
+        for b in np.unique(bins):
+            raster[:] = 0
+            # Footprints only: every part as its convex hull seen from above.
+            _Footprints([_Caster(casters[i].points if casters[i].triangles is None
+                                 else casters[i].triangles.reshape(-1, 3), None, 0.0, 0.0)
+                         for i in np.flatnonzero(bins == b)]).fill(raster, coarse)
+            z = 0.5 * (_AO_BINS_M[b] + min(_AO_BINS_M[b + 1], 2.5))
+            blocked = _blur(raster.astype(np.float32), sigma_of(z) / coarse.cell_m)
+            free *= 1.0 - weight * np.clip(blocked, 0, 1)
+    ao = cv2.resize(1.0 - free, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
+    ratio = 1.0 - lighting.key_fraction * shadow - (1.0 - lighting.key_fraction) * tol.ao_strength * ao
+    return np.power(np.clip(ratio, 0.02, 1.0), 1.0 / GAMMA).astype(np.float32), grid
+
+
+# --------------------------------------------------------------------------------------
+# Occlusion by what the photo shows in front of the furniture
+# --------------------------------------------------------------------------------------
+
+def _scaled_K(K, s):
+    """Intrinsics of the image resized by ``s`` (pixel edges kept: centers move by (s - 1) / 2)."""
+    Ks = K.astype(np.float64).copy()
+    Ks[0, 0] *= s
+    Ks[1, 1] *= s
+    Ks[0, 2] = (K[0, 2] + 0.5) * s - 0.5
+    Ks[1, 2] = (K[1, 2] + 0.5) * s - 0.5
+    return Ks
+
+
+def _mask_occluders(floor_mask, K, pose, tol: Tolerances):
+    """How far (horizontally, meters) from the camera the photo's content stands at each
+    pixel, (h', w') float32 at working scale ``s`` (also returned): a pixel that is not
+    floor shows something standing on the first floor pixel below it, along the image of
+    the vertical through it; 1e6 where that walk leaves the photo first."""
+    h, w = floor_mask.shape
+    s = min(1.0, tol.occlusion_long_px / max(h, w))
+    hs, ws = max(2, round(h * s)), max(2, round(w * s))
+    m = cv2.resize(floor_mask.astype(np.uint8) * 255, (ws, hs), interpolation=cv2.INTER_AREA) > 127
+    # Specks of "not floor" inside the floor are segmentation noise.
+    n, labels, stats, _ = cv2.connectedComponentsWithStats((~m).astype(np.uint8), connectivity=4)
+    speck = np.zeros(n, bool)
+    speck[1:] = stats[1:, cv2.CC_STAT_AREA] < max(4, 2e-4 * hs * ws)
+    m |= speck[labels]
+    Ks = _scaled_K(K, s)
+    R, t = pose[:3, :3], pose[:3, 3]
+    down = Ks @ (R @ np.array([0, 0, -1.0]))  # the vertical's vanishing point, homogeneous
+    y_ref = float(hs - 1)
+    if abs(down[2]) > 1e-9 * np.linalg.norm(down[:2]):
+        vx, vy = down[0] / down[2], down[1] / down[2]
+
+        def x_of(u, y):  # the line through the vanishing point and (u, y_ref), at row y
+            return vx + (u - vx) * (y - vy) / (y_ref - vy)
+
+        def u_of(x, y):
+            return vx + (x - vx) * (y_ref - vy) / np.where(np.abs(y - vy) < 1e-9, 1e-9, y - vy)
+    else:  # level camera: verticals are parallel in the image
+        slope = down[0] / down[1] if abs(down[1]) > 1e-12 else 0.0
+
+        def x_of(u, y):
+            return u + slope * (y - y_ref)
+
+        def u_of(x, y):
+            return x - slope * (y - y_ref)
+    cu = u_of(np.array([0.0, ws - 1.0, 0.0, ws - 1.0]), np.array([0.0, 0.0, y_ref, y_ref]))
+    u_lo, u_hi = float(cu.min()), float(cu.max())
+    nu = int(np.clip(u_hi - u_lo + 1, 2, 4 * ws))
+    us = np.linspace(u_lo, u_hi, nu, dtype=np.float32)
+    ys = np.arange(hs, dtype=np.float32)
+    X = x_of(us[:, None], ys[None, :]).astype(np.float32)  # (nu, hs): column u, row y
+    xi = np.rint(X).astype(np.int32)
+    inside = (xi >= 0) & (xi < ws)
+    floor = np.zeros(X.shape, bool)
+    yi = np.broadcast_to(np.arange(hs, dtype=np.int32), X.shape)
+    floor[inside] = m[yi[inside], xi[inside]]
+    # Walking down the image (increasing y): the first floor sample, or the photo's edge.
+    idx = np.where(floor | ~inside, np.arange(hs, dtype=np.int32)[None, :], hs)
+    first = np.minimum.accumulate(idx[:, ::-1], axis=1)[:, ::-1]
+    j = np.minimum(first, hs - 1)
+    hit = (first < hs) & np.take_along_axis(floor, j, axis=1)
+    # Horizontal distance of that floor sample from the camera.
+    fx = np.take_along_axis(X, j, axis=1)
+    fy = j.astype(np.float32)
+    Hinv = np.linalg.inv(Ks @ np.column_stack([R[:, 0], R[:, 1], t])).astype(np.float32)
+    qx = Hinv[0, 0] * fx + Hinv[0, 1] * fy + Hinv[0, 2]
+    qy = Hinv[1, 0] * fx + Hinv[1, 1] * fy + Hinv[1, 2]
+    qw = Hinv[2, 0] * fx + Hinv[2, 1] * fy + Hinv[2, 2]
+    cam_xy = (-R.T @ t)[:2]
+    ok = hit & (qw > 1e-9)
+    qw = np.where(ok, qw, 1.0)
+    dist = np.where(ok, np.hypot(qx / qw - cam_xy[0], qy / qw - cam_xy[1]), 1e6).astype(np.float32)
+    # Back to image pixels.
+    yy, xx = np.mgrid[0:hs, 0:ws].astype(np.float32)
+    U = ((u_of(xx, yy) - u_lo) * ((nu - 1) / max(u_hi - u_lo, 1e-9))).astype(np.float32)
+    out = cv2.remap(np.ascontiguousarray(dist.T), U, yy, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT,
+                    borderValue=1e6)
+    return out, s
+
+
+class _Bounded(dict):
+    """A dict that forgets its oldest entries beyond ``size``."""
+
+    def __init__(self, size):
+        super().__init__()
+        self.size = size
+
+    def __setitem__(self, key, value):
+        super().__setitem__(key, value)
+        while len(self) > self.size:
+            del self[next(iter(self))]
+
+
+# Per photo: the same mask and camera for every suggestion. Furniture: per item style.
+_OCCLUDERS = _Bounded(4)
+_FURNITURE = _Bounded(256)
+
+
+def _mask_occluders_cached(floor_mask, K, pose, tol):
+    key = (hashlib.sha1(np.packbits(floor_mask)).hexdigest(), floor_mask.shape, K.tobytes(), pose.tobytes(),
+           tol.occlusion_long_px)
+    if key not in _OCCLUDERS:
+        _OCCLUDERS[key] = _mask_occluders(floor_mask, K, pose, tol)
+    return _OCCLUDERS[key]
+
+
+def _wall_occluders(walls_m, rays_floor, cam_xy):
+    """Horizontal distance along each ray's azimuth to the first wall segment (n,), inf if none.
+
+    walls_m : (k, 2, 2) segments; rays_floor : (n, 3) ray directions in the floor frame."""
+    d = rays_floor[:, :2] / np.maximum(np.linalg.norm(rays_floor[:, :2], axis=1), 1e-12)[:, None]
+    best = np.full(len(d), np.inf)
+    for a, b in walls_m:
+        e = b - a
+        rhs = a - cam_xy
+        denom = -d[:, 0] * e[1] + d[:, 1] * e[0]
+        safe = np.where(np.abs(denom) > 1e-12, denom, 1.0)
+        t = (-rhs[0] * e[1] + rhs[1] * e[0]) / safe
+        u = (d[:, 0] * rhs[1] - d[:, 1] * rhs[0]) / safe
+        hit = (np.abs(denom) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1)
+        best = np.where(hit & (t < best), t, best)
+    return best
+
+
+def wall_segments(floor_polygon) -> np.ndarray:
+    """Wall segments (k, 2, 2) of a floor polygon: every edge of an (n, 2) array, or the
+    ``"boundary"`` edges of a :class:`~augment.floor.FloorPolygon` (its ``"image"`` and
+    ``"far"`` edges are not walls)."""
+    poly = np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon), dtype=np.float64)
+    if poly.ndim != 2 or poly.shape[1] != 2 or len(poly) < 3:
+        raise ValueError(f"floor polygon must be (n, 2) with n >= 3 vertices in meters, got shape {poly.shape}")
+    edges = np.stack([poly, np.roll(poly, -1, axis=0)], axis=1)
+    kinds = getattr(floor_polygon, "edge_kind", None)
+    if kinds is not None:
+        edges = edges[np.asarray(kinds) == "boundary"]
+    return edges
+
+
+# --------------------------------------------------------------------------------------
+# render_staged
+# --------------------------------------------------------------------------------------
+
+@dataclass
+class Staged:
+    """A staged photo.
+
+    Attributes
+    ----------
+    image : (h, w, 3) uint8
+        The photo with the furniture and its shadows, full resolution.
+    layer : (h, w, 4) uint8 or None
+        Furniture and shadows alone, straight alpha: laid over the photo it gives ``image``.
+    alpha : (h, w) float32
+        Furniture coverage, 0-1, after occlusion.
+    gain : (h, w) float32
+        What the photo was multiplied by for the shadows (1 = untouched).
+    lighting : Lighting
+    roi_px : (4,) tuple of int
+        x0, y0, x1, y1 of the rendered region (outside it the photo is untouched).
+    render_scale : float
+        Rendered pixels per photo pixel along each axis (above 1: supersampled).
+    timings_s : dict
+        Seconds per stage.
+    """
+
+    image: np.ndarray
+    layer: np.ndarray | None
+    alpha: np.ndarray
+    gain: np.ndarray
+    lighting: Lighting
+    roi_px: tuple
+    render_scale: float
+    timings_s: dict = field(default_factory=dict)
+
+
+def _check_image(image) -> np.ndarray:
+    a = np.asarray(image)
+    if a.ndim != 3 or a.shape[2] != 3 or a.dtype != np.uint8:
+        raise ValueError(f"image must be (h, w, 3) uint8 RGB, got shape {a.shape} dtype {a.dtype}")
+    return a
+
+
+def _reach_points(placed, lighting: Lighting, tol: Tolerances):
+    """Floor-frame points whose projection bounds what the furniture and its shadows can
+    touch: each box's corners grown by 0.35 m (contact darkening), and the shadows of its
+    upper corners along the key light's extreme directions."""
+    out = []
+    dirs = [v for v in _shadow_directions(lighting.direction, lighting.softness_rad, 8) if v[2] < -0.05]
+    for item, _ in placed:
+        W, D, Hh = item.size_m
+        T = world_from_item(item)
+        g = 0.35
+        corners = np.array([[x, y, z] for x in (-D / 2 - g, D / 2 + g) for y in (-W / 2 - g, W / 2 + g)
+                            for z in (0.0, Hh)])
+        world = corners @ T[:3, :3].T + T[:3, 3]
+        out.append(world)
+        top = world[1::2]
+        for v in dirs:
+            out.append(top - np.outer(top[:, 2] / v[2], v))
+    return np.concatenate(out)
+
+
+def _roi(points_px, depth, size_px, margin):
+    w, h = size_px
+    if np.any(depth <= ZNEAR_M):  # something reaches behind the camera: everything may show
+        return (0, 0, w, h)
+    x0, y0 = np.floor(points_px.min(axis=0)).astype(int) - margin
+    x1, y1 = np.ceil(points_px.max(axis=0)).astype(int) + margin + 1
+    x0, y0, x1, y1 = max(0, x0), max(0, y0), min(w, x1), min(h, y1)
+    if x1 <= x0 or y1 <= y0:
+        return None
+    return (int(x0), int(y0), int(x1), int(y1))
+
+
+def _undistort_map(K, dist, roi, step=8):
+    """Undistorted pixel coordinates of the photo pixels of ``roi`` (two (h, w) float32
+    maps), computed every ``step`` pixels and interpolated."""
+    x0, y0, x1, y1 = roi
+    gx = np.arange(x0, x1 + step, step, dtype=np.float64)
+    gy = np.arange(y0, y1 + step, step, dtype=np.float64)
+    X, Y = np.meshgrid(gx, gy)
+    # OpenCV's default 5 iterations leave pixels of error toward the corners.
+    und = cv2.undistortPoints(np.stack([X.ravel(), Y.ravel()], axis=1).reshape(-1, 1, 2), K, dist, None, None, K,
+                              (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-9))
+    und = und.reshape(X.shape + (2,)).astype(np.float32)
+    # Bilinear between the grid points (cv2.resize would align pixel centers, not grid points).
+    u = np.arange(x1 - x0, dtype=np.float32) / step
+    v = np.arange(y1 - y0, dtype=np.float32) / step
+    U, V = np.meshgrid(u, v)
+    mx = cv2.remap(und[..., 0], U, V, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    my = cv2.remap(und[..., 1], U, V, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return mx, my
+
+
+def _render_scale(box_px, supersample, tol: Tolerances):
+    if supersample is not None:
+        return float(supersample)
+    s = math.sqrt(tol.render_budget_px / box_px)
+    s = float(np.clip(s, tol.min_render_scale, tol.max_supersample))
+    if 0.85 <= s < 1.3:
+        return 1.0  # resampling by a few percent would blur more than it smooths
+    return round(s * 4) / 4 if s > 1 else s
+
+
+def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
+                  floor_mask: np.ndarray | None = None, floor_polygon=None,
+                  lighting: Lighting | None = None, seed: int = 0, assets: dict | None = None,
+                  supersample: float | None = None, self_shadows: bool = True, layer: bool = False,
+                  tol: Tolerances = TOL) -> Staged:
+    """Render furniture into a calibrated photo, with its shadows on the photo's floor.
+
+    Parameters
+    ----------
+    image : (h, w, 3) uint8
+        The photo, RGB. Not modified.
+    calibration : Calibration
+        Of this photo (``size_px`` must be ``(w, h)``): intrinsics (K, distortion) and
+        ``camera_from_floor``. The items are in its floor frame (meters, z up).
+    items : sequence of PlacedItem, a Layout, or a layout dict (``layout_K.json``)
+        What to render (:func:`augment.furniture.placed_items`).
+    renderer : Renderer
+        The GL context, reused for every render.
+    floor_mask : (h, w) bool, optional
+        Visible floor (segmentation): what the photo shows standing in front of the
+        furniture hides it, and shadows fall only on floor pixels.
+    floor_polygon : FloorPolygon or (n, 2) float, optional
+        The floor's outline in the floor frame, meters: its wall edges (every edge of an
+        array; the ``"boundary"`` edges of a FloorPolygon) hide what lies beyond them.
+    lighting : Lighting, optional
+        Estimated from the photo (:func:`estimate_lighting`) when None; pass it to reuse
+        one estimate for several suggestions.
+    seed : int
+        Picks each item's style and materials, with the item's id: an item looks the same
+        in every suggestion.
+    assets : dict, optional
+        Kind -> GLB/OBJ path, or parts from :func:`augment.furniture.load_asset`.
+    supersample : float, optional
+        Rendered pixels per photo pixel along each axis. Default: as many as
+        ``tol.render_budget_px`` allows over the region furniture and shadows reach, up
+        to 2 (larger photos are rendered below 1 and upsampled); the renderer's 4x
+        multisampling antialiases edges in any case.
+    self_shadows : bool
+        Shadows of the key light on the furniture itself (from a depth map seen from
+        the light).
+    layer : bool
+        Also return the RGBA layer.
+    tol : Tolerances
+
+    Returns
+    -------
+    Staged
+    """
+    timings = {}
+    t0 = time.perf_counter()
+    image = _check_image(image)
+    h, w = image.shape[:2]
+    if tuple(calibration.size_px) != (w, h):
+        raise ValueError(f"the calibration is for a {calibration.size_px[0]}x{calibration.size_px[1]} photo, "
+                         f"the image is {w}x{h}")
+    if floor_mask is not None:
+        floor_mask = np.asarray(floor_mask)
+        if floor_mask.shape != (h, w):
+            raise ValueError(f"floor_mask must be ({h}, {w}) like the image, got {floor_mask.shape}")
+        floor_mask = floor_mask.astype(bool, copy=False)
+    items = list(items) if isinstance(items, (list, tuple)) else placed_items(items)
+    walls = None if floor_polygon is None else wall_segments(floor_polygon)
+    K, dist, pose = _camera(calibration)
+    if lighting is None:
+        lighting = estimate_lighting(image, calibration, floor_mask)
+    placed = [(it, furniture_for(it, seed, assets, _FURNITURE)) for it in items]
+    timings["build"] = time.perf_counter() - t0
+
+    # The region of the photo furniture and shadows can reach, and the box to render.
+    t = time.perf_counter()
+    out = image.copy()
+    roi = None
+    if placed:
+        reach = _reach_points(placed, lighting, tol)
+        roi = _roi(*_project(reach, K, pose, dist), (w, h), tol.margin_px)
+    if roi is None:  # nothing in view
+        zeros, ones = np.zeros((h, w), np.float32), np.ones((h, w), np.float32)
+        lay = np.dstack([out, np.zeros((h, w), np.uint8)]) if layer else None
+        return Staged(out, lay, zeros, ones, lighting, (0, 0, 0, 0), 1.0, timings)
+    x0, y0, x1, y1 = roi
+    distorted = bool(np.any(dist))
+    if distorted:  # render the undistorted view of the region, then warp it onto the photo
+        map_x, map_y = _undistort_map(K, dist, roi)
+        box = (int(np.floor(map_x.min())) - 2, int(np.floor(map_y.min())) - 2,
+               int(np.ceil(map_x.max())) + 3, int(np.ceil(map_y.max())) + 3)
+    else:
+        box = roi
+    bw, bh = box[2] - box[0], box[3] - box[1]
+    s = _render_scale(bw * bh, supersample, tol)
+    rw, rh = max(1, round(bw * s)), max(1, round(bh * s))
+    Kr = _scaled_K(K - np.array([[0, 0, box[0]], [0, 0, box[1]], [0, 0, 0]]), 1.0)
+    Kr[0, 0] *= rw / bw
+    Kr[1, 1] *= rh / bh
+    Kr[0, 2] = (Kr[0, 2] + 0.5) * rw / bw - 0.5
+    Kr[1, 2] = (Kr[1, 2] + 0.5) * rh / bh - 0.5
+    timings["setup"] = time.perf_counter() - t
+
+    # The flat passes: all light, and the key light alone for its shadows (premultiplied:
+    # the background is transparent black).
+    t = time.perf_counter()
+    R, tvec = pose[:3, :3], pose[:3, 3]
+    cam_pos = -R.T @ tvec
+    cam_xy = cam_pos[:2]
+    forward_xy = R[2, :2] / max(float(np.linalg.norm(R[2, :2])), 1e-9)
+    fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy)
+    camera, camera_gl = pyrender_camera(Kr), gl_from_cv_pose(np.linalg.inv(pose))
+    flags = pyrender.RenderFlags.RGBA | pyrender.RenderFlags.FLAT
+    full, depth = renderer.render(_flat_scene(fulls, camera, camera_gl), rw, rh, flags=flags)
+    self_shadows = self_shadows and lighting.key_fraction > 0
+    if self_shadows:
+        key, _ = renderer.render(_flat_scene(keys, camera, camera_gl), rw, rh, flags=flags)
+    timings["render"] = time.perf_counter() - t
+
+    # Each furniture pixel's point on the floor frame; the key light's shadows on the
+    # furniture (a depth map from the light, filtered over the light's size).
+    t = time.perf_counter()
+    ys, xs = np.nonzero(full[..., 3])
+    d = depth[ys, xs]
+    if (d <= 0).any():  # edge pixels whose depth sample missed: a neighbour's depth
+        grown = cv2.dilate(depth, np.ones((3, 3), np.uint8))
+        d = np.where(d > 0, d, grown[ys, xs])
+    rays = np.stack([(xs - Kr[0, 2]) / Kr[0, 0], (ys - Kr[1, 2]) / Kr[1, 1], np.ones(len(xs))])
+    world = (R.T @ (rays * d - tvec[:, None])).T
+    if self_shadows:
+        corners = np.concatenate([_reach_points([(it, f)], lighting, tol)[:8] for it, f in placed])
+        view = _light_view(renderer, fulls, lighting, corners.min(axis=0), corners.max(axis=0),
+                           2048 if rw * rh > 2.5e6 else 1024)
+        radius_px = float(np.clip(0.3 * math.tan(lighting.softness_rad) / view.texel_m, 1.0, 8.0))
+        # Tested on every second or third pixel of large renders (the shadows are soft).
+        step = 3 if rw * rh > 2.5e6 else 2 if rw * rh > 6e5 else 1
+        world_image = np.full((rh, rw, 3), np.nan, np.float32)
+        world_image[ys, xs] = world
+        world_image = world_image[::step, ::step]
+        lit = key[::step, ::step, :3].max(axis=2) > 0  # surfaces the key light reaches
+        ly, lx, points, bias = _shadow_receivers(world_image, lit, cam_pos, lighting, view.texel_m, radius_px)
+        visibility = np.ones(lit.shape, np.float32)
+        visibility[ly, lx] = _key_visibility(points, bias, view.camera_from_floor[:3, :3],
+                                             view.camera_from_floor[:3, 3], view.K, view.depth_m, radius_px)
+        if step > 1:
+            visibility = cv2.resize(visibility, (rw, rh), interpolation=cv2.INTER_LINEAR)
+        visibility = cv2.blur(visibility, (3, 3))
+        rgba = np.empty((rh, rw, 4), np.uint8)
+        _combine(full, key, visibility, _DECODE, _ENCODE, rgba)
+    else:
+        rgba = np.ascontiguousarray(full)
+    timings["self_shadows"] = time.perf_counter() - t
+
+    # Occlusion, and which furniture pixels lie on the floor (rugs), at render resolution.
+    t = time.perf_counter()
+    low = np.zeros((rh, rw), np.uint8)
+    low[ys, xs] = np.where(world[:, 2] < tol.floor_level_m, 255, 0)
+    if floor_mask is not None or (walls is not None and len(walls)):
+        reach_xy = np.hypot(world[:, 0] - cam_xy[0], world[:, 1] - cam_xy[1])
+        occluder = np.full(len(xs), np.inf)
+        if floor_mask is not None:
+            dmap, ms = _mask_occluders_cached(floor_mask, K, pose, tol)
+            if distorted:
+                px, _ = _project(world, K, pose, dist)
+            else:
+                px = np.stack([(xs + 0.5) * (bw / rw) - 0.5 + box[0], (ys + 0.5) * (bh / rh) - 0.5 + box[1]], 1)
+            mi = np.clip(np.rint((px[:, 1] + 0.5) * ms - 0.5).astype(int), 0, dmap.shape[0] - 1)
+            mj = np.clip(np.rint((px[:, 0] + 0.5) * ms - 0.5).astype(int), 0, dmap.shape[1] - 1)
+            occluder = np.minimum(occluder, dmap[mi, mj])
+        if walls is not None and len(walls):
+            occluder = np.minimum(occluder, _wall_occluders(walls, (R.T @ rays).T, cam_xy))
+        slack = tol.occlusion_m + tol.occlusion_rel * np.where(np.isfinite(occluder), occluder, 0.0)
+        hidden = reach_xy > occluder + slack
+        if hidden.any():
+            # Hidden pixels grown by one (so a hidden silhouette's soft edge goes too), then
+            # a cut a pixel wide.
+            cut = np.zeros((rh, rw), np.uint8)
+            cut[ys[hidden], xs[hidden]] = 255
+            cut = cv2.blur(cv2.dilate(cut, np.ones((3, 3), np.uint8)), (3, 3))
+            iy, ix = np.nonzero(cut)
+            keep = (255 - cut[iy, ix]).astype(np.float32) * (1.0 / 255.0)
+            rgba[iy, ix] = (rgba[iy, ix] * keep[:, None] + 0.5).astype(np.uint8)
+    timings["occlusion"] = time.perf_counter() - t
+
+    # Back to photo pixels: resample the render onto the box.
+    t = time.perf_counter()
+    if (rw, rh) != (bw, bh):
+        interp = cv2.INTER_AREA if s > 1 else cv2.INTER_LINEAR
+        rgba = cv2.resize(rgba, (bw, bh), interpolation=interp)
+        low = cv2.resize(low, (bw, bh), interpolation=interp)
+    # Shadows: the floor raster warped onto the box, only where the floor can be (rays
+    # pointing down; the warp folds the floor's far side into the sky).
+    casters = _casters(placed, tol)
+    on_floor = reach[reach[:, 2] < 1e-6, :2]
+    pts = np.concatenate([on_floor] + [c.points[:, :2] for c in casters])
+    gain_floor, grid = _floor_gain(casters, lighting, (pts.min(axis=0) - 0.3, pts.max(axis=0) + 0.3), tol)
+    shift = np.array([[1.0, 0, -box[0]], [0, 1, -box[1]], [0, 0, 1]])
+    H_box = shift @ K @ np.column_stack([R[:, 0], R[:, 1], tvec]) @ grid.floor_from_raster()
+    gain = cv2.warpPerspective(gain_floor, H_box, (bw, bh), flags=cv2.INTER_LINEAR,
+                               borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
+    up = np.linalg.inv(K).T @ R[:, 2]  # the floor's pixels: up . K^-1 p < 0
+    _clear_above_horizon(gain, float(up[0]), float(up[1]), float(up[2]), box[0], box[1])
+    if distorted:
+        mx, my = map_x - box[0], map_y - box[1]
+        rgba, low = (cv2.remap(a, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+                     for a in (rgba, low))
+        gain = cv2.remap(gain, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
+    timings["shadows"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    full_alpha = np.zeros((h, w), np.float32)
+    full_gain = np.ones((h, w), np.float32)
+    floor_roi = floor_mask[y0:y1, x0:x1] if floor_mask is not None else np.ones((1, 1), bool)
+    _composite(image[y0:y1, x0:x1], rgba, low, gain, floor_roi, floor_mask is not None,
+               out[y0:y1, x0:x1], full_alpha[y0:y1, x0:x1], full_gain[y0:y1, x0:x1])
+    lay = _layer(out, full_alpha, full_gain, image) if layer else None
+    timings["composite"] = time.perf_counter() - t
+    timings["total"] = time.perf_counter() - t0
+    return Staged(out, lay, full_alpha, full_gain, lighting, roi, s, timings)
+
+
+@njit(cache=True)
+def _clear_above_horizon(gain, a, b, c, x0, y0):
+    """Set ``gain`` to 1 at pixels (x0 + col, y0 + row) with a x + b y + c >= 0."""
+    for i in range(gain.shape[0]):
+        v = b * (i + y0) + c
+        for j in range(gain.shape[1]):
+            if a * (j + x0) + v >= 0.0:
+                gain[i, j] = 1.0
+
+
+@njit(cache=True, parallel=True)
+def _composite(photo, rgba, low, gain, floor, use_floor, out, alpha_out, gain_out):
+    """One pass over the region: the photo times its shadow gain under what shows of it,
+    the premultiplied furniture over it; floor-level furniture (``low``, 0-255) takes the
+    shadows too. Shadows fall on floor pixels only when ``use_floor``.
+
+    photo, out : (h, w, 3) uint8; rgba : (h, w, 4) uint8 premultiplied; low : (h, w)
+    uint8; gain : (h, w) float32; floor : (h, w) bool; alpha_out, gain_out : (h, w)
+    float32, written."""
+    h, w = photo.shape[0], photo.shape[1]
+    for i in prange(h):
+        for j in range(w):
+            g = gain[i, j]
+            if use_floor and not floor[i, j]:
+                g = 1.0
+            a = rgba[i, j, 3] * (1.0 / 255.0)
+            k = g * (1.0 - a)
+            fg = 1.0 - low[i, j] * (1.0 / 255.0) * (1.0 - g)
+            for ch in range(3):
+                v = photo[i, j, ch] * k + rgba[i, j, ch] * fg + 0.5
+                out[i, j, ch] = 255 if v >= 255.0 else np.uint8(v)
+            alpha_out[i, j] = a
+            gain_out[i, j] = g
+
+
+def _layer(staged, alpha, gain, photo) -> np.ndarray:
+    """Straight-alpha RGBA of what was added: laid over ``photo`` it gives ``staged``.
+
+    Over the photo P a layer (c, a) gives a c + (1 - a) P; the staged pixel is
+    S = F + (1 - alpha) g P, so a = 1 - (1 - alpha) g and c = (S - (1 - a) P) / a."""
+    a = 1.0 - (1.0 - alpha) * gain
+    added = staged.astype(np.float32) - (1.0 - a)[..., None] * photo.astype(np.float32)
+    c = added / np.maximum(a, 1e-4)[..., None]
+    rgba = np.dstack([np.clip(c, 0, 255), np.clip(a * 255.0, 0, 255)])
+    return (rgba + 0.5).astype(np.uint8)
+
+
+def write_jpeg(path, image: np.ndarray, quality: int = JPEG_QUALITY):
+    """Write an RGB image as JPEG (quality 92 by default), atomically. Returns the path."""
+    image = _check_image(image)
+    ok, data = cv2.imencode(".jpg", cv2.cvtColor(image, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
+    if not ok:
+        raise RuntimeError(f"could not encode {path} as JPEG")
+    return write_atomic(path, data.tobytes())
+
+
+def write_png(path, image: np.ndarray):
+    """Write an RGB or RGBA uint8 image as PNG, atomically. Returns the path."""
+    a = np.asarray(image)
+    if a.dtype != np.uint8 or a.ndim != 3 or a.shape[2] not in (3, 4):
+        raise ValueError(f"PNG image must be (h, w, 3 or 4) uint8, got shape {a.shape} dtype {a.dtype}")
+    ok, data = cv2.imencode(".png", cv2.cvtColor(a, cv2.COLOR_RGBA2BGRA if a.shape[2] == 4 else cv2.COLOR_RGB2BGR))
+    if not ok:
+        raise RuntimeError(f"could not encode {path} as PNG")
+    return write_atomic(path, data.tobytes())

@@ -1,0 +1,379 @@
+"""Rendering furniture into photos: geometry against the ground truth of a synthetic photo,
+shadows, occlusion, the furniture's sizes, and the renderer's hygiene."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+import trimesh
+
+from augment.board import Board
+from augment.calibrate import Calibration, Intrinsics, read_photo
+from augment.furniture import (BUILDERS, FIT_SLACK_M, Part, PlacedItem, build_furniture, furniture_from_asset,
+                               item_mesh, load_asset, placed_items)
+from augment.gl import Renderer
+from augment.render import Lighting, estimate_lighting, render_staged, write_jpeg
+from layout.catalog import CATALOG
+
+PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
+LIGHT = Lighting((0.8, 0.78, 0.75), (0.3, 0.5, -0.81), 0.5, 0.08, (0.3, 0.25, 0.2), "test")
+
+
+def _truth_calibration(name: str, scale: float = 1.0, distortion=None):
+    """The photo ``name`` (resized by ``scale``), its floor mask, and a Calibration built
+    from its ground truth: exact K and pose, floor frame = the board's."""
+    truth = json.loads((PHOTOS / f"{name}.json").read_text())
+    image = read_photo(PHOTOS / f"{name}.jpg")
+    mask = cv2.imread(str(PHOTOS / f"{name}_floor.png"), cv2.IMREAD_GRAYSCALE) > 127
+    K = np.array(truth["K"], dtype=np.float64)
+    if scale != 1.0:
+        h, w = image.shape[:2]
+        size = (round(w * scale), round(h * scale))
+        image = cv2.resize(image, size, interpolation=cv2.INTER_AREA)
+        mask = cv2.resize(mask.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0
+        K[:2, :2] *= scale
+        K[0, 2], K[1, 2] = (K[0, 2] + 0.5) * scale - 0.5, (K[1, 2] + 0.5) * scale - 0.5
+    pose = np.array(truth["camera_from_world"]) @ np.array(truth["board"]["world_from_board"])
+    dist = np.zeros(5) if distortion is None else np.asarray(distortion, dtype=np.float64)
+    R, t = pose[:3, :3], pose[:3, 3]
+    H = K @ np.column_stack([R[:, 0], R[:, 1], t])
+    horizon = np.linalg.inv(K).T @ R[:, 2]
+    calibration = Calibration(
+        size_px=(image.shape[1], image.shape[0]), intrinsics=Intrinsics(K, dist, "truth", 0.0),
+        camera_from_floor=pose, camera_height_m=float(-R[:, 2] @ t),
+        floor_plane_camera=np.append(R[:, 2], -R[:, 2] @ t),
+        image_from_floor=H / H[2, 2], horizon=-horizon / np.hypot(*horizon[:2]), rms_px=0.0,
+        corners_px=np.zeros((0, 2)), corner_ids=np.zeros(0, np.int64), detector="truth", board=Board())
+    return image, mask, calibration
+
+
+@pytest.fixture(scope="module")
+def renderer():
+    with Renderer() as r:
+        yield r
+
+
+@pytest.fixture(scope="module")
+def room_small():
+    return _truth_calibration("room_1", 0.5)
+
+
+def _box_parts():
+    """An exact unit box (no bevels) as furniture parts, base at z = 0."""
+    box = trimesh.creation.box((1.0, 1.0, 1.0))
+    box.apply_translation((0, 0, 0.5))
+    v = box.vertices[box.faces].reshape(-1, 3)
+    n = np.repeat(box.face_normals, 3, axis=0)
+    from augment.furniture import Material
+    return (Part(v, n, np.arange(len(v)).reshape(-1, 3), Material("grey", (0.4, 0.4, 0.4), 0.8)),)
+
+
+def _project(calibration, points):
+    pose = calibration.camera_from_floor
+    px, _ = cv2.projectPoints(np.asarray(points, dtype=np.float64).reshape(-1, 1, 3),
+                              cv2.Rodrigues(pose[:3, :3])[0], pose[:3, 3], calibration.intrinsics.K,
+                              calibration.intrinsics.distortion)
+    return px.reshape(-1, 2)
+
+
+def _box_corners(center_xy, size, yaw=0.0):
+    w, d, h = size
+    c, s = np.cos(yaw), np.sin(yaw)
+    out = []
+    for z in (0.0, h):
+        for x, y in ((-d / 2, -w / 2), (d / 2, -w / 2), (d / 2, w / 2), (-d / 2, w / 2)):
+            out.append((center_xy[0] + c * x - s * y, center_xy[1] + s * x + c * y, z))
+    return np.array(out)
+
+
+def _hull_mask(shape, px):
+    """Pixels (h, w) bool whose centers lie inside the convex hull of ``px``, subpixel exact."""
+    mask = np.zeros(shape, np.uint8)
+    hull = cv2.convexHull(np.round(px * 256).astype(np.int32).reshape(-1, 1, 2))
+    cv2.fillConvexPoly(mask, hull, 1, lineType=cv2.LINE_8, shift=8)
+    return mask.astype(bool)
+
+
+def _band(mask):
+    """Pixels within one pixel of the mask's boundary."""
+    m = mask.astype(np.uint8)
+    k = np.ones((3, 3), np.uint8)
+    return (cv2.dilate(m, k) - cv2.erode(m, k)).astype(bool)
+
+
+def _render_box(renderer, image, calibration, center_xy, size, yaw=0.0, **kw):
+    item = PlacedItem("test_box", (center_xy[0], center_xy[1], size[2] / 2), yaw, size, "box")
+    parts = _box_parts()
+    return render_staged(image, calibration, [item], renderer, assets={"test_box": parts}, lighting=LIGHT,
+                         seed=0, **kw)
+
+
+# --------------------------------------------------------------------------------------
+# Geometry
+# --------------------------------------------------------------------------------------
+
+def test_box_base_corners_land_on_the_true_projection(renderer):
+    """A 0.6 x 0.4 x 0.5 m box on the floor of a synthetic photo, camera and floor from its
+    ground truth: the silhouette's base corners are within 1 px of where K and the pose put
+    them (the render is the photo's own camera, to the pixel center convention)."""
+    image, _, calibration = _truth_calibration("room_1")
+    size = (0.6, 0.4, 0.5)
+    staged = _render_box(renderer, image, calibration, (0.2, 0.3), size, yaw=0.4, supersample=1.0)
+    corners = _box_corners((0.2, 0.3), size, 0.4)
+    px = _project(calibration, corners)
+    hull = cv2.convexHull(px.astype(np.float32)).reshape(-1, 2)
+    alpha = staged.alpha
+    checked = 0
+    for k in range(4):  # base corners on the silhouette
+        p = px[k]
+        if np.min(np.linalg.norm(hull - p, axis=1)) > 1e-3:
+            continue  # inside the silhouette: hidden behind the box
+        # Along the bisector of the hull's corner: covered 1.5 px inside, empty 1.5 px outside.
+        i = int(np.argmin(np.linalg.norm(hull - p, axis=1)))
+        a, b = hull[i - 1] - p, hull[(i + 1) % len(hull)] - p
+        inward = a / np.linalg.norm(a) + b / np.linalg.norm(b)
+        inward /= np.linalg.norm(inward)
+        inside, outside = np.rint(p + 1.5 * inward).astype(int), np.rint(p - 1.5 * inward).astype(int)
+        assert alpha[inside[1], inside[0]] > 0.5, f"corner {k} at {p}: not covered just inside"
+        assert alpha[outside[1], outside[0]] < 0.5, f"corner {k} at {p}: covered just outside"
+        checked += 1
+    assert checked >= 2
+    # The whole silhouette: same area and centroid as the projected hull.
+    expected = _hull_mask(alpha.shape, px)
+    ys, xs = np.nonzero(expected)
+    w = alpha[alpha > 0]
+    yy, xx = np.nonzero(alpha > 0)
+    assert abs(alpha.sum() - expected.sum()) / expected.sum() < 0.01
+    assert np.hypot(np.average(xx, weights=w) - xs.mean(), np.average(yy, weights=w) - ys.mean()) < 0.2
+
+
+def test_unit_cube_at_the_board_origin_covers_exactly_its_hull(renderer, room_small):
+    image, _, calibration = room_small
+    staged = _render_box(renderer, image, calibration, (0.0, 0.0), (1.0, 1.0, 1.0), supersample=1.0)
+    expected = _hull_mask(staged.alpha.shape, _project(calibration, _box_corners((0, 0), (1, 1, 1))))
+    covered = staged.alpha > 0.5
+    wrong = covered != expected
+    assert expected.sum() > 5000
+    assert not (wrong & ~_band(expected)).any(), "pixels off the cube's outline differ"
+    # On the outline the 4x multisampled coverage is the pixel's share of the cube.
+    assert abs(staged.alpha.sum() - expected.sum()) < 0.005 * expected.sum()
+
+
+def test_distorted_lens_follows_the_distortion(renderer):
+    """With radial distortion the render is warped like the photo: the cube's outline is
+    where cv2.projectPoints puts it, within the 1-px band."""
+    image, _, calibration = _truth_calibration("room_1", 0.5, distortion=(-0.12, 0.02, 0, 0, 0))
+    staged = _render_box(renderer, image, calibration, (0.0, 0.0), (1.0, 1.0, 1.0), supersample=1.0)
+    edges = _box_corners((0, 0), (1, 1, 1))
+    pairs = [(a, b) for a in range(8) for b in range(a + 1, 8) if np.sum(edges[a] != edges[b]) == 1]
+    dense = np.concatenate([edges[a] + np.linspace(0, 1, 60)[:, None] * (edges[b] - edges[a]) for a, b in pairs])
+    expected = _hull_mask(staged.alpha.shape, _project(calibration, dense))
+    wrong = (staged.alpha > 0.5) != expected
+    wrong[[0, -1]] = wrong[:, [0, -1]] = False  # the band is not defined on the photo's edge
+    assert expected.sum() > 5000
+    assert not (wrong & ~_band(expected)).any()
+
+
+# --------------------------------------------------------------------------------------
+# Shadows and occlusion
+# --------------------------------------------------------------------------------------
+
+def test_floor_under_a_table_darkens_and_far_floor_is_untouched(renderer):
+    image, mask, calibration = _truth_calibration("room_2", 0.5)
+    pose = calibration.camera_from_floor
+    cam = (-pose[:3, :3].T @ pose[:3, 3])[:2]
+    forward = pose[2, :2] / np.linalg.norm(pose[2, :2])
+    cx, cy = cam + 2.6 * forward
+    table = PlacedItem("dining_table", (cx, cy, 0.375), 0.2, (1.6, 0.9, 0.75), "table")
+    staged = render_staged(image, calibration, [table], renderer, floor_mask=mask, lighting=LIGHT)
+    # Floor points under the top, inset from its edge, that the camera sees between the legs.
+    g = np.stack(np.meshgrid(np.linspace(-0.3, 0.3, 13), np.linspace(-0.6, 0.6, 25)), -1).reshape(-1, 2)
+    c, s = np.cos(0.2), np.sin(0.2)
+    floor = np.column_stack([cx + c * g[:, 0] - s * g[:, 1], cy + s * g[:, 0] + c * g[:, 1], np.zeros(len(g))])
+    px = np.rint(_project(calibration, floor)).astype(int)
+    h, w = mask.shape
+    ok = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
+    px = px[ok]
+    seen = (staged.alpha[px[:, 1], px[:, 0]] == 0) & mask[px[:, 1], px[:, 0]]
+    assert seen.sum() >= 10, "the test needs floor visible under the table"
+    before = image[px[seen, 1], px[seen, 0]].astype(float).sum(axis=1)
+    after = staged.image[px[seen, 1], px[seen, 0]].astype(float).sum(axis=1)
+    assert np.all(after <= before) and np.median(after / before) < 0.85
+    # Everything outside the rendered region is untouched.
+    x0, y0, x1, y1 = staged.roi_px
+    outside = np.ones(mask.shape, bool)
+    outside[y0:y1, x0:x1] = False
+    assert np.array_equal(staged.image[outside], image[outside])
+    # Floor pixels 2 m and more from the table's center (beyond its shadow and occlusion): unchanged.
+    ys, xs = np.mgrid[0:h:3, 0:w:3]
+    xy = cv2.perspectiveTransform(np.stack([xs, ys], -1).reshape(-1, 1, 2).astype(np.float64),
+                                  np.linalg.inv(calibration.image_from_floor)).reshape(-1, 2)
+    far = ((np.hypot(xy[:, 0] - cx, xy[:, 1] - cy) > 2.0) & mask[ys.ravel(), xs.ravel()]
+           & (staged.alpha[ys.ravel(), xs.ravel()] == 0))
+    assert far.sum() > 500
+    fy, fx = ys.ravel()[far], xs.ravel()[far]
+    assert np.array_equal(staged.image[fy, fx], image[fy, fx])
+
+
+def test_walls_in_the_mask_and_the_polygon_hide_what_stands_behind_them(renderer, room_small):
+    """A floor mask cut off 3.2 m from the camera (a wall there): a box beyond it is
+    hidden, a box before it shows. The same wall as a floor-polygon edge does the same."""
+    image, _, calibration = room_small
+    h, w = image.shape[:2]
+    pose = calibration.camera_from_floor
+    cam = -pose[:3, :3].T @ pose[:3, 3]
+    ys, xs = np.mgrid[0:h, 0:w]
+    xy = cv2.perspectiveTransform(np.stack([xs, ys], -1).reshape(-1, 1, 2).astype(np.float64),
+                                  np.linalg.inv(calibration.image_from_floor)).reshape(h, w, 2)
+    rays = np.linalg.inv(calibration.intrinsics.K) @ np.stack([xs.ravel(), ys.ravel(), np.ones(h * w)])
+    down = ((pose[:3, :3].T @ rays)[2] < 0).reshape(h, w)
+    forward = pose[2, :3][:2] / np.linalg.norm(pose[2, :3][:2])  # camera's viewing direction on the floor
+    along = (xy - cam[:2]) @ forward
+    wall_at = 3.2
+    mask = down & (along < wall_at)
+    near = cam[:2] + forward * 2.2
+    far = cam[:2] + forward * 4.2
+    for where, expect_visible in ((near, True), (far, False)):
+        staged = _render_box(renderer, image, calibration, where, (0.5, 0.5, 0.8), floor_mask=mask)
+        assert (staged.alpha > 0.5).sum() > 200 if expect_visible else (staged.alpha > 0.5).sum() < 20
+    side = np.array([-forward[1], forward[0]])
+    wall = cam[:2] + forward * wall_at
+    poly = np.array([cam[:2] - 5 * side - 2 * forward, cam[:2] + 5 * side - 2 * forward,
+                     wall + 5 * side, wall - 5 * side])
+    e1, e2 = poly[1] - poly[0], poly[2] - poly[1]
+    if e1[0] * e2[1] - e1[1] * e2[0] < 0:  # counter-clockwise
+        poly = poly[::-1]
+    staged = _render_box(renderer, image, calibration, far, (0.5, 0.5, 0.8), floor_polygon=poly)
+    assert (staged.alpha > 0.5).sum() < 20
+    staged = _render_box(renderer, image, calibration, near, (0.5, 0.5, 0.8), floor_polygon=poly)
+    assert (staged.alpha > 0.5).sum() > 200
+
+
+# --------------------------------------------------------------------------------------
+# Furniture
+# --------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("kind", sorted(CATALOG))
+def test_every_kind_fills_its_box_exactly(kind):
+    """Bounds equal the item's size within 1 mm (width along the item's y, depth along x),
+    at the catalog size and at another; at the catalog size the builders themselves come
+    within FIT_SLACK_M of it (the final fit only trims)."""
+    assert kind in BUILDERS
+    w, d, h = CATALOG[kind].size_m
+    for size, seed in (((w, d, h), 0), ((w * 1.2, d * 0.9, h * 1.1), 3)):
+        f = build_furniture(kind, size, style_seed=seed)
+        lo, hi = f.bounds_m
+        assert np.allclose(lo, [-size[1] / 2, -size[0] / 2, 0.0], atol=1e-3), (kind, f.style, lo)
+        assert np.allclose(hi, [size[1] / 2, size[0] / 2, size[2]], atol=1e-3), (kind, f.style, hi)
+        if seed == 0:  # round things (tables, pots) are stretched into ovals at other sizes
+            raw = f.raw_bounds_m
+            target = np.array([[-size[0] / 2, -size[1] / 2, 0.0], [size[0] / 2, size[1] / 2, size[2]]])
+            assert np.abs(raw - target).max() < FIT_SLACK_M, (kind, f.style, raw - target)
+        assert all(np.all(np.isfinite(p.vertices)) and np.allclose(np.linalg.norm(p.normals, axis=1), 1, atol=1e-6)
+                   for p in f.parts)
+
+
+def test_styles_vary_and_seeds_repeat():
+    a = build_furniture("sofa", style_seed=1)
+    b = build_furniture("sofa", style_seed=1)
+    assert a.style == b.style and all(np.array_equal(p.vertices, q.vertices) for p, q in zip(a.parts, b.parts))
+    styles = {build_furniture("sofa", style_seed=s).style for s in range(12)}
+    colours = {build_furniture("sofa", style_seed=s).parts[0].material.color_rgb for s in range(12)}
+    assert len(styles) >= 2 and len(colours) >= 6
+
+
+def test_placed_item_mesh_in_the_floor_frame():
+    """Front toward the yaw: a yaw of 90 degrees puts the depth along y."""
+    item = PlacedItem("dresser", (1.0, 2.0, 0.4), np.pi / 2, (1.0, 0.5, 0.8), "d")
+    lo, hi = item_mesh(item).bounds
+    assert np.allclose(lo, [0.5, 1.75, 0.0], atol=1e-3) and np.allclose(hi, [1.5, 2.25, 0.8], atol=1e-3)
+
+
+def test_user_model_is_scaled_to_the_item(tmp_path):
+    """A GLB (glTF: y up, front toward +z) stands in for a kind, stretched onto its box."""
+    mesh = trimesh.creation.box((2.0, 1.0, 0.5))  # glTF: 2 wide (x), 1 tall (y), 0.5 deep (z)
+    mesh.visual.face_colors = [200, 30, 30, 255]
+    path = tmp_path / "thing.glb"
+    mesh.export(path)
+    f = furniture_from_asset("sofa", (2.1, 0.95, 0.85), load_asset(path))
+    lo, hi = f.bounds_m
+    assert np.allclose(lo, [-0.475, -1.05, 0], atol=1e-6) and np.allclose(hi, [0.475, 1.05, 0.85], atol=1e-6)
+    assert f.parts[0].material.color_rgb[0] > 0.5 > f.parts[0].material.color_rgb[1]
+
+
+def test_layout_dict_gives_placed_items():
+    layout = {"items": [{"id": "s", "kind": "sofa", "position_m": [1, 2, 0.425], "yaw_rad": 0.5,
+                         "size_m": [2.1, 0.95, 0.85], "group": None}]}
+    (item,) = placed_items(layout)
+    assert item.kind == "sofa" and item.elevation_m == pytest.approx(0.0) and item.yaw_rad == 0.5
+
+
+# --------------------------------------------------------------------------------------
+# Hygiene: inputs, reuse, outputs
+# --------------------------------------------------------------------------------------
+
+def test_inputs_untouched_renders_repeatable_and_layer_recomposes(renderer, room_small, tmp_path):
+    image, mask, calibration = room_small
+    image_before, mask_before = image.copy(), mask.copy()
+    items = [PlacedItem("sofa", (0.2, 0.8, 0.425), -1.3, (2.1, 0.95, 0.85), "sofa"),
+             PlacedItem("rug", (0.0, 0.0, 0.005), 0.3, (2.0, 1.4, 0.01), "rug"),
+             PlacedItem("plant", (-0.9, 0.3, 0.5), 0.0, (0.4, 0.4, 1.0), "plant")]
+    first = render_staged(image, calibration, items, renderer, floor_mask=mask, layer=True)
+    assert np.array_equal(image, image_before) and np.array_equal(mask, mask_before)
+    # One renderer, several renders: other items in between, then the same render again.
+    render_staged(image, calibration, items[:1], renderer, lighting=LIGHT)
+    again = render_staged(image, calibration, items, renderer, floor_mask=mask, layer=True)
+    assert np.array_equal(first.image, again.image)
+    assert first.image.shape == image.shape and not np.array_equal(first.image, image)
+    # The RGBA layer over the photo gives the staged photo.
+    a = first.layer[..., 3:].astype(float) / 255
+    over = first.layer[..., :3] * a + image * (1 - a)
+    assert np.abs(over - first.image).max() <= 3
+    path = write_jpeg(tmp_path / "staged.jpg", first.image)
+    back = cv2.imread(str(path))
+    assert back.shape == image.shape and not list(tmp_path.glob(".*.tmp"))
+    assert np.abs(back[..., ::-1].astype(int) - first.image).mean() < 3
+
+
+def test_exposure_and_colour_follow_the_photo():
+    """The board's white squares set the exposure and white balance: a photo half as bright
+    (in linear light) gives half the irradiance; a warm cast, a warm light."""
+    image, mask, calibration = _truth_calibration("room_2", 0.5)
+    base = np.array(estimate_lighting(image, calibration, mask).irradiance_rgb)
+    linear = (image / 255.0) ** 2.2
+    for gains in ((0.5, 0.5, 0.5), (1.0, 0.8, 0.6)):
+        shifted = np.clip(255 * (linear * gains) ** (1 / 2.2) + 0.5, 0, 255).astype(np.uint8)
+        got = np.array(estimate_lighting(shifted, calibration, mask).irradiance_rgb)
+        assert np.allclose(got / base, gains, rtol=0.08), (gains, got / base)
+
+
+def test_key_light_comes_from_the_window():
+    """room_1 shows a window: the key light travels from it into the room."""
+    image, mask, calibration = _truth_calibration("room_1", 0.5)
+    lighting = estimate_lighting(image, calibration, mask)
+    assert lighting.source == "window"
+    truth = json.loads((PHOTOS / "room_1.json").read_text())
+    board_from_world = np.linalg.inv(np.array(truth["board"]["world_from_board"]))
+    window = np.mean(truth["room"]["windows"][0]["segment_m"], axis=0)
+    window = (board_from_world @ [window[0], window[1], 0.0, 1.0])[:2]
+    pose = calibration.camera_from_floor
+    cam = (-pose[:3, :3].T @ pose[:3, 3])[:2]
+    d = np.array(lighting.direction)
+    assert d[2] < 0 and float(d[:2] @ (window - cam)) < 0
+
+
+def test_bad_inputs_are_named(renderer, room_small):
+    image, mask, calibration = room_small
+    with pytest.raises(ValueError, match="uint8"):
+        render_staged(image.astype(np.float32), calibration, [], renderer)
+    with pytest.raises(ValueError, match="floor_mask"):
+        render_staged(image, calibration, [], renderer, floor_mask=mask[:10], lighting=LIGHT)
+    with pytest.raises(ValueError, match="calibration is for"):
+        render_staged(image[:100], calibration, [], renderer, lighting=LIGHT)
+    with pytest.raises(ValueError, match="size_m"):
+        build_furniture("sofa", (2.0, -1.0, 0.8))
+    empty = render_staged(image, calibration, [], renderer, lighting=LIGHT)
+    assert np.array_equal(empty.image, image)
