@@ -47,13 +47,15 @@ from augment.calibrate import (Calibration, CalibrationError, calibrate_file, ca
 from augment.gl import Renderer  # noqa: E402
 from augment.height import measure_height  # noqa: E402
 from augment.overlay_height import height_overlay  # noqa: E402
+from augment.segment import FloorModel, segment_floor  # noqa: E402
 from augment.synth import CEILING, render_sample  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
 
 ELIGIBLE_CEILING = 0.002          # fraction of the photo that must show ceiling
 TARGET_MEDIAN, TARGET_P90 = 0.03, 0.08
 SAMPLE_PHOTO = Path(__file__).resolve().parents[1] / "samples" / "photos" / "room_1.jpg"
-MODES = ("truth+mask", "truth", "board+mask", "board", "exif+mask")
+# "+mask": the renderer's true floor mask; "+segmented": the floor model's (the product's path).
+MODES = ("truth+mask", "truth", "board+mask", "board", "exif+mask", "exif+segmented")
 BIG_SIZE = (4000, 3000)
 
 
@@ -105,6 +107,7 @@ def _entry(result, truth_h: float) -> dict:
 def measure(args, template: Calibration) -> tuple[list[dict], dict]:
     rows, keep = [], None
     board = Board()
+    model = FloorModel()
     with pitch_range(*args.pitch), Renderer() as renderer:
         for i in range(args.count):
             sample = render_sample([args.seed, i], renderer, size_px=args.size)
@@ -136,6 +139,8 @@ def measure(args, template: Calibration) -> tuple[list[dict], dict]:
                 row["exif_refused"] = str(error).split(":")[0].split(" (")[0].split(".")[0]
             else:
                 row["exif+mask"] = _entry(measure_height(photo, exif_cal, sample.floor_mask), truth_h)
+                segmented = segment_floor(photo, model, exif_cal).mask
+                row["exif+segmented"] = _entry(measure_height(photo, exif_cal, segmented), truth_h)
             rows.append(row)
             if keep is None and row["eligible"] and not row["truth+mask"]["fallback"]:
                 keep = (photo, sample.floor_mask, t, cal)

@@ -1,0 +1,265 @@
+"""The floor polygon in meters, from a floor mask and the board's calibration.
+
+The largest floor region's outline is taken back through the floor homography into the
+floor frame (the board's: origin at its center, z up), simplified so walls come out
+straight, and each edge is labelled with what bounds it: a wall or an object standing on
+the floor (``"boundary"``), the photo's edge (``"image"``: the floor goes on beyond
+it), or the distance beyond which the floor is not believed (``"far"``). Only the first
+kind is a real limit of the room; the others are the *visible-extent caveat*.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from .segment import MAX_FLOOR_DISTANCE_M, floor_distance_m, _scaled
+
+# Contour work happens at this size at most: enough to place a wall line within a
+# couple of centimeters at room distances, and fast for 12 MP photos.
+POLYGON_LONG_PX = 1024
+SIMPLIFY_M = 0.05        # how far the straightened outline may stray from the mask's
+NOTCH_AREA_M2 = 0.02     # vertices cutting off less than this are noise, not corners
+BORDER_PX = 2            # a contour point this near the photo's edge is the photo's edge
+EDGE_KINDS = ("boundary", "image", "far")
+
+
+@dataclass(frozen=True)
+class FloorPolygon:
+    """The visible floor as a polygon in the floor frame.
+
+    Attributes
+    ----------
+    polygon_m : (n, 2) float64
+        Vertices in meters, counter-clockwise seen from above.
+    edge_kind : tuple of str, length n
+        Edge i runs from vertex i to vertex i+1: ``"boundary"`` (wall or object),
+        ``"image"`` (the photo's edge cut the floor off) or ``"far"`` (beyond
+        ``MAX_FLOOR_DISTANCE_M``).
+    area_m2 : float
+    outline_px : (k, 2) float64
+        The unsimplified floor outline in the photo, pixels.
+    caveat : str
+        Empty when every edge is a boundary; else what the polygon leaves out.
+    """
+
+    polygon_m: np.ndarray
+    edge_kind: tuple[str, ...]
+    area_m2: float
+    outline_px: np.ndarray
+    caveat: str
+
+    def to_json(self) -> dict:
+        return {"polygon_m": self.polygon_m.round(4).tolist(), "edge_kind": list(self.edge_kind),
+                "area_m2": round(self.area_m2, 4), "caveat": self.caveat}
+
+
+def _signed_area(p: np.ndarray) -> float:
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _drop_notches(poly: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """Indices of ``poly`` left after removing vertices whose triangle with their
+    neighbours is smaller than ``NOTCH_AREA_M2`` (smallest first, repeatedly)."""
+    idx = list(range(len(poly)))
+    while len(idx) > 3:
+        p = poly[idx]
+        prev, nxt = np.roll(p, 1, axis=0), np.roll(p, -1, axis=0)
+        tri = 0.5 * np.abs((p[:, 0] - prev[:, 0]) * (nxt[:, 1] - prev[:, 1])
+                           - (p[:, 1] - prev[:, 1]) * (nxt[:, 0] - prev[:, 0]))
+        tri[keep[idx]] = np.inf
+        i = int(np.argmin(tri))
+        if tri[i] >= NOTCH_AREA_M2:
+            break
+        del idx[i]
+    return np.asarray(idx)
+
+
+def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
+    """Simplified floor polygon (meters) of the largest floor region of ``mask``.
+
+    Parameters
+    ----------
+    mask : (rows, cols) bool
+        Floor mask at the calibrated photo's size. Not modified.
+    calibration : Calibration
+        The photo's calibration (:func:`augment.calibrate.calibrate_photo`).
+
+    Returns
+    -------
+    FloorPolygon
+
+    Raises
+    ------
+    ValueError
+        When the mask's size differs from the calibration's, or no floor lies below the
+        horizon.
+    """
+    mask = np.asarray(mask, dtype=bool)
+    cols, rows = calibration.size_px
+    if mask.shape != (rows, cols):
+        raise ValueError(f"floor mask of {mask.shape[1]} x {mask.shape[0]} px does not match the "
+                         f"calibrated photo's {cols} x {rows} px")
+    scale = min(1.0, POLYGON_LONG_PX / max(rows, cols))
+    small_cal = _scaled(calibration, scale)
+    size = small_cal.size_px
+    small = cv2.resize(mask.astype(np.uint8), size, interpolation=cv2.INTER_AREA) > 0 if scale < 1 else mask
+    distance = floor_distance_m(small.shape, small_cal)
+    near = distance <= MAX_FLOOR_DISTANCE_M
+    region = (small & near).astype(np.uint8)
+    # Opening removes hair-thin spurs (a skirting board's shadow) before tracing.
+    region = cv2.morphologyEx(region, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    contours, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        raise ValueError("no floor below the horizon in the mask")
+    contour = max(contours, key=cv2.contourArea)[:, 0, :].astype(np.float64)
+    if len(contour) < 3 or cv2.contourArea(contour.astype(np.float32)) < 16:
+        raise ValueError("the floor region is too small to outline")
+
+    h, w = small.shape
+    on_border = ((contour[:, 0] <= BORDER_PX - 1) | (contour[:, 0] >= w - BORDER_PX)
+                 | (contour[:, 1] <= BORDER_PX - 1) | (contour[:, 1] >= h - BORDER_PX))
+    ci, cj = contour[:, 1].astype(int), contour[:, 0].astype(int)
+    ring = cv2.dilate((~near).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    at_far = ring[ci, cj] & ~on_border
+    kind = np.where(on_border, 1, np.where(at_far, 2, 0))
+
+    # Pixel centers of the scaled image map back to full-size pixel coordinates.
+    outline_px = (contour + 0.5) / scale - 0.5
+    floor_m = calibration.floor_from_pixels(outline_px)
+    approx = cv2.approxPolyDP(floor_m.astype(np.float32).reshape(-1, 1, 2), SIMPLIFY_M, True)[:, 0, :]
+    # approxPolyDP returns a subset of the input points: find their indices, in order.
+    lookup = {tuple(p): i for i, p in enumerate(floor_m.astype(np.float32))}
+    vertex_idx = np.array(sorted(lookup[tuple(p)] for p in approx))
+    # A vertex where the edge kind changes (the floor meets the photo's edge) stays.
+    changes = kind != np.roll(kind, 1)
+    pinned = np.isin(vertex_idx, np.flatnonzero(changes))
+    keep = _drop_notches(floor_m[vertex_idx], pinned)
+    vertex_idx = vertex_idx[keep]
+    poly = floor_m[vertex_idx]
+
+    edge_kind = []
+    for a, b in zip(vertex_idx, np.roll(vertex_idx, -1)):
+        span = np.arange(a, b + 1) if b > a else np.concatenate([np.arange(a, len(kind)), np.arange(0, b + 1)])
+        votes = np.bincount(kind[span[1:-1]] if len(span) > 2 else kind[span], minlength=3)
+        edge_kind.append(EDGE_KINDS[int(np.argmax(votes))])
+    if _signed_area(poly) < 0:
+        # Reverse vertices; edge i (i -> i+1) becomes the edge between the same two
+        # vertices, which now sits at a shifted index.
+        poly = poly[::-1].copy()
+        edge_kind = edge_kind[::-1]
+        edge_kind = edge_kind[1:] + edge_kind[:1]
+    area = abs(_signed_area(poly))
+    return FloorPolygon(poly, tuple(edge_kind), area, outline_px, _caveat(poly, edge_kind))
+
+
+def _caveat(poly: np.ndarray, edge_kind: list[str]) -> str:
+    lengths = np.linalg.norm(np.roll(poly, -1, axis=0) - poly, axis=1)
+    parts = []
+    for name, say in (("image", "the photo's edge"), ("far", f"{MAX_FLOOR_DISTANCE_M:g} m from the camera")):
+        sel = np.array([k == name for k in edge_kind])
+        if sel.any():
+            parts.append(f"{lengths[sel].sum():.2f} m of outline at {say}")
+    if not parts:
+        return ""
+    return ("visible floor only: " + "; ".join(parts)
+            + " - the room goes on beyond those edges, so its area may be larger")
+
+
+def floor_area_m2(mask: np.ndarray, calibration) -> float:
+    """Area (m^2) of the floor pixels of ``mask``, each weighted by its footprint on the
+    floor (the homography's local area scale). Measures a mask, holes and all."""
+    mask = np.asarray(mask, dtype=bool)
+    rows, cols = mask.shape
+    y, x = np.nonzero(mask)
+    if len(x) == 0:
+        return 0.0
+    H = np.linalg.inv(calibration.image_from_floor)
+    pts = np.column_stack([x, y, np.ones(len(x))]) @ H.T
+    w = pts[:, 2]
+    # |det J| of the projective map (x, y) -> floor at a point is det(H) / w^3.
+    det = abs(np.linalg.det(H) / w ** 3)
+    return float(det[np.abs(w) > 1e-12].sum())
+
+
+EDGE_COLORS = {"boundary": (255, 210, 0), "image": (0, 200, 255), "far": (170, 170, 170)}
+FLOOR_TINT = np.array([40, 220, 90], np.float32)
+
+
+def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | None = None,
+                  calibration=None) -> np.ndarray:
+    """The photo with the floor tinted, its outline, and a plan of the polygon.
+
+    Parameters
+    ----------
+    image : (rows, cols, 3) uint8
+        RGB photo. Not modified.
+    mask : (rows, cols) bool
+    polygon, calibration : optional
+        When given, the straightened polygon is drawn back onto the photo (edges coloured
+        by kind: yellow boundary, blue photo edge, grey far) and a top-down plan with a
+        1 m grid, the board, the camera (red) and the area is set beside the photo.
+
+    Returns
+    -------
+    (rows, cols, 3) uint8, or (rows, cols + rows, 3) with the plan beside it.
+    """
+    out = np.asarray(image, dtype=np.uint8).copy()
+    mask = np.asarray(mask, dtype=bool)
+    out[mask] = (0.55 * out[mask] + 0.45 * FLOOR_TINT).astype(np.uint8)
+    rows, cols = mask.shape
+    thick = max(2, round(max(rows, cols) / 500))
+    edge = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_GRADIENT, np.ones((3, 3), np.uint8)) > 0
+    out[edge] = (20, 120, 40)
+    if polygon is None or calibration is None:
+        return out
+    n = len(polygon.polygon_m)
+    for i in range(n):
+        a, b = polygon.polygon_m[i], polygon.polygon_m[(i + 1) % n]
+        pts = calibration.pixels_from_floor(np.linspace(a, b, 24)).round().astype(np.int32)
+        cv2.polylines(out, [pts], False, EDGE_COLORS[polygon.edge_kind[i]], thick, cv2.LINE_AA)
+    return np.hstack([out, _plan(rows, polygon, calibration)])
+
+
+def _plan(side: int, polygon: FloorPolygon, calibration) -> np.ndarray:
+    """Top-down plan, turned so the camera looks up the panel, as the photo does."""
+    band = side // 10  # room for the captions above and below the plan
+    world_from_camera = np.linalg.inv(calibration.camera_from_floor)
+    cam = world_from_camera[:2, 3]
+    forward = world_from_camera[:2, 2]
+    forward = forward / max(np.linalg.norm(forward), 1e-9)
+    # Rows of R are the panel's right and up directions in floor coordinates.
+    R = np.array([[forward[1], -forward[0]], forward])
+    pts = np.vstack([polygon.polygon_m, cam[None]]) @ R.T
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    px_per_m = (side - 2 * band) / max(float((hi - lo).max()), 1.0)
+    center = (lo + hi) / 2
+
+    def to_px(p):
+        q = (np.asarray(p, dtype=np.float64).reshape(-1, 2) @ R.T - center) * px_per_m
+        return np.column_stack([side / 2 + q[:, 0], side / 2 - q[:, 1]]).round().astype(np.int32)
+
+    panel = np.full((side, side, 3), 250, np.uint8)
+    reach = np.abs(np.vstack([polygon.polygon_m, cam[None]])).max() + side / px_per_m
+    for g in np.arange(-np.ceil(reach), np.ceil(reach) + 1):
+        for a, b in (((g, -reach), (g, reach)), ((-reach, g), (reach, g))):
+            p, q = to_px([a, b])
+            cv2.line(panel, tuple(map(int, p)), tuple(map(int, q)), (225, 225, 225), 1)
+    poly_px = to_px(polygon.polygon_m)
+    cv2.fillPoly(panel, [poly_px], (200, 240, 205))
+    weight = max(1, side // 400)
+    for i in range(len(poly_px)):
+        cv2.line(panel, tuple(map(int, poly_px[i])), tuple(map(int, poly_px[(i + 1) % len(poly_px)])),
+                 tuple(int(c * 0.8) for c in EDGE_COLORS[polygon.edge_kind[i]]), 1 + weight, cv2.LINE_AA)
+    cv2.fillPoly(panel, [to_px(calibration.board.outline_m()[:, :2])], (60, 60, 60))
+    c = to_px(cam)[0]
+    cv2.circle(panel, (int(c[0]), int(c[1])), 3 + 2 * weight, (200, 30, 30), -1, cv2.LINE_AA)
+    font = max(0.35, side / 700)
+    cv2.putText(panel, "plan (camera red, looking up), grid 1 m", (band // 3, int(band * 0.6)),
+                cv2.FONT_HERSHEY_SIMPLEX, font * 0.7, (90, 90, 90), weight, cv2.LINE_AA)
+    cv2.putText(panel, f"{polygon.area_m2:.1f} m2 visible floor", (band // 3, side - band // 3),
+                cv2.FONT_HERSHEY_SIMPLEX, font, (30, 30, 30), weight, cv2.LINE_AA)
+    cv2.rectangle(panel, (0, 0), (side - 1, side - 1), (80, 80, 80), 1)
+    return panel

@@ -1,0 +1,398 @@
+"""Where the floor is: an ONNX segmentation model, GrabCut refinement, the floor polygon.
+
+Thesis Appendix C.3.1: a segmentation network's floor class seeds GrabCut. Here the
+network is Stager's own (``models/floor_segnet.onnx``, trained on synthetic rooms by
+``models/train_floor.py``), or any ONNX segmentation model a user points at, described
+by a :class:`ModelSpec`. GrabCut refines the model's edges against the photo's colours;
+the board (it lies on the floor) and the horizon (nothing above it is floor) pin it down.
+Without a model, GrabCut alone starts from the calibration's geometry.
+
+Images are RGB ``(rows, cols, 3)`` uint8; masks are ``(rows, cols)`` bool; points are
+``(x, y)`` pixels.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+DEFAULT_MODEL = Path(__file__).resolve().parent.parent / "models" / "floor_segnet.onnx"
+# GrabCut's cost grows with the pixel count; edges it can fix are a few pixels wide at
+# this size, and the mask is scaled back up with the model's smooth probabilities.
+GRABCUT_LONG_PX = 400
+GRABCUT_ITERATIONS = 3
+# Probabilities this sure are taken as given; GrabCut decides the rest.
+SURE_FLOOR, SURE_OTHER = 0.97, 0.03
+MIN_IMAGE_PX = 64
+# Floor farther than this from the camera is not believed: a room photo rarely shows
+# more, and near the horizon one pixel spans meters.
+MAX_FLOOR_DISTANCE_M = 15.0
+
+
+class SegmentationError(ValueError):
+    """Bad input or no floor: the message says what and what would work."""
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """How to feed an ONNX segmentation model and read its floor class.
+
+    Attributes
+    ----------
+    input_size : (rows, cols) or None
+        A fixed input size; None for a fully convolutional model, fed the photo scaled so
+        its long side is ``input_long_px``, each side a multiple of ``multiple_px``.
+    channel_order : "RGB" or "BGR"
+    scale, mean, std : float, (3,), (3,)
+        Input = (pixel * scale - mean) / std, per channel in ``channel_order``.
+    floor_class : tuple of int
+        Output channels whose probabilities add up to "floor" (e.g. SUN RGB-D floor = 2,
+        or ADE20K floor and rug).
+    output : "logits" or "probabilities"
+        Whether the model's output still needs a softmax over the class axis.
+    layout : "NCHW" or "NHWC"
+    """
+
+    input_size: tuple[int, int] | None = None
+    input_long_px: int = 256
+    multiple_px: int = 32
+    channel_order: str = "RGB"
+    scale: float = 1 / 255
+    mean: tuple[float, float, float] = (0.485, 0.456, 0.406)
+    std: tuple[float, float, float] = (0.229, 0.224, 0.225)
+    floor_class: tuple[int, ...] = (1,)
+    output: str = "logits"
+    layout: str = "NCHW"
+
+    def __post_init__(self):
+        if self.channel_order not in ("RGB", "BGR"):
+            raise SegmentationError(f"model channel_order {self.channel_order!r}: use RGB or BGR")
+        if self.output not in ("logits", "probabilities"):
+            raise SegmentationError(f"model output {self.output!r}: use logits or probabilities")
+        if self.layout not in ("NCHW", "NHWC"):
+            raise SegmentationError(f"model layout {self.layout!r}: use NCHW or NHWC")
+        if len(self.mean) != 3 or len(self.std) != 3 or min(self.std) <= 0:
+            raise SegmentationError(f"model mean {self.mean} / std {self.std}: need 3 values each, std > 0")
+        if not self.floor_class or min(self.floor_class) < 0:
+            raise SegmentationError(f"model floor_class {self.floor_class}: need class indices >= 0")
+
+    @classmethod
+    def from_json(cls, path) -> "ModelSpec":
+        """Read the spec from a model's sidecar JSON (unknown keys, like training notes, are ignored)."""
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError) as error:
+            raise SegmentationError(f"model spec {path}: cannot read it as JSON ({error})") from None
+        known = {f: data[f] for f in cls.__dataclass_fields__ if f in data}
+        for key in ("mean", "std", "input_size"):
+            if known.get(key) is not None:
+                known[key] = tuple(known[key])
+        if "floor_class" in known:
+            fc = known["floor_class"]
+            known["floor_class"] = tuple(fc) if isinstance(fc, (list, tuple)) else (int(fc),)
+        try:
+            return cls(**known)
+        except TypeError as error:
+            raise SegmentationError(f"model spec {path}: {error}") from None
+
+
+class FloorModel:
+    """An ONNX segmentation model loaded in onnxruntime, with its :class:`ModelSpec`.
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.onnx`` file. Its spec is read from ``path`` with suffix ``.json`` when that
+        exists, else the defaults; ``spec`` overrides both.
+    spec : ModelSpec, optional
+    threads : int, optional
+        onnxruntime intra-op threads (default: its own choice).
+    """
+
+    def __init__(self, path=DEFAULT_MODEL, spec: ModelSpec | None = None, threads: int | None = None):
+        import onnxruntime as ort  # loaded lazily: GrabCut-only runs need none of it
+
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise SegmentationError(f"model {self.path}: no such file; train one with models/train_floor.py "
+                                    "or use --method grabcut")
+        sidecar = self.path.with_suffix(".json")
+        self.spec = spec if spec is not None else (ModelSpec.from_json(sidecar) if sidecar.is_file() else ModelSpec())
+        options = ort.SessionOptions()
+        options.log_severity_level = 3
+        if threads is not None:
+            options.intra_op_num_threads = threads
+        try:
+            self.session = ort.InferenceSession(str(self.path), options, providers=["CPUExecutionProvider"])
+        except Exception as error:  # onnxruntime raises its own types for a corrupt file
+            raise SegmentationError(f"model {self.path}: onnxruntime cannot load it ({error})") from None
+        inputs = self.session.get_inputs()
+        if len(inputs) != 1:
+            raise SegmentationError(f"model {self.path}: expected one input, found {len(inputs)}")
+        self.input_name = inputs[0].name
+
+    def _input_shape(self, rows: int, cols: int) -> tuple[int, int]:
+        s = self.spec
+        if s.input_size is not None:
+            return tuple(s.input_size)
+        scale = s.input_long_px / max(rows, cols)
+        m = s.multiple_px
+        return max(m, round(rows * scale / m) * m), max(m, round(cols * scale / m) * m)
+
+    def floor_probability(self, image: np.ndarray) -> np.ndarray:
+        """Floor probability ``(rows, cols)`` float32 in [0, 1], at the image's size."""
+        image = _check_image(image)
+        rows, cols = image.shape[:2]
+        s = self.spec
+        in_rows, in_cols = self._input_shape(rows, cols)
+        x = cv2.resize(image, (in_cols, in_rows), interpolation=cv2.INTER_AREA).astype(np.float32)
+        if s.channel_order == "BGR":
+            x = x[..., ::-1]
+        x = (x * np.float32(s.scale) - np.float32(s.mean)) / np.float32(s.std)
+        x = x.transpose(2, 0, 1)[None] if s.layout == "NCHW" else x[None]
+        out = self.session.run(None, {self.input_name: np.ascontiguousarray(x, np.float32)})[0][0]
+        if s.layout == "NHWC" and out.ndim == 3:
+            out = out.transpose(2, 0, 1)
+        if out.ndim != 3 or max(s.floor_class) >= out.shape[0]:
+            raise SegmentationError(f"model {self.path}: output shape {out.shape} has no class "
+                                    f"{max(s.floor_class)}; check floor_class and layout")
+        if s.output == "logits":
+            out = np.exp(out - out.max(axis=0, keepdims=True))
+            out /= out.sum(axis=0, keepdims=True)
+        p = out[list(s.floor_class)].sum(axis=0).astype(np.float32)
+        return np.clip(cv2.resize(p, (cols, rows), interpolation=cv2.INTER_LINEAR), 0, 1)
+
+
+def _check_image(image: np.ndarray) -> np.ndarray:
+    image = np.asarray(image)
+    if image.ndim == 2:
+        image = np.repeat(image[..., None], 3, axis=2)
+    if image.ndim != 3 or image.shape[2] not in (3, 4):
+        raise SegmentationError(f"image of shape {image.shape}: expected (rows, cols, 3) RGB")
+    if image.dtype != np.uint8:
+        raise SegmentationError(f"image dtype {image.dtype}: expected uint8")
+    if min(image.shape[:2]) < MIN_IMAGE_PX:
+        raise SegmentationError(f"image of {image.shape[1]} x {image.shape[0]} px is too small; "
+                                f"need at least {MIN_IMAGE_PX} px a side")
+    return np.ascontiguousarray(image[..., :3])
+
+
+# ----------------------------------------------------------------------------- geometry seeds
+
+def below_horizon(shape: tuple[int, int], horizon: np.ndarray, margin_px: float = 0.0) -> np.ndarray:
+    """Pixels on the floor side of the horizon line ``a x + b y + c = 0`` by ``margin_px``."""
+    rows, cols = shape
+    y, x = np.mgrid[0:rows, 0:cols]
+    a, b, c = horizon
+    return a * x + b * y + c > margin_px
+
+
+def board_polygon_px(calibration, grow: float = 1.0) -> np.ndarray:
+    """The board's paper outline in pixels, (4, 2), optionally grown about its center."""
+    outline = calibration.board.outline_m() * grow
+    return calibration.pixels_from_floor(outline)
+
+
+def floor_distance_m(shape: tuple[int, int], calibration) -> np.ndarray:
+    """Horizontal distance (rows, cols) from the camera to each pixel's floor point; inf
+    at and above the horizon."""
+    rows, cols = shape
+    y, x = np.mgrid[0:rows, 0:cols].astype(np.float64)
+    pts = np.column_stack([x.ravel(), y.ravel()])
+    cam = np.linalg.inv(calibration.camera_from_floor)[:2, 3]
+    floor = calibration.floor_from_pixels(pts)
+    d = np.hypot(floor[:, 0] - cam[0], floor[:, 1] - cam[1]).reshape(rows, cols)
+    d[~below_horizon(shape, calibration.horizon, 1.0)] = np.inf
+    return d
+
+
+# ----------------------------------------------------------------------------- segmentation
+
+@dataclass(frozen=True)
+class Segmentation:
+    """A floor mask and how it was found.
+
+    Attributes
+    ----------
+    mask : (rows, cols) bool
+        True on the floor (the board counts as floor), at the photo's size.
+    probability : (rows, cols) float32 or None
+        The model's floor probability, when a model ran.
+    method : str
+        ``"onnx+grabcut"``, ``"onnx"`` or ``"grabcut"``.
+    warnings : tuple of str
+    """
+
+    mask: np.ndarray
+    probability: np.ndarray | None
+    method: str
+    warnings: tuple[str, ...] = field(default=())
+
+
+def _working_scale(shape, long_px) -> float:
+    return min(1.0, long_px / max(shape))
+
+
+def _grabcut(image_small, trimap, iterations):
+    mask = trimap.copy()
+    if not (np.any((mask == cv2.GC_FGD) | (mask == cv2.GC_PR_FGD))
+            and np.any((mask == cv2.GC_BGD) | (mask == cv2.GC_PR_BGD))):
+        return (mask == cv2.GC_FGD) | (mask == cv2.GC_PR_FGD)
+    bgd, fgd = np.zeros((1, 65), np.float64), np.zeros((1, 65), np.float64)
+    bgr = np.ascontiguousarray(image_small[..., ::-1])
+    cv2.grabCut(bgr, mask, None, bgd, fgd, iterations, cv2.GC_INIT_WITH_MASK)
+    return (mask == cv2.GC_FGD) | (mask == cv2.GC_PR_FGD)
+
+
+# The board lies on open floor: the paper and a margin around it are floor for sure.
+BOARD_MARGIN = 1.3
+
+
+def _seed_geometry(trimap, shape_small, scale, calibration):
+    """Pin what the calibration knows: around the board is floor, above the horizon is not."""
+    if calibration is None:
+        return
+    horizon = calibration.horizon.copy()
+    horizon[2] *= scale  # the line in the scaled image: a x' + b y' + c s = 0
+    trimap[~below_horizon(shape_small, horizon, 0.0)] = cv2.GC_BGD
+    board = (board_polygon_px(calibration, grow=BOARD_MARGIN) * scale).round().astype(np.int32)
+    cv2.fillPoly(trimap, [board], int(cv2.GC_FGD))
+
+
+def _hide_board(small, calibration, scale):
+    """The board's black and white squares would teach GrabCut's floor colour model that
+    black and white are floor; paint the floor's colours over it first."""
+    if calibration is None:
+        return small
+    mask = np.zeros(small.shape[:2], np.uint8)
+    board = (board_polygon_px(calibration, grow=1.1) * scale).round().astype(np.int32)
+    cv2.fillPoly(mask, [board], 255)
+    if not mask.any():
+        return small
+    return cv2.inpaint(small, mask, 3, cv2.INPAINT_TELEA)
+
+
+def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibration=None,
+                  method: str = "onnx", refine: bool = True) -> Segmentation:
+    """Find the floor in a photo.
+
+    Parameters
+    ----------
+    image : (rows, cols, 3) uint8
+        RGB photo (grey (rows, cols) is accepted). Not modified.
+    model : FloorModel, optional
+        Needed for ``method="onnx"``.
+    calibration : Calibration, optional
+        From :func:`augment.calibrate.calibrate_photo`; its board and horizon seed GrabCut.
+    method : {"onnx", "grabcut"}
+        ``"grabcut"`` runs GrabCut alone, seeded from the calibration's geometry.
+    refine : bool
+        Refine the model's mask with GrabCut (``"onnx"`` only).
+
+    Returns
+    -------
+    Segmentation
+    """
+    image = _check_image(image)
+    if method not in ("onnx", "grabcut"):
+        raise SegmentationError(f"method {method!r}: use onnx or grabcut")
+    rows, cols = image.shape[:2]
+    warnings = []
+    scale = _working_scale((rows, cols), GRABCUT_LONG_PX)
+    size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
+    small = _hide_board(cv2.resize(image, size_small, interpolation=cv2.INTER_AREA), calibration, scale)
+    shape_small = small.shape[:2]
+    probability = None
+
+    if method == "onnx":
+        if model is None:
+            raise SegmentationError("method onnx needs a model; give --model PATH or use --method grabcut")
+        probability = model.floor_probability(image)
+        p_small = cv2.resize(probability, size_small, interpolation=cv2.INTER_AREA)
+        if refine:
+            trimap = np.where(p_small > 0.5, cv2.GC_PR_FGD, cv2.GC_PR_BGD).astype(np.uint8)
+            # Only well inside a confident region is the model taken as given: its edges
+            # are a few input pixels soft, and they are what GrabCut is for.
+            band = 5
+            kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * band + 1, 2 * band + 1))
+            trimap[cv2.erode((p_small > SURE_FLOOR).astype(np.uint8), kernel) > 0] = cv2.GC_FGD
+            trimap[cv2.erode((p_small < SURE_OTHER).astype(np.uint8), kernel) > 0] = cv2.GC_BGD
+            _seed_geometry(trimap, shape_small, scale, calibration)
+            small_mask = _grabcut(small, trimap, GRABCUT_ITERATIONS)
+            name = "onnx+grabcut"
+        else:
+            small_mask = p_small > 0.5
+            if calibration is not None:
+                trimap = np.where(small_mask, cv2.GC_FGD, cv2.GC_BGD).astype(np.uint8)
+                _seed_geometry(trimap, shape_small, scale, calibration)
+                small_mask = trimap == cv2.GC_FGD
+            name = "onnx"
+    else:
+        if calibration is None:
+            raise SegmentationError("method grabcut needs the board's calibration (the board seeds the floor, "
+                                    "the horizon bounds it); photograph the board on the floor, or use a model")
+        small_mask = _grabcut(small, _geometry_trimap(shape_small, scale, calibration), 5)
+        name = "grabcut"
+
+    mask_small = _clean(small_mask, calibration, scale)
+    if not mask_small.any():
+        warnings.append("no floor found")
+    if probability is not None and method == "onnx":
+        # Upsample with the model's sub-pixel edge where the two agree, GrabCut's elsewhere.
+        up = cv2.resize(mask_small.astype(np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR)
+        mask = up > 0.5
+    else:
+        mask = cv2.resize(mask_small.astype(np.uint8), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0
+    return Segmentation(mask, probability, name, tuple(warnings))
+
+
+def _geometry_trimap(shape_small, scale, calibration) -> np.ndarray:
+    """GrabCut's start without a model: floor about as near as the board is probably
+    floor, floor beyond any room's reach is not, the board is, above the horizon is not."""
+    distance = floor_distance_m(shape_small, _scaled(calibration, scale))
+    board_distance_m = float(np.hypot(*np.linalg.inv(calibration.camera_from_floor)[:2, 3]))
+    trimap = np.full(shape_small, cv2.GC_PR_BGD, np.uint8)
+    trimap[distance < max(2.0, 1.6 * board_distance_m)] = cv2.GC_PR_FGD
+    trimap[distance > MAX_FLOOR_DISTANCE_M] = cv2.GC_BGD
+    _seed_geometry(trimap, shape_small, scale, calibration)
+    return trimap
+
+
+def _scaled(calibration, scale):
+    """The calibration seen through an image scaled by ``scale`` (for pixel-grid work)."""
+    if scale == 1.0:
+        return calibration
+    S = np.diag([scale, scale, 1.0])
+    intrinsics = replace(calibration.intrinsics, K=S @ calibration.intrinsics.K)
+    horizon = calibration.horizon.copy()
+    horizon[2] *= scale
+    return replace(calibration, intrinsics=intrinsics, image_from_floor=S @ calibration.image_from_floor,
+                   horizon=horizon, size_px=(round(calibration.size_px[0] * scale),
+                                             round(calibration.size_px[1] * scale)))
+
+
+def _clean(mask: np.ndarray, calibration, scale) -> np.ndarray:
+    """The floor is one region: keep the component under the board (else the largest),
+    close pinholes, and drop specks."""
+    mask = mask.astype(np.uint8)
+    mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    if n <= 1:
+        return np.zeros(mask.shape, bool)
+    keep = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    if calibration is not None:
+        x, y = (calibration.pixels_from_floor(np.zeros((1, 2)))[0] * scale).round().astype(int)
+        if 0 <= y < mask.shape[0] and 0 <= x < mask.shape[1] and labels[y, x] > 0:
+            keep = labels[y, x]
+    out = labels == keep
+    # Pinholes (texture, a knot in the wood) are not things standing on the floor.
+    holes = ~out
+    n, hl, hs, _ = cv2.connectedComponentsWithStats(holes.astype(np.uint8), connectivity=4)
+    tiny = max(4, int(1e-4 * mask.size))
+    small_holes = np.flatnonzero(hs[:, cv2.CC_STAT_AREA] < tiny)
+    out |= np.isin(hl, small_holes[small_holes > 0])
+    return out

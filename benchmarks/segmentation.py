@@ -1,0 +1,237 @@
+"""Floor segmentation: accuracy on unseen synthetic rooms and on real photos, and speed.
+
+Prints tables and writes ``benchmarks/results/segmentation.{json,md}`` plus pictures:
+``segmentation_synth_worst.png`` (the worst held-out renders, model + GrabCut) and
+``segmentation_real_masks.png`` (real rooms: truth vs prediction as colours only - the
+photos' licence allows measuring, not copying them).
+
+    .venv/bin/python benchmarks/segmentation.py [--count 40] [--real ../shared/data/real-rooms-dev]
+
+Held-out renders use seed 901 (training used 100 and 101, validation 900), random phone
+sizes and orientations. Each is calibrated from its board with the true focal length
+(the floor's accuracy is measured here, the focal estimate in calibration.py); a render
+whose board is not found is segmented without calibration and counted.
+
+The floor polygon is compared with the true visible floor area: the ground-truth mask,
+holes filled, integrated over the floor through the true camera.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+from tqdm import tqdm
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from augment.board import Board  # noqa: E402
+from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics  # noqa: E402
+from augment.floor import floor_polygon  # noqa: E402
+from augment.gl import Renderer  # noqa: E402
+from augment.segment import DEFAULT_MODEL, MAX_FLOOR_DISTANCE_M, FloorModel, segment_floor  # noqa: E402
+from augment.synth import render_sample  # noqa: E402
+from layout.fileio import write_atomic  # noqa: E402
+
+OUT = ROOT / "benchmarks" / "results"
+
+
+def iou(pred, truth, ignore=None):
+    keep = np.ones(truth.shape, bool) if ignore is None else ~ignore
+    union = np.logical_or(pred, truth)[keep].sum()
+    return float(np.logical_and(pred, truth)[keep].sum() / union) if union else 1.0
+
+
+def true_visible_area_m2(truth_mask, truth) -> float:
+    """Area of the hole-filled truth floor region, through the true camera, out to the
+    same distance the polygon believes."""
+    K = np.array(truth["K"])
+    camera_from_world = np.array(truth["camera_from_world"])
+    image_from_floor = K @ camera_from_world[:3][:, [0, 1, 3]]
+    filled = truth_mask.astype(np.uint8)
+    contours, _ = cv2.findContours(filled, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    cv2.drawContours(filled, contours, -1, 1, -1)
+    y, x = np.nonzero(filled)
+    H = np.linalg.inv(image_from_floor)
+    pts = np.column_stack([x, y, np.ones(len(x))]) @ H.T
+    w = pts[:, 2]
+    floor = pts[:, :2] / w[:, None]
+    cam = np.linalg.inv(camera_from_world)[:2, 3]
+    near = np.hypot(*(floor - cam).T) <= MAX_FLOOR_DISTANCE_M
+    return float(np.abs(np.linalg.det(H) / w[near] ** 3).sum())
+
+
+def pair_picture(rows: list[tuple[str, np.ndarray, np.ndarray, np.ndarray | None]], cell=(320, 240)) -> np.ndarray:
+    """Tiles: green = both say floor, red = predicted only, blue = missed, grey = ignored."""
+    tiles = []
+    for name, pred, truth, ignore in rows:
+        tile = np.full((*pred.shape, 3), 235, np.uint8)
+        tile[pred & truth] = (60, 170, 80)
+        tile[pred & ~truth] = (220, 60, 50)
+        tile[~pred & truth] = (50, 90, 220)
+        if ignore is not None:
+            tile[ignore] = (150, 150, 150)
+        tile = cv2.resize(tile, cell, interpolation=cv2.INTER_NEAREST)
+        cv2.putText(tile, name[:34], (4, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 1, cv2.LINE_AA)
+        tiles.append(tile)
+    while len(tiles) % 3:
+        tiles.append(np.full((cell[1], cell[0], 3), 255, np.uint8))
+    return np.vstack([np.hstack(tiles[i:i + 3]) for i in range(0, len(tiles), 3)])
+
+
+def synthetic(args, model):
+    rows, worst = [], []
+    with Renderer() as renderer:
+        for i in tqdm(range(args.count), desc="held-out renders", disable=not sys.stderr.isatty()):
+            size = None if args.size is None else tuple(args.size)
+            sample = render_sample([901, i], renderer, size_px=size)
+            w, h = sample.truth["size_px"]
+            try:
+                cal = calibrate_photo(sample.image, Board(),
+                                      intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
+            except CalibrationError:
+                cal = None
+            row = {"image": i, "size": f"{w}x{h}", "calibrated": cal is not None}
+            for name, kwargs in (("onnx", dict(model=model, refine=False)), ("onnx+grabcut", dict(model=model)),
+                                 ("grabcut", dict(method="grabcut"))):
+                if name == "grabcut" and cal is None:
+                    row[name] = None
+                    continue
+                start = time.perf_counter()
+                seg = segment_floor(sample.image, calibration=cal, **kwargs)
+                row[f"{name}_s"] = time.perf_counter() - start
+                row[name] = iou(seg.mask, sample.floor_mask)
+                if name == "onnx+grabcut":
+                    mask = seg.mask
+            if cal is not None and mask.any():
+                truth_area = true_visible_area_m2(sample.floor_mask, sample.truth)
+                try:
+                    poly = floor_polygon(mask, cal)
+                    row["area_m2"], row["true_area_m2"] = poly.area_m2, truth_area
+                    row["area_error"] = (poly.area_m2 - truth_area) / truth_area
+                    row["vertices"] = len(poly.polygon_m)
+                except ValueError:
+                    row["area_error"] = None
+            rows.append(row)
+            worst.append((row["onnx+grabcut"], f"synth 901/{i} IoU {row['onnx+grabcut']:.3f}", mask, sample.floor_mask,
+                          sample.image))
+    worst.sort(key=lambda r: r[0])
+    return rows, worst[:6]
+
+
+def real(folder: Path, model):
+    rows, pictures = [], []
+    for photo in sorted(p for p in folder.iterdir() if p.suffix in (".jpg", ".png") and "_" in p.stem
+                        and not p.stem.endswith(("_floor", "_ignore"))):
+        image = cv2.cvtColor(cv2.imread(str(photo)), cv2.COLOR_BGR2RGB)
+        truth = cv2.imread(str(photo.with_name(photo.stem + "_floor.png")), cv2.IMREAD_GRAYSCALE) > 127
+        ignore_path = photo.with_name(photo.stem + "_ignore.png")
+        ignore = cv2.imread(str(ignore_path), cv2.IMREAD_GRAYSCALE) > 127 if ignore_path.exists() else None
+        row = {"image": photo.stem}
+        for name, kwargs in (("onnx", dict(refine=False)), ("onnx+grabcut", {})):
+            seg = segment_floor(image, model, None, **kwargs)
+            row[name] = iou(seg.mask, truth, ignore)
+            if name == "onnx+grabcut":
+                pictures.append((f"{photo.stem} {row[name]:.2f}", seg.mask, truth, ignore))
+        rows.append(row)
+    return rows, pictures
+
+
+def fmt(v, spec=".3f"):
+    return "-" if v is None else format(v, spec)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--count", type=int, default=40)
+    parser.add_argument("--size", type=int, nargs=2, default=None, metavar=("W", "H"),
+                        help="render size (default: random phone sizes)")
+    parser.add_argument("--real", type=Path, default=ROOT.parent / "shared" / "data" / "real-rooms-dev")
+    parser.add_argument("--model", type=Path, default=DEFAULT_MODEL)
+    args = parser.parse_args(argv)
+    model = FloorModel(args.model)
+
+    # Speed: model alone at its input size, and the whole step on a 12 MP photo.
+    with Renderer() as renderer:
+        sample = render_sample([901, 1000], renderer, size_px=(1008, 756))
+    big = cv2.resize(sample.image, (4032, 3024), interpolation=cv2.INTER_CUBIC)
+    cal_big = calibrate_photo(big, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0] * 4, (4032, 3024)))
+    small = cv2.resize(sample.image, (256, 192), interpolation=cv2.INTER_AREA)
+    infer, whole = [], []
+    for _ in range(7):
+        start = time.perf_counter()
+        model.session.run(None, {model.input_name: np.zeros((1, 3, 192, 256), np.float32)})
+        infer.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        segment_floor(big, model, cal_big)
+        whole.append(time.perf_counter() - start)
+    del small
+    speed = {"model_ms_256x192": 1000 * float(np.median(infer)), "segment_12mp_s": float(np.median(whole))}
+
+    synth_rows, worst = synthetic(args, model)
+    real_rows, real_pictures = real(args.real, model) if args.real.is_dir() else ([], [])
+
+    def col(rows, key):
+        return [r[key] for r in rows if r.get(key) is not None]
+
+    summary = {
+        "synthetic": {k: {"mean": float(np.mean(col(synth_rows, k))), "min": float(np.min(col(synth_rows, k)))}
+                      for k in ("onnx", "onnx+grabcut", "grabcut")},
+        "area_error_median_abs": float(np.median(np.abs(col(synth_rows, "area_error")))),
+        "area_error_p90_abs": float(np.percentile(np.abs(col(synth_rows, "area_error")), 90)),
+        "area_within_5pct": f"{sum(abs(e) <= 0.05 for e in col(synth_rows, 'area_error'))}/"
+                            f"{len(col(synth_rows, 'area_error'))}",
+        "uncalibrated": sum(not r["calibrated"] for r in synth_rows),
+        "real": {k: float(np.mean(col(real_rows, k))) for k in ("onnx", "onnx+grabcut")} if real_rows else None,
+        "speed": speed,
+    }
+    lines = ["# Floor segmentation benchmark", "",
+             f"model `{args.model.name}`; {args.count} held-out renders (seed 901); "
+             f"machine: {__import__('os').cpu_count()} cores", "",
+             "| render | size | IoU onnx | IoU onnx+grabcut | IoU grabcut | area error | step s |",
+             "|---|---|---|---|---|---|---|"]
+    for r in synth_rows:
+        lines.append(f"| {r['image']} | {r['size']} | {fmt(r['onnx'])} | {fmt(r['onnx+grabcut'])} | "
+                     f"{fmt(r['grabcut'])} | {fmt(r.get('area_error'), '+.1%')} | {fmt(r.get('onnx+grabcut_s'), '.2f')} |")
+    s = summary["synthetic"]
+    lines += ["", "| held-out synthetic | mean IoU | worst IoU |", "|---|---|---|"]
+    lines += [f"| {k} | {v['mean']:.3f} | {v['min']:.3f} |" for k, v in s.items()]
+    lines += ["", f"floor polygon area vs true visible area: median |error| {summary['area_error_median_abs']:.1%}, "
+                  f"90th percentile {summary['area_error_p90_abs']:.1%}, within 5 %: {summary['area_within_5pct']}"]
+    if real_rows:
+        lines += ["", "| real room (furnished; never trained on) | IoU onnx | IoU onnx+grabcut |", "|---|---|---|"]
+        lines += [f"| {r['image']} | {r['onnx']:.3f} | {r['onnx+grabcut']:.3f} |" for r in real_rows]
+        lines += [f"| **mean** | {summary['real']['onnx']:.3f} | {summary['real']['onnx+grabcut']:.3f} |"]
+    lines += ["", f"speed: model alone {speed['model_ms_256x192']:.1f} ms (256x192 input); "
+                  f"whole step on a 12 MP photo (4032x3024, model + GrabCut + clean-up) {speed['segment_12mp_s']:.2f} s "
+                  "(medians of 7)"]
+    text = "\n".join(lines) + "\n"
+    print(text)
+    OUT.mkdir(parents=True, exist_ok=True)
+    write_atomic(OUT / "segmentation.md", text)
+    write_atomic(OUT / "segmentation.json", json.dumps({"summary": summary, "synthetic": synth_rows,
+                                                        "real": real_rows}, indent=1))
+    tiles = []
+    for _, name, mask, truth, image in worst:
+        tile = image.copy()
+        tile[mask & ~truth] = (0.4 * tile[mask & ~truth] + [150, 0, 0]).astype(np.uint8)
+        tile[~mask & truth] = (0.4 * tile[~mask & truth] + [0, 0, 150]).astype(np.uint8)
+        tile[mask & truth] = (0.6 * tile[mask & truth] + [0, 100, 0]).astype(np.uint8)
+        tile = cv2.resize(tile, (320, 240), interpolation=cv2.INTER_AREA)
+        cv2.putText(tile, name, (4, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
+        tiles.append(tile)
+    sheet = np.vstack([np.hstack(tiles[i:i + 3]) for i in range(0, len(tiles) - len(tiles) % 3, 3)])
+    write_atomic(OUT / "segmentation_synth_worst.png", cv2.imencode(".png", sheet[..., ::-1])[1].tobytes())
+    if real_pictures:
+        write_atomic(OUT / "segmentation_real_masks.png",
+                     cv2.imencode(".png", pair_picture(real_pictures)[..., ::-1])[1].tobytes())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

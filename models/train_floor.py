@@ -1,0 +1,397 @@
+"""Train the floor segmentation model on synthetic rooms and export it to ONNX.
+
+Training needs torch (``pip install -e '.[train]'``); Stager itself runs the exported
+model with onnxruntime only.
+
+Recipe (what ``models/floor_segnet.onnx`` was made with; the model card in
+``models/README.md`` gives the time it took)::
+
+    python -m augment.synth --count 3000 --seed 100 --size 320x240 --out data/floor_train_l --quiet
+    python -m augment.synth --count 1000 --seed 101 --size 240x320 --out data/floor_train_p --quiet
+    python models/train_floor.py --data data/floor_train_l data/floor_train_p \
+        --epochs 14 --seed 0 --out models/floor_segnet.onnx
+
+Everything random (initial weights, batch order, augmentation) derives from ``--seed``;
+torch runs single-process on the CPU, so a run repeats up to floating-point reduction
+order.
+
+Domain randomization: the renders already vary textures, light, clutter, camera and
+photo defects. On top, each training image gets a random crop and rescale, a mirror, a
+small roll, colour, gamma, blur, noise and JPEG changes, sometimes greyscale, and 0-5
+pasted *occluders*: furniture-like blocks standing on the floor, filled with patches of
+other photos, labelled not-floor. Empty rooms are what Stager is for, but users' rooms
+are rarely quite empty, and the occluders teach the model that the floor stops where
+something stands on it.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+# Input normalisation, stored beside the model so the loader can read it.
+MEAN_RGB = (0.485, 0.456, 0.406)
+STD_RGB = (0.229, 0.224, 0.225)
+# Long side of the network input; the short side keeps the photo's aspect, rounded to 32.
+INPUT_LONG_PX = 256
+TRAIN_SHAPES = {"landscape": (192, 256), "portrait": (256, 192)}  # (rows, cols)
+
+
+def conv_bn(c_in: int, c_out: int, stride: int = 1) -> nn.Sequential:
+    return nn.Sequential(nn.Conv2d(c_in, c_out, 3, stride, 1, bias=False),
+                         nn.BatchNorm2d(c_out), nn.ReLU(inplace=True))
+
+
+class FloorSegNet(nn.Module):
+    """SegNet-style encoder-decoder with skip connections and a global context branch.
+
+    Five stride-2 stages (1/2 .. 1/32); a decoder that upsamples and fuses the skips down
+    to 1/4 scale, then a bilinear 4x upsampling (finer decoding cost more than the rest of
+    the network together and bought nothing a GrabCut refinement does not). Image-level
+    context (global average pool) is added at the bottleneck, because whether a flat patch
+    is floor or wall depends on where it sits in the whole room.
+    Output: logits (N, 2, H, W), class 1 = floor.
+    """
+
+    def __init__(self, widths=(16, 32, 64, 96, 160)):
+        super().__init__()
+        self.encoder = nn.ModuleList([
+            conv_bn(3, widths[0], 2),
+            conv_bn(widths[0], widths[1], 2),
+            *[nn.Sequential(conv_bn(a, b, 2), conv_bn(b, b)) for a, b in zip(widths[1:-1], widths[2:])],
+        ])
+        self.context = nn.Sequential(nn.Conv2d(widths[-1], widths[-1], 1), nn.ReLU(inplace=True))
+        self.decoder = nn.ModuleList([nn.Sequential(conv_bn(deep + skip, skip), conv_bn(skip, skip))
+                                      for skip, deep in zip(widths[-2:0:-1], widths[:1:-1])])
+        self.head = nn.Conv2d(widths[1], 2, 1)
+
+    def forward(self, x):
+        size = x.shape[-2:]
+        skips = []
+        for stage in self.encoder:
+            x = stage(x)
+            skips.append(x)
+        x = x + self.context(x.mean(dim=(2, 3), keepdim=True))
+        for block, skip in zip(self.decoder, skips[-2:0:-1]):
+            x = F.interpolate(x, size=skip.shape[-2:], mode="bilinear", align_corners=False)
+            x = block(torch.cat([x, skip], dim=1))
+        return F.interpolate(self.head(x), size=size, mode="bilinear", align_corners=False)
+
+
+# ----------------------------------------------------------------------------- data
+
+def load_folder(folder: Path) -> tuple[np.ndarray, np.ndarray]:
+    """All ``NNNNN.jpg`` / ``NNNNN_floor.png`` pairs of a synth folder, RGB uint8 and bool."""
+    images, masks = [], []
+    for jpg in sorted(folder.glob("[0-9]*.jpg")):
+        mask = cv2.imread(str(jpg.with_name(jpg.stem + "_floor.png")), cv2.IMREAD_GRAYSCALE)
+        image = cv2.imread(str(jpg), cv2.IMREAD_COLOR)
+        if image is None or mask is None:
+            raise SystemExit(f"{jpg}: unreadable image or missing {jpg.stem}_floor.png")
+        images.append(cv2.cvtColor(image, cv2.COLOR_BGR2RGB))
+        masks.append(mask > 127)
+    if not images:
+        raise SystemExit(f"{folder}: no NNNNN.jpg images (make them with python -m augment.synth)")
+    return np.stack(images), np.stack(masks)
+
+
+def _random_crop(rng, image, mask, shape):
+    rows, cols = image.shape[:2]
+    area = rng.uniform(0.55, 1.0)
+    aspect = (shape[1] / shape[0]) * np.exp(rng.uniform(-0.15, 0.15))
+    h = int(np.clip(np.sqrt(area * rows * cols / aspect), 16, rows))
+    w = int(np.clip(h * aspect, 16, cols))
+    y, x = rng.integers(0, rows - h + 1), rng.integers(0, cols - w + 1)
+    image = cv2.resize(image[y:y + h, x:x + w], shape[::-1], interpolation=cv2.INTER_AREA)
+    mask = cv2.resize(mask[y:y + h, x:x + w].astype(np.uint8), shape[::-1], interpolation=cv2.INTER_NEAREST)
+    return image, mask.astype(bool)
+
+
+def _roll(rng, image, mask):
+    angle = rng.uniform(-6, 6)
+    rows, cols = mask.shape
+    rot = cv2.getRotationMatrix2D((cols / 2, rows / 2), angle, 1.0 + abs(angle) / 40)
+    image = cv2.warpAffine(image, rot, (cols, rows), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    mask = cv2.warpAffine(mask.astype(np.uint8), rot, (cols, rows), flags=cv2.INTER_NEAREST,
+                          borderMode=cv2.BORDER_REFLECT)
+    return image, mask.astype(bool)
+
+
+def _occluders(rng, image, mask, donors):
+    """Paste furniture-like blocks whose feet stand on the floor; they hide floor."""
+    rows, cols = mask.shape
+    floor_rc = np.argwhere(mask)
+    if len(floor_rc) < 50:
+        return image, mask
+    image, mask = image.copy(), mask.copy()
+    for _ in range(rng.integers(0, 6)):
+        foot_r, foot_c = (int(v) for v in floor_rc[rng.integers(len(floor_rc))])
+        w = int(cols * rng.uniform(0.08, 0.45))
+        h = int(rows * rng.uniform(0.06, 0.5))
+        top, left = max(0, foot_r - h), int(np.clip(foot_c - w // 2, 0, cols - 1))
+        bottom, right = min(rows, foot_r + int(h * rng.uniform(0, 0.25))), min(cols, left + w)
+        if bottom - top < 4 or right - left < 4:
+            continue
+        shape = np.zeros((rows, cols), np.uint8)
+        kind = rng.integers(3)
+        if kind == 0:  # box
+            cv2.rectangle(shape, (left, top), (right - 1, bottom - 1), 1, -1)
+        elif kind == 1:  # rounded, like a sofa or armchair
+            cv2.ellipse(shape, ((left + right) // 2, (top + bottom) // 2), ((right - left) // 2, (bottom - top) // 2),
+                        0, 0, 360, 1, -1)
+        else:  # legs: a top slab and thin legs, floor visible between them
+            slab = top + (bottom - top) // 4
+            cv2.rectangle(shape, (left, top), (right - 1, slab), 1, -1)
+            leg = max(2, (right - left) // 12)
+            cv2.rectangle(shape, (left, slab), (left + leg, bottom - 1), 1, -1)
+            cv2.rectangle(shape, (right - 1 - leg, slab), (right - 1, bottom - 1), 1, -1)
+        region = shape.astype(bool)
+        donor = donors[rng.integers(len(donors))]
+        dr, dc = donor.shape[:2]
+        y, x = rng.integers(0, max(1, dr - (bottom - top))), rng.integers(0, max(1, dc - (right - left)))
+        patch = cv2.resize(donor[y:y + max(8, dr // 3), x:x + max(8, dc // 3)], (cols, rows))
+        if rng.random() < 0.5:  # a plain painted or upholstered surface, shaded top to bottom
+            color = rng.uniform(0, 255, 3)
+            shade = np.linspace(rng.uniform(0.7, 1.2), rng.uniform(0.4, 1.0), rows)[:, None, None]
+            patch = np.clip(color * shade + rng.normal(0, 6, (rows, cols, 3)), 0, 255).astype(np.uint8)
+        image[region] = patch[region]
+        mask[region] = False
+    return image, mask
+
+
+def _photometric(rng, image):
+    img = image.astype(np.float32) / 255.0
+    img = img * np.float32(rng.uniform(0.6, 1.4, 3) ** 0.5)  # white balance
+    img = img * np.float32(rng.uniform(0.5, 1.6)) + np.float32(rng.uniform(-0.1, 0.1))  # exposure, offset
+    img = np.clip(img, 0, 1) ** np.float32(rng.uniform(0.6, 1.6))
+    if rng.random() < 0.15:
+        img = np.repeat(img.mean(axis=2, keepdims=True), 3, axis=2)
+    if rng.random() < 0.3:
+        hsv = cv2.cvtColor(img, cv2.COLOR_RGB2HSV)
+        hsv[..., 0] = (hsv[..., 0] + np.float32(rng.uniform(-30, 30))) % 360
+        hsv[..., 1] *= np.float32(rng.uniform(0.5, 1.5))
+        img = cv2.cvtColor(np.clip(hsv, 0, [360, 1, 1]).astype(np.float32), cv2.COLOR_HSV2RGB)
+    if rng.random() < 0.3:
+        img = cv2.GaussianBlur(img, (0, 0), rng.uniform(0.4, 1.8))
+    img = img + rng.normal(0, rng.uniform(0, 0.04), img.shape).astype(np.float32)
+    out = (np.clip(img, 0, 1) * 255).astype(np.uint8)
+    if rng.random() < 0.3:
+        ok, buf = cv2.imencode(".jpg", out, [cv2.IMWRITE_JPEG_QUALITY, int(rng.integers(30, 90))])
+        out = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED)
+    return out
+
+
+def _donor_patch(rng, donors, rows, cols):
+    """A random crop of another training photo, stretched to (rows, cols)."""
+    donor = donors[rng.integers(len(donors))]
+    dr, dc = donor.shape[:2]
+    h, w = rng.integers(dr // 6, dr // 2 + 1), rng.integers(dc // 6, dc // 2 + 1)
+    y, x = rng.integers(0, dr - h + 1), rng.integers(0, dc - w + 1)
+    return cv2.resize(donor[y:y + h, x:x + w], (cols, rows), interpolation=cv2.INTER_LINEAR)
+
+
+def _plain_surface(rng, rows, cols):
+    """A painted or carpeted surface: one colour, a soft gradient and fine noise."""
+    color = rng.uniform(20, 235, 3)
+    gy, gx = np.mgrid[0:rows, 0:cols].astype(np.float32)
+    ramp = 1 + rng.uniform(-0.3, 0.3) * gy / rows + rng.uniform(-0.2, 0.2) * gx / cols
+    noise = rng.normal(0, rng.uniform(1, 8), (rows, cols, 1))
+    return np.clip(color * ramp[..., None] + noise, 0, 255).astype(np.uint8)
+
+
+def _retexture(rng, image, mask, donors):
+    """Break "textured means floor": sometimes the floor becomes plain paint or carpet,
+    sometimes the walls get another photo's texture (wood panelling, tiles, a mural).
+    The original luminance is kept as shading, so shadows and light stay where they were."""
+    rows, cols = mask.shape
+    lum = image.astype(np.float32).mean(axis=2, keepdims=True)
+    out = image.copy()
+    for region, p in ((mask, 0.3), (~mask, 0.3)):
+        if rng.random() >= p or region.sum() < 20:
+            continue
+        surface = _plain_surface(rng, rows, cols) if rng.random() < 0.6 else _donor_patch(rng, donors, rows, cols)
+        shade = lum / max(float(lum[region].mean()), 1.0)
+        new = np.clip(surface.astype(np.float32) * shade ** rng.uniform(0.5, 1.0), 0, 255).astype(np.uint8)
+        out[region] = new[region]
+    return out
+
+
+def _wall_things(rng, image, mask, donors):
+    """Pictures, shelves, windows and cupboards on the walls: rectangles filled with
+    photo patches, book-like stripes or flat colour. Not floor, wherever they land."""
+    rows, cols = mask.shape
+    image, mask = image.copy(), mask.copy()
+    for _ in range(rng.integers(1, 7)):
+        h, w = int(rows * rng.uniform(0.06, 0.45)), int(cols * rng.uniform(0.05, 0.35))
+        top, left = rng.integers(0, max(1, int(rows * 0.7) - h)), rng.integers(0, max(1, cols - w))
+        kind = rng.integers(3)
+        if kind == 0:
+            patch = _donor_patch(rng, donors, h, w)
+        elif kind == 1:  # shelves of books
+            patch = np.zeros((h, w, 3), np.uint8)
+            x = 0
+            while x < w:
+                step = int(rng.integers(2, 7))
+                patch[:, x:x + step] = rng.uniform(10, 240, 3)
+                x += step
+            for y in range(0, h, max(6, h // int(rng.integers(2, 5)))):
+                patch[y:y + 2] = rng.uniform(60, 220, 3)
+        else:
+            patch = _plain_surface(rng, h, w)
+        image[top:top + h, left:left + w] = patch
+        mask[top:top + h, left:left + w] = False
+    return image, mask
+
+
+def augment(rng, image, mask, shape, donors):
+    image, mask = _random_crop(rng, image, mask, shape)
+    if rng.random() < 0.5:
+        image, mask = image[:, ::-1], mask[:, ::-1]
+    if rng.random() < 0.5:
+        image, mask = _roll(rng, image, mask)
+    image, mask = np.ascontiguousarray(image), np.ascontiguousarray(mask)
+    image = _retexture(rng, image, mask, donors)
+    if rng.random() < 0.5:
+        image, mask = _wall_things(rng, image, mask, donors)
+    if rng.random() < 0.8:
+        image, mask = _occluders(rng, image, mask, donors)
+    return _photometric(rng, np.ascontiguousarray(image)), np.ascontiguousarray(mask)
+
+
+def to_tensor(images: np.ndarray) -> torch.Tensor:
+    x = (images.astype(np.float32) / 255.0 - np.float32(MEAN_RGB)) / np.float32(STD_RGB)
+    return torch.from_numpy(np.ascontiguousarray(x.transpose(0, 3, 1, 2)))
+
+
+# ----------------------------------------------------------------------------- training
+
+def loss_fn(logits, target):
+    """Cross-entropy plus soft-IoU of the floor, the metric the product is judged on."""
+    ce = F.cross_entropy(logits, target.long())
+    p = torch.softmax(logits, dim=1)[:, 1]
+    t = target.float()
+    inter = (p * t).sum(dim=(1, 2))
+    union = (p + t - p * t).sum(dim=(1, 2))
+    iou = (inter + 1) / (union + 1)
+    return ce + (1 - iou).mean()
+
+
+def iou(pred: np.ndarray, truth: np.ndarray) -> float:
+    union = np.logical_or(pred, truth).sum()
+    return 1.0 if union == 0 else float(np.logical_and(pred, truth).sum() / union)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--data", type=Path, nargs="+", required=True, help="synth folders to train on")
+    parser.add_argument("--val", type=Path, default=None, help="held-out synth folder for a per-epoch IoU")
+    parser.add_argument("--epochs", type=int, default=14)
+    parser.add_argument("--batch", type=int, default=16)
+    parser.add_argument("--lr", type=float, default=3e-3)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--out", type=Path, default=Path("models/floor_segnet.onnx"))
+    args = parser.parse_args(argv)
+
+    torch.manual_seed(args.seed)
+    torch.set_num_threads(args.threads)
+    rng = np.random.default_rng(args.seed)
+    sets = {}
+    for folder in args.data:
+        images, masks = load_folder(folder)
+        kind = "landscape" if images.shape[2] >= images.shape[1] else "portrait"
+        prev = sets.get(kind)
+        sets[kind] = (images, masks) if prev is None else (np.concatenate([prev[0], images]),
+                                                           np.concatenate([prev[1], masks]))
+    # Occluders are filled with patches of other training photos.
+    donors = [image for images, _ in sets.values() for image in images[:300]]
+    total = sum(len(s[0]) for s in sets.values())
+    steps_per_epoch = total // args.batch
+    model = FloorSegNet()
+    n_params = sum(p.numel() for p in model.parameters())
+    print(f"{total} training images ({', '.join(f'{k}: {len(v[0])}' for k, v in sets.items())}), "
+          f"{n_params / 1e6:.2f} M parameters", flush=True)
+    optim = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
+    sched = torch.optim.lr_scheduler.OneCycleLR(optim, max_lr=args.lr, total_steps=args.epochs * steps_per_epoch,
+                                                pct_start=0.1)
+    kinds = list(sets)
+    weights = np.array([len(sets[k][0]) for k in kinds], float)
+    start = time.time()
+    log = []
+    for epoch in range(args.epochs):
+        model.train()
+        running = []
+        for step in range(steps_per_epoch):
+            kind = kinds[rng.choice(len(kinds), p=weights / weights.sum())]
+            images, masks = sets[kind]
+            idx = rng.integers(0, len(images), args.batch)
+            batch = [augment(rng, images[i], masks[i], TRAIN_SHAPES[kind], donors) for i in idx]
+            x = to_tensor(np.stack([b[0] for b in batch]))
+            y = torch.from_numpy(np.stack([b[1] for b in batch]))
+            loss = loss_fn(model(x), y)
+            optim.zero_grad()
+            loss.backward()
+            optim.step()
+            sched.step()
+            running.append(loss.item())
+        entry = {"epoch": epoch + 1, "loss": float(np.mean(running)), "minutes": (time.time() - start) / 60}
+        if args.val is not None:
+            entry["val_iou"] = validate(model, args.val)
+        log.append(entry)
+        print(json.dumps(entry), flush=True)
+        export(model, args.out, log, args, n_params, time.time() - start)
+    return 0
+
+
+def predict_torch(model, image_rgb: np.ndarray) -> np.ndarray:
+    rows, cols = image_rgb.shape[:2]
+    scale = INPUT_LONG_PX / max(rows, cols)
+    shape = (max(32, round(rows * scale / 32) * 32), max(32, round(cols * scale / 32) * 32))
+    x = to_tensor(cv2.resize(image_rgb, shape[::-1], interpolation=cv2.INTER_AREA)[None])
+    with torch.no_grad():
+        p = torch.softmax(model(x), dim=1)[0, 1].numpy()
+    return cv2.resize(p, (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
+
+
+def validate(model, folder: Path) -> float:
+    model.eval()
+    images, masks = load_folder(folder)
+    return float(np.mean([iou(predict_torch(model, im), m) for im, m in zip(images, masks)]))
+
+
+def export(model, out: Path, log, args, n_params, seconds) -> None:
+    """Write the ONNX model and its sidecar JSON (what the loader needs) atomically."""
+    model.eval()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(out.name + ".tmp")
+    dummy = torch.zeros(1, 3, *TRAIN_SHAPES["landscape"])
+    torch.onnx.export(model, (dummy,), str(tmp), input_names=["image"], output_names=["logits"],
+                      dynamic_axes={"image": {0: "n", 2: "rows", 3: "cols"}, "logits": {0: "n", 2: "rows", 3: "cols"}},
+                      opset_version=17, dynamo=False)
+    tmp.replace(out)
+    # The torch weights too (not shipped): to fine-tune or inspect later.
+    torch.save(model.state_dict(), out.with_suffix(".pt"))
+    sidecar = {
+        "input_long_px": INPUT_LONG_PX, "multiple_px": 32, "channel_order": "RGB",
+        "mean": list(MEAN_RGB), "std": list(STD_RGB), "scale": 1 / 255, "floor_class": 1,
+        "output": "logits",
+        "training": {"data": [str(p) for p in args.data], "epochs_done": len(log), "seed": args.seed,
+                     "batch": args.batch, "lr": args.lr, "parameters": n_params,
+                     "minutes": round(seconds / 60, 1), "log": log},
+    }
+    side = out.with_suffix(".json")
+    tmp_side = side.with_name(side.name + ".tmp")
+    tmp_side.write_text(json.dumps(sidecar, indent=1))
+    tmp_side.replace(side)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

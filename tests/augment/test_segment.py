@@ -1,0 +1,203 @@
+"""Floor segmentation and the floor polygon against known answers: synthetic renders the
+model never saw (its training seeds were 100 and 101), a hand-built ONNX model, and
+floors drawn from known polygons through a real calibration."""
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from augment.board import Board
+from augment.calibrate import calibrate_photo, exif_intrinsics
+from augment.floor import floor_area_m2, floor_overlay, floor_polygon
+from augment.gl import Renderer
+from augment.segment import DEFAULT_MODEL, FloorModel, ModelSpec, SegmentationError, segment_floor
+from augment.synth import render_sample
+
+
+def iou(a, b):
+    return np.logical_and(a, b).sum() / np.logical_or(a, b).sum()
+
+
+@pytest.fixture(scope="module")
+def held_out():
+    """Renders from seeds the model was not trained on, calibrated with their true focal
+    length (these tests are about the floor, not the focal estimate)."""
+    out = []
+    with Renderer() as renderer:
+        for i in range(6):
+            sample = render_sample([7100, i], renderer, size_px=(640, 480))
+            f = sample.truth["K"][0][0]
+            try:
+                cal = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(f, (640, 480)))
+            except ValueError:
+                continue
+            out.append((sample, cal))
+    assert len(out) >= 4
+    return out
+
+
+@pytest.fixture(scope="module")
+def model():
+    return FloorModel(DEFAULT_MODEL)
+
+
+def test_shipped_model_finds_the_floor_of_unseen_rooms(held_out, model):
+    ious = []
+    for sample, cal in held_out:
+        image = sample.image.copy()
+        seg = segment_floor(image, model, cal)
+        assert np.array_equal(image, sample.image)  # input untouched
+        assert seg.method == "onnx+grabcut" and seg.mask.shape == image.shape[:2]
+        ious.append(iou(seg.mask, sample.floor_mask))
+    assert min(ious) > 0.9 and np.mean(ious) > 0.95, ious
+
+
+def test_grabcut_alone_from_the_calibration(held_out):
+    ious = [iou(segment_floor(s.image, calibration=c, method="grabcut").mask, s.floor_mask) for s, c in held_out]
+    assert np.mean(ious) > 0.85, ious
+
+
+def test_the_board_is_floor_and_nothing_above_the_horizon_is(held_out, model):
+    sample, cal = held_out[0]
+    mask = segment_floor(sample.image, model, cal).mask
+    rows, cols = mask.shape
+    y, x = np.mgrid[0:rows, 0:cols]
+    above = cal.horizon[0] * x + cal.horizon[1] * y + cal.horizon[2] < 0
+    assert not (mask & above).any()
+    board = np.zeros_like(mask, np.uint8)
+    cv2.fillPoly(board, [cal.pixels_from_floor(Board().outline_m()[:, :2] * 0.9).round().astype(np.int32)], 1)
+    assert mask[board > 0].all()
+
+
+def _tiny_model(path, layout="NCHW"):
+    """A 1x1 convolution: class 2's logit is 20 (R - B), the others 0. So with RGB input
+    "floor" is where the photo is red; fed BGR by mistake, where it is blue. An NHWC
+    model (as exported from TensorFlow) takes and gives channels last."""
+    import onnx
+    from onnx import TensorProto, helper
+
+    w = np.zeros((3, 3, 1, 1), np.float32)
+    w[2, 0, 0, 0], w[2, 2, 0, 0] = 20, -20
+    nodes, inp = [], "image"
+    if layout == "NHWC":
+        nodes.append(helper.make_node("Transpose", ["image"], ["nchw"], perm=[0, 3, 1, 2]))
+        inp = "nchw"
+    nodes.append(helper.make_node("Conv", [inp, "w"], ["logits" if layout == "NCHW" else "conv"]))
+    if layout == "NHWC":
+        nodes.append(helper.make_node("Transpose", ["conv"], ["logits"], perm=[0, 2, 3, 1]))
+    shape_in = [1, "rows", "cols", 3] if layout == "NHWC" else [1, 3, "rows", "cols"]
+    shape_out = [1, "rows", "cols", 3] if layout == "NHWC" else [1, 3, "rows", "cols"]
+    graph = helper.make_graph(
+        nodes, "tiny", [helper.make_tensor_value_info("image", TensorProto.FLOAT, shape_in)],
+        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, shape_out)],
+        [helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.ravel())])
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
+    model.ir_version = 8
+    onnx.save(model, str(path))
+    return path
+
+
+def test_a_users_onnx_model_is_fed_as_its_spec_says(tmp_path):
+    image = np.zeros((96, 128, 3), np.uint8)
+    image[:, :64] = (200, 30, 30)   # red left half
+    image[:, 64:] = (30, 30, 200)   # blue right half
+    left = np.zeros((96, 128), bool)
+    left[:, :64] = True
+    for layout in ("NCHW", "NHWC"):
+        path = _tiny_model(tmp_path / f"tiny_{layout}.onnx", layout)
+        spec = ModelSpec(input_size=(48, 64), mean=(0, 0, 0), std=(1, 1, 1), floor_class=(2,), layout=layout)
+        p = FloorModel(path, spec=spec).floor_probability(image)
+        assert p.shape == (96, 128) and iou(p > 0.5, left) > 0.95
+        bgr = FloorModel(path, spec=ModelSpec(**{**spec.__dict__, "channel_order": "BGR"}))
+        assert iou(bgr.floor_probability(image) > 0.5, ~left) > 0.95
+    # The sidecar JSON is read when present; CLI-style overrides win over it.
+    (tmp_path / "tiny_NCHW.json").write_text(json.dumps({"input_size": [48, 64], "mean": [0, 0, 0],
+                                                         "std": [1, 1, 1], "floor_class": 2, "note": "x"}))
+    assert FloorModel(tmp_path / "tiny_NCHW.onnx").spec.floor_class == (2,)
+
+
+def test_bad_models_and_images_get_clear_errors(tmp_path):
+    with pytest.raises(SegmentationError, match="no such file"):
+        FloorModel(tmp_path / "missing.onnx")
+    (tmp_path / "junk.onnx").write_bytes(b"not a model")
+    with pytest.raises(SegmentationError, match="cannot load"):
+        FloorModel(tmp_path / "junk.onnx")
+    with pytest.raises(SegmentationError, match="channel_order"):
+        ModelSpec(channel_order="RGBA")
+    with pytest.raises(SegmentationError, match="too small"):
+        segment_floor(np.zeros((20, 30, 3), np.uint8), method="grabcut")
+    with pytest.raises(SegmentationError, match="uint8"):
+        segment_floor(np.zeros((100, 100, 3), np.float32), method="grabcut")
+    with pytest.raises(SegmentationError, match="calibration"):
+        segment_floor(np.zeros((100, 100, 3), np.uint8), method="grabcut")
+
+
+def test_grey_photo_is_accepted(held_out, model):
+    sample, cal = held_out[0]
+    grey = cv2.cvtColor(sample.image, cv2.COLOR_RGB2GRAY)
+    assert iou(segment_floor(grey, model, cal).mask, sample.floor_mask) > 0.85
+
+
+def _floor_mask(cal, polygon_m):
+    """Rasterize a floor polygon through the calibration, edges densely sampled."""
+    ring = np.vstack([np.linspace(a, b, 200, endpoint=False)
+                      for a, b in zip(polygon_m, np.roll(polygon_m, -1, axis=0))])
+    mask = np.zeros(cal.size_px[::-1], np.uint8)
+    cv2.fillPoly(mask, [cal.pixels_from_floor(ring).round().astype(np.int32)], 1)
+    return mask > 0
+
+
+def test_polygon_recovers_a_known_floor(held_out):
+    """An L-shaped floor around the board, fully in view: its corners come back within
+    3 cm, its area within 1 %, and every edge is a real boundary."""
+    _, cal = held_out[0]
+    cam = np.linalg.inv(cal.camera_from_floor)[:2, 3]
+    toward = -cam / np.linalg.norm(cam)  # from the camera through the board
+    side = np.array([-toward[1], toward[0]])
+    local = np.array([[-0.8, -0.3], [0.8, -0.3], [0.8, 0.5], [0.2, 0.5], [0.2, 1.1], [-0.8, 1.1]])
+    for scale in (1.0, 0.7, 0.5):  # as large as the view allows, with the board inside
+        truth = scale * (local[:, :1] * side + local[:, 1:] * toward)
+        mask = _floor_mask(cal, truth)
+        if not (mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any()):
+            break
+    else:
+        pytest.fail("no L-shaped floor fits the view")
+    poly = floor_polygon(mask, cal)
+    assert len(poly.polygon_m) == 6 and set(poly.edge_kind) == {"boundary"} and poly.caveat == ""
+    for v in truth:
+        assert np.min(np.linalg.norm(poly.polygon_m - v, axis=1)) < 0.03
+    area = 0.5 * abs(np.dot(truth[:, 0], np.roll(truth[:, 1], -1)) - np.dot(truth[:, 1], np.roll(truth[:, 0], -1)))
+    assert abs(poly.area_m2 - area) / area < 0.01
+    # Pixel by pixel, the raster's boundary pixels (half outside the true edge) add about
+    # 2 % on a floor this small.
+    assert 0 < (floor_area_m2(mask, cal) - area) / area < 0.03
+    # Counter-clockwise seen from above.
+    p = poly.polygon_m
+    assert np.dot(p[:, 0], np.roll(p[:, 1], -1)) - np.dot(p[:, 1], np.roll(p[:, 0], -1)) > 0
+
+
+def test_floor_cut_by_the_photo_edge_is_labelled(held_out):
+    """A floor running out of the photo at the bottom: those edges are the photo's, and
+    the caveat says the room goes on."""
+    _, cal = held_out[0]
+    cam = np.linalg.inv(cal.camera_from_floor)[:2, 3]
+    toward = -cam / np.linalg.norm(cam)
+    side = np.array([-toward[1], toward[0]])
+    # From just ahead of the camera's feet (below the photo's bottom edge) to 1 m past the board.
+    near, far = cam + 0.3 * toward, toward
+    truth = np.array([near - 0.6 * side, near + 0.6 * side, far + 0.6 * side, far - 0.6 * side])
+    mask = _floor_mask(cal, truth)
+    poly = floor_polygon(mask, cal)
+    assert "image" in poly.edge_kind and "boundary" in poly.edge_kind
+    assert "visible floor only" in poly.caveat
+    picture = floor_overlay(np.zeros((*mask.shape, 3), np.uint8), mask, poly, cal)
+    assert picture.shape == (mask.shape[0], mask.shape[1] + mask.shape[0], 3)
+
+
+def test_mask_of_the_wrong_size_is_refused(held_out):
+    _, cal = held_out[0]
+    with pytest.raises(ValueError, match="does not match"):
+        floor_polygon(np.ones((10, 10), bool), cal)
