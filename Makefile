@@ -1,4 +1,4 @@
-# Stager: `make demo` sets everything up and solves the sample; `make test` runs the suite.
+# Stager: `make demo` sets everything up, solves the sample and furnishes a sample photo; `make test` runs the suite.
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
@@ -35,7 +35,9 @@ demo: setup
 	$(PY) -m augment.synth --count 4 --seed 2026 --size 640x480 --out out/demo/photos --sheet out/demo/photos.png --quiet
 	@echo "plans written to $(CURDIR)/out/demo (plan_1.png ... plan_4.png, layout_K.json)"
 	@echo "synthetic room photos with ground truth in $(CURDIR)/out/demo/photos (contact sheets photos.png, photos_truth.png)"
+	$(VENV)/bin/stage furnish samples/photos/room_4.jpg --room living_room --suggestions 4 --seed 0 --out out/demo/furnished
 	@echo "sample photos for the image stage: $(CURDIR)/samples/photos/room_1.jpg ... room_4.jpg"
+	@echo "staged images of samples/photos/room_4.jpg in $(CURDIR)/out/demo/furnished (staged_1.jpg ... staged_4.jpg, side by side in staged_all.jpg; report.json, scene_K.glb, overlays)"
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

@@ -7,6 +7,8 @@
     stage check PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
     stage segment PHOTO [--model M.onnx] [--method onnx|grabcut] [--board ...] [--out MASK.png] [--quiet]
     stage measure PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
+    stage furnish PHOTO [--board 7x5] [--square 45] [--room NAME | --spec FILE] [--suggestions 4]
+                  [--seed 0] [--camera profile.json] [--model M.onnx] [--out DIR] [--quiet]
 
 ``--board`` counts inner corners, ``COLSxROWS`` for a plain checkerboard (the default
 7x5), ``charuco:COLSxROWS`` for a ChArUco board (ArUco markers of DICT_4X4_50 in the
@@ -16,21 +18,30 @@ white squares), which still calibrates when part of it is hidden or out of the f
 several photos of it (any angle, e.g. held up or on a table); ``check`` calibrates one
 photo of the board lying on the floor and draws the result over it; ``segment`` finds
 the floor (mask, overlay, and the floor polygon in meters when the board is found);
-``measure`` does both and measures the wall height: "measure my room" without furniture.
+``measure`` does both and measures the wall height: "measure my room" without furniture;
+``furnish`` goes on to lay out furniture (a room preset, default living_room, or a spec
+file) on the measured floor and renders each suggestion into the photo
+(:mod:`augment.pipeline` lists the files it writes).
 
 Exit status: 0 success, 2 bad input (one ``error:`` line on stderr saying what and
-where, and what would work), 1 an unexpected failure (a bug: the traceback is printed).
+where, and what would work: an unreadable photo, no board, no floor, a floor too small
+for any furniture, an output folder that cannot be written, an invalid spec file), 1 an
+unexpected failure (a bug: the traceback is printed), 130 interrupted. ``measure`` and
+``furnish`` write their files only when everything is done, all or none: a failure
+leaves the output folder as it was.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import sys
 from pathlib import Path
 from typing import NamedTuple
 
 from layout.command import EXIT_OK, Parser, dispatch, parse
+from layout.presets import PRESETS
 
 from .board import BOARD_KINDS, CHARUCO_DICTIONARY, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM, PAPER_MM
 
@@ -196,7 +207,45 @@ def _parser():
     m.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
                    help="output folder (default out/<photo name>; created)")
     m.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
+
+    f = sub.add_parser("furnish", help="furnish the photo: staged images of several layout suggestions",
+                       description="Calibrate PHOTO from the board, find the floor, measure the walls, lay out "
+                                   "furniture on the floor in view (a room preset, or the items of a spec file) "
+                                   "and render each suggestion into the photo. Writes to DIR: staged_K.jpg, "
+                                   "staged_all.jpg (contact sheet), layout_K.json, plan_K.png, energy.png, "
+                                   "scene_K.glb (glTF: floor, walls, furniture), overlay_calibration.png, "
+                                   "overlay_floor.png, overlay_height.png and report.json.")
+    f.add_argument("photo", type=Path, metavar="PHOTO")
+    _add_board_args(f)
+    what = f.add_mutually_exclusive_group()
+    what.add_argument("--room", choices=tuple(PRESETS), default=None, metavar="NAME",
+                      help=f"room preset: {', '.join(PRESETS)} (default living_room); the furniture is "
+                           "chosen for the floor's area")
+    what.add_argument("--spec", type=Path, default=None, metavar="FILE.toml",
+                      help="a layout spec (see `layout solve`): its items, groups and constraints on the "
+                           "measured floor (its own room, doors and windows are not used)")
+    f.add_argument("--suggestions", "-n", type=_count, default=4, metavar="N",
+                   help="number of layout suggestions (default 4)")
+    f.add_argument("--seed", type=int, default=0, help="seed of suggestion 1; K uses seed + K - 1 (default 0)")
+    f.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
+                   help="camera profile from `stage calibrate`")
+    f.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
+                   help="floor model (default: Stager's models/floor_segnet.onnx, with its MODEL.json)")
+    f.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
+                   help="output folder (default out/<photo name>; created)")
+    f.add_argument("--quiet", "-q", action="store_true",
+                   help="print nothing but errors and warnings (no progress bar either)")
     return p
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= 100:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number from 1 to 100")
+    return value
 
 
 def _size_px(text: str) -> tuple[int, int]:
@@ -528,6 +577,55 @@ def _measure_cmd(args):
     return EXIT_OK
 
 
+def _furnish_cmd(args):
+    from .pipeline import dropped_summary, furnish, write_outputs
+
+    board = _board(args)
+    out = args.out if args.out is not None else Path("out") / args.photo.stem
+    _prepare_dir_out(out)
+    # The files are made in a folder beside out, then moved in: both places must take them.
+    for folder in ([out] if out.is_dir() else []) + [next(p for p in out.parents if p.exists())]:
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise StageError(f"--out {out}: cannot write in {folder}; choose a folder you can write to")
+    if args.photo.is_file():
+        for flag, path, hint in (("--camera", args.camera, "make a camera profile with `stage calibrate`"),
+                                 ("--model", args.model, "give an ONNX floor model, or leave --model out"),
+                                 ("--spec", args.spec, "write one (see `layout solve --help`)")):
+            if path is not None and not path.is_file():
+                raise StageError(f"{flag} {path}: no such file; {hint}")
+    result = furnish(args.photo, board, room=args.room, spec=args.spec, suggestions=args.suggestions,
+                     seed=args.seed, camera=args.camera, model=args.model,
+                     progress=not args.quiet and sys.stderr.isatty())
+    paths = write_outputs(result, out)
+    if not args.quiet:
+        cal, floor, height = result.calibration, result.floor, result.height
+        i = cal.intrinsics
+        print(f"camera      {cal.camera_height_m:.2f} m above the floor, focal {i.K[0, 0]:.0f} px from {i.source}, "
+              f"RMS {cal.rms_px:.2f} px")
+        print(f"floor       {floor.area_m2:.2f} m\u00b2 in view, {len(floor.polygon_m)} corners "
+              f"({result.segmentation.method})")
+        state = "assumed (fallback)" if height.fallback else f"confidence {height.confidence:.2f}"
+        print(f"walls       {result.room_height_m:.2f} m high, {state}")
+        kinds = ", ".join(i.id for i in result.spec.items)
+        print(f"furniture   {result.source}: {len(result.spec.items)} items ({kinds})")
+        if result.dropped:
+            print(f"left out    {dropped_summary(result.dropped)}")
+        print(f"{'K':>3} {'energy':>9} {'overlaps':>8} {'outside m²':>11} {'walkable':>8}")
+        for k, (lay, rep) in enumerate(zip(result.layouts, result.reports), start=1):
+            print(f"{k:>3} {lay.energy:>9.4g} {rep['overlaps']['count']:>8d} {rep['outside_m2']:>11.3f} "
+                  f"{'yes' if rep['traversable'] else 'no':>8}")
+        t = result.timings_s
+        print("time        " + ", ".join(f"{k} {v:.2f}" for k, v in t.items() if k != "total")
+              + f"; total {t['total']:.1f} s")
+        n = len(result.staged)
+        print(f"staged      {out / 'staged_1.jpg'}" + (f" ... staged_{n}.jpg" if n > 1 else "")
+              + f", side by side in {out / 'staged_all.jpg'}")
+        print(f"wrote {len(paths)} files to {out}/")
+    for warning in result.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    return EXIT_OK
+
+
 def _write_all(files: dict, folder: Path) -> None:
     """Write every file or none: a failure removes the ones already written."""
     _mkdir(folder, "--out", folder)
@@ -551,13 +649,16 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_OK
+    from layout.errors import LayoutError
+
     from .calibrate import CalibrationError
+    from .pipeline import FurnishError
     from .segment import SegmentationError
 
     commands = {"board": _board_cmd, "calibrate": _calibrate_cmd, "check": _check_cmd, "segment": _segment_cmd,
-                "measure": _measure_cmd}
+                "measure": _measure_cmd, "furnish": _furnish_cmd}
     return dispatch(commands[args.command], args, "stage",
-                    [((StageError, CalibrationError, SegmentationError), str)])
+                    [((StageError, CalibrationError, SegmentationError, LayoutError, FurnishError), str)])
 
 
 if __name__ == "__main__":

@@ -842,6 +842,34 @@ def load_spec(path) -> Spec:
     return _parse(r, path, doc)
 
 
+def spec_from_dict(doc, where="<spec>") -> Spec:
+    """Check a spec given as a dict, shaped like a spec file's TOML (see the module
+    docstring): specs made in code, e.g. a room preset on a measured floor.
+
+    Parameters
+    ----------
+    doc : dict
+        ``{"room": {...}, "items": [...], ...}`` with lists (not arrays) for points, as
+        :func:`tomllib.load` would give. Not modified.
+    where : str
+        Names the spec in error messages and becomes ``Spec.path`` (e.g.
+        ``"--room bedroom"``).
+
+    Returns
+    -------
+    Spec
+        With a ``room.preset`` and a ``room.polygon``: furnished for that floor's area.
+
+    Raises
+    ------
+    LayoutError
+        For any invalid entry; the message starts with ``where``.
+    """
+    if not isinstance(doc, dict):
+        raise LayoutError(f"{where}: expected a table (a dict of sections), got {_show(doc)}")
+    return _parse(_Reader(where), Path(where), doc)
+
+
 def _parse(r, path, doc):
     unknown = [k for k in doc if k not in TOP_LEVEL]
     if unknown:

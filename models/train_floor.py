@@ -298,6 +298,8 @@ def main(argv=None) -> int:
     parser.add_argument("--lr", type=float, default=3e-3)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--init", type=Path, default=None,
+                        help="start from these torch weights (a .pt written beside an earlier run's .onnx)")
     parser.add_argument("--out", type=Path, default=Path("models/floor_segnet.onnx"))
     args = parser.parse_args(argv)
 
@@ -316,6 +318,8 @@ def main(argv=None) -> int:
     total = sum(len(s[0]) for s in sets.values())
     steps_per_epoch = total // args.batch
     model = FloorSegNet()
+    if args.init is not None:
+        model.load_state_dict(torch.load(args.init, map_location="cpu", weights_only=True))
     n_params = sum(p.numel() for p in model.parameters())
     print(f"{total} training images ({', '.join(f'{k}: {len(v[0])}' for k, v in sets.items())}), "
           f"{n_params / 1e6:.2f} M parameters", flush=True)
@@ -384,6 +388,7 @@ def export(model, out: Path, log, args, n_params, seconds) -> None:
         "mean": list(MEAN_RGB), "std": list(STD_RGB), "scale": 1 / 255, "floor_class": 1,
         "output": "logits",
         "training": {"data": [str(p) for p in args.data], "epochs_done": len(log), "seed": args.seed,
+                     "init": None if args.init is None else str(args.init),
                      "batch": args.batch, "lr": args.lr, "parameters": n_params,
                      "minutes": round(seconds / 60, 1), "log": log},
     }

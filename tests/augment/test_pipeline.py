@@ -1,0 +1,398 @@
+"""The end-to-end pipeline (augment.pipeline) and ``stage furnish``: furniture on the
+ground-truth floor of synthetic sample photos, no overlaps, complete reports and files,
+all-or-nothing writing, and one clear error per kind of bad input."""
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import textwrap
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+import trimesh
+
+from augment import cli, pipeline
+from augment.board import Board
+from augment.calibrate import read_photo
+from augment.pipeline import (REPORT_KEYS, FurnishError, contact_sheet, fit_spec, furnish, inset_polygon,
+                              scene_glb, write_outputs)
+from layout.spec import load_spec
+
+PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
+# room_4: 12 m² of carpet in view; room_1: a 2 m² corner of a room.
+ROOMY, CRAMPED = PHOTOS / "room_4.jpg", PHOTOS / "room_1.jpg"
+FOOTPRINT_IN_FLOOR = 0.98
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _listing(folder: Path) -> dict:
+    """Every file under ``folder`` with its digest: proves a folder untouched."""
+    return {str(p.relative_to(folder)): _digest(p) for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _truth_mask(photo: Path) -> np.ndarray:
+    return cv2.imread(str(photo.with_name(photo.stem + "_floor.png")), cv2.IMREAD_GRAYSCALE) > 127
+
+
+def run(argv, capsys):
+    code = cli.main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def write_spec(folder: Path, text: str, name="my.toml") -> Path:
+    path = folder / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+# Each furnish makes and closes its own GL context: closing one EGL context while another
+# is open terminates the display under both, so none is kept across tests.
+@pytest.fixture(scope="module")
+def roomy():
+    """``furnish`` on room_4 (living room preset, three suggestions), and the photo's
+    digest taken before."""
+    before = _digest(ROOMY)
+    result = furnish(ROOMY, Board(), suggestions=3, seed=0)
+    return result, before
+
+
+# --------------------------------------------------------------------------- end to end
+
+
+def test_furniture_stands_on_the_true_floor(roomy):
+    """Each suggestion's footprints, projected with the photo's calibration (as the
+    renderer draws them), lie on the ground-truth floor."""
+    result, _ = roomy
+    truth = _truth_mask(ROOMY)
+    assert len(result.layouts) == 3
+    for k, lay in enumerate(result.layouts, start=1):
+        assert len(lay.items) >= 2
+        drawn = np.zeros(truth.shape, np.uint8)
+        for corners in lay.corners_m():
+            px = result.calibration.pixels_from_floor(corners)
+            cv2.fillPoly(drawn, [np.round(px).astype(np.int32)], 1)
+        drawn = drawn.astype(bool)
+        share = (drawn & truth).sum() / drawn.sum()
+        assert share >= FOOTPRINT_IN_FLOOR, f"suggestion {k}: {100 * share:.1f} % of footprint pixels on the floor"
+
+
+def test_no_overlaps_and_nothing_off_the_floor(roomy):
+    result, _ = roomy
+    for lay, rep in zip(result.layouts, result.reports):
+        assert rep["overlaps"]["count"] == 0 and rep["outside_m2"] == 0.0
+        # Independently: no two colliding footprints intersect by more than 1 cm².
+        corners = lay.corners_m().astype(np.float32)
+        collides = lay.model.particle_collides[lay.items]
+        for a in range(len(corners)):
+            for b in range(a + 1, len(corners)):
+                if collides[a] and collides[b]:
+                    area, _ = cv2.intersectConvexConvex(corners[a], corners[b])
+                    assert area < 1e-4
+    # The layouts' floor is the measured one, a little inside.
+    poly = result.spec.polygon_m
+    assert 0.8 * result.floor.area_m2 < abs(pipeline._signed_area(poly)) < result.floor.area_m2
+
+
+def test_staged_images_show_furniture_and_keep_the_photo(roomy):
+    result, before = roomy
+    assert _digest(ROOMY) == before
+    photo = read_photo(ROOMY)
+    assert np.array_equal(result.image, photo)
+    for img in result.staged:
+        assert img.shape == photo.shape and img.dtype == np.uint8
+        changed = np.abs(img.astype(int) - photo).max(axis=2) > 30
+        assert 0.02 < changed.mean() < 0.8
+    sheet = result.contact_sheet
+    assert sheet.ndim == 3 and sheet.shape[1] > sheet.shape[0]  # three side by side
+
+
+def test_report_is_complete(roomy):
+    result, _ = roomy
+    report = json.loads(json.dumps(result.report, allow_nan=False))
+    assert set(REPORT_KEYS) <= set(report)
+    assert report["calibration"]["source"] == "single-view" and report["calibration"]["rms_px"] < 1.0
+    assert report["floor"]["area_m2"] > 5 and len(report["floor"]["polygon_m"]) >= 3
+    assert {"height_m", "confidence", "fallback", "used_m"} <= set(report["height"])
+    assert report["furniture"]["source"] == "preset living_room" and report["furniture"]["items"]
+    assert [s["k"] for s in report["suggestions"]] == [1, 2, 3]
+    for s in report["suggestions"]:
+        assert {"energy", "overlaps", "outside_m2", "traversable"} <= set(s)
+    for stage in ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene",
+                  "overlays", "total"):
+        assert report["timings_s"][stage] >= 0
+    assert {"stager", "numpy", "opencv", "onnxruntime", "pyrender"} <= set(report["versions"])
+
+
+def test_outputs_are_all_there_and_readable(roomy, tmp_path):
+    result, _ = roomy
+    out = tmp_path / "new" / "out"
+    paths = write_outputs(result, out)
+    names = {p.name for p in paths}
+    expected = {f"{stem}_{k}.{ext}" for k in (1, 2, 3)
+                for stem, ext in (("staged", "jpg"), ("layout", "json"), ("plan", "png"), ("scene", "glb"))}
+    expected |= {"staged_all.jpg", "energy.png", "report.json", "overlay_calibration.png", "overlay_floor.png",
+                 "overlay_height.png"}
+    assert names == expected
+    assert {p.name for p in out.iterdir()} == expected  # no temporary leftovers
+    assert not [p for p in out.parent.iterdir() if p.name != "out"]
+    for p in paths:
+        if p.suffix in (".jpg", ".png"):
+            assert cv2.imread(str(p)) is not None, p
+        elif p.suffix == ".json":
+            json.loads(p.read_text())
+    scene = trimesh.load(out / "scene_1.glb", file_type="glb")
+    assert {"floor", "walls"} <= set(scene.geometry)
+    assert json.loads((out / "layout_2.json").read_text())["metrics"]["overlaps"]["count"] == 0
+
+
+def test_rewrite_replaces_files_and_failure_leaves_the_folder_alone(roomy, tmp_path, monkeypatch):
+    result, _ = roomy
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "staged_1.jpg").write_bytes(b"old")
+    (out / "mine.txt").write_text("keep me")
+    write_outputs(result, out)
+    assert (out / "staged_1.jpg").read_bytes() != b"old" and (out / "mine.txt").read_text() == "keep me"
+    before = _listing(out)
+
+    real = pipeline._write_files
+
+    def half_then_fail(res, folder):
+        real(res, folder)
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(pipeline, "_write_files", half_then_fail)
+    with pytest.raises(FurnishError, match="No space left"):
+        write_outputs(result, out)
+    assert _listing(out) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]  # the staging folder is gone
+
+
+def test_glb_scene_is_y_up_with_walls_of_the_room_height(roomy):
+    result, _ = roomy
+    scene = trimesh.load(io.BytesIO(scene_glb(result.floor, 2.7, result.layouts[0])), file_type="glb")
+    lo, hi = scene.bounds
+    assert hi[1] == pytest.approx(2.7, abs=1e-6) and lo[1] == pytest.approx(0.0, abs=1e-6)  # y up
+    ids = [result.layouts[0].model.names[i] for i in result.layouts[0].items]
+    assert set(ids) <= set(scene.graph.nodes)
+
+
+# --------------------------------------------------------------------------- the command
+
+
+def test_furnish_command_on_a_cramped_floor(tmp_path, capsys):
+    out = tmp_path / "staged"
+    before = _digest(CRAMPED)
+    code, stdout, err = run(["furnish", CRAMPED, "--room", "bedroom", "--suggestions", "2", "--out", out], capsys)
+    assert code == 0, err
+    assert _digest(CRAMPED) == before
+    assert "staged_all.jpg" in stdout and "walkable" in stdout and "warning: " in err
+    report = json.loads((out / "report.json").read_text())
+    assert report["furniture"]["source"] == "preset bedroom" and len(report["suggestions"]) == 2
+    assert all(s["overlaps"] == 0 and s["outside_m2"] == 0 for s in report["suggestions"])
+    for name in ("staged_1.jpg", "staged_2.jpg", "staged_all.jpg", "scene_2.glb", "plan_2.png"):
+        assert (out / name).stat().st_size > 1000
+
+
+@pytest.fixture
+def out_with_a_file(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "staged_1.jpg").write_bytes(b"an earlier result")
+    return out
+
+
+def _refused(argv, out, capsys, *needles):
+    before = _listing(out)
+    code, stdout, err = run(argv, capsys)
+    assert code == 2, err
+    assert err.startswith("error: ") and err.count("\n") == 1 and "Traceback" not in err, err
+    for needle in needles:
+        assert needle in err, err
+    assert _listing(out) == before
+    return err
+
+
+def test_photo_without_a_board(tmp_path, out_with_a_file, capsys):
+    gray = tmp_path / "gray.png"
+    gray.write_bytes(cv2.imencode(".png", np.full((480, 640, 3), 128, np.uint8))[1].tobytes())
+    _refused(["furnish", gray, "--out", out_with_a_file], out_with_a_file, capsys, "no 7x5 checkerboard", str(gray))
+
+
+def test_unreadable_photo(tmp_path, out_with_a_file, capsys):
+    bad = tmp_path / "photo.jpg"
+    bad.write_text("not a JPEG")
+    _refused(["furnish", bad, "--out", out_with_a_file], out_with_a_file, capsys, str(bad), "not an image")
+
+
+def test_unwritable_out(tmp_path, out_with_a_file, capsys):
+    blocker = out_with_a_file / "a file"
+    blocker.write_text("")
+    _refused(["furnish", ROOMY, "--out", blocker / "sub"], out_with_a_file, capsys, "--out", "is a file")
+
+
+def test_spec_error(tmp_path, out_with_a_file, capsys):
+    spec = write_spec(tmp_path, """
+        [room]
+        height = 2.5
+        [[items]]
+        id = "sofa"
+        kind = "sofaa"
+        """)
+    _refused(["furnish", ROOMY, "--spec", spec, "--out", out_with_a_file], out_with_a_file, capsys,
+             str(spec), "sofaa")
+
+
+def test_unknown_room(out_with_a_file, capsys):
+    _refused(["furnish", ROOMY, "--room", "ballroom", "--out", out_with_a_file], out_with_a_file, capsys,
+             "ballroom", "bedroom")
+
+
+def test_floor_too_small_for_any_furniture(tmp_path, out_with_a_file, capsys):
+    spec = write_spec(tmp_path, """
+        [room]
+        polygon = [[0, 0], [20, 0], [20, 20], [0, 20]]
+        height = 3
+        [[items]]
+        id = "podium"
+        kind = "stage"
+        size = [6, 4, 0.6]
+        """)
+    _refused(["furnish", CRAMPED, "--spec", spec, "--out", out_with_a_file], out_with_a_file, capsys,
+             "floor too small for any furniture", "m² of floor", "podium")
+
+
+# --------------------------------------------------------------------------- a spec on the measured floor
+
+
+def test_spec_items_that_do_not_fit_are_dropped_with_a_warning(tmp_path):
+    spec = write_spec(tmp_path, """
+        [room]
+        polygon = [[0, 0], [9, 0], [9, 8], [0, 8]]
+        height = 3.2
+        doors = [{ at = [4, 0], width = 0.9 }]
+        [[items]]
+        id = "sofa"
+        kind = "sofa"
+        at = [2, 2]
+        [[items]]
+        id = "wardrobe"
+        kind = "wardrobe"
+        size = [1.0, 0.6, 2.9]
+        [[items]]
+        id = "pool"
+        kind = "pool_table"
+        size = [5.5, 4.5, 0.8]
+        [[constraints]]
+        type = "distance"
+        a = "sofa"
+        b = "pool"
+        distance = 1.0
+        """)
+    result = furnish(ROOMY, Board(), spec=spec, suggestions=1)
+    assert [i.id for i in result.spec.items] == ["sofa"]
+    assert {d["id"] for d in result.dropped} == {"wardrobe", "pool"}
+    assert not result.spec.constraints and not result.spec.doors
+    warnings = " ".join(result.warnings)
+    assert "door" in warnings and "wardrobe" in warnings and "pool" in warnings and "sofa" in warnings
+    assert result.report["furniture"]["dropped"] == result.dropped
+
+
+# --------------------------------------------------------------------------- pieces
+
+
+@pytest.fixture
+def square_spec(tmp_path):
+    return load_spec(write_spec(tmp_path, """
+        [room]
+        polygon = [[0, 0], [4, 0], [4, 4], [0, 4]]
+        height = 3
+        [[groups]]
+        id = "dining"
+        rigid = true
+        [[items]]
+        id = "table"
+        kind = "dining_table"
+        group = "dining"
+        offset = [0, 0]
+        [[items]]
+        id = "chair"
+        kind = "chair"
+        count = 2
+        group = "dining"
+        offset = [[0.7, 0], [-0.7, 0]]
+        yaw_deg = [180, 0]
+        [[items]]
+        id = "lamp"
+        kind = "floor_lamp"
+        [[items]]
+        id = "rack"
+        kind = "coat_rack"
+        [[constraints]]
+        type = "balance"
+        """))
+
+
+def test_fit_spec_keeps_what_fits_in_order(square_spec):
+    poly = np.array([[0, 0], [4, 0], [4, 4], [0, 4]], float)
+    fitted, dropped = fit_spec(square_spec, poly, 2.5)
+    assert [i.id for i in fitted.items] == ["table", "chair_1", "chair_2", "lamp", "rack"] and not dropped
+    # Lower ceiling: the tall coat rack goes, alone.
+    rack_h = next(i for i in square_spec.items if i.id == "rack").kind.size_m[2]
+    fitted, dropped = fit_spec(square_spec, poly, rack_h - 0.05)
+    assert [d["id"] for d in dropped] == ["rack"] and "high" in dropped[0]["reason"]
+    # The dining set with its chairs spans 1.6 x 1.9 m: a 1 m strip takes none of it, and
+    # its group goes with its members.
+    strip = np.array([[0, 0], [6, 0], [6, 1.0], [0, 1.0]], float)
+    fitted, dropped = fit_spec(square_spec, strip, 2.5)
+    assert {d["id"] for d in dropped} >= {"table", "chair_1", "chair_2"}
+    assert not fitted.groups and all(i.id in ("lamp", "rack") for i in fitted.items)
+    assert [c.type for c in fitted.constraints] == ["balance"]
+
+
+def test_fit_spec_caps_the_summed_footprint(square_spec):
+    small = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], float)
+    fitted, dropped = fit_spec(square_spec, small, 2.5)
+    area = sum(i.kind.size_m[0] * i.kind.size_m[1] for i in fitted.items)
+    assert area <= pipeline.TOL.max_fill * 4.0 + 1e-9
+    assert [i.id for i in fitted.items] == ["table", "chair_1", "chair_2"]
+    assert [d["id"] for d in dropped] == ["lamp", "rack"] and all("no room left" in d["reason"] for d in dropped)
+
+
+def test_rect_fits_diagonally():
+    square = np.array([[0, 0], [2.5, 0], [2.5, 2.5], [0, 2.5]], float)
+    assert pipeline._rect_fits(square, 3.0, 0.3)      # only along the diagonal (3.54 m)
+    assert not pipeline._rect_fits(square, 3.7, 0.2)  # longer than the diagonal
+    assert not pipeline._rect_fits(square, 2.6, 2.6)
+
+
+def test_inset_polygon():
+    square = np.array([[0, 0], [4, 0], [4, 3], [0, 3]], float)
+    inner = inset_polygon(square, 0.1)
+    assert pipeline._signed_area(inner) == pytest.approx(3.8 * 2.8, rel=0.02)
+    assert inner.min() >= 0.09 and inner[:, 0].max() <= 3.91
+    assert inset_polygon(square / 8, 0.2) is None
+
+
+def test_triangulate_an_l_shape():
+    ell = np.array([[0, 0], [4, 0], [4, 1], [1, 1], [1, 3], [0, 3]], float)
+    tris = pipeline._triangulate(ell)
+    assert len(tris) == 4
+    u, v = ell[tris[:, 1]] - ell[tris[:, 0]], ell[tris[:, 2]] - ell[tris[:, 0]]
+    area = np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]).sum() / 2
+    assert area == pytest.approx(6.0)
+
+
+def test_contact_sheet_layout(rng):
+    images = [rng.integers(0, 255, (120, 160, 3), dtype=np.uint8) for _ in range(4)]
+    sheet = contact_sheet(images)
+    gap = pipeline.TOL.sheet_gap_px
+    assert sheet.shape == (2 * 120 + 3 * gap, 2 * 160 + 3 * gap, 3)
+    assert contact_sheet(images[:3]).shape == (120 + 2 * gap, 3 * 160 + 4 * gap, 3)
