@@ -3,7 +3,8 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
-APT_PACKAGES := libegl1 libgl1-mesa-dri libegl-mesa0 libosmesa6
+# Mesa's EGL/OSMesa for the renderer; Chromium for the web app's browser test.
+APT_PACKAGES := libegl1 libgl1-mesa-dri libegl-mesa0 libosmesa6 chromium
 
 .PHONY: setup test demo clean system-packages
 

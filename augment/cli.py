@@ -9,6 +9,7 @@
     stage measure PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
     stage furnish PHOTO [--board 7x5] [--square 45] [--room NAME | --spec FILE] [--suggestions 4]
                   [--seed 0] [--camera profile.json] [--model M.onnx] [--out DIR] [--quiet]
+    stage serve [--host 127.0.0.1] [--port 8000] [--workers N] [--jobs DIR]
 
 ``--board`` counts inner corners, ``COLSxROWS`` for a plain checkerboard (the default
 7x5), ``charuco:COLSxROWS`` for a ChArUco board (ArUco markers of DICT_4X4_50 in the
@@ -21,7 +22,8 @@ the floor (mask, overlay, and the floor polygon in meters when the board is foun
 ``measure`` does both and measures the wall height: "measure my room" without furniture;
 ``furnish`` goes on to lay out furniture (a room preset, default living_room, or a spec
 file) on the measured floor and renders each suggestion into the photo
-(:mod:`augment.pipeline` lists the files it writes).
+(:mod:`augment.pipeline` lists the files it writes); ``serve`` runs the web app
+(:mod:`augment.web`) that does what ``furnish`` does from a browser.
 
 Exit status: 0 success, 2 bad input (one ``error:`` line on stderr saying what and
 where, and what would work: an unreadable photo, no board, no floor, a floor too small
@@ -235,6 +237,18 @@ def _parser():
                    help="output folder (default out/<photo name>; created)")
     f.add_argument("--quiet", "-q", action="store_true",
                    help="print nothing but errors and warnings (no progress bar either)")
+
+    s = sub.add_parser("serve", help="run the web app: upload a photo in a browser, get staged images",
+                       description="Serve the web page and its API (augment.web; OpenAPI page at /docs) until "
+                                   "interrupted. Photos are furnished in worker processes; finished jobs and "
+                                   "their files are deleted after an hour.")
+    s.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1: this machine only; 0.0.0.0 for all)")
+    s.add_argument("--port", type=int, default=8000, help="port (default 8000)")
+    s.add_argument("--workers", type=_count, default=None, metavar="N",
+                   help="worker processes, each furnishing one photo at a time (default one per core)")
+    s.add_argument("--jobs", type=Path, default=Path("out") / "jobs", metavar="DIR",
+                   help="folder for uploads and results (default out/jobs; created)")
     return p
 
 
@@ -626,6 +640,16 @@ def _furnish_cmd(args):
     return EXIT_OK
 
 
+def _serve_cmd(args):
+    try:
+        from .web import serve
+    except ImportError as error:
+        raise StageError(f"the web app needs {error.name}: pip install fastapi uvicorn python-multipart") from None
+    _prepare_dir_out(args.jobs)
+    serve(args.host, args.port, workers=args.workers, jobs_dir=args.jobs)
+    return EXIT_OK
+
+
 def _write_all(files: dict, folder: Path) -> None:
     """Write every file or none: a failure removes the ones already written."""
     _mkdir(folder, "--out", folder)
@@ -656,7 +680,7 @@ def main(argv=None) -> int:
     from .segment import SegmentationError
 
     commands = {"board": _board_cmd, "calibrate": _calibrate_cmd, "check": _check_cmd, "segment": _segment_cmd,
-                "measure": _measure_cmd, "furnish": _furnish_cmd}
+                "measure": _measure_cmd, "furnish": _furnish_cmd, "serve": _serve_cmd}
     return dispatch(commands[args.command], args, "stage",
                     [((StageError, CalibrationError, SegmentationError, LayoutError, FurnishError), str)])
 

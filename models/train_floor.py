@@ -6,10 +6,13 @@ model with onnxruntime only.
 Recipe (what ``models/floor_segnet.onnx`` was made with; the model card in
 ``models/README.md`` gives the time it took)::
 
-    python -m augment.synth --count 3000 --seed 100 --size 320x240 --out data/floor_train_l --quiet
-    python -m augment.synth --count 1000 --seed 101 --size 240x320 --out data/floor_train_p --quiet
-    python models/train_floor.py --data data/floor_train_l data/floor_train_p \
-        --epochs 14 --seed 0 --out models/floor_segnet.onnx
+    python -m augment.synth --count 1679 --seed 100 --size 320x240 --out data/floor_train_l --quiet
+    python -m augment.synth --count 500 --seed 101 --size 240x320 --out data/floor_train_p --quiet
+    python -m augment.synth --count 120 --seed 900 --size 640x480 --out data/floor_heldout --quiet
+    python models/train_floor.py --data data/floor_train_l data/floor_train_p --val data/floor_heldout \
+        --epochs 10 --seed 0 --out out/train2/floor_segnet.onnx
+    python models/train_floor.py --data data/floor_train_l data/floor_train_p --val data/floor_heldout \
+        --epochs 8 --lr 1e-3 --seed 1 --init out/train2/floor_segnet.pt --out models/floor_segnet.onnx
 
 Everything random (initial weights, batch order, augmentation) derives from ``--seed``;
 torch runs single-process on the CPU, so a run repeats up to floating-point reduction
@@ -17,11 +20,12 @@ order.
 
 Domain randomization: the renders already vary textures, light, clutter, camera and
 photo defects. On top, each training image gets a random crop and rescale, a mirror, a
-small roll, colour, gamma, blur, noise and JPEG changes, sometimes greyscale, and 0-5
-pasted *occluders*: furniture-like blocks standing on the floor, filled with patches of
-other photos, labelled not-floor. Empty rooms are what Stager is for, but users' rooms
-are rarely quite empty, and the occluders teach the model that the floor stops where
-something stands on it.
+small roll, colour, gamma, blur, noise and JPEG changes, sometimes greyscale; a plain
+repainted floor or another photo's texture on the walls (shading kept); pictures and
+shelves on the walls; and 0-5 pasted *occluders*: furniture-like blocks standing on the
+floor, filled with patches of other photos, labelled not-floor. Empty rooms are what
+Stager is for, but users' rooms are rarely quite empty, and the occluders teach the model
+that the floor stops where something stands on it.
 """
 from __future__ import annotations
 

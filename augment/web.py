@@ -1,0 +1,533 @@
+"""The web app: upload a photo of an empty room in a browser, get staged images.
+
+:func:`create_app` builds a FastAPI app over :func:`augment.pipeline.furnish`;
+``stage serve`` runs it with uvicorn (bound to 127.0.0.1 by default). The API, also
+described on the app's OpenAPI page (``/docs``):
+
+=================================== ==================================================
+``POST /api/jobs``                  multipart: ``photo`` and the options of ``stage
+                                    furnish`` (``board``, ``square``, ``room``,
+                                    ``suggestions``, ``seed``, an optional ``camera``
+                                    profile file) -> 202 ``{"id": ...}``
+``GET /api/jobs/{id}``              ``status`` (queued, running, done, failed), per-stage
+                                    progress, ``error`` (what went wrong, in words),
+                                    ``files``, ``warnings``
+``GET /api/jobs/{id}/files/{name}`` one output file; only names in the job's ``files``
+``GET /api/jobs/{id}/download.zip`` every output file in one zip
+``GET /api/board.pdf``              the board to print (``board``, ``square``, ``paper``)
+=================================== ==================================================
+
+Jobs run in a pool of worker processes (one per core by default), each with one GL
+context reused for all its jobs (:class:`augment.gl.Renderer`); at most ``workers +
+max_queued`` jobs are waiting or running, beyond that ``POST /api/jobs`` answers 503 with
+``Retry-After``. Safety: the upload's size is limited (413); its header is read before it
+is decoded, so more than :data:`MAX_PIXELS` pixels (a decompression bomb) is refused
+(413); anything OpenCV cannot decode is refused (415); job ids are random UUIDs; files
+are served only by name from the job's own output listing; finished jobs are deleted
+after ``keep_minutes``. Nothing the user sends is used as a path: the photo is stored
+as ``photo.<type>`` with the type found by decoding it.
+
+Layout of ``jobs_dir``: one folder per job, ``<id>/input/`` (the photo, the camera
+profile), ``<id>/out/`` (the files of :func:`augment.pipeline.write_outputs`),
+``<id>/progress.json`` (written by the worker as stages finish).
+"""
+from __future__ import annotations
+
+import asyncio
+import io
+import json
+import multiprocessing
+import os
+import shutil
+import time
+import uuid
+import warnings
+import zipfile
+from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import asynccontextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Annotated
+
+from fastapi import FastAPI, File, Form, HTTPException, Request, UploadFile
+from fastapi.responses import FileResponse, JSONResponse, Response
+
+MAX_PIXELS = 50_000_000
+MAX_PROFILE_BYTES = 1 << 20
+MAX_SUGGESTIONS = 12
+RETRY_AFTER_S = 30
+DEFAULT_JOBS_DIR = Path("out") / "jobs"
+STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene", "overlays",
+          "write")
+STATIC_DIR = Path(__file__).with_name("web_static")
+# Kinds of user error: the class name in the worker, the key in a job's "error".
+_USER_ERRORS = {"CalibrationError": "calibration", "SegmentationError": "segmentation",
+                "LayoutError": "layout", "FurnishError": "furnish"}
+# OpenCV's decoder -> the photo's stored suffix (PIL names the format from the header).
+_SUFFIXES = {"JPEG": ".jpg", "MPO": ".jpg", "PNG": ".png", "TIFF": ".tif", "WEBP": ".webp", "BMP": ".bmp"}
+
+
+# --------------------------------------------------------------------------------------
+# The worker process
+# --------------------------------------------------------------------------------------
+
+_renderer = None          # one GL context per worker process, made on its first job
+_progress_path = None     # the running job's progress.json
+
+
+class _FileProgress:
+    """Stands in for :class:`augment.pipeline._Progress` in a worker: the current stage
+    and the steps done, written to the job's ``progress.json`` (replaced atomically)."""
+
+    def __init__(self, enabled: bool, total: int):
+        self.total, self.done, self.current, self.finished = int(total), 0, None, []
+        self._write()
+
+    def stage(self, name: str) -> None:
+        if self.current is not None and self.current != name and self.current not in self.finished:
+            self.finished.append(self.current)
+        self.current = name
+        self._write()
+
+    def step(self, n: int = 1) -> None:
+        self.done += n
+        self._write()
+
+    def grow(self, n: int) -> None:
+        self.total += n
+        self._write()
+
+    def close(self) -> None:
+        pass
+
+    def _write(self) -> None:
+        _write_progress({"stage": self.current, "finished": self.finished, "done": self.done,
+                         "total": self.total + 1})  # + 1: writing the files
+
+
+def _write_progress(state: dict) -> None:
+    tmp = _progress_path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(state))
+    os.replace(tmp, _progress_path)
+
+
+def _run_job(job_dir: str, options: dict) -> dict:
+    """Furnish one job's photo into ``job_dir/out`` (in a worker process).
+
+    Returns ``{"files": [...], "warnings": [...]}``, or ``{"error": {"kind", "message"}}``
+    for bad input (the errors of :func:`augment.pipeline.furnish`). A bug raises.
+    """
+    global _renderer, _progress_path
+    from layout.errors import LayoutError
+
+    from . import pipeline
+    from .board import Board
+    from .calibrate import CalibrationError
+    from .gl import Renderer
+    from .segment import SegmentationError
+
+    job = Path(job_dir)
+    _progress_path = job / "progress.json"
+    # furnish() reports its stages through pipeline._Progress; in this worker process
+    # they go to the job's progress.json instead of a terminal.
+    pipeline._Progress = _FileProgress
+    if _renderer is None:
+        _renderer = Renderer()
+    photo = job / "input" / options["photo"]
+    camera = job / "input" / options["camera"] if options.get("camera") else None
+    try:
+        result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
+                                  room=options["room"], suggestions=options["suggestions"],
+                                  seed=options["seed"], camera=camera, progress=True, renderer=_renderer)
+        state = json.loads(_progress_path.read_text())
+        _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
+        paths = pipeline.write_outputs(result, job / "out")
+    except (CalibrationError, SegmentationError, LayoutError, pipeline.FurnishError) as error:
+        message = str(error).replace(str(photo), "the photo")
+        if camera is not None:
+            message = message.replace(str(camera), "the camera profile")
+        return {"error": {"kind": _USER_ERRORS[type(error).__name__], "message": message}}
+    state = json.loads(_progress_path.read_text())
+    _write_progress(dict(state, stage=None, finished=list(STAGES), done=state["total"]))
+    return {"files": [p.name for p in paths], "warnings": list(result.warnings)}
+
+
+# --------------------------------------------------------------------------------------
+# Upload checks
+# --------------------------------------------------------------------------------------
+
+class UploadError(ValueError):
+    """An upload refused before any work: ``status`` is the HTTP code to answer."""
+
+    def __init__(self, status: int, message: str):
+        super().__init__(message)
+        self.status = status
+
+
+def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
+    """Check an uploaded photo; returns the suffix to store it under (``".jpg"``, ...).
+
+    The header's size is read first (PIL, without decoding the pixels), so a small file
+    that claims a huge image is refused before it can fill the memory; then OpenCV
+    decodes it, as the pipeline will.
+
+    Raises
+    ------
+    UploadError
+        415 when it is not an image OpenCV can decode, 413 when it has more than
+        ``max_pixels`` pixels.
+    """
+    import cv2
+    import numpy as np
+    from PIL import Image, UnidentifiedImageError
+
+    with warnings.catch_warnings():
+        # PIL warns above its own (larger) limit; this check refuses those anyway.
+        warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+        try:
+            with Image.open(io.BytesIO(data)) as image:
+                (width, height), kind = image.size, image.format
+        except Image.DecompressionBombError:
+            raise UploadError(413, f"the photo has too many pixels (at most {max_pixels / 1e6:g} megapixels)") \
+                from None
+        except (UnidentifiedImageError, OSError, ValueError):
+            raise UploadError(415, "the file is not an image this app can read; send a JPEG, PNG, TIFF, WebP "
+                                   "or BMP photo") from None
+    if width * height > max_pixels:
+        raise UploadError(413, f"the photo is {width} x {height} = {width * height / 1e6:.0f} megapixels; at "
+                               f"most {max_pixels / 1e6:g} megapixels are accepted: send a smaller photo")
+    if kind not in _SUFFIXES or cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR) is None:
+        raise UploadError(415, f"the photo ({kind or 'unknown'} format) cannot be decoded; send a JPEG, PNG, "
+                               "TIFF, WebP or BMP photo")
+    return _SUFFIXES[kind]
+
+
+def _check_options(board: str, square: float, room: str, suggestions: int) -> tuple:
+    import argparse
+
+    from layout.presets import PRESETS
+
+    from .board import Board
+    from .cli import parse_board
+
+    try:
+        spec = parse_board(board)
+    except argparse.ArgumentTypeError as error:
+        raise UploadError(422, f"board {error}") from None
+    if not 0 < square < 1000:
+        raise UploadError(422, f"square {square:g}: the side of one printed square in millimeters, e.g. 45")
+    try:
+        Board(spec.cols, spec.rows, square, kind=spec.kind)
+    except ValueError as error:
+        raise UploadError(422, f"board {board}: {error}") from None
+    if room not in PRESETS:
+        raise UploadError(422, f"room {room!r}: choose one of {', '.join(PRESETS)}")
+    if not 1 <= suggestions <= MAX_SUGGESTIONS:
+        raise UploadError(422, f"suggestions {suggestions}: choose from 1 to {MAX_SUGGESTIONS}")
+    return spec
+
+
+# --------------------------------------------------------------------------------------
+# Jobs
+# --------------------------------------------------------------------------------------
+
+@dataclass
+class Job:
+    id: str
+    folder: Path
+    options: dict
+    created: float = field(default_factory=time.time)
+    future: Future | None = None
+    finished: float | None = None
+    result: dict | None = None
+
+
+def _job_state(job: Job) -> dict:
+    board = f"{job.options['board'][0]}x{job.options['board'][1]}"
+    if job.options["kind"] != "chessboard":
+        board = f"{job.options['kind']}:{board}"
+    state = {"id": job.id, "status": "queued", "stage": None, "stages": {s: "pending" for s in STAGES},
+             "progress": 0.0, "error": None, "files": [], "warnings": [],
+             "options": {"board": board, "square": job.options["square"], "room": job.options["room"],
+                         "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
+    try:
+        progress = json.loads((job.folder / "progress.json").read_text())
+    except (FileNotFoundError, json.JSONDecodeError):
+        progress = None
+    if progress is not None:
+        state["status"] = "running"
+        for name in progress["finished"]:
+            state["stages"][name] = "done"
+        if progress["stage"] is not None:
+            state["stages"][progress["stage"]] = "running"
+        state["stage"] = progress["stage"]
+        state["progress"] = round(min(1.0, progress["done"] / max(progress["total"], 1)), 3)
+    if job.result is not None:
+        if "error" in job.result:
+            state["status"] = "failed"
+            state["error"] = job.result["error"]
+            if state["stage"] is not None:
+                state["stages"][state["stage"]] = "failed"
+        else:
+            state.update(status="done", progress=1.0, stage=None, files=job.result["files"],
+                         warnings=job.result["warnings"], stages={s: "done" for s in STAGES})
+    return state
+
+
+def _board_hint(job: Job) -> dict:
+    """What to print when the board was not found: the board asked for and its PDF."""
+    cols, rows = job.options["board"]
+    spec = f"{cols}x{rows}" if job.options["kind"] == "chessboard" else f"{job.options['kind']}:{cols}x{rows}"
+    square = job.options["square"]
+    return {"board": spec, "square": square,
+            "pdf": f"/api/board.pdf?board={spec}&square={square:g}"}
+
+
+def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: int | None = None,
+               keep_minutes: float = 60, max_queued: int | None = None):
+    """The web app.
+
+    Parameters
+    ----------
+    jobs_dir : path-like
+        Where jobs keep their files (created).
+    max_upload_mb : float
+        Largest request accepted, megabytes (413 beyond).
+    workers : int, optional
+        Worker processes; default one per core.
+    keep_minutes : float
+        Finished jobs and their files are deleted this long after they finish.
+    max_queued : int, optional
+        Jobs that may wait for a free worker (default ``2 * workers``); beyond that,
+        ``POST /api/jobs`` answers 503 with ``Retry-After``.
+
+    Returns
+    -------
+    fastapi.FastAPI
+    """
+    jobs_dir = Path(jobs_dir)
+    jobs_dir.mkdir(parents=True, exist_ok=True)
+    workers = (os.cpu_count() or 1) if workers is None else int(workers)
+    if workers < 1:
+        raise ValueError(f"workers = {workers}: at least 1")
+    max_queued = 2 * workers if max_queued is None else int(max_queued)
+    max_bytes = int(max_upload_mb * 1e6)
+    keep_s = float(keep_minutes) * 60
+    jobs: dict[str, Job] = {}
+    pool: dict = {}
+
+    def sweep(now: float | None = None) -> list[str]:
+        """Delete finished jobs older than keep_minutes, and leftover job folders."""
+        now = time.time() if now is None else now
+        gone = [j.id for j in jobs.values() if j.finished is not None and now - j.finished > keep_s]
+        for job_id in gone:
+            shutil.rmtree(jobs.pop(job_id).folder, ignore_errors=True)
+        for folder in jobs_dir.iterdir():
+            if folder.name not in jobs and _is_uuid(folder.name) and now - folder.stat().st_mtime > keep_s:
+                shutil.rmtree(folder, ignore_errors=True)
+                gone.append(folder.name)
+        return gone
+
+    async def sweeper():
+        while True:
+            await asyncio.sleep(max(1.0, min(60.0, keep_s / 4)))
+            sweep()
+
+    def new_pool():
+        # spawn: a fresh interpreter per worker, no GL or numba thread state forked.
+        return ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+
+    @asynccontextmanager
+    async def lifespan(app):
+        pool["executor"] = new_pool()
+        task = asyncio.create_task(sweeper())
+        try:
+            yield
+        finally:
+            task.cancel()
+            pool.pop("executor").shutdown(wait=True, cancel_futures=True)
+
+    app = FastAPI(title="Stager", version=_version(), lifespan=lifespan,
+                  description="Furnish a photo of an empty room. Upload a photo with the printed board on its "
+                              "floor to POST /api/jobs, poll GET /api/jobs/{id}, then fetch its files.")
+    app.state.sweep = sweep
+    app.state.jobs = jobs
+
+    @app.exception_handler(UploadError)
+    async def upload_error(request, error: UploadError):
+        return JSONResponse({"detail": str(error)}, status_code=error.status)
+
+    @app.middleware("http")
+    async def limit_size(request: Request, call_next):
+        # Refuse a too large body from its header, before it is read.
+        length = request.headers.get("content-length")
+        if request.method == "POST" and length is not None and length.isdigit() and int(length) > max_bytes:
+            return JSONResponse({"detail": _too_large(int(length), max_bytes)}, status_code=413)
+        return await call_next(request)
+
+    @app.get("/", include_in_schema=False)
+    async def index():
+        return FileResponse(STATIC_DIR / "index.html", media_type="text/html")
+
+    @app.post("/api/jobs", status_code=202)
+    async def submit(photo: Annotated[UploadFile, File(description="photo of the empty room, the board on "
+                                                                   "its floor")],
+                     board: Annotated[str, Form(description="inner corners, COLSxROWS or charuco:COLSxROWS")]
+                     = "7x5",
+                     square: Annotated[float, Form(description="side of one printed square, mm")] = 45.0,
+                     room: Annotated[str, Form(description="room preset")] = "living_room",
+                     suggestions: Annotated[int, Form()] = 4,
+                     seed: Annotated[int, Form()] = 0,
+                     camera: Annotated[UploadFile | None, File(description="camera profile from "
+                                                                           "`stage calibrate`")] = None):
+        """Start furnishing a photo; answers the job's id."""
+        spec = _check_options(board, square, room, suggestions)
+        data = await photo.read(max_bytes + 1)
+        if len(data) > max_bytes:
+            raise UploadError(413, _too_large(len(data), max_bytes))
+        if not data:
+            raise UploadError(422, "no photo: choose a photo of the empty room with the board on its floor")
+        suffix = check_photo(data)
+        profile = None
+        if camera is not None and camera.filename:
+            profile = await camera.read(MAX_PROFILE_BYTES + 1)
+            if len(profile) > MAX_PROFILE_BYTES:
+                raise UploadError(413, "the camera profile is larger than 1 MB; it is not a profile from "
+                                       "`stage calibrate`")
+            try:
+                json.loads(profile)
+            except (UnicodeDecodeError, json.JSONDecodeError):
+                raise UploadError(422, "the camera profile is not JSON; make one with `stage calibrate`") from None
+        active = sum(j.result is None for j in jobs.values())
+        if active >= workers + max_queued:
+            raise HTTPException(503, f"the server is busy ({active} photos in progress); try again in "
+                                     f"{RETRY_AFTER_S} s", headers={"Retry-After": str(RETRY_AFTER_S)})
+        job_id = str(uuid.uuid4())
+        folder = jobs_dir / job_id
+        (folder / "input").mkdir(parents=True)
+        (folder / "input" / f"photo{suffix}").write_bytes(data)
+        if profile is not None:
+            (folder / "input" / "camera.json").write_bytes(profile)
+        options = {"photo": f"photo{suffix}", "camera": "camera.json" if profile is not None else None,
+                   "board": (spec.cols, spec.rows), "kind": spec.kind, "square": float(square), "room": room,
+                   "suggestions": int(suggestions), "seed": int(seed)}
+        job = jobs[job_id] = Job(job_id, folder, options)
+        try:
+            job.future = pool["executor"].submit(_run_job, str(folder), options)
+        except BrokenProcessPool:
+            # A worker died (its jobs failed as internal errors); start a fresh pool.
+            pool["executor"].shutdown(wait=False)
+            pool["executor"] = new_pool()
+            job.future = pool["executor"].submit(_run_job, str(folder), options)
+        job.future.add_done_callback(lambda future: _finish(job, future))
+        return {"id": job_id}
+
+    def get_job(job_id: str) -> Job:
+        job = jobs.get(job_id)
+        if job is None:
+            raise HTTPException(404, f"no job {job_id!r}: it never existed or was deleted (finished jobs are "
+                                     f"kept {keep_minutes:g} minutes)")
+        return job
+
+    @app.get("/api/jobs/{job_id}")
+    async def status(job_id: str):
+        """The job's status, per-stage progress, error, files and warnings."""
+        job = get_job(job_id)
+        state = _job_state(job)
+        if state["error"] is not None and state["error"]["kind"] == "calibration" \
+                and state["error"]["message"].startswith("no "):
+            state["error"]["board"] = _board_hint(job)
+        return state
+
+    @app.get("/api/jobs/{job_id}/files/{name}")
+    async def file(job_id: str, name: str):
+        """One output file, by its name in the job's ``files``."""
+        job = get_job(job_id)
+        names = job.result.get("files", []) if job.result is not None else []
+        if name not in names:
+            raise HTTPException(404, f"job {job_id} has no file {name!r}; its files are listed by "
+                                     f"GET /api/jobs/{job_id}")
+        return FileResponse(job.folder / "out" / name)
+
+    @app.get("/api/jobs/{job_id}/download.zip")
+    async def download(job_id: str):
+        """Every output file of a finished job, in one zip."""
+        job = get_job(job_id)
+        if job.result is None or "files" not in job.result:
+            raise HTTPException(409, f"job {job_id} has no files: it is {_job_state(job)['status']}")
+        buffer = io.BytesIO()
+        with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+            for name in job.result["files"]:
+                archive.write(job.folder / "out" / name, name)
+        return Response(buffer.getvalue(), media_type="application/zip",
+                        headers={"Content-Disposition": f'attachment; filename="stager-{job_id[:8]}.zip"'})
+
+    @app.get("/api/board.pdf")
+    async def board_pdf(board: str = "7x5", square: float | None = None, paper: str = "A3"):
+        """The board to print, as `stage board` writes it."""
+        return Response(await asyncio.to_thread(_board_pdf, board, square, paper), media_type="application/pdf",
+                        headers={"Content-Disposition": 'inline; filename="board.pdf"'})
+
+    return app
+
+
+def _board_pdf(board: str, square: float | None, paper: str) -> bytes:
+    import argparse
+    import tempfile
+
+    from .cli import parse_board
+    from .printable import board_for_paper, write_board_pdf
+
+    try:
+        cols, rows, kind = parse_board(board)
+        printed = board_for_paper(paper, cols, rows, square, kind)
+    except (argparse.ArgumentTypeError, ValueError) as error:
+        raise UploadError(422, f"board {board}, square {square}, paper {paper}: {error}") from None
+    with tempfile.TemporaryDirectory() as folder:
+        path = write_board_pdf(Path(folder) / "board.pdf", printed, paper.upper())
+        return path.read_bytes()
+
+
+def _finish(job: Job, future: Future) -> None:
+    """A worker is done with ``job`` (a pool thread): keep its result, or the bug."""
+    job.finished = time.time()
+    error = future.exception() if not future.cancelled() else None
+    if future.cancelled():
+        job.result = {"error": {"kind": "cancelled", "message": "the server stopped before this photo was done"}}
+    elif error is not None:
+        import traceback
+
+        traceback.print_exception(error)
+        job.result = {"error": {"kind": "internal", "message": f"internal error ({type(error).__name__}: "
+                                                               f"{error}); this is a bug in Stager"}}
+    else:
+        job.result = future.result()
+
+
+def _too_large(n_bytes: int, max_bytes: int) -> str:
+    return (f"the upload is {n_bytes / 1e6:.1f} MB; at most {max_bytes / 1e6:g} MB are accepted: send a smaller "
+            "photo")
+
+
+def _is_uuid(name: str) -> bool:
+    try:
+        return str(uuid.UUID(name)) == name
+    except ValueError:
+        return False
+
+
+def _version() -> str:
+    from . import __version__
+
+    return __version__
+
+
+def serve(host: str = "127.0.0.1", port: int = 8000, workers: int | None = None, jobs_dir=DEFAULT_JOBS_DIR) -> None:
+    """Run the app with uvicorn until interrupted."""
+    import uvicorn
+
+    uvicorn.run(create_app(jobs_dir, workers=workers), host=host, port=port)
+
+
+__all__ = ["create_app", "check_photo", "serve", "UploadError", "MAX_PIXELS", "STAGES"]
