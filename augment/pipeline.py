@@ -799,8 +799,8 @@ def _load_model(model):
 
 
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
-            seed: int = 0, camera=None, model=None, progress: bool = False, renderer=None,
-            tol: Tolerances = TOL) -> FurnishResult:
+            seed: int = 0, camera=None, model=None, progress: bool = False, reporter=None,
+            renderer=None, tol: Tolerances = TOL) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
     Parameters
@@ -824,6 +824,10 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         Floor model (default :data:`augment.segment.DEFAULT_MODEL`).
     progress : bool
         A progress bar on stderr.
+    reporter : callable, optional
+        Instead of the bar: ``reporter(total_steps)`` makes an object with ``stage(name)``,
+        ``step(n=1)``, ``grow(n)`` and ``close()`` that hears of the progress (the web
+        app writes it to the job's folder).
     renderer : Renderer, optional
         A GL context to reuse (one is made and closed when None).
 
@@ -852,7 +856,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     # Everything that can be checked without the photo is, first.
     source_name, source = _furniture_source(room, spec)
     floor_model = _load_model(model)
-    bar = _Progress(progress, 6 + 3 * suggestions)
+    steps = 6 + 3 * suggestions
+    bar = _Progress(progress, steps) if reporter is None else reporter(steps)
     clock = _Clock(bar)
     try:
         with clock("calibrate"):

@@ -77,10 +77,10 @@ _progress_path = None     # the running job's progress.json
 
 
 class _FileProgress:
-    """Stands in for :class:`augment.pipeline._Progress` in a worker: the current stage
-    and the steps done, written to the job's ``progress.json`` (replaced atomically)."""
+    """``furnish``'s progress reporter in a worker: the current stage and the steps
+    done, written to the job's ``progress.json`` (replaced atomically)."""
 
-    def __init__(self, enabled: bool, total: int):
+    def __init__(self, total: int):
         self.total, self.done, self.current, self.finished = int(total), 0, None, []
         self._write()
 
@@ -129,9 +129,6 @@ def _run_job(job_dir: str, options: dict) -> dict:
 
     job = Path(job_dir)
     _progress_path = job / "progress.json"
-    # furnish() reports its stages through pipeline._Progress; in this worker process
-    # they go to the job's progress.json instead of a terminal.
-    pipeline._Progress = _FileProgress
     if _renderer is None:
         _renderer = Renderer()
     photo = job / "input" / options["photo"]
@@ -139,7 +136,8 @@ def _run_job(job_dir: str, options: dict) -> dict:
     try:
         result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
                                   room=options["room"], suggestions=options["suggestions"],
-                                  seed=options["seed"], camera=camera, progress=True, renderer=_renderer)
+                                  seed=options["seed"], camera=camera, reporter=_FileProgress,
+                                  renderer=_renderer)
         state = json.loads(_progress_path.read_text())
         _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
         paths = pipeline.write_outputs(result, job / "out")
