@@ -28,7 +28,7 @@ MAX_RMS_PX = 2.0               # worse reprojection means a bent, moved or mis-s
 # Single-view focal needs perspective: the board's normal must be tilted from the optical
 # axis (a fronto-parallel board says nothing about f) but not so far that it is a sliver.
 MIN_TILT_DEG = 15.0
-MAX_TILT_DEG = 80.0
+MAX_TILT_DEG = 85.0
 MAX_SINGLE_VIEW_UNCERTAINTY = 0.05   # relative focal uncertainty allowed before refusing
 # The focal length's deviation scales with the corners' noise, which the fit estimates from
 # its residuals; with few corners (a partly hidden board) the fit absorbs much of the noise
