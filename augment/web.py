@@ -36,9 +36,11 @@ from __future__ import annotations
 import asyncio
 import io
 import json
+import math
 import multiprocessing
 import os
 import shutil
+import statistics
 import time
 import uuid
 import warnings
@@ -56,7 +58,10 @@ from fastapi.responses import FileResponse, JSONResponse, Response
 MAX_PIXELS = 50_000_000
 MAX_PROFILE_BYTES = 1 << 20
 MAX_SUGGESTIONS = 12
-RETRY_AFTER_S = 30
+# A busy server says when to come back: about when a worker frees up, from the recent
+# jobs' times (this default until one is done), within these bounds.
+DEFAULT_JOB_S = 20.0
+RETRY_AFTER_BOUNDS_S = (2, 60)
 DEFAULT_JOBS_DIR = Path("out") / "jobs"
 STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene", "overlays",
           "write")
@@ -121,6 +126,8 @@ def _run_job(job_dir: str, options: dict) -> dict:
     global _renderer, _progress_path
     from layout.errors import LayoutError
 
+    start = time.perf_counter()
+
     from . import pipeline
     from .board import Board
     from .calibrate import CalibrationError
@@ -145,10 +152,21 @@ def _run_job(job_dir: str, options: dict) -> dict:
         message = str(error).replace(str(photo), "the photo")
         if camera is not None:
             message = message.replace(str(camera), "the camera profile")
-        return {"error": {"kind": _USER_ERRORS[type(error).__name__], "message": message}}
+        return {"error": {"kind": _USER_ERRORS[type(error).__name__], "message": message},
+                "seconds": time.perf_counter() - start}
     state = json.loads(_progress_path.read_text())
     _write_progress(dict(state, stage=None, finished=list(STAGES), done=state["total"]))
-    return {"files": [p.name for p in paths], "warnings": list(result.warnings)}
+    return {"files": [p.name for p in paths], "warnings": list(result.warnings),
+            "seconds": time.perf_counter() - start}
+
+
+def retry_after_s(job_seconds, workers: int) -> int:
+    """Seconds until a worker is likely free: the median of the last (up to 10) job
+    times over the worker count, within ``RETRY_AFTER_BOUNDS_S``."""
+    recent = list(job_seconds)[-10:]
+    typical = statistics.median(recent) if recent else DEFAULT_JOB_S
+    lo, hi = RETRY_AFTER_BOUNDS_S
+    return int(min(hi, max(lo, math.ceil(typical / max(1, workers)))))
 
 
 # --------------------------------------------------------------------------------------
@@ -399,8 +417,10 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                 raise UploadError(422, "the camera profile is not JSON; make one with `stage calibrate`") from None
         active = sum(j.result is None for j in jobs.values())
         if active >= workers + max_queued:
+            wait = retry_after_s([j.result["seconds"] for j in sorted(jobs.values(), key=lambda j: j.finished or 0)
+                                  if j.result is not None and "seconds" in j.result], workers)
             raise HTTPException(503, f"the server is busy ({active} photos in progress); try again in "
-                                     f"{RETRY_AFTER_S} s", headers={"Retry-After": str(RETRY_AFTER_S)})
+                                     f"{wait} s", headers={"Retry-After": str(wait)})
         job_id = str(uuid.uuid4())
         folder = jobs_dir / job_id
         (folder / "input").mkdir(parents=True)

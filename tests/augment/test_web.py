@@ -19,7 +19,7 @@ with warnings.catch_warnings():
     warnings.filterwarnings("ignore", "Using `httpx` with `starlette.testclient` is deprecated")
     from fastapi.testclient import TestClient  # noqa: E402
 
-from augment.web import create_app  # noqa: E402
+from augment.web import create_app, retry_after_s  # noqa: E402
 
 PHOTO = Path(__file__).resolve().parents[2] / "samples" / "photos" / "room_4.jpg"
 
@@ -86,8 +86,16 @@ def test_files_and_zip(finished):
 def test_full_queue_answers_503(finished):
     busy = finished[4]
     assert busy.status_code == 503
-    assert busy.headers["retry-after"] == "30"
+    # No job had finished when it was refused: the default job time over the workers.
+    assert busy.headers["retry-after"] == str(retry_after_s([], 1)) == "20"
     assert "busy" in busy.json()["detail"]
+
+
+def test_retry_after_follows_recent_job_times():
+    assert retry_after_s([10.0, 14.0, 12.0], workers=2) == 6   # median 12 s, two workers
+    assert retry_after_s([0.5], workers=4) == 2                # never less than 2 s
+    assert retry_after_s([500.0], workers=1) == 60             # nor more than a minute
+    assert retry_after_s([100.0] * 5 + [10.0] * 10, workers=1) == 10  # the last ten count
 
 
 @pytest.mark.parametrize("name", ["../../etc/passwd", "..%2F..%2Fetc%2Fpasswd", "photo.jpg", "progress.json",
