@@ -407,34 +407,28 @@ def _calibrate_cmd(args):
     return EXIT_OK
 
 
-def _check_cmd(args):
-    import cv2
+def _check_camera(args) -> None:
+    """A ``--camera`` profile that is not there is named before any work is done."""
+    if args.camera is not None and args.photo.is_file() and not args.camera.is_file():
+        raise StageError(f"--camera {args.camera}: no such file; make a camera profile with "
+                         f"`stage calibrate SHOT... --out {args.camera}`")
 
+
+def _check_cmd(args):
     from .calibrate import calibrate_file, read_photo
+    from .imageio import encode_image
     from .overlay import calibration_overlay
 
     board = _board(args)
     out = args.out if args.out is not None else Path("out") / args.photo.stem
     _prepare_dir_out(out)
-    if args.camera is not None and args.photo.is_file() and not args.camera.is_file():
-        raise StageError(f"--camera {args.camera}: no such file; make a camera profile with "
-                         f"`stage calibrate SHOT... --out {args.camera}`")
+    _check_camera(args)
     calibration = calibrate_file(args.photo, board, profile=args.camera)
     overlay = calibration_overlay(read_photo(args.photo), calibration)
     report = {"photo": str(args.photo), **calibration.to_json()}
-    text = json.dumps(report, indent=2) + "\n"
-    ok, png = cv2.imencode(".png", cv2.cvtColor(overlay, cv2.COLOR_RGB2BGR))
-    if not ok:
-        raise RuntimeError("OpenCV could not encode the overlay as PNG")
-    # Everything is computed: only now is anything written.
-    _mkdir(out, "--out", out)
+    # Everything is computed: only now is anything written, the pair or nothing.
     paths = (out / "calibration.json", out / "overlay_calibration.png")
-    _write(paths[0], text, "--out", out)
-    try:
-        _write(paths[1], png.tobytes(), "--out", out)
-    except StageError:
-        paths[0].unlink(missing_ok=True)  # no half-written result: the pair or nothing
-        raise
+    _write_all({paths[0]: json.dumps(report, indent=2) + "\n", paths[1]: encode_image(overlay, ".png")}, out)
     if args.quiet:
         return EXIT_OK
     i = calibration.intrinsics
@@ -452,28 +446,27 @@ def _check_cmd(args):
     return EXIT_OK
 
 
-def _load_model(args):
+def _load_model(path, **spec_overrides):
+    """The floor model at ``path`` (Stager's when None), its sidecar spec with the given
+    fields replaced."""
     from dataclasses import replace
 
     from .segment import DEFAULT_MODEL, FloorModel, ModelSpec
 
-    path = args.model if args.model is not None else DEFAULT_MODEL
+    path = path if path is not None else DEFAULT_MODEL
     if not path.is_file():
-        hint = "use --method grabcut" if args.model is not None else \
+        hint = "use --method grabcut" if path != DEFAULT_MODEL else \
             "the repository's models/floor_segnet.onnx is missing; reinstall, or use --method grabcut"
         raise StageError(f"--model {path}: no such file; {hint}")
     sidecar = path.with_suffix(".json")
     spec = ModelSpec.from_json(sidecar) if sidecar.is_file() else ModelSpec()
-    given = {k: getattr(args, k) for k in ("input_size", "mean", "std", "channel_order", "floor_class", "output")
-             if getattr(args, k) is not None}
-    return FloorModel(path, spec=replace(spec, **given))
+    return FloorModel(path, spec=replace(spec, **spec_overrides))
 
 
 def _segment_cmd(args):
-    import cv2
-
     from .calibrate import CalibrationError, calibrate_file, read_photo
     from .floor import floor_overlay, floor_polygon
+    from .imageio import encode_image
     from .segment import segment_floor
 
     board = _board(args)
@@ -482,7 +475,9 @@ def _segment_cmd(args):
         raise StageError(f"--out {out}: the mask is written as PNG; give a name ending in .png, e.g. floor.png")
     _prepare_file_out(out, "floor.png")
     image = read_photo(args.photo)
-    model = _load_model(args) if args.method == "onnx" else None
+    overrides = {k: getattr(args, k) for k in ("input_size", "mean", "std", "channel_order", "floor_class", "output")
+                 if getattr(args, k) is not None}
+    model = _load_model(args.model, **overrides) if args.method == "onnx" else None
     warnings = []
     try:
         calibration = calibrate_file(args.photo, board, profile=args.camera)
@@ -501,8 +496,8 @@ def _segment_cmd(args):
         except ValueError as error:
             warnings.append(f"no floor polygon: {error}")
     overlay = floor_overlay(image, seg.mask, polygon, calibration)
-    files = {out: cv2.imencode(".png", seg.mask.astype("uint8") * 255)[1].tobytes(),
-             out.with_name(out.stem + "_overlay.png"): cv2.imencode(".png", overlay[..., ::-1])[1].tobytes()}
+    files = {out: encode_image(seg.mask.astype("uint8") * 255, ".png"),
+             out.with_name(out.stem + "_overlay.png"): encode_image(overlay, ".png")}
     if polygon is not None:
         report = {"photo": str(args.photo), "method": seg.method, "floor_fraction": float(seg.mask.mean()),
                   "floor": polygon.to_json(), "warnings": warnings}
@@ -520,15 +515,6 @@ def _segment_cmd(args):
     return EXIT_OK
 
 
-def _png(image) -> bytes:
-    import cv2
-
-    ok, data = cv2.imencode(".png", image[..., ::-1] if image.ndim == 3 else image)
-    if not ok:
-        raise RuntimeError("OpenCV could not encode a PNG")
-    return data.tobytes()
-
-
 def _measure_cmd(args):
     import time
 
@@ -536,6 +522,7 @@ def _measure_cmd(args):
     from .calibrate import calibrate_file, read_photo
     from .floor import floor_overlay, floor_polygon
     from .height import measure_height
+    from .imageio import encode_image
     from .overlay import calibration_overlay
     from .overlay_height import height_overlay
     from .segment import segment_floor
@@ -543,18 +530,14 @@ def _measure_cmd(args):
     board = _board(args)
     out = args.out if args.out is not None else Path("out") / args.photo.stem
     _prepare_dir_out(out)
-    if args.camera is not None and args.photo.is_file() and not args.camera.is_file():
-        raise StageError(f"--camera {args.camera}: no such file; make a camera profile with "
-                         f"`stage calibrate SHOT... --out {args.camera}`")
-    for name in ("input_size", "mean", "std", "channel_order", "floor_class", "output"):
-        setattr(args, name, None)  # measure takes a model with its sidecar as it is
+    _check_camera(args)
     timings = {}
     start = time.perf_counter()
     image = read_photo(args.photo)
     calibration = calibrate_file(args.photo, board, profile=args.camera)
     timings["calibrate_s"] = time.perf_counter() - start
     start = time.perf_counter()
-    seg = segment_floor(image, _load_model(args), calibration)
+    seg = segment_floor(image, _load_model(args.model), calibration)
     warnings = list(calibration.warnings) + list(seg.warnings)
     if not seg.mask.any():
         raise StageError(f"photo {args.photo}: no floor found; the floor must show around the board")
@@ -572,9 +555,9 @@ def _measure_cmd(args):
               "timings": {k: round(v, 3) for k, v in timings.items()},
               "warnings": warnings}
     files = {out / "report.json": json.dumps(report, indent=2) + "\n",
-             out / "overlay_calibration.png": _png(calibration_overlay(image, calibration)),
-             out / "overlay_floor.png": _png(floor_overlay(image, seg.mask, polygon, calibration)),
-             out / "overlay_height.png": _png(height_overlay(image, calibration, height))}
+             out / "overlay_calibration.png": encode_image(calibration_overlay(image, calibration), ".png"),
+             out / "overlay_floor.png": encode_image(floor_overlay(image, seg.mask, polygon, calibration), ".png"),
+             out / "overlay_height.png": encode_image(height_overlay(image, calibration, height), ".png")}
     _write_all(files, out)
     if not args.quiet:
         i = calibration.intrinsics
@@ -651,17 +634,17 @@ def _serve_cmd(args):
 
 
 def _write_all(files: dict, folder: Path) -> None:
-    """Write every file or none: a failure removes the ones already written."""
-    _mkdir(folder, "--out", folder)
-    done = []
+    """Write ``files`` ({path in ``folder``: bytes or text}) all or none: made beside
+    ``folder``, then moved in (:func:`layout.fileio.staged_folder`)."""
+    from layout.fileio import staged_folder
+
     try:
-        for path, data in files.items():
-            _write(path, data, "--out", folder)
-            done.append(path)
-    except StageError:
-        for path in done:
-            path.unlink(missing_ok=True)
-        raise
+        with staged_folder(folder) as staging:
+            for path, data in files.items():
+                (staging / path.name).write_bytes(data.encode("utf-8") if isinstance(data, str) else data)
+    except OSError as error:
+        raise StageError(f"--out {folder}: cannot write there ({error.strerror or error}); nothing was "
+                         "changed in it; choose a folder you can write to") from None
 
 
 def main(argv=None) -> int:

@@ -54,7 +54,7 @@ CAPTION_BOX_RGBA = (0, 0, 0, 160)
 TEXT_RGB = (255, 255, 255)
 
 
-def _font(size_px: int) -> ImageFont.ImageFont:
+def overlay_font(size_px: int) -> ImageFont.ImageFont:
     """DejaVu Sans (shipped with matplotlib, as the printed board uses), else PIL's own."""
     spec = importlib.util.find_spec("matplotlib")  # found without importing matplotlib (slow)
     for folder in (spec.submodule_search_locations or []) if spec else []:
@@ -428,7 +428,7 @@ class _Caption:
     """The caption's lines, font and box size (placed later)."""
 
     def __init__(self, calibration: Calibration, style: _Style, horizon: bool):
-        self.font = _font(style.font_px)
+        self.font = overlay_font(style.font_px)
         self.lines = _caption_lines(calibration, horizon)
         self.line_h = round(1.35 * style.font_px)
         self.pad = round(0.6 * style.font_px)
@@ -565,7 +565,7 @@ def _grow(rect, fraction, pixels=0.0):
 def _draw_text(out: np.ndarray, caption: _Caption, style: _Style, labels) -> np.ndarray:
     """The caption box and the labels, drawn with PIL (antialiased TrueType text)."""
     h, w = out.shape[:2]
-    label_font = _font(style.label_px)
+    label_font = overlay_font(style.label_px)
     base = Image.fromarray(out).convert("RGBA")
     layer = Image.new("RGBA", base.size, (0, 0, 0, 0))
     draw = ImageDraw.Draw(layer)

@@ -15,15 +15,13 @@ distortion before drawing, like the photo's own lines.
 """
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import cv2
 import numpy as np
-from PIL import Image, ImageDraw, ImageFont
+from PIL import Image, ImageDraw
 
 from .calibrate import Calibration
 from .height import HeightResult
+from .overlay import overlay_font
 
 EDGE_RGB = (60, 220, 90)          # inlier vertical edges
 CEILING_RGB = (40, 200, 255)      # inlier wall--ceiling lines (drawn from their base to their top)
@@ -31,17 +29,6 @@ OTHER_RGB = (170, 170, 170)       # measured but not used
 FALLBACK_RGB = (255, 120, 60)     # caption accent when the fallback was used
 CAPTION_BOX_RGBA = (0, 0, 0, 170)
 TEXT_RGB = (255, 255, 255)
-
-
-def _font(size_px: int) -> ImageFont.ImageFont:
-    """DejaVu Sans (shipped with matplotlib), else PIL's own."""
-    spec = importlib.util.find_spec("matplotlib")  # found without importing matplotlib (slow)
-    for folder in (spec.submodule_search_locations or []) if spec else []:
-        try:
-            return ImageFont.truetype(str(Path(folder) / "mpl-data" / "fonts" / "ttf" / "DejaVuSans.ttf"), size_px)
-        except OSError:
-            continue
-    return ImageFont.load_default(size=size_px)
 
 
 def _distorted(points: np.ndarray, calibration: Calibration) -> np.ndarray:
@@ -99,7 +86,7 @@ def height_overlay(image: np.ndarray, calibration: Calibration, result: HeightRe
 
     canvas = Image.fromarray(out)
     draw = ImageDraw.Draw(canvas, "RGBA")
-    label_font = _font(max(12, round(side / 55)))
+    label_font = overlay_font(max(12, round(side / 55)))
     for i in np.flatnonzero(result.inliers):
         if np.all(np.isfinite(tops[i])) and np.isfinite(result.heights_m[i]):
             x = min(max(tops[i][0] + thick * 5, 0), w - 1)
@@ -109,7 +96,7 @@ def height_overlay(image: np.ndarray, calibration: Calibration, result: HeightRe
     title = (f"wall height {result.height_m:.2f} m (fallback)" if result.fallback
              else f"wall height {result.height_m:.2f} m, confidence {result.confidence:.2f}")
     lines = [title] + _wrap(result.reason, 70)
-    font = _font(max(12, round(side / 45)))
+    font = overlay_font(max(12, round(side / 45)))
     pad = round(font.size * 0.5)
     box_w = pad * 2 + max(draw.textlength(s, font=font) for s in lines)
     box_h = pad * 2 + len(lines) * round(font.size * 1.25)

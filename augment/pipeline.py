@@ -54,11 +54,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 import platform
-import shutil
 import sys
-import tempfile
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -70,9 +67,11 @@ import numpy as np
 from layout import report as layout_report
 from layout.builder import LayoutBuilder
 from layout.errors import LayoutError
+from layout.fileio import staged_folder
 from layout.presets import PRESETS
 
 from . import __version__
+from .imageio import encode_image
 
 DEFAULT_ROOM = "living_room"
 DEFAULT_SUGGESTIONS = 4
@@ -935,16 +934,6 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
 # Writing
 # --------------------------------------------------------------------------------------
 
-def _encode(image: np.ndarray, ext: str) -> bytes:
-    from .render import JPEG_QUALITY
-
-    params = [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY] if ext == ".jpg" else []
-    ok, data = cv2.imencode(ext, cv2.cvtColor(image, cv2.COLOR_RGB2BGR), params)
-    if not ok:
-        raise RuntimeError(f"OpenCV could not encode an image as {ext}")
-    return data.tobytes()
-
-
 def _write_files(result: FurnishResult, folder: Path) -> list[str]:
     """Every output file into ``folder``; returns their names."""
     import json
@@ -956,42 +945,17 @@ def _write_files(result: FurnishResult, folder: Path) -> list[str]:
         names.append(name)
 
     for k, img in enumerate(result.staged, start=1):
-        put(f"staged_{k}.jpg", _encode(img, ".jpg"))
-    put("staged_all.jpg", _encode(result.contact_sheet, ".jpg"))
+        put(f"staged_{k}.jpg", encode_image(img, ".jpg"))
+    put("staged_all.jpg", encode_image(result.contact_sheet, ".jpg"))
     title = f"{result.photo.stem}, {result.source}: "
     for p in layout_report.write_outputs(result.layouts, folder, result.reports, title=title):
         names.append(p.name)
     for k, glb in enumerate(result.scenes_glb, start=1):
         put(f"scene_{k}.glb", glb)
     for name, img in result.overlays.items():
-        put(name, _encode(img, ".png"))
+        put(name, encode_image(img, ".png"))
     put("report.json", json.dumps(result.report, indent=2, allow_nan=False) + "\n")
     return names
-
-
-def _move_in(staging: Path, names: list[str], out: Path) -> None:
-    """Move the files from ``staging`` into ``out``: each an atomic rename; when one
-    fails, the files already moved are put back as they were."""
-    backup = staging / ".previous"
-    backup.mkdir()
-    done = []  # (name, had an older file)
-    try:
-        for name in names:
-            old = (out / name).exists()
-            if old:
-                os.replace(out / name, backup / name)
-            done.append((name, old))
-            os.replace(staging / name, out / name)
-    except OSError:
-        for name, old in reversed(done):
-            try:
-                if old:
-                    os.replace(backup / name, out / name)
-                else:
-                    (out / name).unlink(missing_ok=True)
-            except OSError:
-                pass  # best effort: the first error is the one reported
-        raise
 
 
 def write_outputs(result: FurnishResult, out_dir) -> list[Path]:
@@ -1015,21 +979,9 @@ def write_outputs(result: FurnishResult, out_dir) -> list[Path]:
     if out.exists() and not out.is_dir():
         raise FurnishError(f"output folder {out}: exists and is not a folder")
     try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+        with staged_folder(out) as staging:
+            names = _write_files(result, staging)
     except OSError as error:
         raise FurnishError(f"output folder {out}: cannot write there ({error.strerror or error}); "
-                           "choose a folder you can write to") from None
-    try:
-        names = _write_files(result, staging)
-        if not out.exists():
-            staging.chmod(0o755)  # mkdtemp makes it private; outputs are meant to be shared
-            os.rename(staging, out)
-        else:
-            _move_in(staging, names, out)
-    except OSError as error:
-        raise FurnishError(f"output folder {out}: cannot write there ({error.strerror or error}); "
-                           "nothing was changed in it") from None
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
+                           "nothing was changed in it; choose a folder you can write to") from None
     return [out / name for name in names]

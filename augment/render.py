@@ -48,10 +48,10 @@ from layout.fileio import write_atomic
 
 from .furniture import furniture_for, placed_items, world_from_item
 from .gl import ZNEAR_M, Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
+from .imageio import JPEG_QUALITY, encode_image
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 PAPER_ALBEDO = 0.85         # the board's white squares: office paper
-JPEG_QUALITY = 92
 
 
 @dataclass(frozen=True)
@@ -1178,19 +1178,12 @@ def _layer(staged, alpha, gain, photo) -> np.ndarray:
 
 def write_jpeg(path, image: np.ndarray, quality: int = JPEG_QUALITY):
     """Write an RGB image as JPEG (quality 92 by default), atomically. Returns the path."""
-    image = _check_image(image)
-    ok, data = cv2.imencode(".jpg", cv2.cvtColor(image, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
-    if not ok:
-        raise RuntimeError(f"could not encode {path} as JPEG")
-    return write_atomic(path, data.tobytes())
+    return write_atomic(path, encode_image(_check_image(image), ".jpg", quality))
 
 
 def write_png(path, image: np.ndarray):
     """Write an RGB or RGBA uint8 image as PNG, atomically. Returns the path."""
     a = np.asarray(image)
-    if a.dtype != np.uint8 or a.ndim != 3 or a.shape[2] not in (3, 4):
+    if a.ndim != 3:
         raise ValueError(f"PNG image must be (h, w, 3 or 4) uint8, got shape {a.shape} dtype {a.dtype}")
-    ok, data = cv2.imencode(".png", cv2.cvtColor(a, cv2.COLOR_RGBA2BGRA if a.shape[2] == 4 else cv2.COLOR_RGB2BGR))
-    if not ok:
-        raise RuntimeError(f"could not encode {path} as PNG")
-    return write_atomic(path, data.tobytes())
+    return write_atomic(path, encode_image(a, ".png"))

@@ -1,8 +1,10 @@
 """Atomic file output: readers never see a half-written file, and a failed write leaves
-the previous file (or none) in place."""
+the previous file (or none) in place; :func:`staged_folder` does the same for a set of
+files."""
 from __future__ import annotations
 
 import os
+import shutil
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -35,3 +37,53 @@ def write_atomic(path, data: bytes | str) -> Path:
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
     return Path(path)
+
+
+@contextmanager
+def staged_folder(out_dir):
+    """Yield a temporary folder beside ``out_dir``; what is written there is moved into
+    ``out_dir`` all or none when the block ends without an exception.
+
+    A new ``out_dir`` is the staging folder renamed into place whole; into an existing one
+    each file is renamed in, and if one move fails those already moved are put back as
+    they were. Files in ``out_dir`` that the block did not write are left alone. Errors
+    are ``OSError``; the temporary folder never outlives the block.
+    """
+    out = Path(out_dir)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    try:
+        yield staging
+        names = sorted(p.name for p in staging.iterdir())
+        if not out.exists():
+            staging.chmod(0o755)  # mkdtemp makes it private; outputs are meant to be shared
+            os.rename(staging, out)
+        else:
+            _move_in(staging, names, out)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+
+
+def _move_in(staging: Path, names: list[str], out: Path) -> None:
+    """Move the files ``names`` from ``staging`` into ``out``: each an atomic rename; when
+    one fails, the files already moved are put back as they were."""
+    backup = staging / ".previous"
+    backup.mkdir()
+    done = []  # (name, had an older file)
+    try:
+        for name in names:
+            old = (out / name).exists()
+            if old:
+                os.replace(out / name, backup / name)
+            done.append((name, old))
+            os.replace(staging / name, out / name)
+    except OSError:
+        for name, old in reversed(done):
+            try:
+                if old:
+                    os.replace(backup / name, out / name)
+                else:
+                    (out / name).unlink(missing_ok=True)
+            except OSError:
+                pass  # best effort: the first error is the one reported
+        raise
