@@ -474,6 +474,7 @@ def _segment_cmd(args):
     if out.suffix.lower() != ".png":
         raise StageError(f"--out {out}: the mask is written as PNG; give a name ending in .png, e.g. floor.png")
     _prepare_file_out(out, "floor.png")
+    _check_camera(args)
     image = read_photo(args.photo)
     overrides = {k: getattr(args, k) for k in ("input_size", "mean", "std", "channel_order", "floor_class", "output")
                  if getattr(args, k) is not None}

@@ -77,6 +77,9 @@ def test_segment_refusals_name_the_problem(tmp_path, capsys):
     assert code == 2 and "too small" in err
     code, _, err = run(["segment", PHOTO, "--mean", "1,2", "--out", tmp_path / "c.png"], capsys)
     assert code == 2 and "R,G,B" in err
+    # A profile that is not there is an error, not a photo "without calibration".
+    code, _, err = run(["segment", PHOTO, "--camera", tmp_path / "none.json", "--out", tmp_path / "c.png"], capsys)
+    assert code == 2 and "--camera" in err and "stage calibrate" in err
     assert not any(tmp_path.glob("[abc]*.png"))
 
 
