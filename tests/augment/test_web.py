@@ -229,7 +229,9 @@ def test_browser_upload_shows_gallery(server, tmp_path):
                 document.getElementById("drop").dispatchEvent(
                     new DragEvent("drop", {dataTransfer: dt, bubbles: true, cancelable: true}));
             }""", base64.b64encode(PHOTO.read_bytes()).decode())
-            assert page.locator("#preview").is_visible()
+            # The preview has no size until the browser decodes the blob, so wait for it
+            # rather than asking once (a raced check failed in CI).
+            page.wait_for_selector("#preview", state="visible", timeout=5_000)
             page.click("#go")
             page.wait_for_selector("#download:not([hidden])", timeout=50_000)
             staged = page.locator("#staged img[alt^='Suggestion']")
