@@ -890,12 +890,15 @@ def residual_boundary(R, P, pos, yaw, out):
 
 @njit(cache=True, error_model="numpy")
 def candidate_pairs(P, pos, yaw, cell_m, pad_m):
-    """Pairs (i < j) whose padded bounding boxes overlap, from a uniform spatial hash.
+    """Pairs (i < j) whose padded bounding boxes overlap, from a uniform grid.
 
-    Items with accessibility are padded by their deepest clearance so the pair list
-    serves the accessibility constraints too. Each box is inserted in every cell it
-    covers; a pair is reported only from the first cell of its boxes' intersection,
-    so every pair appears once.
+    Each box covers an item's footprint and its access boxes, so the pair list serves
+    the accessibility constraints too. Every box goes into the one cell of its
+    center, and the cell is at least as wide as every box, so overlapping boxes sit in
+    the same or adjacent cells: each cell is checked against itself and four of its
+    eight neighbours (a half stencil), which reports every pair once. Boxes much wider
+    than typical (a stage, a door zone) would blow up the cell, so they are checked
+    against every box instead.
     """
     n = P.role.shape[0]
     idx = np.empty(n, np.int64)
@@ -904,84 +907,122 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
         if P.role[i] == OBSTACLE or (P.role[i] == ITEM and (P.collides[i] or P.access_max[i] > 0.0)):
             idx[m] = i
             m += 1
-    lo = np.empty((m, 2))
-    hi = np.empty((m, 2))
-    for q in range(m):
-        i = idx[q]
-        x, y, a = pos[i, 0], pos[i, 1], yaw[i]
-        c = abs(math.cos(a))
-        s = abs(math.sin(a))
-        hd = 0.5 * P.size[i, 1] + P.access_max[i]
-        hw = 0.5 * P.size[i, 0] + P.access_max[i]
-        ex = c * hd + s * hw + pad_m
-        ey = s * hd + c * hw + pad_m
-        lo[q, 0] = x - ex
-        lo[q, 1] = y - ey
-        hi[q, 0] = x + ex
-        hi[q, 1] = y + ey
     pairs = np.empty((max(16, 8 * m), 2), np.int64)
     if m < 2:
         return pairs[:0]
-    x0 = lo[:, 0].min()
-    y0 = lo[:, 1].min()
+    cx = np.empty(m)
+    cy = np.empty(m)
+    ex = np.empty(m)
+    ey = np.empty(m)
+    for q in range(m):
+        # The box covers the footprint and its access boxes (sides 0/2 behind/ahead
+        # along the depth axis, 1/3 left/right), so it is off-center when only one
+        # side needs clearance.
+        i = idx[q]
+        a0, a1, a2, a3 = P.access_depth[i, 0], P.access_depth[i, 1], P.access_depth[i, 2], P.access_depth[i, 3]
+        ox = 0.5 * (a2 - a0)
+        oy = 0.5 * (a1 - a3)
+        hd = 0.5 * (P.size[i, 1] + a0 + a2)
+        hw = 0.5 * (P.size[i, 0] + a1 + a3)
+        c = math.cos(yaw[i])
+        s = math.sin(yaw[i])
+        cx[q] = pos[i, 0] + c * ox - s * oy
+        cy[q] = pos[i, 1] + s * ox + c * oy
+        ex[q] = abs(c) * hd + abs(s) * hw + pad_m
+        ey[q] = abs(s) * hd + abs(c) * hw + pad_m
+    width = 2.0 * np.maximum(ex, ey)
+    big_above = 4.0 * max(np.median(width), 0.5 * cell_m)
     cell = cell_m
-    nx = int((hi[:, 0].max() - x0) / cell) + 1
-    ny = int((hi[:, 1].max() - y0) / cell) + 1
+    for q in range(m):
+        if width[q] <= big_above:
+            cell = max(cell, width[q])
+    x0 = cx.min()
+    y0 = cy.min()
+    nx = int((cx.max() - x0) / cell) + 1
+    ny = int((cy.max() - y0) / cell) + 1
     while nx * ny > 4 * m + 64:
         cell *= 1.5
-        nx = int((hi[:, 0].max() - x0) / cell) + 1
-        ny = int((hi[:, 1].max() - y0) / cell) + 1
-    cx0 = np.empty(m, np.int64)
-    cy0 = np.empty(m, np.int64)
-    cx1 = np.empty(m, np.int64)
-    cy1 = np.empty(m, np.int64)
-    count = np.zeros(nx * ny + 1, np.int64)
+        nx = int((cx.max() - x0) / cell) + 1
+        ny = int((cy.max() - y0) / cell) + 1
+    home = np.empty(m, np.int64)
+    start = np.zeros(nx * ny + 1, np.int64)
+    big = np.empty(m, np.int64)
+    nbig = 0
     for q in range(m):
-        cx0[q] = int((lo[q, 0] - x0) / cell)
-        cy0[q] = int((lo[q, 1] - y0) / cell)
-        cx1[q] = min(nx - 1, int((hi[q, 0] - x0) / cell))
-        cy1[q] = min(ny - 1, int((hi[q, 1] - y0) / cell))
-        for gy in range(cy0[q], cy1[q] + 1):
-            for gx in range(cx0[q], cx1[q] + 1):
-                count[gy * nx + gx + 1] += 1
+        if width[q] > cell:
+            home[q] = -1
+            big[nbig] = q
+            nbig += 1
+        else:
+            home[q] = int((cy[q] - y0) / cell) * nx + int((cx[q] - x0) / cell)
+            start[home[q] + 1] += 1
     for g in range(nx * ny):
-        count[g + 1] += count[g]
-    fill = count.copy()
-    cells = np.empty(count[nx * ny], np.int64)
+        start[g + 1] += start[g]
+    # Copies in cell order: the stencil's cells are two runs of consecutive cells,
+    # so the inner loop streams through memory.
+    fill = start.copy()
+    order = np.empty(m - nbig, np.int64)
     for q in range(m):
-        for gy in range(cy0[q], cy1[q] + 1):
-            for gx in range(cx0[q], cx1[q] + 1):
-                g = gy * nx + gx
-                cells[fill[g]] = q
-                fill[g] += 1
+        if home[q] >= 0:
+            order[fill[home[q]]] = q
+            fill[home[q]] += 1
+    sx = cx[order]
+    sy = cy[order]
+    sex = ex[order]
+    sey = ey[order]
     npairs = 0
     for g in range(nx * ny):
         gx = g % nx
         gy = g // nx
-        for u in range(count[g], count[g + 1]):
-            qa = cells[u]
-            for v in range(u + 1, count[g + 1]):
-                qb = cells[v]
-                if lo[qa, 0] > hi[qb, 0] or lo[qb, 0] > hi[qa, 0]:
-                    continue
-                if lo[qa, 1] > hi[qb, 1] or lo[qb, 1] > hi[qa, 1]:
-                    continue
-                if max(cx0[qa], cx0[qb]) != gx or max(cy0[qa], cy0[qb]) != gy:
-                    continue
-                i = idx[qa]
-                j = idx[qb]
-                if P.body[i] == P.body[j]:
-                    continue
-                if P.inv_mass[P.body[i]] == 0.0 and P.inv_mass[P.body[j]] == 0.0:
-                    continue
-                if npairs == pairs.shape[0]:
-                    grown = np.empty((2 * npairs, 2), np.int64)
-                    grown[:npairs] = pairs
-                    pairs = grown
-                pairs[npairs, 0] = min(i, j)
-                pairs[npairs, 1] = max(i, j)
-                npairs += 1
+        for u in range(start[g], start[g + 1]):
+            xa, ya, exa, eya = sx[u], sy[u], sex[u], sey[u]
+            for run in range(2):
+                # Half stencil: this cell (later entries) and its east neighbour; then
+                # the three cells above.
+                if run == 0:
+                    first = u + 1
+                    last = start[g + 2] if gx + 1 < nx else start[g + 1]
+                else:
+                    if gy + 1 >= ny:
+                        continue
+                    first = start[g + nx - 1] if gx > 0 else start[g + nx]
+                    last = start[g + nx + 2] if gx + 1 < nx else start[g + nx + 1]
+                for v in range(first, last):
+                    if abs(xa - sx[v]) > exa + sex[v] or abs(ya - sy[v]) > eya + sey[v]:
+                        continue
+                    i = idx[order[u]]
+                    j = idx[order[v]]
+                    if P.body[i] == P.body[j] or (P.inv_mass[P.body[i]] == 0.0 and P.inv_mass[P.body[j]] == 0.0):
+                        continue
+                    if npairs == pairs.shape[0]:
+                        pairs = _grown(pairs)
+                    pairs[npairs, 0] = min(i, j)
+                    pairs[npairs, 1] = max(i, j)
+                    npairs += 1
+    for a in range(nbig):
+        qa = big[a]
+        for qb in range(m):
+            if qb == qa or (home[qb] < 0 and qb < qa):
+                continue
+            if abs(cx[qa] - cx[qb]) > ex[qa] + ex[qb] or abs(cy[qa] - cy[qb]) > ey[qa] + ey[qb]:
+                continue
+            i = idx[qa]
+            j = idx[qb]
+            if P.body[i] == P.body[j] or (P.inv_mass[P.body[i]] == 0.0 and P.inv_mass[P.body[j]] == 0.0):
+                continue
+            if npairs == pairs.shape[0]:
+                pairs = _grown(pairs)
+            pairs[npairs, 0] = min(i, j)
+            pairs[npairs, 1] = max(i, j)
+            npairs += 1
     return pairs[:npairs]
+
+
+@njit(cache=True, error_model="numpy")
+def _grown(pairs):
+    grown = np.empty((2 * pairs.shape[0], 2), np.int64)
+    grown[: pairs.shape[0]] = pairs
+    return grown
 
 
 @njit(cache=True, inline="always", error_model="numpy")

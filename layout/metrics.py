@@ -11,7 +11,6 @@ from dataclasses import dataclass
 import cv2
 import numba
 import numpy as np
-import skimage.measure
 import skimage.morphology
 
 from layout.geometry import polygon_area
@@ -361,32 +360,6 @@ class _Raster:
         self.resolution_m = resolution_m
         self.shape = shape
 
-    def pixels(self, polygon_m):
-        """Row and column indices of the pixels whose centers lie in ``polygon_m``."""
-        col = (polygon_m[:, 0] - self.origin_m[0]) / self.resolution_m - 0.5
-        row = (polygon_m[:, 1] - self.origin_m[1]) / self.resolution_m - 0.5
-        # OpenCV fills in C (skimage.draw.polygon builds the polygon's whole bounding
-        # grid in Python-level NumPy): rasterize in a window around the polygon with
-        # sub-pixel vertices, then keep the pixels inside the image.
-        r0 = max(int(np.floor(row.min())), 0)
-        c0 = max(int(np.floor(col.min())), 0)
-        r1 = min(int(np.ceil(row.max())) + 1, self.shape[0])
-        c1 = min(int(np.ceil(col.max())) + 1, self.shape[1])
-        rr = cc = np.zeros(0, dtype=np.intp)
-        if r1 > r0 and c1 > c0:
-            window = np.zeros((r1 - r0, c1 - c0), dtype=np.uint8)
-            pts = np.round(np.stack([col - c0, row - r0], axis=1) * _SUBPIXEL).astype(np.int32)
-            cv2.fillPoly(window, [pts], 1, lineType=cv2.LINE_8, shift=_SHIFT)
-            rr, cc = np.nonzero(window)
-            rr, cc = rr + r0, cc + c0
-        if len(rr) == 0:
-            # Slivers thinner than a pixel cover no center; keep the pixels they lie in.
-            pts = np.vstack([polygon_m, polygon_m.mean(axis=0, keepdims=True)])
-            rc = np.floor((pts[:, ::-1] - self.origin_m[::-1]) / self.resolution_m).astype(int)
-            inside = np.all((rc >= 0) & (rc < self.shape), axis=1)
-            rr, cc = rc[inside, 0], rc[inside, 1]
-        return rr, cc
-
     def mask_all(self, polygons_m):
         """Union of the masks of many small convex polygons (one OpenCV call; the
         polygons thinner than a pixel still get the pixels :meth:`pixels` gives them)."""
@@ -406,9 +379,21 @@ class _Raster:
         return mask
 
     def mask(self, polygon_m):
-        m = np.zeros(self.shape, dtype=bool)
-        m[self.pixels(polygon_m)] = True
-        return m
+        """Pixels whose centers lie in ``polygon_m`` (any simple polygon); a sliver
+        thinner than a pixel that covers no center keeps the pixels of its vertices
+        and centroid."""
+        m = np.zeros(self.shape, dtype=np.uint8)
+        col = (polygon_m[:, 0] - self.origin_m[0]) / self.resolution_m - 0.5
+        row = (polygon_m[:, 1] - self.origin_m[1]) / self.resolution_m - 0.5
+        pts = np.round(np.stack([col, row], axis=1) * _SUBPIXEL).astype(np.int32)
+        cv2.fillPoly(m, [pts], 1, lineType=cv2.LINE_8, shift=_SHIFT)
+        mask = m.astype(bool)
+        if not mask.any():
+            pts = np.vstack([polygon_m, polygon_m.mean(axis=0, keepdims=True)])
+            rc = np.floor((pts[:, ::-1] - self.origin_m[::-1]) / self.resolution_m).astype(int)
+            inside = np.all((rc >= 0) & (rc < self.shape), axis=1)
+            mask[rc[inside, 0], rc[inside, 1]] = True
+        return mask
 
 
 @numba.njit(cache=True)
@@ -417,7 +402,7 @@ def _labels_in_quads(labels, n_labels, quads_px):
 
     A pixel belongs to a quad when its center is inside; a quad thinner than a pixel
     that covers no center takes the pixels holding its corners and its centroid
-    (as :meth:`_Raster.pixels` does). Returns (q, n_labels + 1) bool.
+    (as :meth:`_Raster.mask` does). Returns (q, n_labels + 1) bool.
     """
     h, w = labels.shape
     out = np.zeros((quads_px.shape[0], n_labels + 1), dtype=np.bool_)
@@ -526,9 +511,8 @@ def traversability(
     door_masks = [raster.mask(zone) & free for zone in doors]
     for m in door_masks:
         passable |= m
-    labels, n_components = skimage.measure.label(
-        passable, connectivity=2, background=0, return_num=True
-    )
+    count, labels = cv2.connectedComponents(passable.astype(np.uint8), connectivity=8, ltype=cv2.CV_32S)
+    n_components = count - 1
 
     def touched(where):
         return set(np.unique(labels[where]).tolist()) - {0}

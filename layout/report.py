@@ -41,15 +41,22 @@ def _shared_sides(model, items, corners, access, depth):
     parent = model.particle_parent[items]
     center = corners.mean(axis=1)
     reach = np.linalg.norm(corners[:, 0] - center, axis=1) + depth.max(axis=1)
-    triples = []  # (owner, side, mate) close enough to matter
-    for a in np.flatnonzero((parent >= 0) & (depth.max(axis=1) > 0)):
-        near = np.linalg.norm(center - center[a], axis=1) < reach + reach[a]
-        for b in np.flatnonzero(near & (parent == parent[a]) & model.particle_collides[items]):
-            if a != b:
-                triples += [(a, k, b) for k in np.flatnonzero(depth[a] > 0)]
+    collides = model.particle_collides[items]
+    owner, mate = [], []  # pairs of group mates close enough to matter
+    for g in np.unique(parent[parent >= 0]):
+        members = np.flatnonzero(parent == g)
+        owners = members[depth[members].max(axis=1) > 0]
+        mates = members[collides[members]]
+        dist = np.linalg.norm(center[owners][:, None] - center[mates][None], axis=-1)
+        near = (dist < reach[owners][:, None] + reach[mates][None]) & (owners[:, None] != mates[None])
+        a, b = np.nonzero(near)
+        owner.append(owners[a])
+        mate.append(mates[b])
     taken = np.zeros(depth.shape, bool)
-    if triples:
-        a, k, b = np.array(triples).T
+    if owner:
+        owner, mate = np.concatenate(owner), np.concatenate(mate)
+        pair, k = np.nonzero(depth[owner] > 0)
+        a, b = owner[pair], mate[pair]
         area = metrics.pairwise_intersection_area(access[a, k], corners[b])
         taken[a[area > MIN_OVERLAP_M2], k[area > MIN_OVERLAP_M2]] = True
     return taken

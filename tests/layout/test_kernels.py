@@ -465,24 +465,34 @@ def test_spatial_hash_matches_brute_force(rng):
     b = LayoutBuilder([[0, 0], [30, 0], [30, 30], [0, 30]], 3.0)
     n = 400
     sizes = rng.uniform(0.2, 2.0, size=(n, 3))
+    sizes[:4, :2] = [[9.0, 2.0], [7.0, 6.0], [0.3, 12.0], [8.0, 8.0]]  # checked against all
     for k in range(n):
         b.add_item(f"i{k}", sizes[k], access_m=(0, 0, rng.choice([0, 0.5]), 0))
     m = b.finalize()
     pos, yaw = _state(m, rng.uniform(0, 30, size=(n, 2)), yaw=rng.uniform(-3, 3, n))
     P = m.packed()[0]
     pairs = {tuple(p) for p in K.candidate_pairs(P, pos, yaw, 1.0, 0.0)}
-    # Brute force on the same padded bounding boxes.
-    c, s = np.abs(np.cos(yaw)), np.abs(np.sin(yaw))
-    reach = m.particle_access_depth_m.max(1)
-    hd, hw = 0.5 * sizes[:, 1] + reach, 0.5 * sizes[:, 0] + reach
-    ex, ey = c * hd + s * hw, s * hd + c * hw
+    # Brute force on the world bounding boxes of footprint plus access boxes: the
+    # access box of side k (back, left, front, right) extends the footprint there.
+    a = m.particle_access_depth_m
+    local = np.stack([
+        np.stack([-0.5 * sizes[:, 1] - a[:, 0], -0.5 * sizes[:, 0] - a[:, 3]], 1),
+        np.stack([0.5 * sizes[:, 1] + a[:, 2], -0.5 * sizes[:, 0] - a[:, 3]], 1),
+        np.stack([0.5 * sizes[:, 1] + a[:, 2], 0.5 * sizes[:, 0] + a[:, 1]], 1),
+        np.stack([-0.5 * sizes[:, 1] - a[:, 0], 0.5 * sizes[:, 0] + a[:, 1]], 1),
+    ], 1)
+    c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+    wx = pos[:, None, 0] + c * local[..., 0] - s * local[..., 1]
+    wy = pos[:, None, 1] + s * local[..., 0] + c * local[..., 1]
+    lo, hi = np.stack([wx.min(1), wy.min(1)], 1), np.stack([wx.max(1), wy.max(1)], 1)
     expect = {
         (i, j)
         for i in range(n)
         for j in range(i + 1, n)
-        if abs(pos[i, 0] - pos[j, 0]) <= ex[i] + ex[j] and abs(pos[i, 1] - pos[j, 1]) <= ey[i] + ey[j]
+        if np.all(lo[i] <= hi[j] + 1e-12) and np.all(lo[j] <= hi[i] + 1e-12)
     }
     assert pairs == expect
+    assert 0 < len(pairs) < n * (n - 1) // 20  # a real test: some pairs, far from all
 
 
 def test_nested_rigid_groups_compose_offsets_once():
