@@ -1198,6 +1198,32 @@ def access_side(xo, yo, co, so, wo, do, depth_m, side, xi, yi, ci, si, wi, di, m
 
 
 @njit(cache=True, error_model="numpy")
+def access_zones(P):
+    """(n, 3): center (in the item's frame) and radius of a circle around each item's
+    access boxes (radius -1 for items without any), from their bounding box. Local,
+    because a Gauss–Seidel pass moves items while it runs (but never turns them)."""
+    n = P.role.shape[0]
+    zone = np.empty((n, 3))
+    for i in range(n):
+        if P.access_max[i] <= 0.0:
+            zone[i, 2] = -1.0
+            continue
+        hd = 0.5 * P.size[i, 1]
+        hw = 0.5 * P.size[i, 0]
+        a0, a1, a2, a3 = P.access_depth[i, 0], P.access_depth[i, 1], P.access_depth[i, 2], P.access_depth[i, 3]
+        # Local bounding box of the boxes that exist: behind and ahead span the width,
+        # left and right the depth.
+        x0 = -hd - a0 if a0 > 0.0 else (-hd if a1 > 0.0 or a3 > 0.0 else hd)
+        x1 = hd + a2 if a2 > 0.0 else (hd if a1 > 0.0 or a3 > 0.0 else -hd)
+        y0 = -hw - a3 if a3 > 0.0 else (-hw if a0 > 0.0 or a2 > 0.0 else hw)
+        y1 = hw + a1 if a1 > 0.0 else (hw if a0 > 0.0 or a2 > 0.0 else -hw)
+        zone[i, 0] = 0.5 * (x0 + x1)
+        zone[i, 1] = 0.5 * (y0 + y1)
+        zone[i, 2] = 0.5 * math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2)
+    return zone
+
+
+@njit(cache=True, error_model="numpy")
 def access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, out, project):
     """Accessibility of both items of every candidate pair: with ``project``, push the
     intruder out of each access box it enters by ``k`` of the depth (the owner takes
@@ -1207,19 +1233,24 @@ def access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, out, project):
     """
     size = P.size
     radius = P.radius
-    access_max = P.access_max
     depth = P.access_depth
+    zone = access_zones(P)
     for p in range(pairs.shape[0]):
         total = 0.0
         for turn_ in range(2):
             owner = pairs[p, turn_]
             other = pairs[p, 1 - turn_]
-            if access_max[owner] <= 0.0 or P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
+            # Most pairs are rejected here, by the circle around the owner's access boxes.
+            if zone[owner, 2] < 0.0:
+                continue
+            zx = pos[owner, 0] + cs[owner, 0] * zone[owner, 0] - cs[owner, 1] * zone[owner, 1]
+            zy = pos[owner, 1] + cs[owner, 1] * zone[owner, 0] + cs[owner, 0] * zone[owner, 1]
+            reach = zone[owner, 2] + radius[other]
+            if (zx - pos[other, 0]) ** 2 + (zy - pos[other, 1]) ** 2 >= reach * reach:
+                continue
+            if P.role[owner] != ITEM or P.role[other] != ITEM or not P.collides[other]:
                 continue
             if P.parent[owner] >= 0 and P.parent[owner] == P.parent[other]:
-                continue
-            reach = radius[owner] + access_max[owner] + radius[other]
-            if (pos[owner, 0] - pos[other, 0]) ** 2 + (pos[owner, 1] - pos[other, 1]) ** 2 >= reach * reach:
                 continue
             if abs(pos[owner, 2] - pos[other, 2]) >= 0.5 * (size[owner, 2] + size[other, 2]) - Z_TOUCH_M:
                 continue

@@ -162,12 +162,14 @@ def initial_state(model: Model, rng: np.random.Generator) -> State:
 
 
 def _start_near_partners(model, pos, random_xy, rng):
-    """A free item tied to another by an "eq" or "max" distance constraint starts at
-    a random point within that distance of its partner instead of anywhere on the
-    floor (beyond the paper, like :func:`_start_on_curves`): a chair starts near its
-    table. The paper's uniform start leaves partners on opposite sides of a large
-    floor, and pulling them together through a crowd of items takes hundreds of
-    iterations; in a small room it makes no difference.
+    """A free item tied to another by a "max" distance constraint starts at a random
+    point within that distance of its partner instead of anywhere on the floor
+    (beyond the paper, like :func:`_start_on_curves`). The paper's uniform start
+    leaves such partners on opposite sides of a large floor, and pulling them
+    together through a crowd takes hundreds of iterations. "eq" distances are left
+    alone: they mostly seat chairs around a focal point, and chairs that arrive from
+    random directions spread around their table, while chairs started next to it
+    bunch up (the picnic's median energy rose from 0.47 to 0.60 when they did).
 
     Each item moves at most once, in constraint order, so a chain of constraints
     starts as a chain; ``random_xy`` (n,) marks the items whose start was random.
@@ -175,7 +177,7 @@ def _start_near_partners(model, pos, random_xy, rng):
     moved = np.zeros(model.n, bool)
     body = model.particle_body
     for (i, j), rest, mode in zip(model.distance_pairs, model.distance_rest_m, model.distance_mode):
-        if mode == codes.MIN or body[i] != i or body[j] != j:
+        if mode != codes.MAX or body[i] != i or body[j] != j:
             continue
         if random_xy[j] and not moved[j]:
             anchor, mover = i, j
