@@ -12,7 +12,7 @@ OpenCV (x right, y down, z forward). Poses are 4x4 arrays named ``camera_from_fl
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import cv2
@@ -117,6 +117,18 @@ class Calibration:
     detector: str
     board: Board
     warnings: tuple[str, ...] = field(default=())
+
+    def scaled(self, scale: float) -> "Calibration":
+        """The same calibration for the photo resized by ``scale`` (pixel-grid work at a
+        working size)."""
+        if scale == 1.0:
+            return self
+        S = np.diag([scale, scale, 1.0])
+        horizon = self.horizon.copy()
+        horizon[2] *= scale
+        return replace(self, intrinsics=replace(self.intrinsics, K=S @ self.intrinsics.K),
+                       image_from_floor=S @ self.image_from_floor, horizon=horizon,
+                       size_px=(round(self.size_px[0] * scale), round(self.size_px[1] * scale)))
 
     @property
     def world_from_camera(self) -> np.ndarray:

@@ -501,7 +501,7 @@ def _segment_cmd(args):
              out.with_name(out.stem + "_overlay.png"): encode_image(overlay, ".png")}
     if polygon is not None:
         report = {"photo": str(args.photo), "method": seg.method, "floor_fraction": float(seg.mask.mean()),
-                  "floor": polygon.to_json(), "warnings": warnings}
+                  "skirting_m": seg.skirting_m, "floor": polygon.to_json(), "warnings": warnings}
         files[out.with_suffix(".json")] = json.dumps(report, indent=2) + "\n"
     _write_all(files, out.parent)
     if not args.quiet:
@@ -551,7 +551,7 @@ def _measure_cmd(args):
         warnings.append(f"wall height not measured: {height.reason}")
     report = {"photo": str(args.photo), "stager_version": __version__,
               "calibration": calibration.to_json(),
-              "floor": {"method": seg.method, **polygon.to_json()},
+              "floor": {"method": seg.method, "skirting_m": seg.skirting_m, **polygon.to_json()},
               "height": height.to_json(),
               "timings": {k: round(v, 3) for k, v in timings.items()},
               "warnings": warnings}

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .segment import MAX_FLOOR_DISTANCE_M, floor_distance_m, _scaled
+from .segment import MAX_FLOOR_DISTANCE_M, floor_distance_m
 
 # Contour work happens at this size at most: enough to place a wall line within a
 # couple of centimeters at room distances, and fast for 12 MP photos.
@@ -103,7 +103,7 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
         raise ValueError(f"floor mask of {mask.shape[1]} x {mask.shape[0]} px does not match the "
                          f"calibrated photo's {cols} x {rows} px")
     scale = min(1.0, POLYGON_LONG_PX / max(rows, cols))
-    small_cal = _scaled(calibration, scale)
+    small_cal = calibration.scaled(scale)
     size = small_cal.size_px
     small = cv2.resize(mask.astype(np.uint8), size, interpolation=cv2.INTER_AREA) > 0 if scale < 1 else mask
     distance = floor_distance_m(small.shape, small_cal)

@@ -13,11 +13,13 @@ Images are RGB ``(rows, cols, 3)`` uint8; masks are ``(rows, cols)`` bool; point
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
+
+from .skirting import trim_skirting
 
 DEFAULT_MODEL = Path(__file__).resolve().parent.parent / "models" / "floor_segnet.onnx"
 # GrabCut's cost grows with the pixel count; edges it can fix are a few pixels wide at
@@ -229,12 +231,16 @@ class Segmentation:
     method : str
         ``"onnx+grabcut"``, ``"onnx"`` or ``"grabcut"``.
     warnings : tuple of str
+    skirting_m : float or None
+        Height of the skirting board trimmed from the mask's top edge
+        (:func:`augment.skirting.trim_skirting`), when one was.
     """
 
     mask: np.ndarray
     probability: np.ndarray | None
     method: str
     warnings: tuple[str, ...] = field(default=())
+    skirting_m: float | None = None
 
 
 def _working_scale(shape, long_px) -> float:
@@ -350,7 +356,11 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     # Linear interpolation of the 0/1 mask, cut at one half: edges come out straight
     # rather than staircased at the working pixel size.
     mask = cv2.resize(mask_small.astype(np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
-    return Segmentation(mask, probability, name, tuple(warnings))
+    skirting_m = None
+    if calibration is not None and name != "onnx" and mask.any():
+        # The refined mask's top edge sits on the skirting boards; the floor ends below.
+        mask, skirting_m = trim_skirting(image, mask, calibration)
+    return Segmentation(mask, probability, name, tuple(warnings), skirting_m)
 
 
 def _geometry_trimap(shape_small, scale, calibration) -> np.ndarray:
@@ -359,26 +369,13 @@ def _geometry_trimap(shape_small, scale, calibration) -> np.ndarray:
     floor beyond any room's reach is not, the board is, above the horizon is not.
     (Measured on 32 held-out renders: mean IoU 0.907 with the board's distance as the
     limit, 0.868 with 1.6 times it, 0.755 with the board alone as the seed.)"""
-    distance = floor_distance_m(shape_small, _scaled(calibration, scale))
+    distance = floor_distance_m(shape_small, calibration.scaled(scale))
     board_distance_m = float(np.hypot(*np.linalg.inv(calibration.camera_from_floor)[:2, 3]))
     trimap = np.full(shape_small, cv2.GC_PR_BGD, np.uint8)
     trimap[distance < board_distance_m] = cv2.GC_PR_FGD
     trimap[distance > MAX_FLOOR_DISTANCE_M] = cv2.GC_BGD
     _seed_geometry(trimap, shape_small, scale, calibration)
     return trimap
-
-
-def _scaled(calibration, scale):
-    """The calibration seen through an image scaled by ``scale`` (for pixel-grid work)."""
-    if scale == 1.0:
-        return calibration
-    S = np.diag([scale, scale, 1.0])
-    intrinsics = replace(calibration.intrinsics, K=S @ calibration.intrinsics.K)
-    horizon = calibration.horizon.copy()
-    horizon[2] *= scale
-    return replace(calibration, intrinsics=intrinsics, image_from_floor=S @ calibration.image_from_floor,
-                   horizon=horizon, size_px=(round(calibration.size_px[0] * scale),
-                                             round(calibration.size_px[1] * scale)))
 
 
 def _clean(mask: np.ndarray, calibration, scale) -> np.ndarray:

@@ -1,0 +1,90 @@
+"""Skirting boards trimmed from the floor mask, on ray-cast rooms with known answers."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from augment.board import Board
+from augment.calibrate import Calibration, Intrinsics
+from augment.skirting import trim_skirting
+
+WALL_Y_M = 4.0
+SIZE = (960, 720)
+
+
+def _room(board_m: float, shadow: bool = False, seed: int = 0):
+    """A camera 1.5 m up looking at a wall 4 m ahead, 20 degrees down. Returns the photo,
+    the true floor mask, the floor plus the board's face (the mistake to undo) and the
+    exact calibration."""
+    w, h = SIZE
+    K = np.array([[800.0, 0, (w - 1) / 2], [0, 800.0, (h - 1) / 2], [0, 0, 1]])
+    pitch = np.radians(20.0)
+    x = np.array([1.0, 0, 0])
+    z = np.array([0, np.cos(pitch), -np.sin(pitch)])
+    world_from_camera = np.eye(4)
+    world_from_camera[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    world_from_camera[:3, 3] = [0.0, 0.0, 1.5]
+    camera_from_floor = np.linalg.inv(world_from_camera)
+
+    u, v = np.meshgrid(np.arange(w), np.arange(h))
+    rays = np.stack([(u - K[0, 2]) / K[0, 0], (v - K[1, 2]) / K[1, 1], np.ones_like(u, float)], -1)
+    d = rays @ world_from_camera[:3, :3].T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_floor = np.where(d[..., 2] < 0, -1.5 / d[..., 2], np.inf)
+        t_wall = np.where(d[..., 1] > 0, WALL_Y_M / d[..., 1], np.inf)
+    floor = t_floor < t_wall
+    hit_x = d[..., 0] * np.minimum(t_floor, t_wall)
+    hit_y = d[..., 1] * np.minimum(t_floor, t_wall)
+    hit_z = 1.5 + d[..., 2] * np.minimum(t_floor, t_wall)
+    board = ~floor & (hit_z < board_m)
+
+    rng = np.random.default_rng(seed)
+    image = np.empty((h, w, 3))
+    grain = 12 * np.sin(hit_x * 40.0)[..., None]  # planks along the view
+    image[:] = (200, 185, 160)  # wall
+    image[floor] = (np.array([150.0, 110.0, 70.0]) + grain)[floor]
+    if shadow:  # a soft darkening at the foot of the wall, no edge
+        image[floor] *= (1 - 0.35 * np.exp(-(WALL_Y_M - hit_y[floor]) / 0.15))[:, None]
+    image[board] = (238, 236, 230)
+    image += rng.normal(0, 3, image.shape)
+    image = np.clip(image, 0, 255).astype(np.uint8)
+
+    R, t = camera_from_floor[:3, :3], camera_from_floor[:3, 3]
+    H = K @ np.column_stack([R[:, 0], R[:, 1], t])
+    horizon = np.linalg.inv(K).T @ R[:, 2]
+    calibration = Calibration(
+        size_px=SIZE, intrinsics=Intrinsics(K, np.zeros(5), "truth", 0.0), camera_from_floor=camera_from_floor,
+        camera_height_m=1.5, floor_plane_camera=np.append(R[:, 2], -R[:, 2] @ t), image_from_floor=H / H[2, 2],
+        horizon=horizon / np.hypot(*horizon[:2]), rms_px=0.0, corners_px=np.zeros((0, 2)),
+        corner_ids=np.zeros(0, np.int64), detector="truth", board=Board())
+    return image, floor, floor | board, calibration
+
+
+@pytest.mark.parametrize("board_m", [0.06, 0.12])
+def test_board_is_trimmed_to_the_floor_line(board_m):
+    image, truth, mask, calibration = _room(board_m)
+    band = mask & ~truth
+    assert band.sum() > 5 * SIZE[0]  # the mistake is a real strip, several pixels tall
+    before = image.copy(), mask.copy()
+    trimmed, height_m = trim_skirting(image, mask, calibration)
+    assert height_m == pytest.approx(board_m, abs=0.01)
+    assert (trimmed & band).sum() < 0.05 * band.sum()  # the strip is gone
+    assert (truth & ~trimmed).sum() < 0.002 * truth.sum()  # and the floor stays
+    np.testing.assert_array_equal(before[0], image)  # inputs untouched
+    np.testing.assert_array_equal(before[1], mask)
+
+
+def test_shadow_at_the_wall_is_not_a_board():
+    image, truth, _, calibration = _room(0.0, shadow=True)
+    trimmed, height_m = trim_skirting(image, truth, calibration)
+    assert height_m is None
+    np.testing.assert_array_equal(trimmed, truth)
+
+
+def test_floor_reaching_the_top_of_the_photo_is_left_alone():
+    image, truth, mask, calibration = _room(0.12)
+    cropped = mask.copy()
+    cropped[: SIZE[1] // 2] = True  # no wall above the floor anywhere: nothing to measure
+    trimmed, height_m = trim_skirting(image, cropped, calibration)
+    assert height_m is None
+    np.testing.assert_array_equal(trimmed, cropped)
