@@ -23,7 +23,7 @@ from ..board import CHARUCO_DICTIONARY, Board
 from ..gl import Renderer, pyrender
 from .camera import Shot, place_board, random_handling, random_shot, random_size
 from .photo import degrade
-from .rooms import Clutter, Room, add_clutter, random_room
+from .rooms import Clutter, Room, add_clutter, add_furniture, random_room
 from .scene import SEG_CEILING, SEG_FLOOR, SEG_WALL, build_scene
 
 FORMAT = "stager-synth-1"
@@ -83,7 +83,7 @@ def _board_cover(board: Board, world_from_board: np.ndarray, fraction: float) ->
 
 def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = None,
                   board: Board | None = None, clutter: bool = True, photographic: bool = True,
-                  board_hidden: float = 0.0) -> Sample:
+                  board_hidden: float = 0.0, furnished: float = 0.0) -> Sample:
     """Render one synthetic room photo with its ground truth.
 
     Parameters
@@ -100,6 +100,10 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         Allow cartons and radiators on the floor.
     photographic : bool
         Apply exposure, white balance, vignetting, blur and noise (JPEG happens on write).
+    furnished : float
+        Chance that the room gets 1-6 pieces of catalog furniture (0: never, and the
+        random stream is the same as without this option). Empty rooms are what Stager
+        is for; furnished ones teach the floor model where furniture ends.
     board_hidden : float
         Put a flat carton over this fraction of the board's squares (across its width, from
         its +x edge): a partly hidden board, as ChArUco boards allow. The truth's
@@ -127,6 +131,8 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     outline = (board.outline_m() @ world_from_board[:3, :3].T + world_from_board[:3, 3])[:, :2]
     if clutter:
         room = add_clutter(rng, room, _keep_out(shot, outline))
+    if furnished > 0 and rng.random() < furnished:
+        room = add_furniture(rng, room, _keep_out(shot, outline))
     if board_hidden > 0:
         room = replace(room, clutter=room.clutter + (_board_cover(board, world_from_board, board_hidden),))
 

@@ -50,6 +50,8 @@ def main(argv=None) -> int:
     parser.add_argument("--square", type=float, default=DEFAULT_SQUARE_MM,
                         help=f"square size in mm (default {DEFAULT_SQUARE_MM:g})")
     parser.add_argument("--no-clutter", dest="clutter", action="store_false", help="keep floors clean")
+    parser.add_argument("--furnished", type=float, default=0.0, metavar="P",
+                        help="chance that a room gets 1-6 pieces of furniture (default 0: empty rooms)")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="render processes (default: one per core)")
     parser.add_argument("--sheet", type=Path, default=None,
@@ -70,7 +72,9 @@ def main(argv=None) -> int:
         print(f"error: cannot write to --out {args.out}: {error.strerror}", file=sys.stderr)
         return 2
 
-    options = dict(seed=args.seed, size=args.size, out=args.out, clutter=args.clutter,
+    if not 0.0 <= args.furnished <= 1.0:
+        parser.error(f"--furnished {args.furnished}: must be a chance between 0 and 1, e.g. 0.7")
+    options = dict(seed=args.seed, size=args.size, out=args.out, clutter=args.clutter, furnished=args.furnished,
                    board=Board(args.board.cols, args.board.rows, args.square, kind=args.board.kind))
     workers = max(1, min(args.workers, args.count))
     start = time.perf_counter()

@@ -222,3 +222,48 @@ def add_clutter(rng: np.random.Generator, room: Room, keep_out: list[np.ndarray]
                     items.append(c)
                     break
     return Room(room.polygon_m, room.height_m, room.openings, tuple(items))
+
+
+# Catalog kinds that furnish a room (rugs stay out: they are floor to a layout).
+FURNITURE_KINDS = ("sofa", "armchair", "coffee_table", "tv_stand", "bookcase", "dining_table", "chair", "desk",
+                   "office_chair", "bed", "nightstand", "wardrobe", "dresser", "plant", "floor_lamp", "side_table")
+
+
+def add_furniture(rng: np.random.Generator, room: Room, keep_out: list[np.ndarray], max_items: int = 6) -> Room:
+    """Add 1 to ``max_items`` pieces of furniture (catalog kinds at their sizes, give or
+    take 15 %), most with their backs to a wall, the rest anywhere, clear of the board's
+    sight lines, the door swings and each other. They are ``Clutter`` whose ``kind`` is
+    a catalog kind; the scene builds them with :mod:`augment.furniture`."""
+    from layout.catalog import CATALOG
+
+    poly = room.polygon_m
+    items = list(room.clutter)
+    blocked = list(keep_out)
+    for o in room.openings:
+        if o.kind == "door":
+            a, b = o.segment_m(poly)
+            n = inward_normal(poly, o.wall)
+            blocked.append(np.array([a, b, b + n * (o.end_m - o.start_m), a + n * (o.end_m - o.start_m)]))
+    lo, hi = poly.min(axis=0), poly.max(axis=0)
+    for _ in range(rng.integers(1, max_items + 1)):
+        kind = FURNITURE_KINDS[rng.integers(len(FURNITURE_KINDS))]
+        for _ in range(20):
+            size = tuple(float(v) for v in np.asarray(CATALOG[kind].size_m) * rng.uniform(0.85, 1.15, 3))
+            if rng.random() < 0.6:
+                wall = int(rng.integers(len(poly)))
+                a, b = wall_ends(poly, wall)
+                n = inward_normal(poly, wall)
+                center = a + rng.uniform(0.1, 0.9) * (b - a) + n * (size[1] / 2 + 0.03)
+                facing = float(np.arctan2(n[1], n[0]))
+            else:
+                center = rng.uniform(lo, hi)
+                facing = float(rng.uniform(-np.pi, np.pi))
+            # Clutter turns its width axis; the front faces a quarter turn on.
+            c = Clutter(kind, tuple(float(v) for v in center), size, facing - np.pi / 2)
+            foot = c.footprint_m()
+            if contains(poly, foot, margin_m=0.005).all() and not any(
+                    _overlaps(foot, k) for k in blocked + [i.footprint_m() for i in items]):
+                items.append(c)
+                break
+    return Room(room.polygon_m, room.height_m, room.openings, tuple(items))
+

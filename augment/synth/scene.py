@@ -11,11 +11,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..board import Board
+from ..furniture import PlacedItem, item_mesh
 from ..gl import Scene as GLScene
 from ..gl import gl_from_cv_pose, pyrender, pyrender_camera
 from . import textures
 from .camera import Shot
-from .rooms import Room, contains, inward_normal, wall_ends
+from .rooms import FURNITURE_KINDS, Room, contains, inward_normal, wall_ends
 
 WALL_THICKNESS_M = 0.15
 # Trim and clutter sink this far into the wall, floor or ceiling they touch: where two
@@ -403,6 +404,14 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                 b.box((c.center_m[0], c.center_m[1], c.size_m[2] / 2 - _EMBED_M), c.size_m, c.yaw_rad)
         if b.positions:
             add(b.mesh(_material(rng, _random_tint(rng, base, spread), closed=True)), SEG_OTHER)
+
+    # Furniture (catalog kinds), built as the renderer builds it for staged photos.
+    for c in room.clutter:
+        if c.kind in FURNITURE_KINDS:
+            item = PlacedItem(c.kind, (c.center_m[0], c.center_m[1], c.size_m[2] / 2), c.yaw_rad + np.pi / 2,
+                              c.size_m)
+            mesh = item_mesh(item, seed=int(rng.integers(1 << 30)))
+            add(pyrender.Mesh.from_trimesh(mesh, smooth=False), SEG_OTHER)
 
     # The board: printed paper, slightly off-white, matte.
     sheet = board.image(px_per_square=32 if texture_px <= 256 else 64)

@@ -251,3 +251,34 @@ def test_cli_rejects_bad_arguments(tmp_path, capsys):
     with pytest.raises(SystemExit):
         synth_main(["--count", "0", "--out", str(tmp_path)])
     assert "--count 0" in capsys.readouterr().err
+
+
+def test_furnished_rooms_hide_the_floor_under_furniture(renderer):
+    """With ``furnished=1`` every room gets catalog furniture, and the middle of each solid
+    piece (a point inside its body) is not floor in the mask."""
+    solid = {"sofa", "armchair", "bookcase", "wardrobe", "dresser", "bed", "tv_stand", "nightstand"}
+    checked = 0
+    for seed in range(8):
+        sample = render_sample(seed, renderer, size_px=(640, 480), furnished=1.0, photographic=False)
+        pieces = [c for c in sample.truth["room"]["clutter"] if c["kind"] not in ("box", "radiator")]
+        assert pieces, f"seed {seed}: no furniture"
+        K, cfw = np.array(sample.truth["K"]), np.array(sample.truth["camera_from_world"])
+        for c in pieces:
+            if c["kind"] not in solid:
+                continue
+            middle = np.append(np.mean(c["footprint_m"], axis=0), 0.5 * c["height_m"])
+            p = cfw[:3, :3] @ middle + cfw[:3, 3]
+            if p[2] <= 0.1:
+                continue
+            u, v = (K @ p)[:2] / p[2]
+            if 0 <= u < 640 and 0 <= v < 480:
+                assert not sample.floor_mask[int(v), int(u)], (seed, c["kind"])
+                checked += 1
+    assert checked >= 2
+
+
+def test_cli_rejects_a_bad_furnished_chance(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        synth_main(["--count", "1", "--out", str(tmp_path), "--furnished", "1.5"])
+    assert exit_info.value.code == 2
+    assert "--furnished 1.5" in capsys.readouterr().err
