@@ -466,22 +466,51 @@ def _furniture_source(room: str | None, spec):
     return f"preset {name}", name
 
 
-def _spec_for_floor(source, polygon_m: np.ndarray, height_m: float, warnings: list):
+def open_edges(polygon_m: np.ndarray, floor) -> list[int]:
+    """Edges of ``polygon_m`` (the layout's floor, counter-clockwise) that are not walls:
+    those whose midpoint is nearest an edge of the measured floor that the photo's edge
+    or the distance cut off (``FloorPolygon.edge_kind`` other than ``"boundary"``).
+
+    Parameters
+    ----------
+    polygon_m : (m, 2) float64
+        The floor the layouts are made on (the measured one, shrunk by the wall margin).
+    floor : FloorPolygon
+
+    Returns
+    -------
+    list of int
+        Edge numbers k (corner k to k + 1).
+    """
+    src = np.asarray(floor.polygon_m, dtype=np.float64)
+    a, b = src, np.roll(src, -1, axis=0)
+    ab = b - a
+    out = []
+    for k, mid in enumerate(0.5 * (polygon_m + np.roll(polygon_m, -1, axis=0))):
+        t = np.clip(((mid - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-12), 0.0, 1.0)
+        nearest = int(np.argmin(np.linalg.norm(a + t[:, None] * ab - mid, axis=1)))
+        if floor.edge_kind[nearest] != "boundary":
+            out.append(k)
+    return out
+
+
+def _spec_for_floor(source, polygon_m: np.ndarray, height_m: float, warnings: list, open_edges=()):
     """The furniture spec on the measured floor: a preset furnished for its area, or a
     spec file's items (its room, doors, windows and item positions are in its own frame,
-    not the photo's: they are replaced or left out, with a warning)."""
+    not the photo's: they are replaced or left out, with a warning). ``open_edges`` are
+    the floor's edges that are not walls."""
     from layout.spec import spec_from_dict
 
     poly = np.asarray(polygon_m, dtype=np.float64).round(6).tolist()
+    room = {"height": height_m, "polygon": poly, "open_edges": list(open_edges)}
     if isinstance(source, str):
-        return spec_from_dict({"room": {"preset": source, "height": height_m, "polygon": poly}},
-                              where=f"preset {source}")
+        return spec_from_dict({"room": {"preset": source, **room}}, where=f"preset {source}")
     sp = source
     if sp.doors or sp.windows:
         warnings.append(f"{sp.path}: its {len(sp.doors)} door(s) and {len(sp.windows)} window(s) are placed in "
                         "the spec's own room, not the photo's floor; they are left out")
     if sp.preset is not None:
-        furnished = spec_from_dict({"room": {"preset": sp.preset, "height": height_m, "polygon": poly},
+        furnished = spec_from_dict({"room": {"preset": sp.preset, **room},
                                     "constraints": list(sp.constraint_tables)}, where=str(sp.path))
         return dataclasses.replace(furnished, path=sp.path, solver=sp.solver)
     placed = [i.id for i in sp.items if i.at_m is not None or i.fixed]
@@ -491,7 +520,7 @@ def _spec_for_floor(source, polygon_m: np.ndarray, height_m: float, warnings: li
                         "not the photo's floor; they are ignored")
     return dataclasses.replace(
         sp, items=tuple(dataclasses.replace(i, at_m=None, fixed=False) for i in sp.items),
-        groups=tuple(dataclasses.replace(g, at_m=None, fixed=False) for g in sp.groups))
+        groups=tuple(dataclasses.replace(g, at_m=None, fixed=False) for g in sp.groups), open_edges=tuple(open_edges))
 
 
 def dropped_summary(dropped: list) -> str:
@@ -887,7 +916,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         room_height = float(height.height_m)
         with clock("furniture"):
             poly = _layout_floor(floor, room_height, photo, tol)
-            fitted, dropped = fit_spec(_spec_for_floor(source, poly, room_height, warnings), poly, room_height, tol)
+            spec = _spec_for_floor(source, poly, room_height, warnings, open_edges(poly, floor))
+            fitted, dropped = fit_spec(spec, poly, room_height, tol)
             if not fitted.items:
                 raise _too_small(floor.area_m2, dropped)
         bar.step()

@@ -197,6 +197,37 @@ def nearest_on_polygon(poly, x, y):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def nearest_wall(R, x, y):
+    """:func:`nearest_on_polygon` over the wall edges only (open edges skipped); the
+    edge is -1 when the room has no wall."""
+    poly = R.polygon
+    m = poly.shape[0]
+    best = 1e300
+    bx = 0.0
+    by = 0.0
+    be = -1
+    for e in range(m):
+        if not R.wall[e]:
+            continue
+        ax = poly[e, 0]
+        ay = poly[e, 1]
+        ex = poly[(e + 1) % m, 0] - ax
+        ey = poly[(e + 1) % m, 1] - ay
+        ll = ex * ex + ey * ey
+        t = ((x - ax) * ex + (y - ay) * ey) / ll if ll > 0.0 else 0.0
+        t = min(1.0, max(0.0, t))
+        qx = ax + t * ex
+        qy = ay + t * ey
+        d2 = (x - qx) ** 2 + (y - qy) ** 2
+        if d2 < best:
+            best = d2
+            bx = qx
+            by = qy
+            be = e
+    return bx, by, be, math.sqrt(best)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def inside_polygon(poly, x, y):
     """Crossing-number point-in-polygon test."""
     m = poly.shape[0]
@@ -511,8 +542,11 @@ def residual_balance(B, P, pos, yaw, out):
 
 @njit(cache=True, inline="always", error_model="numpy")
 def wall_frame(R, x, y):
-    """Signed distance to the walls (positive inside), inward direction, nearest edge."""
-    qx, qy, e, dist = nearest_on_polygon(R.polygon, x, y)
+    """Signed distance to the nearest wall (positive inside the floor), the direction
+    away from it, and its edge (-1: the room has no wall, and the rest is 0)."""
+    qx, qy, e, dist = nearest_wall(R, x, y)
+    if e < 0:
+        return 0.0, 0.0, 0.0, -1
     if dist < EPS:
         return 0.0, R.edge_normal[e, 0], R.edge_normal[e, 1], e
     nx = (x - qx) / dist
@@ -531,9 +565,9 @@ def project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen):
         if P.inv_mass[P.body[i]] == 0.0:
             continue
         x, y = pos[i, 0], pos[i, 1]
-        sd, nx, ny, _ = wall_frame(R, x, y)
+        sd, nx, ny, e = wall_frame(R, x, y)
         C = sd - W.rest[c]
-        if (W.mode[c] == MIN and C >= 0.0) or (W.mode[c] == MAX and C <= 0.0):
+        if e < 0 or (W.mode[c] == MIN and C >= 0.0) or (W.mode[c] == MAX and C <= 0.0):
             continue
         k, memo = stiffness_memo(W.k0[c], W.schedule[c], it, rate, memo)
         push(P.body[i], -k * C * nx, -k * C * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
@@ -543,8 +577,8 @@ def project_wall_distance(W, R, P, pos, yaw, acc, jac, it, rate, degen):
 def residual_wall_distance(W, R, P, pos, yaw, out):
     for c in range(W.item.shape[0]):
         x, y = pos[W.item[c], 0], pos[W.item[c], 1]
-        sd, _, _, _ = wall_frame(R, x, y)
-        C = sd - W.rest[c]
+        sd, _, _, e = wall_frame(R, x, y)
+        C = 0.0 if e < 0 else sd - W.rest[c]
         if W.mode[c] == MIN:
             C = min(C, 0.0)
         elif W.mode[c] == MAX:
@@ -555,7 +589,9 @@ def residual_wall_distance(W, R, P, pos, yaw, out):
 @njit(cache=True, inline="always", error_model="numpy")
 def wall_orientation_error(O, R, P, pos, yaw, c):
     x, y, a = pos[O.item[c], 0], pos[O.item[c], 1], yaw[O.item[c]]
-    _, _, e, _ = nearest_on_polygon(R.polygon, x, y)
+    _, _, e, _ = nearest_wall(R, x, y)
+    if e < 0:
+        return 0.0
     want = math.atan2(R.edge_normal[e, 1], R.edge_normal[e, 0]) + O.angle[c]
     return wrap(want - a)
 
@@ -1072,8 +1108,10 @@ def wall_points_pair(P, R, pos, yaw, i, j, model, gap_m):
     and window zones count as wall-bound (they have infinite mass)."""
     xi, yi, ai = pos[i, 0], pos[i, 1], yaw[i]
     xj, yj, aj = pos[j, 0], pos[j, 1], yaw[j]
-    qxi, qyi, _, _ = nearest_on_polygon(R.polygon, xi, yi)
-    qxj, qyj, _, _ = nearest_on_polygon(R.polygon, xj, yj)
+    qxi, qyi, ei, _ = nearest_wall(R, xi, yi)
+    qxj, qyj, ej, _ = nearest_wall(R, xj, yj)
+    if ei < 0 or ej < 0:
+        return 1.0, 0.0, 0.0, True  # no wall to slide along: nothing to do
     dx = qxi - qxj
     dy = qyi - qyj
     dist = math.sqrt(dx * dx + dy * dy)

@@ -56,9 +56,13 @@ class LayoutBuilder:
         simple polygon with at least 3 vertices.
     wall_height_m : float
         Room height; items taller than this are refused.
+    open_edges : iterable of int, optional
+        Edges (k = from vertex k to k + 1, in the order given) that are not walls, such
+        as where a photo cuts the floor off: items stay inside them, but nothing is put
+        against them, turned to them or slid along them.
     """
 
-    def __init__(self, floor_polygon_m, wall_height_m=2.5):
+    def __init__(self, floor_polygon_m, wall_height_m=2.5, open_edges=()):
         poly = np.asarray(floor_polygon_m, dtype=np.float64)
         if poly.ndim != 2 or poly.shape[1] != 2:
             raise LayoutError(f"room.polygon: expected a list of [x, y] points, got shape {poly.shape}")
@@ -78,7 +82,16 @@ class LayoutBuilder:
         area = polygon_area(poly)
         if abs(area) < 1e-9:
             raise LayoutError("room.polygon: has zero area")
+        m = len(poly)
+        wall = np.ones(m, bool)
+        for k in open_edges:
+            if not (isinstance(k, (int, np.integer)) and 0 <= int(k) < m):
+                raise LayoutError(f"room.open_edges: {k!r} is not an edge number 0-{m - 1} of the "
+                                  f"{m}-corner polygon (edge k runs from corner k to corner k + 1)")
+            wall[int(k)] = False
         self.polygon_m = poly if area > 0 else poly[::-1].copy()
+        # Reversing the corners turns edge k into edge m - 2 - k.
+        self.edge_wall = wall if area > 0 else wall[(m - 2 - np.arange(m)) % m]
         self.wall_height_m = float(_finite("room.height", wall_height_m, positive=True))
         self._p = []  # particle records (dicts)
         self._groups = {}
@@ -524,6 +537,7 @@ class LayoutBuilder:
             floor_polygon_m=poly.copy(),
             floor_edge_normal=normals,
             floor_reflex=reflex,
+            floor_edge_wall=self.edge_wall.copy(),
             floor_clearance_m=clearance,
             floor_grid_origin_m=grid_origin,
             floor_grid_cell_m=np.array([grid_cell]),

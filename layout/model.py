@@ -28,7 +28,7 @@ WallOrientations = namedtuple("WallOrientations", "item angle k0 schedule")
 Orientations = namedtuple("Orientations", "pairs angle mode k0 schedule")
 Stacks = namedtuple("Stacks", "pairs k0 schedule")
 Curves = namedtuple("Curves", "group kind params start members spacing anchor_fixed k0 schedule")
-Room = namedtuple("Room", "polygon edge_normal reflex clearance grid_origin grid_cell")
+Room = namedtuple("Room", "polygon edge_normal reflex clearance grid_origin grid_cell wall")
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,6 +65,8 @@ class Model:
     floor_polygon_m: np.ndarray  # (m, 2) counter-clockwise
     floor_edge_normal: np.ndarray  # (m, 2) inward unit normal of edge k -> k+1
     floor_reflex: np.ndarray  # (m,) bool: vertex is an inner (reflex) corner
+    floor_edge_wall: np.ndarray  # (m,) bool: edge k -> k+1 is a wall (False: open, e.g. the
+    #   photo's edge: items stay inside it but are not put against it)
     floor_clearance_m: np.ndarray  # (gy, gx) distance to the walls that every point of
     #   the grid cell has at least (0 outside or on a wall); a quick inside test
     floor_grid_origin_m: np.ndarray  # (2,) lower-left corner of cell (0, 0)
@@ -172,7 +174,7 @@ class Model:
                 get("stack", Stacks),
                 get("curve", Curves),
                 Room(self.floor_polygon_m, self.floor_edge_normal, self.floor_reflex, self.floor_clearance_m,
-                     self.floor_grid_origin_m, self.floor_grid_cell_m),
+                     self.floor_grid_origin_m, self.floor_grid_cell_m, self.floor_edge_wall),
             )
             object.__setattr__(self, "_packed", cached)
         return cached

@@ -78,6 +78,7 @@ def plan_figure(
     access_corners_m=None,
     access_depth_m=None,
     kinds=None,
+    open_edges=(),
 ):
     """Top-down plan of a furnished room.
 
@@ -109,6 +110,8 @@ def plan_figure(
         ``access_corners_m``.
     kinds : sequence of str, length n, optional
         Item categories; footprints of one kind share a color. Defaults to ``labels``.
+    open_edges : iterable of int, optional
+        Edges (k = corner k to k + 1) that are not walls, drawn as a thin dashed line.
 
     Returns
     -------
@@ -221,6 +224,11 @@ def plan_figure(
         PolygonPatch(polygon, closed=True, fill=False, edgecolor=_WALL_COLOR, linewidth=_WALL_PT,
                      joinstyle="miter", zorder=7)
     )
+    for e in open_edges:
+        # Floor color over the wall, then a dashed line: the floor goes on here.
+        seg = polygon[[e, (e + 1) % len(polygon)]]
+        ax.plot(seg[:, 0], seg[:, 1], color=_FLOOR_COLOR, linewidth=_WALL_PT + 1.0, solid_capstyle="butt", zorder=8)
+        ax.plot(seg[:, 0], seg[:, 1], color=_WALL_COLOR, linewidth=1.0, linestyle=(0, (4, 3)), zorder=9)
     for seg in doors:
         # Floor color over the wall opens the gap; the thin line marks the door leaf.
         ax.plot(seg[:, 0], seg[:, 1], color=_FLOOR_COLOR, linewidth=_WALL_PT + 1.0,

@@ -207,7 +207,7 @@ def write_outputs(layouts, out_dir, reports=None, title=""):
             door_zones_m=doors, door_segments_m=m.door_segments_m,
             window_segments_m=m.window_segments_m, lanes_m=lane_segments(m, lay),
             overlap_pairs=overlap, access_corners_m=access, access_depth_m=depth,
-            kinds=[m.kinds[i] for i in items],
+            kinds=[m.kinds[i] for i in items], open_edges=np.flatnonzero(~m.floor_edge_wall),
             title=(f"{title}suggestion {k}: E = {lay.energy:.3g}, "
                    f"{rep['overlaps']['count']} overlaps, {verdict}"),
         )

@@ -102,6 +102,7 @@ class Layout:
         return {
             "room": {
                 "polygon_m": m.floor_polygon_m.tolist(),
+                "open_edges": [int(e) for e in np.flatnonzero(~m.floor_edge_wall)],
                 "height_m": m.wall_height_m,
                 "doors_m": m.door_segments_m.tolist(),
                 "windows_m": m.window_segments_m.tolist(),

@@ -26,6 +26,9 @@ Only the fields listed here are allowed: a misspelt field is an error, not ignor
     of a wall); its swing zone, ``clearance`` deep, stays free.
     ``windows``  list of ``{ at = [x, y], width = 1.2, sill = 0.9, height = 1.2,
     clearance = 0.4 }``: items taller than the sill keep ``clearance`` away.
+    ``open_edges`` list of edge numbers (edge k runs from polygon corner k to k + 1)
+    that are not walls, e.g. where a photo cut the floor off: items stay inside
+    them, but none is put against them.
 
 ``[solver]`` (optional)
     Settings of :class:`layout.Solver`: ``max_iterations``, ``min_iterations``,
@@ -116,7 +119,7 @@ from .geometry import polygon_area
 from .solver import Solver
 
 TOP_LEVEL = ("room", "solver", "groups", "items", "constraints")
-ROOM_FIELDS = ("polygon", "height", "preset", "doors", "windows")
+ROOM_FIELDS = ("polygon", "height", "preset", "doors", "windows", "open_edges")
 DOOR_FIELDS = ("at", "width", "clearance", "height")
 WINDOW_FIELDS = ("at", "width", "sill", "height", "clearance")
 SOLVER_FIELDS = {
@@ -255,6 +258,8 @@ class Spec:
     groups, items, constraints : tuples of Group, Item, Constraint
         With a preset: as furnished for the file's own floor (re-furnished by
         :func:`build` for another floor).
+    open_edges : tuple of int
+        Edges of ``polygon_m`` (counter-clockwise order) that are not walls.
     """
 
     path: Path
@@ -268,6 +273,7 @@ class Spec:
     items: tuple
     constraints: tuple
     constraint_tables: tuple = ()
+    open_edges: tuple = ()
 
 
 class _Reader:
@@ -882,11 +888,19 @@ def _parse(r, path, doc):
     room = r.table(doc["room"], "room", ROOM_FIELDS)
     height = r.number(room.get("height", 2.5), "room", "height", positive=True)
     polygon = None
+    open_edges = room.get("open_edges", [])
+    if not isinstance(open_edges, list):
+        raise r.error("room", f"open_edges = {_show(open_edges)} must be a list of edge numbers, e.g. [2]")
+    open_edges = [r.integer(e, "room", "open_edges", minimum=0) for e in open_edges]
+    if open_edges and "polygon" not in room:
+        raise r.error("room", "open_edges needs a polygon: edge k runs from polygon corner k to k + 1")
     if "polygon" in room:
         polygon = r.polygon(room["polygon"], "room.polygon")
         with r.context(None):
-            # The builder knows what a usable floor is (simple, non-degenerate).
-            polygon = LayoutBuilder(polygon, height).polygon_m
+            # The builder knows what a usable floor is (simple, non-degenerate), and
+            # renumbers the open edges when it turns the corners counter-clockwise.
+            b = LayoutBuilder(polygon, height, open_edges=open_edges)
+            polygon, open_edges = b.polygon_m, [int(e) for e in np.flatnonzero(~b.edge_wall)]
     preset = None
     if "preset" in room:
         from . import presets
@@ -926,7 +940,7 @@ def _parse(r, path, doc):
                           f"(one of: {', '.join(_preset_names())})")
     spec = Spec(path=path, polygon_m=polygon, height_m=height, preset=preset, doors=doors,
                 windows=windows, solver=solver, groups=(), items=(), constraints=(),
-                constraint_tables=tuple(constraint_tables))
+                constraint_tables=tuple(constraint_tables), open_edges=tuple(open_edges))
     if preset is not None:
         if polygon is None:
             return spec  # furnished by build(), once the floor is known
@@ -1010,7 +1024,7 @@ def build(spec: Spec, *, polygon_m=None):
         with r.context(where):
             polygon = LayoutBuilder(poly, height).polygon_m
     with r.context(None if polygon_m is None else where):
-        b = LayoutBuilder(polygon, height)
+        b = LayoutBuilder(polygon, height, open_edges=spec.open_edges if polygon_m is None else ())
     groups, items, constraints = spec.groups, spec.items, spec.constraints
     if spec.preset is not None and (polygon_m is not None or not items):
         g_tables, i_tables, c_tables = _preset_tables(spec, b.polygon_m)

@@ -17,8 +17,9 @@ import trimesh
 from augment import cli, pipeline
 from augment.board import Board
 from augment.calibrate import read_photo
+from augment.floor import FloorPolygon
 from augment.pipeline import (REPORT_KEYS, FurnishError, contact_sheet, fit_spec, furnish, inset_polygon,
-                              scene_glb, write_outputs)
+                              open_edges, scene_glb, write_outputs)
 from layout.spec import load_spec
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -379,6 +380,41 @@ def test_inset_polygon():
     assert pipeline._signed_area(inner) == pytest.approx(3.8 * 2.8, rel=0.02)
     assert inner.min() >= 0.09 and inner[:, 0].max() <= 3.91
     assert inset_polygon(square / 8, 0.2) is None
+
+
+def test_open_edges_of_the_shrunk_floor_follow_the_measured_ones():
+    """The photo cut the floor off on the right (x = 4) and the distance on the left
+    (x = 0): the shrunk floor's edges along those sides are open, the others walls."""
+    square = np.array([[0, 0], [4, 0], [4, 3], [0, 3]], float)
+    floor = FloorPolygon(square, ("boundary", "image", "boundary", "far"), 12.0, np.zeros((0, 2)), "")
+    inner = inset_polygon(square, 0.05)
+    found = open_edges(inner, floor)
+    mid = 0.5 * (inner + np.roll(inner, -1, axis=0))
+    vertical = [k for k in range(len(inner)) if min(mid[k, 0], 4 - mid[k, 0]) < 0.1]
+    assert len(vertical) == 2 and found == vertical
+
+
+def test_furniture_goes_against_walls_not_the_photos_edge(roomy):
+    """room_4's floor meets the photo's edge on three sides: those are open edges in the
+    layouts, and the sofa and the TV stand (against a wall by default) are nearer a
+    real wall than any open edge."""
+    result, _ = roomy
+    for lay in result.layouts:
+        m = lay.model
+        room = lay.to_dict()["room"]
+        assert room["open_edges"], "no open edge on a photo whose floor leaves the frame"
+        poly = m.floor_polygon_m
+        for i in m.items:
+            if m.kinds[i] not in ("sofa", "tv_stand"):
+                continue
+            p = lay.position_m[i, :2]
+            dist = []
+            for e in range(len(poly)):
+                a, b = poly[e], poly[(e + 1) % len(poly)]
+                t = np.clip(np.dot(p - a, b - a) / np.dot(b - a, b - a), 0, 1)
+                dist.append(np.linalg.norm(a + t * (b - a) - p))
+            dist = np.array(dist)
+            assert dist[m.floor_edge_wall].min() < dist[~m.floor_edge_wall].min(), m.kinds[i]
 
 
 def test_triangulate_an_l_shape():

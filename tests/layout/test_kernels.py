@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from layout import LayoutBuilder
+from layout import LayoutBuilder, LayoutError
 from layout import _codes as codes
 from layout import _kernels as K
 
@@ -508,3 +508,50 @@ def test_nested_rigid_groups_compose_offsets_once():
     np.testing.assert_allclose(pos[item, :2], [2.0, 1.0], atol=1e-12)
     assert math.isclose(yaw[item], math.pi / 2)
     assert m.particle_body[item] == outer
+
+
+def test_open_edge_is_no_wall():
+    """Edge 3 (x = 0, from (0, 10) to (0, 0)) is open, like a photo's edge: the wardrobe
+    1 m from it goes to the nearest wall, y = 0, 4 m away, faces +y, and stays inside."""
+    b = LayoutBuilder(ROOM, open_edges=[3])
+    w = b.add_item("wardrobe", (1.2, 0.6, 2.0))
+    b.wall_distance(w, k0=1.0)
+    b.wall_orientation(w, k0=1.0)
+    m = b.finalize()
+    np.testing.assert_array_equal(m.floor_edge_wall, [True, True, True, False])
+    pos, yaw = _state(m, [[1.0, 4.0]], yaw=[0.4])
+    R = m.packed()[11]
+    out = np.zeros(1)
+    K.residual_wall_distance(m.packed()[6], R, m.packed()[0], pos, yaw, out)
+    assert out[0] == pytest.approx(4.0 - 0.3)  # distance to y = 0, less half the depth
+    _project(K.project_wall_distance, m.packed()[6], m, pos, yaw, R)
+    np.testing.assert_allclose(pos[0, :2], [1.0, 0.3])
+    _project(K.project_wall_orientation, m.packed()[7], m, pos, yaw, R)
+    assert yaw[0] == pytest.approx(np.pi / 2)
+
+
+def test_room_without_walls_has_no_wall_constraints():
+    b = LayoutBuilder(ROOM, open_edges=[0, 1, 2, 3])
+    w = b.add_item("wardrobe", (1.2, 0.6, 2.0))
+    b.against_wall(w)
+    m = b.finalize()
+    pos, yaw = _state(m, [[4.0, 4.0]], yaw=[0.4])
+    before, yaw_before = pos.copy(), yaw.copy()
+    R = m.packed()[11]
+    _project(K.project_wall_distance, m.packed()[6], m, pos, yaw, R)
+    _project(K.project_wall_orientation, m.packed()[7], m, pos, yaw, R)
+    np.testing.assert_array_equal(pos, before)
+    np.testing.assert_array_equal(yaw, yaw_before)
+
+
+def test_open_edges_follow_a_clockwise_polygon():
+    # Given clockwise, the corners are reversed: edge 0 ((0,0)->(0,10)) becomes edge 2.
+    b = LayoutBuilder([[0, 0], [0, 10], [10, 10], [10, 0]], open_edges=[0])
+    np.testing.assert_array_equal(b.polygon_m, [[10, 0], [10, 10], [0, 10], [0, 0]])
+    np.testing.assert_array_equal(b.edge_wall, [True, True, False, True])
+
+
+@pytest.mark.parametrize("bad", [4, -1, 1.5, "2"])
+def test_open_edge_that_is_no_edge_is_refused(bad):
+    with pytest.raises(LayoutError, match=r"room.open_edges: .* is not an edge number 0-3"):
+        LayoutBuilder(ROOM, open_edges=[bad])

@@ -570,3 +570,36 @@ def test_nightstands_end_up_beside_the_head_of_the_bed(tmp_path):
         assert along < -0.6 and 0.9 < abs(across) < 1.3, (name, along, across)
         # Same facing as the bed (not turned to the wall).
         assert abs(math.remainder(best.yaw_rad[i] - best.yaw_rad[bed], 2 * math.pi)) < 0.3
+
+
+def test_open_edges_reach_the_model_in_the_builders_order(tmp_path):
+    # Clockwise in the file: its edge 1 ((0, 4) -> (5, 4)) is edge 1 of the reversed,
+    # counter-clockwise polygon as well ((5, 4) -> (0, 4)); its edge 0 becomes edge 2.
+    s = load(tmp_path, """
+    [room]
+    polygon = [[0, 0], [0, 4], [5, 4], [5, 0]]
+    open_edges = [0, 1]
+
+    [[items]]
+    id = "bed"
+    kind = "bed"
+    """)
+    assert s.open_edges == (1, 2)
+    model, _ = spec.build(s)
+    np.testing.assert_array_equal(model.floor_edge_wall, [True, False, False, True])
+    layout = Solver(restarts=0).solve(model, seed=0)
+    assert layout.to_dict()["room"]["open_edges"] == [1, 2]
+
+
+@pytest.mark.parametrize("value,expect", [
+    ("[4]", "room.open_edges: 4 is not an edge number 0-3"),
+    ("[-1]", "open_edges = -1 must be at least 0"),
+    ('"north"', 'open_edges = "north" must be a list of edge numbers'),
+])
+def test_bad_open_edges_are_named(tmp_path, value, expect):
+    message = error_of(tmp_path, ROOM + f"open_edges = {value}\n" + """
+    [[items]]
+    id = "bed"
+    kind = "bed"
+    """)
+    assert expect in message
