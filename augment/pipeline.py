@@ -85,6 +85,7 @@ class Tolerances:
                                      # strays up to augment.floor.SIMPLIFY_M beyond the mask; baseboards)
     max_fill: float = 0.5            # summed footprint of floor-standing items: at most this share of the floor
     seed_tries: int = 3              # seeds tried per suggestion before an item is dropped
+    min_difference_m: float = 0.3    # a suggestion this close to an earlier one (diversity) is a twin
     fit_cell_m: float = 0.02         # raster cell of the "does this footprint fit the floor" test
     fit_angles: int = 36             # orientations tried, over 180 degrees
     sheet_tile_px: int = 640         # width of one photo on the contact sheet
@@ -559,20 +560,30 @@ def _clean(rep: dict) -> bool:
 def _solve(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress: _Progress,
            tol: Tolerances):
     """Solve ``suggestions`` layouts, suggestion K from seed ``seed + K - 1``; one that
-    collides or leaves the floor is solved again from seed ``seed + K - 1 + N``, then
-    ``+ 2N`` (``tol.seed_tries`` in all). When a suggestion has no clean layout, the
-    least important unit (the spec's last) is dropped and all are solved again."""
+    collides, leaves the floor or repeats an earlier suggestion (closer than
+    ``tol.min_difference_m``, :func:`layout.diversity`) is solved again from seed
+    ``seed + K - 1 + N``, then ``+ 2N`` (``tol.seed_tries`` in all). A twin is kept when
+    no try gives anything else (a floor may allow only so many arrangements). When a
+    suggestion has no clean layout, the least important unit (the spec's last) is
+    dropped and all are solved again."""
+    from layout import diversity
     from layout.spec import build
 
     while True:
         model, solver = build(spec)
         layouts, reports, failed = [], [], None
         for k in range(suggestions):
+            twin = None
             for t in range(tol.seed_tries):
                 lay = solver.solve(model, seed=seed + k + t * suggestions)
                 rep = layout_report.evaluate(lay)
-                if _clean(rep):
+                if not _clean(rep):
+                    continue
+                if all(diversity([old, lay]) >= tol.min_difference_m for old in layouts):
                     break
+                twin = twin or (lay, rep)
+            else:
+                lay, rep = twin if twin is not None else (lay, rep)
             progress.step()
             if not _clean(rep):
                 failed = k + 1

@@ -432,3 +432,25 @@ def test_contact_sheet_layout(rng):
     gap = pipeline.TOL.sheet_gap_px
     assert sheet.shape == (2 * 120 + 3 * gap, 2 * 160 + 3 * gap, 3)
     assert contact_sheet(images[:3]).shape == (120 + 2 * gap, 3 * 160 + 4 * gap, 3)
+
+
+def test_a_repeated_suggestion_is_solved_again_from_another_seed(monkeypatch):
+    """Seeds 0 and 1 are made to give the same layout: suggestion 2 must come from the
+    next seed tried (1 + N) instead; and when every try repeats, the twin is kept."""
+    from layout import Solver, diversity
+
+    real = Solver.solve
+    spec = load_spec(Path(__file__).resolve().parents[2] / "samples" / "living_room.toml")
+
+    def run(twin_seeds):
+        monkeypatch.setattr(Solver, "solve", lambda self, model, seed=None, state=None:
+                            real(self, model, seed=0 if seed in twin_seeds else seed))
+        _, layouts, _ = pipeline._solve(spec, 2, 0, 20.0, [], pipeline._Progress(False, 2), pipeline.TOL)
+        return layouts
+
+    first, second = run({1})
+    assert diversity([first, second]) >= pipeline.TOL.min_difference_m
+    np.testing.assert_array_equal(second.position_m, real(Solver(**{**spec.solver.__dict__}), first.model,
+                                                          seed=1 + 2).position_m)
+    first, second = run({1, 3, 5})  # every try for suggestion 2 repeats suggestion 1
+    np.testing.assert_array_equal(second.position_m, first.position_m)
