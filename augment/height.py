@@ -57,6 +57,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from layout.geometry import point_segment_distances
+
 from .calibrate import Calibration
 
 # Tolerances and limits, in one place.
@@ -471,16 +473,6 @@ def _merge_vertical(seg: np.ndarray, vp: np.ndarray, tol_px: float, gap_px: floa
     return [np.array(g) for g in groups.values()]
 
 
-def _point_segment_distance(points: np.ndarray, seg: np.ndarray) -> np.ndarray:
-    """(k, m) distances from points (k, 2) to segments (m, 4)."""
-    a, b = seg[:, :2], seg[:, 2:]
-    ab = b - a
-    t = np.clip(np.einsum("kmi,mi->km", points[:, None, :] - a[None], ab) / np.maximum(np.sum(ab * ab, 1), 1e-12),
-                0, 1)
-    closest = a[None] + t[..., None] * ab[None]
-    return np.linalg.norm(points[:, None, :] - closest, axis=2)
-
-
 def _sample(image: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Nearest-pixel values of ``image`` at points (..., 2), clipped to the frame."""
     h, w = image.shape[:2]
@@ -816,7 +808,7 @@ def _blocked_above(tops: np.ndarray, K: np.ndarray, pose: np.ndarray, lines: np.
                           posinf=0.0)
     starts = tops + clear_px * up
     ends = tops + np.maximum(reach, clear_px)[:, None] * up
-    far = _point_segment_distance(tops, lines) > clear_px      # (k, m): the top's own junction does not count
+    far = point_segment_distances(tops, lines[:, :2], lines[:, 2:]) > clear_px      # (k, m): the top's own junction does not count
     return np.array([_crossed(starts[i:i + 1], ends[i:i + 1], lines[far[i]])[0] for i in range(len(tops))])
 
 
@@ -915,7 +907,7 @@ def _candidates(seg: np.ndarray, K: np.ndarray, pose: np.ndarray, size_px: tuple
     r = JUNCTION_FRACTION * side
     olen = np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
     if len(lines) and len(bases):
-        capped = np.max(np.where(_point_segment_distance(tops, lines) <= r, olen, 0), axis=1) > 0
+        capped = np.max(np.where(point_segment_distances(tops, lines[:, :2], lines[:, 2:]) <= r, olen, 0), axis=1) > 0
     else:
         capped = np.zeros(len(bases), bool)
     c["capped"] = capped | (c["kind"] == 1)          # a long line meets the top

@@ -68,6 +68,7 @@ from layout import report as layout_report
 from layout.builder import LayoutBuilder
 from layout.errors import LayoutError
 from layout.fileio import staged_folder
+from layout.geometry import edge_distances
 from layout.presets import PRESETS
 
 from . import __version__
@@ -483,16 +484,9 @@ def open_edges(polygon_m: np.ndarray, floor) -> list[int]:
     list of int
         Edge numbers k (corner k to k + 1).
     """
-    src = np.asarray(floor.polygon_m, dtype=np.float64)
-    a, b = src, np.roll(src, -1, axis=0)
-    ab = b - a
-    out = []
-    for k, mid in enumerate(0.5 * (polygon_m + np.roll(polygon_m, -1, axis=0))):
-        t = np.clip(((mid - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-12), 0.0, 1.0)
-        nearest = int(np.argmin(np.linalg.norm(a + t[:, None] * ab - mid, axis=1)))
-        if floor.edge_kind[nearest] != "boundary":
-            out.append(k)
-    return out
+    mid = 0.5 * (polygon_m + np.roll(polygon_m, -1, axis=0))
+    nearest = edge_distances(mid, floor.polygon_m).argmin(axis=1)
+    return [k for k, e in enumerate(nearest) if floor.edge_kind[e] != "boundary"]
 
 
 def _spec_for_floor(source, polygon_m: np.ndarray, height_m: float, warnings: list, open_edges=()):

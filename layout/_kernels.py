@@ -50,6 +50,8 @@ from ._codes import (
 N_KINDS = len(KINDS)
 # Empty memo of stiffness_memo: (k0, schedule, k).
 NO_MEMO = (-1.0, -1, 0.0)
+# The wall flags of nearest_edge when every edge counts (never read then).
+NO_WALLS = np.zeros(1, np.bool_)
 EPS = 1e-12
 # Vertical overlap below which two boxes count as resting on each other, not colliding.
 Z_TOUCH_M = 1e-6
@@ -170,14 +172,18 @@ def sync_members(P, pos, yaw):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def nearest_on_polygon(poly, x, y):
-    """Nearest boundary point (qx, qy), its edge (first found on ties) and distance."""
+def nearest_edge(poly, walls_only, wall, x, y):
+    """Nearest boundary point (qx, qy), its edge (first found on ties; -1 when no edge
+    qualifies) and distance, over every edge or, with ``walls_only``, the edges that
+    ``wall`` marks."""
     m = poly.shape[0]
     best = 1e300
     bx = 0.0
     by = 0.0
-    be = 0
+    be = -1
     for e in range(m):
+        if walls_only and not wall[e]:
+            continue
         ax = poly[e, 0]
         ay = poly[e, 1]
         ex = poly[(e + 1) % m, 0] - ax
@@ -197,34 +203,16 @@ def nearest_on_polygon(poly, x, y):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def nearest_on_polygon(poly, x, y):
+    """Nearest point on any edge: (qx, qy), its edge and the distance."""
+    return nearest_edge(poly, False, NO_WALLS, x, y)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def nearest_wall(R, x, y):
-    """:func:`nearest_on_polygon` over the wall edges only (open edges skipped); the
-    edge is -1 when the room has no wall."""
-    poly = R.polygon
-    m = poly.shape[0]
-    best = 1e300
-    bx = 0.0
-    by = 0.0
-    be = -1
-    for e in range(m):
-        if not R.wall[e]:
-            continue
-        ax = poly[e, 0]
-        ay = poly[e, 1]
-        ex = poly[(e + 1) % m, 0] - ax
-        ey = poly[(e + 1) % m, 1] - ay
-        ll = ex * ex + ey * ey
-        t = ((x - ax) * ex + (y - ay) * ey) / ll if ll > 0.0 else 0.0
-        t = min(1.0, max(0.0, t))
-        qx = ax + t * ex
-        qy = ay + t * ey
-        d2 = (x - qx) ** 2 + (y - qy) ** 2
-        if d2 < best:
-            best = d2
-            bx = qx
-            by = qy
-            be = e
-    return bx, by, be, math.sqrt(best)
+    """Nearest point on a wall edge (open edges skipped); the edge is -1 when the room
+    has no wall."""
+    return nearest_edge(R.polygon, True, R.wall, x, y)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -1028,7 +1016,7 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
                         continue
                     i = idx[order[u]]
                     j = idx[order[v]]
-                    if P.body[i] == P.body[j] or (P.inv_mass[P.body[i]] == 0.0 and P.inv_mass[P.body[j]] == 0.0):
+                    if not _may_meet(P, i, j):
                         continue
                     if npairs == pairs.shape[0]:
                         pairs = _grown(pairs)
@@ -1044,7 +1032,7 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
                 continue
             i = idx[qa]
             j = idx[qb]
-            if P.body[i] == P.body[j] or (P.inv_mass[P.body[i]] == 0.0 and P.inv_mass[P.body[j]] == 0.0):
+            if not _may_meet(P, i, j):
                 continue
             if npairs == pairs.shape[0]:
                 pairs = _grown(pairs)
@@ -1052,6 +1040,12 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
             pairs[npairs, 1] = max(i, j)
             npairs += 1
     return pairs[:npairs]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _may_meet(P, i, j):
+    """A pair to list: two bodies, at least one of them movable."""
+    return P.body[i] != P.body[j] and (P.inv_mass[P.body[i]] != 0.0 or P.inv_mass[P.body[j]] != 0.0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -1236,32 +1230,6 @@ def access_side(xo, yo, co, so, wo, do, depth_m, side, xi, yi, ci, si, wi, di, m
 
 
 @njit(cache=True, error_model="numpy")
-def access_zones(P):
-    """(n, 3): center (in the item's frame) and radius of a circle around each item's
-    access boxes (radius -1 for items without any), from their bounding box. Local,
-    because a Gauss–Seidel pass moves items while it runs (but never turns them)."""
-    n = P.role.shape[0]
-    zone = np.empty((n, 3))
-    for i in range(n):
-        if P.access_max[i] <= 0.0:
-            zone[i, 2] = -1.0
-            continue
-        hd = 0.5 * P.size[i, 1]
-        hw = 0.5 * P.size[i, 0]
-        a0, a1, a2, a3 = P.access_depth[i, 0], P.access_depth[i, 1], P.access_depth[i, 2], P.access_depth[i, 3]
-        # Local bounding box of the boxes that exist: behind and ahead span the width,
-        # left and right the depth.
-        x0 = -hd - a0 if a0 > 0.0 else (-hd if a1 > 0.0 or a3 > 0.0 else hd)
-        x1 = hd + a2 if a2 > 0.0 else (hd if a1 > 0.0 or a3 > 0.0 else -hd)
-        y0 = -hw - a3 if a3 > 0.0 else (-hw if a0 > 0.0 or a2 > 0.0 else hw)
-        y1 = hw + a1 if a1 > 0.0 else (hw if a0 > 0.0 or a2 > 0.0 else -hw)
-        zone[i, 0] = 0.5 * (x0 + x1)
-        zone[i, 1] = 0.5 * (y0 + y1)
-        zone[i, 2] = 0.5 * math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2)
-    return zone
-
-
-@njit(cache=True, error_model="numpy")
 def access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, out, project):
     """Accessibility of both items of every candidate pair: with ``project``, push the
     intruder out of each access box it enters by ``k`` of the depth (the owner takes
@@ -1272,7 +1240,9 @@ def access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, out, project):
     size = P.size
     radius = P.radius
     depth = P.access_depth
-    zone = access_zones(P)
+    # Local circles, because a Gauss–Seidel pass moves items while it runs (but never
+    # turns them).
+    zone = P.access_zone
     for p in range(pairs.shape[0]):
         total = 0.0
         for turn_ in range(2):

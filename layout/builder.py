@@ -12,7 +12,7 @@ import numpy as np
 from . import _codes as codes
 from . import _kernels as K
 from .errors import LayoutError
-from .geometry import box_corners, polygon_area, polygon_centroid, self_intersection
+from .geometry import access_zones, box_corners, polygon_area, polygon_centroid, self_intersection
 from .model import Model
 
 # Default initial stiffness per kind and schedule: soft constraints fade (DECAY),
@@ -513,6 +513,7 @@ class LayoutBuilder:
         cur_start, cur_members = csr("curve", 3)
         doors = self._doors
         windows = self._windows
+        access = np.array([r["access"] for r in p], np.float64).reshape(n, 4)
         return Model(
             names=tuple(r["name"] for r in p),
             kinds=tuple(r["kind"] for r in p),
@@ -527,11 +528,12 @@ class LayoutBuilder:
             particle_collides=np.array([r["collides"] for r in p], bool),
             particle_bounded=(role == codes.ITEM),
             particle_wall_bound=wall_bound,
-            particle_access_depth_m=np.array([r["access"] for r in p], np.float64).reshape(n, 4),
+            particle_access_depth_m=access,
             particle_mstart=mstart,
             particle_mlist=mlist,
             particle_radius_m=0.5 * np.hypot(size[:, 0], size[:, 1]),
-            particle_access_max_m=np.array([r["access"] for r in p], np.float64).reshape(n, 4).max(axis=1),
+            particle_access_max_m=access.max(axis=1),
+            particle_access_zone_m=access_zones(size, access),
             particle_init_position_m=init_pos,
             particle_init_yaw_rad=init_yaw,
             floor_polygon_m=poly.copy(),

@@ -94,11 +94,45 @@ def access_box_corners(center_m, yaw_rad, width_m, depth_m, access_depth_m):
     return out
 
 
+def access_zones(size_m, access_depth_m):
+    """(n, 3): center (x front, y left, in the item's frame) and radius of a circle
+    around each item's access boxes, from the bounding box of the boxes it has; radius
+    -1 for items without any. (The access pass rejects most pairs by this circle.)"""
+    size = np.asarray(size_m, dtype=np.float64)
+    a = np.asarray(access_depth_m, dtype=np.float64)
+    hd, hw = 0.5 * size[:, 1], 0.5 * size[:, 0]
+    back, left, front, right = (a[:, k] > 0.0 for k in range(4))
+    # Behind and ahead span the width; left and right span the depth.
+    x0 = np.where(back, -hd - a[:, 0], np.where(left | right, -hd, hd))
+    x1 = np.where(front, hd + a[:, 2], np.where(left | right, hd, -hd))
+    y0 = np.where(right, -hw - a[:, 3], np.where(back | front, -hw, hw))
+    y1 = np.where(left, hw + a[:, 1], np.where(back | front, hw, -hw))
+    zone = np.stack([0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.5 * np.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2)], axis=1)
+    zone[a.max(axis=1) <= 0.0] = [0.0, 0.0, -1.0]
+    return zone
+
+
 def polygon_area(polygon_m):
     """Signed area (m²) of a polygon: positive when counter-clockwise."""
     p = np.asarray(polygon_m, dtype=np.float64)
     x, y = p[:, 0], p[:, 1]
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def point_segment_distances(points, starts, ends):
+    """(k, m) distances from points (k, 2) to the segments from ``starts`` (m, 2) to
+    ``ends`` (m, 2), in the points' unit."""
+    p = np.asarray(points, dtype=np.float64)
+    a = np.asarray(starts, dtype=np.float64)
+    ab = np.asarray(ends, dtype=np.float64) - a
+    t = np.clip(np.einsum("kmi,mi->km", p[:, None, :] - a[None], ab) / np.maximum(np.sum(ab * ab, 1), 1e-12), 0, 1)
+    return np.linalg.norm(p[:, None, :] - (a[None] + t[..., None] * ab[None]), axis=2)
+
+
+def edge_distances(points, polygon_m):
+    """(k, m) distances from points (k, 2) to each edge (k -> k + 1) of a polygon."""
+    poly = np.asarray(polygon_m, dtype=np.float64)
+    return point_segment_distances(points, poly, np.roll(poly, -1, axis=0))
 
 
 def polygon_centroid(polygon_m):

@@ -360,39 +360,38 @@ class _Raster:
         self.resolution_m = resolution_m
         self.shape = shape
 
-    def mask_all(self, polygons_m):
-        """Union of the masks of many small convex polygons (one OpenCV call; the
-        polygons thinner than a pixel still get the pixels :meth:`pixels` gives them)."""
+    def _fill(self, polygons_m):
+        """fillPoly of polygons (each (k, 2) meters) with sub-pixel vertices, as bool."""
         m = np.zeros(self.shape, dtype=np.uint8)
-        if len(polygons_m) == 0:
-            return m.astype(bool)
-        col = (polygons_m[..., 0] - self.origin_m[0]) / self.resolution_m - 0.5
-        row = (polygons_m[..., 1] - self.origin_m[1]) / self.resolution_m - 0.5
-        pts = np.round(np.stack([col, row], axis=-1) * _SUBPIXEL).astype(np.int32)
-        cv2.fillPoly(m, list(pts), 1, lineType=cv2.LINE_8, shift=_SHIFT)
-        mask = m.astype(bool)
-        # Slivers: fillPoly with LINE_8 marks the pixels their edges pass through, which
-        # may differ from pixel-center filling; add the pixel of each centroid too.
-        rc = np.floor((polygons_m.mean(axis=1)[:, ::-1] - self.origin_m[::-1]) / self.resolution_m).astype(int)
-        ok = np.all((rc >= 0) & (rc < self.shape), axis=1)
-        mask[rc[ok, 0], rc[ok, 1]] = True
+        pts = [np.round(np.stack([(p[:, 0] - self.origin_m[0]) / self.resolution_m - 0.5,
+                                  (p[:, 1] - self.origin_m[1]) / self.resolution_m - 0.5], axis=1)
+                        * _SUBPIXEL).astype(np.int32) for p in polygons_m]
+        if pts:
+            cv2.fillPoly(m, pts, 1, lineType=cv2.LINE_8, shift=_SHIFT)
+        return m.astype(bool)
+
+    def _mark(self, mask, points_m):
+        """Set the pixels that contain ``points_m`` (k, 2), those inside the image."""
+        rc = np.floor((points_m[:, ::-1] - self.origin_m[::-1]) / self.resolution_m).astype(int)
+        inside = np.all((rc >= 0) & (rc < self.shape), axis=1)
+        mask[rc[inside, 0], rc[inside, 1]] = True
+
+    def mask_all(self, polygons_m):
+        """Union of the masks of many small convex polygons (one OpenCV call); fillPoly
+        with LINE_8 marks the pixels their edges pass through, which may differ from
+        pixel-center filling, so each centroid's pixel is added too (slivers)."""
+        mask = self._fill(list(polygons_m))
+        if len(polygons_m):
+            self._mark(mask, polygons_m.mean(axis=1))
         return mask
 
     def mask(self, polygon_m):
         """Pixels whose centers lie in ``polygon_m`` (any simple polygon); a sliver
         thinner than a pixel that covers no center keeps the pixels of its vertices
         and centroid."""
-        m = np.zeros(self.shape, dtype=np.uint8)
-        col = (polygon_m[:, 0] - self.origin_m[0]) / self.resolution_m - 0.5
-        row = (polygon_m[:, 1] - self.origin_m[1]) / self.resolution_m - 0.5
-        pts = np.round(np.stack([col, row], axis=1) * _SUBPIXEL).astype(np.int32)
-        cv2.fillPoly(m, [pts], 1, lineType=cv2.LINE_8, shift=_SHIFT)
-        mask = m.astype(bool)
+        mask = self._fill([polygon_m])
         if not mask.any():
-            pts = np.vstack([polygon_m, polygon_m.mean(axis=0, keepdims=True)])
-            rc = np.floor((pts[:, ::-1] - self.origin_m[::-1]) / self.resolution_m).astype(int)
-            inside = np.all((rc >= 0) & (rc < self.shape), axis=1)
-            mask[rc[inside, 0], rc[inside, 1]] = True
+            self._mark(mask, np.vstack([polygon_m, polygon_m.mean(axis=0, keepdims=True)]))
         return mask
 
 

@@ -16,7 +16,7 @@ import numpy as np
 Particles = namedtuple(
     "Particles",
     "role size mass inv_mass body body_offset body_yaw parent collides bounded wall_bound access_depth "
-    "mstart mlist radius access_max",
+    "mstart mlist radius access_max access_zone",
 )
 Distances = namedtuple("Distances", "pairs rest mode k0 schedule w_scale")
 Lanes = namedtuple("Lanes", "origin item start angle length half_width k0 schedule w_scale")
@@ -59,6 +59,8 @@ class Model:
     particle_mlist: np.ndarray  # rigid members of each body (the body itself excluded)
     particle_radius_m: np.ndarray  # (n,) half diagonal of the footprint
     particle_access_max_m: np.ndarray  # (n,) deepest clearance
+    particle_access_zone_m: np.ndarray  # (n, 3) circle round the access boxes, item frame
+    #   (center x, y, radius; radius -1 without any): see layout.geometry.access_zones
     particle_init_position_m: np.ndarray  # (n, 3) NaN x/y where the start is random
     particle_init_yaw_rad: np.ndarray  # (n,) NaN where random
 

@@ -115,7 +115,7 @@ from . import catalog
 from .builder import LayoutBuilder
 from .catalog import Kind, RuleItem
 from .errors import LayoutError
-from .geometry import polygon_area
+from .geometry import edge_distances, polygon_area
 from .solver import Solver
 
 TOP_LEVEL = ("room", "solver", "groups", "items", "constraints")
@@ -432,14 +432,7 @@ def _read_openings(r, room, key, fields):
 
 
 def _distance_to_walls(polygon_m, point):
-    p = np.asarray(point, dtype=np.float64)
-    best = math.inf
-    for e in range(len(polygon_m)):
-        a, b = polygon_m[e], polygon_m[(e + 1) % len(polygon_m)]
-        ev = b - a
-        t = float(np.clip(np.dot(p - a, ev) / np.dot(ev, ev), 0.0, 1.0))
-        best = min(best, float(np.linalg.norm(a + t * ev - p)))
-    return best
+    return float(edge_distances(np.asarray(point, dtype=np.float64)[None], polygon_m).min())
 
 
 # ------------------------------------------------------------------ furniture

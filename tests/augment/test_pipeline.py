@@ -20,6 +20,7 @@ from augment.calibrate import read_photo
 from augment.floor import FloorPolygon
 from augment.pipeline import (REPORT_KEYS, FurnishError, contact_sheet, fit_spec, furnish, inset_polygon,
                               open_edges, scene_glb, write_outputs)
+from layout.geometry import edge_distances
 from layout.spec import load_spec
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -403,17 +404,10 @@ def test_furniture_goes_against_walls_not_the_photos_edge(roomy):
         m = lay.model
         room = lay.to_dict()["room"]
         assert room["open_edges"], "no open edge on a photo whose floor leaves the frame"
-        poly = m.floor_polygon_m
         for i in m.items:
             if m.kinds[i] not in ("sofa", "tv_stand"):
                 continue
-            p = lay.position_m[i, :2]
-            dist = []
-            for e in range(len(poly)):
-                a, b = poly[e], poly[(e + 1) % len(poly)]
-                t = np.clip(np.dot(p - a, b - a) / np.dot(b - a, b - a), 0, 1)
-                dist.append(np.linalg.norm(a + t * (b - a) - p))
-            dist = np.array(dist)
+            dist = edge_distances(lay.position_m[i, None, :2], m.floor_polygon_m)[0]
             assert dist[m.floor_edge_wall].min() < dist[~m.floor_edge_wall].min(), m.kinds[i]
 
 

@@ -1,0 +1,27 @@
+"""Floor-plane geometry helpers against hand-computed answers."""
+import numpy as np
+
+from layout.geometry import edge_distances, point_segment_distances
+
+
+def test_point_segment_distances_by_hand():
+    points = [[0, 1], [3, 4], [-2, 0]]
+    starts, ends = [[0, 0], [1, 1]], [[2, 0], [1, 1]]  # a segment on the x axis, and a point
+    np.testing.assert_allclose(point_segment_distances(points, starts, ends),
+                               [[1, 1], [np.hypot(1, 4), np.hypot(2, 3)], [2, np.hypot(3, 1)]])
+
+
+def test_edge_distances_of_a_square():
+    square = [[0, 0], [4, 0], [4, 3], [0, 3]]
+    np.testing.assert_allclose(edge_distances([[1, 1], [5, 1]], square), [[1, 3, 2, 1], [np.hypot(1, 1), 1, np.hypot(1, 2), 5]])
+
+
+def test_access_zones_by_hand():
+    from layout.geometry import access_zones
+
+    # 1 m wide, 2 m deep: clearance 0.5 ahead only; behind and left; none.
+    zones = access_zones([[1, 2, 1]] * 3, [[0, 0, 0.5, 0], [0.4, 0.3, 0, 0], [0, 0, 0, 0]])
+    np.testing.assert_allclose(zones[0], [1.25, 0, 0.5 * np.hypot(0.5, 1)])  # the box ahead: x 1..1.5
+    # Behind (x -1.4..-1, y -0.5..0.5) and left (x -1..1, y 0.5..0.8): box x -1.4..1, y -0.5..0.8.
+    np.testing.assert_allclose(zones[1], [-0.2, 0.15, 0.5 * np.hypot(2.4, 1.3)])
+    np.testing.assert_array_equal(zones[2], [0, 0, -1])
