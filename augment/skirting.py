@@ -65,7 +65,6 @@ def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m) -> np
     t = t_of[best]
     k = np.arange(len(cols))
 
-    in_strip = offsets[None] < (t - 1)[:, None]
     strip_color = _prefix_median(c, t - 1)
     below = c[k[:, None], t[:, None] + 2 + np.arange(6)[None]]
     below_color = np.median(below, axis=1)

@@ -176,6 +176,25 @@ def _overlaps(a: np.ndarray, b: np.ndarray) -> bool:
     return True
 
 
+def _door_zones(room: Room) -> list[np.ndarray]:
+    """Door swing zones, which stay clear: a square of the door's width in front of it."""
+    poly = room.polygon_m
+    zones = []
+    for o in room.openings:
+        if o.kind == "door":
+            a, b = o.segment_m(poly)
+            n = inward_normal(poly, o.wall)
+            zones.append(np.array([a, b, b + n * (o.end_m - o.start_m), a + n * (o.end_m - o.start_m)]))
+    return zones
+
+
+def _fits(poly: np.ndarray, c: Clutter, blocked: list[np.ndarray], items: list[Clutter]) -> bool:
+    """Whether ``c`` stands on the floor clear of ``blocked`` regions and ``items``."""
+    foot = c.footprint_m()
+    return bool(contains(poly, foot, margin_m=0.005).all()) and not any(
+        _overlaps(foot, k) for k in blocked + [i.footprint_m() for i in items])
+
+
 def add_clutter(rng: np.random.Generator, room: Room, keep_out: list[np.ndarray],
                 max_items: int = 3) -> Room:
     """Add a radiator under some windows and up to ``max_items`` cartons.
@@ -187,18 +206,10 @@ def add_clutter(rng: np.random.Generator, room: Room, keep_out: list[np.ndarray]
     """
     poly = room.polygon_m
     items: list[Clutter] = []
-    doors = [o for o in room.openings if o.kind == "door"]
-    # Door swing zones stay clear: a square of the door's width in front of it.
-    blocked = list(keep_out)
-    for o in doors:
-        a, b = o.segment_m(poly)
-        n = inward_normal(poly, o.wall)
-        blocked.append(np.array([a, b, b + n * (o.end_m - o.start_m), a + n * (o.end_m - o.start_m)]))
+    blocked = list(keep_out) + _door_zones(room)
 
     def fits(c: Clutter) -> bool:
-        foot = c.footprint_m()
-        return bool(contains(poly, foot, margin_m=0.005).all()) and not any(
-            _overlaps(foot, k) for k in blocked + [i.footprint_m() for i in items])
+        return _fits(poly, c, blocked, items)
 
     for o in room.openings:
         if o.kind == "window" and o.bottom_m > 0.65 and rng.random() < 0.4:
@@ -238,12 +249,7 @@ def add_furniture(rng: np.random.Generator, room: Room, keep_out: list[np.ndarra
 
     poly = room.polygon_m
     items = list(room.clutter)
-    blocked = list(keep_out)
-    for o in room.openings:
-        if o.kind == "door":
-            a, b = o.segment_m(poly)
-            n = inward_normal(poly, o.wall)
-            blocked.append(np.array([a, b, b + n * (o.end_m - o.start_m), a + n * (o.end_m - o.start_m)]))
+    blocked = list(keep_out) + _door_zones(room)
     lo, hi = poly.min(axis=0), poly.max(axis=0)
     for _ in range(rng.integers(1, max_items + 1)):
         kind = FURNITURE_KINDS[rng.integers(len(FURNITURE_KINDS))]
@@ -260,9 +266,7 @@ def add_furniture(rng: np.random.Generator, room: Room, keep_out: list[np.ndarra
                 facing = float(rng.uniform(-np.pi, np.pi))
             # Clutter turns its width axis; the front faces a quarter turn on.
             c = Clutter(kind, tuple(float(v) for v in center), size, facing - np.pi / 2)
-            foot = c.footprint_m()
-            if contains(poly, foot, margin_m=0.005).all() and not any(
-                    _overlaps(foot, k) for k in blocked + [i.footprint_m() for i in items]):
+            if _fits(poly, c, blocked, items):
                 items.append(c)
                 break
     return Room(room.polygon_m, room.height_m, room.openings, tuple(items))
