@@ -42,7 +42,7 @@ import sys
 from pathlib import Path
 from typing import NamedTuple
 
-from layout.command import EXIT_OK, Parser, dispatch, parse
+from layout.command import EXIT_OK, Parser, dispatch, parse, run as run_command
 from layout.presets import PRESETS
 
 from .board import BOARD_KINDS, CHARUCO_DICTIONARY, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM, PAPER_MM
@@ -669,5 +669,10 @@ def main(argv=None) -> int:
                     [((StageError, CalibrationError, SegmentationError, LayoutError, FurnishError), str)])
 
 
+def run() -> None:
+    """The console script."""
+    run_command(main)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

@@ -26,6 +26,9 @@ Stages, in order (``FurnishResult.timings_s`` has one entry per stage):
    measured height along the polygon's ``"boundary"`` edges, the furniture.
 9. ``overlays``: calibration, floor and height drawn over the photo, and the contact
    sheet of the staged photos.
+10. ``plans``: each suggestion's plan and JSON, and the energy plot
+    (:func:`layout.report.output_files`). They are drawn on a second thread from the end
+    of ``layout`` on; this stage is only the wait for them after ``overlays``.
 
 Files written by :func:`write_outputs` (K = 1 … N):
 
@@ -53,10 +56,12 @@ Image convention: arrays are (row, col); points are (x, y) pixels. Colours are R
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import math
 import platform
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -139,6 +144,9 @@ class FurnishResult:
         ``overlay_calibration.png``, ``overlay_floor.png``, ``overlay_height.png``.
     scenes_glb : list of bytes
         One glTF binary per suggestion.
+    layout_files : dict of str -> bytes
+        ``layout_K.json``, ``plan_K.png`` and ``energy.png``
+        (:func:`layout.report.output_files`).
     report : dict
         What ``report.json`` holds (:func:`report_dict`).
     timings_s : dict of str -> float
@@ -162,6 +170,7 @@ class FurnishResult:
     contact_sheet: np.ndarray
     overlays: dict
     scenes_glb: list
+    layout_files: dict
     report: dict = field(default_factory=dict)
     timings_s: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
@@ -876,11 +885,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     """
     from .calibrate import calibrate_file, read_photo
     from .floor import floor_overlay, floor_polygon
-    from .gl import Renderer
     from .height import measure_height
     from .overlay import calibration_overlay
     from .overlay_height import height_overlay
-    from .render import estimate_lighting, render_staged
     from .segment import segment_floor
 
     if isinstance(suggestions, bool) or not isinstance(suggestions, (int, np.integer)) or suggestions < 1:
@@ -893,6 +900,12 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     steps = 6 + 3 * suggestions
     bar = _Progress(progress, steps) if reporter is None else reporter(steps)
     clock = _Clock(bar)
+    # A second thread takes work that would otherwise wait for the GIL-free stretches of
+    # this one: importing the renderer (pyrender and trimesh, a second or more) while
+    # OpenCV and onnxruntime find the board and the floor, and drawing the plans
+    # (matplotlib) while GL and NumPy render the suggestions.
+    background = ThreadPoolExecutor(max_workers=1, thread_name_prefix="furnish")
+    render_module = background.submit(importlib.import_module, "augment.render")
     try:
         with clock("calibrate"):
             image = read_photo(photo)
@@ -931,15 +944,19 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         if dropped:
             warnings.append(f"left out {len(dropped)} item(s) that do not fit the measured floor: "
                             + dropped_summary(dropped))
+        layout_files = background.submit(layout_report.output_files, layouts, reports,
+                                    title=f"{photo.stem}, {source_name}: ")
         with clock("render"):
+            render = render_module.result()
             own = renderer is None
-            gl = Renderer() if own else renderer
+            gl = render.Renderer() if own else renderer
             try:
-                lighting = estimate_lighting(image, calibration, seg.mask)
+                lighting = render.estimate_lighting(image, calibration, seg.mask)
                 staged = []
                 for lay in layouts:
-                    staged.append(render_staged(image, calibration, lay, gl, floor_mask=seg.mask,
-                                                floor_polygon=floor, lighting=lighting, seed=seed).image)
+                    staged.append(render.render_staged(image, calibration, lay, gl, floor_mask=seg.mask,
+                                                       floor_polygon=floor, lighting=lighting,
+                                                       seed=seed).image)
                     bar.step()
             finally:
                 if own:
@@ -956,12 +973,16 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                         "overlay_height.png": height_overlay(image, calibration, height)}
             sheet = contact_sheet(staged, tol=tol)
         bar.step()
+        with clock("plans"):  # only what the plans take beyond the stages above
+            layout_files = layout_files.result()
     finally:
+        # On an error nothing waits for the import or the plans still running.
+        background.shutdown(wait=False, cancel_futures=True)
         bar.close()
     timings = dict(clock.timings, total=time.perf_counter() - t_start)
     result = FurnishResult(photo, image, calibration, seg, floor, height, room_height, source_name, fitted,
-                           dropped, layouts, reports, staged, sheet, overlays, scenes, timings_s=timings,
-                           warnings=warnings)
+                           dropped, layouts, reports, staged, sheet, overlays, scenes, layout_files,
+                           timings_s=timings, warnings=warnings)
     result.report = report_dict(result)
     return result
 
@@ -983,9 +1004,8 @@ def _write_files(result: FurnishResult, folder: Path) -> list[str]:
     for k, img in enumerate(result.staged, start=1):
         put(f"staged_{k}.jpg", encode_image(img, ".jpg"))
     put("staged_all.jpg", encode_image(result.contact_sheet, ".jpg"))
-    title = f"{result.photo.stem}, {result.source}: "
-    for p in layout_report.write_outputs(result.layouts, folder, result.reports, title=title):
-        names.append(p.name)
+    for name, data in result.layout_files.items():
+        put(name, data)
     for k, glb in enumerate(result.scenes_glb, start=1):
         put(f"scene_{k}.glb", glb)
     for name, img in result.overlays.items():

@@ -41,7 +41,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PHOTO = ROOT / "samples" / "photos" / "room_4.jpg"
 SUGGESTIONS = 4
 TARGET_S = 8.0
-STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene", "overlays", "write")
+STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene", "overlays", "plans",
+          "write")
 
 
 def _one_call(photo: Path) -> dict:
@@ -117,7 +118,9 @@ def main() -> None:
                f"command {np.median(commands):.2f} s: {'met' if ok and np.median(commands) < TARGET_S else 'MISSED'}.",
            "The first call in a process pays for loading numba's compiled solver from its disk cache, "
            "onnxruntime's session and the first build of each furniture piece; `render` includes making "
-           "the GL context and estimating the light; `write` is mostly the four plans (matplotlib)."]
+           "the GL context and estimating the light. The plans (matplotlib) are drawn on a second "
+           "thread from the end of `layout` on: `plans` is only the wait for them after `overlays`; "
+           "`write` encodes the images and writes the files."]
     data = results_io.machine(load_average=loads, photo=str(photo), suggestions=SUGGESTIONS, target_s=TARGET_S,
                               compile_command_s=compile_s, command_s=commands, first_call=first,
                               following_calls=following, median=median)

@@ -15,7 +15,7 @@ import sys
 import tomllib
 from pathlib import Path
 
-from .command import EXIT_OK, Parser, dispatch, parse
+from .command import EXIT_OK, Parser, dispatch, parse, run as run_command
 from .errors import LayoutError
 
 
@@ -122,5 +122,10 @@ def main(argv=None) -> int:
     ])
 
 
+def run() -> None:
+    """The console script."""
+    run_command(main)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

@@ -8,11 +8,13 @@ failure (a bug: the traceback is printed), 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import sys
 import time
 import traceback
 from collections.abc import Callable, Sequence
+from typing import NoReturn
 
 EXIT_OK, EXIT_BUG, EXIT_INPUT = 0, 1, 2
 
@@ -65,3 +67,15 @@ def dispatch(command: Callable[[argparse.Namespace], int], args: argparse.Namesp
         print(f"error: unexpected failure (a bug in {program}); please report the traceback above",
               file=sys.stderr)
         return EXIT_BUG
+
+
+def run(main: Callable[[], int]) -> NoReturn:
+    """A console script: exit with ``main()``'s status.
+
+    What is still alive is frozen out of garbage collection first: the interpreter's
+    last collections would otherwise walk every object numba, SciPy and matplotlib made
+    at import, half a second on every ``stage`` command.
+    """
+    status = main()
+    gc.freeze()
+    sys.exit(status)

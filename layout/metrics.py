@@ -11,7 +11,6 @@ from dataclasses import dataclass
 import cv2
 import numba
 import numpy as np
-import skimage.morphology
 
 from layout.geometry import polygon_area
 
@@ -503,7 +502,9 @@ def traversability(
     raster = _Raster(origin, resolution_m, shape)
     free = raster.mask(floor)
     free[raster.mask_all(corners[blocks])] = False
-    disk = skimage.morphology.disk(int(round(radius_m / resolution_m)))
+    r = int(round(radius_m / resolution_m))
+    dy, dx = np.ogrid[-r:r + 1, -r:r + 1]
+    disk = dx * dx + dy * dy <= r * r
     # cv2.erode is the same binary erosion (outside the image counts as blocked), in C.
     passable = cv2.erode(free.astype(np.uint8), disk.astype(np.uint8), borderType=cv2.BORDER_CONSTANT,
                          borderValue=0).astype(bool)

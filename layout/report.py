@@ -150,10 +150,6 @@ def lane_segments(model, layout):
     return np.array(out, dtype=np.float64).reshape(-1, 2, 2)
 
 
-def _write_json(path, data):
-    write_atomic(path, json.dumps(data, indent=2, allow_nan=False) + "\n")
-
-
 def _finite(x):
     """JSON has no NaN/inf: write them as null."""
     if isinstance(x, float) and not np.isfinite(x):
@@ -165,19 +161,53 @@ def _finite(x):
     return x
 
 
-def write_outputs(layouts, out_dir, reports=None, title=""):
-    """Write the files of ``layout solve`` for a list of suggestions.
+def output_files(layouts, reports=None, title=""):
+    """The files of ``layout solve`` for a list of suggestions, in memory.
 
     Parameters
     ----------
     layouts : sequence of Layout
         Suggestion K (from 1) is ``layouts[K - 1]``.
-    out_dir : str or os.PathLike
-        Created if missing. Files are written atomically.
     reports : sequence of dict, optional
         :func:`evaluate` of each layout (computed when not given).
     title : str
         Prefix of the plan titles.
+
+    Returns
+    -------
+    files : dict of str to bytes
+        ``layout_K.json`` and ``plan_K.png`` for each K, then ``energy.png``.
+    """
+    reports = [evaluate(lay) for lay in layouts] if reports is None else list(reports)
+    files = {}
+    for k, (lay, rep) in enumerate(zip(layouts, reports), start=1):
+        data = lay.to_dict()
+        data["metrics"] = rep
+        data["energy_by_kind"] = dict(lay.energy_by_kind)
+        files[f"layout_{k}.json"] = (json.dumps(_finite(data), indent=2, allow_nan=False) + "\n").encode()
+        m = lay.model
+        items, corners, _, access, depth = _item_geometry(lay)
+        index = {name: n for n, name in enumerate(m.names[i] for i in items)}
+        overlap = [[index[a], index[b]] for a, b, _ in rep["overlaps"]["pairs"]]
+        doors = lay.corners_m(m.door_particles) if len(m.door_particles) else None
+        verdict = "walkable" if rep["traversable"] else "NOT walkable"
+        files[f"plan_{k}.png"] = plot.figure_png(plot.plan_figure(
+            m.floor_polygon_m, corners, [m.names[i] for i in items], lay.yaw_rad[items],
+            door_zones_m=doors, door_segments_m=m.door_segments_m,
+            window_segments_m=m.window_segments_m, lanes_m=lane_segments(m, lay),
+            overlap_pairs=overlap, access_corners_m=access, access_depth_m=depth,
+            kinds=[m.kinds[i] for i in items], open_edges=np.flatnonzero(~m.floor_edge_wall),
+            title=(f"{title}suggestion {k}: E = {lay.energy:.3g}, "
+                   f"{rep['overlaps']['count']} overlaps, {verdict}"),
+        ))
+    traces = {f"suggestion {k}": lay.trace[np.isfinite(lay.trace)] for k, lay in enumerate(layouts, 1)}
+    files["energy.png"] = plot.figure_png(plot.energy_figure(traces, title=f"{title}energy per iteration"))
+    return files
+
+
+def write_outputs(layouts, out_dir, reports=None, title=""):
+    """Write :func:`output_files` into ``out_dir`` (created if missing), each file
+    atomically.
 
     Returns
     -------
@@ -186,34 +216,4 @@ def write_outputs(layouts, out_dir, reports=None, title=""):
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    reports = [evaluate(lay) for lay in layouts] if reports is None else list(reports)
-    paths = []
-    for k, (lay, rep) in enumerate(zip(layouts, reports), start=1):
-        data = lay.to_dict()
-        data["metrics"] = rep
-        data["energy_by_kind"] = dict(lay.energy_by_kind)
-        p = out / f"layout_{k}.json"
-        _write_json(p, _finite(data))
-        paths.append(p)
-        m = lay.model
-        items, corners, _, access, depth = _item_geometry(lay)
-        index = {name: n for n, name in enumerate(m.names[i] for i in items)}
-        overlap = [[index[a], index[b]] for a, b, _ in rep["overlaps"]["pairs"]]
-        doors = lay.corners_m(m.door_particles) if len(m.door_particles) else None
-        verdict = "walkable" if rep["traversable"] else "NOT walkable"
-        p = out / f"plan_{k}.png"
-        plot.plot_plan(
-            p, m.floor_polygon_m, corners, [m.names[i] for i in items], lay.yaw_rad[items],
-            door_zones_m=doors, door_segments_m=m.door_segments_m,
-            window_segments_m=m.window_segments_m, lanes_m=lane_segments(m, lay),
-            overlap_pairs=overlap, access_corners_m=access, access_depth_m=depth,
-            kinds=[m.kinds[i] for i in items], open_edges=np.flatnonzero(~m.floor_edge_wall),
-            title=(f"{title}suggestion {k}: E = {lay.energy:.3g}, "
-                   f"{rep['overlaps']['count']} overlaps, {verdict}"),
-        )
-        paths.append(p)
-    p = out / "energy.png"
-    traces = {f"suggestion {k}": lay.trace[np.isfinite(lay.trace)] for k, lay in enumerate(layouts, 1)}
-    plot.plot_energy(p, traces, title=f"{title}energy per iteration")
-    paths.append(p)
-    return paths
+    return [write_atomic(out / name, data) for name, data in output_files(layouts, reports, title).items()]

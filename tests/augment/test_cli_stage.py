@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import json
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import cv2
@@ -61,6 +63,19 @@ def test_board_writes_the_paper_sized_pdf(tmp_path, capsys, paper, expected_pt):
     assert (x1, y1) == pytest.approx(expected_pt, abs=0.1)
     square = {"A4": "30", "A3": "45"}[paper]
     assert f"--square {square}" in stdout
+
+
+def test_console_script_exits_with_the_command_status(tmp_path):
+    # `stage` runs through augment.cli.run (which skips the interpreter's last garbage
+    # collections): the status and the output must be what main gives.
+    out = tmp_path / "board.pdf"
+    ok = subprocess.run([sys.executable, "-m", "augment.cli", "board", "--out", str(out)],
+                        capture_output=True, text=True)
+    assert ok.returncode == 0, ok.stderr
+    assert out.read_bytes().startswith(b"%PDF") and "--square 45" in ok.stdout
+    bad = subprocess.run([sys.executable, "-m", "augment.cli", "board", "--paper", "A4", "--square", "60",
+                          "--out", str(tmp_path / "b.pdf")], capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.startswith("error:")
 
 
 def test_board_that_does_not_fit_is_refused(tmp_path, capsys):

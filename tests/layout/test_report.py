@@ -121,6 +121,10 @@ def test_write_outputs(tmp_path):
     for p in paths:
         if p.suffix == ".png":
             assert matplotlib.image.imread(p).shape[2] in (3, 4)
+    # The same files in memory, byte for byte (stage furnish writes these).
+    files = report.output_files(layouts, title="test: ")
+    assert list(files) == [p.name for p in paths]
+    assert all(files[p.name] == p.read_bytes() for p in paths)
     # Writing again replaces the files in place.
     report.write_outputs(layouts[:1], out)
     assert json.loads((out / "layout_1.json").read_text())["seed"] == 0
