@@ -8,7 +8,8 @@
     stage segment PHOTO [--model M.onnx] [--method onnx|grabcut] [--board ...] [--out MASK.png] [--quiet]
     stage measure PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
     stage furnish PHOTO [--board 7x5] [--square 45] [--room NAME | --spec FILE] [--suggestions 4]
-                  [--seed 0] [--camera profile.json] [--model M.onnx] [--out DIR] [--quiet]
+                  [--seed 0] [--camera profile.json] [--model M.onnx] [--asset KIND=FILE ...]
+                  [--out DIR] [--quiet]
     stage serve [--host 127.0.0.1] [--port 8000] [--workers N] [--jobs DIR]
 
 ``--board`` counts inner corners, ``COLSxROWS`` for a plain checkerboard (the default
@@ -233,6 +234,10 @@ def _parser():
                    help="camera profile from `stage calibrate`")
     f.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
                    help="floor model (default: Stager's models/floor_segnet.onnx, with its MODEL.json)")
+    f.add_argument("--asset", type=_asset, action="append", default=[], metavar="KIND=FILE",
+                   help="your own model of a furniture kind (GLB, glTF or OBJ; y up, front toward +z), "
+                        "stretched onto each item of that kind; repeat for more kinds "
+                        "(e.g. --asset sofa=models/my_sofa.glb)")
     f.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
                    help="output folder (default out/<photo name>; created)")
     f.add_argument("--quiet", "-q", action="store_true",
@@ -575,6 +580,14 @@ def _measure_cmd(args):
     return EXIT_OK
 
 
+def _asset(text: str) -> tuple[str, Path]:
+    """``KIND=FILE`` of ``--asset``."""
+    kind, sep, path = text.partition("=")
+    if not sep or not kind.strip() or not path.strip():
+        raise argparse.ArgumentTypeError(f"{text!r}: give KIND=FILE, e.g. --asset sofa=models/my_sofa.glb")
+    return kind.strip(), Path(path.strip())
+
+
 def _furnish_cmd(args):
     from .pipeline import dropped_summary, furnish, write_outputs
 
@@ -588,11 +601,17 @@ def _furnish_cmd(args):
     if args.photo.is_file():
         for flag, path, hint in (("--camera", args.camera, "make a camera profile with `stage calibrate`"),
                                  ("--model", args.model, "give an ONNX floor model, or leave --model out"),
-                                 ("--spec", args.spec, "write one (see `layout solve --help`)")):
+                                 ("--spec", args.spec, "write one (see `layout solve --help`)"),
+                                 *((f"--asset {kind}=", path, "give a GLB, glTF or OBJ file")
+                                   for kind, path in args.asset)):
             if path is not None and not path.is_file():
-                raise StageError(f"{flag} {path}: no such file; {hint}")
+                raise StageError(f"{flag}{'' if flag.endswith('=') else ' '}{path}: no such file; {hint}")
+    kinds = [kind for kind, _ in args.asset]
+    if len(set(kinds)) < len(kinds):
+        twice = sorted({k for k in kinds if kinds.count(k) > 1})
+        raise StageError(f"--asset: {', '.join(twice)} given more than once; give one model per kind")
     result = furnish(args.photo, board, room=args.room, spec=args.spec, suggestions=args.suggestions,
-                     seed=args.seed, camera=args.camera, model=args.model,
+                     seed=args.seed, camera=args.camera, model=args.model, assets=dict(args.asset),
                      progress=not args.quiet and sys.stderr.isatty())
     paths = write_outputs(result, out)
     if not args.quiet:

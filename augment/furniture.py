@@ -1906,14 +1906,19 @@ def load_asset(path, up: str = "y", yaw_deg: float = 0.0) -> tuple[Part, ...]:
     Raises
     ------
     ValueError
-        When the file holds no triangles or ``up`` is not ``"y"`` or ``"z"``.
+        When the file is missing, cannot be read or holds no triangles, or ``up`` is not
+        ``"y"`` or ``"z"``.
     """
     path = Path(path)
     if up not in _ASSET_TO_BUILDER:
         raise ValueError(f"up={up!r} for {path}: use 'y' (glTF, most OBJ files) or 'z'")
     if not path.is_file():
         raise ValueError(f"furniture model {path} does not exist")
-    scene = trimesh.load(str(path), force="scene")
+    try:
+        scene = trimesh.load(str(path), force="scene")
+    except Exception as error:  # noqa: BLE001 - a malformed file makes trimesh raise anything
+        raise ValueError(f"furniture model {path} could not be read as a 3-D model "
+                         f"({type(error).__name__}: {error})") from None
     parts = []
     for node in scene.graph.nodes_geometry:
         transform, name = scene.graph[node]

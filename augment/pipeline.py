@@ -147,6 +147,8 @@ class FurnishResult:
     layout_files : dict of str -> bytes
         ``layout_K.json``, ``plan_K.png`` and ``energy.png``
         (:func:`layout.report.output_files`).
+    assets : dict of str -> str
+        The user's models by kind (``assets`` of :func:`furnish`), as given.
     report : dict
         What ``report.json`` holds (:func:`report_dict`).
     timings_s : dict of str -> float
@@ -171,6 +173,7 @@ class FurnishResult:
     overlays: dict
     scenes_glb: list
     layout_files: dict
+    assets: dict = field(default_factory=dict)
     report: dict = field(default_factory=dict)
     timings_s: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
@@ -678,7 +681,8 @@ def _matte(tree: dict) -> None:
             primitive.setdefault("material", len(materials) - 1)
 
 
-def scene_glb(floor, height_m: float, layout, seed: int = 0, cache: dict | None = None) -> bytes:
+def scene_glb(floor, height_m: float, layout, seed: int = 0, cache: dict | None = None,
+              assets: dict | None = None) -> bytes:
     """A suggestion as a binary glTF 2.0 scene (y up, meters, as Blender, three.js and
     Unity expect): the measured floor, walls of ``height_m`` along its ``"boundary"``
     edges, and the furniture (node names are the item ids).
@@ -694,6 +698,8 @@ def scene_glb(floor, height_m: float, layout, seed: int = 0, cache: dict | None 
         scene shows the same pieces as the staged photo).
     cache : dict, optional
         Built furniture kept between calls (:func:`augment.furniture.furniture_for`).
+    assets : dict, optional
+        Kind -> the user's model, as for :func:`augment.render.render_staged`.
     """
     import trimesh
 
@@ -708,7 +714,7 @@ def scene_glb(floor, height_m: float, layout, seed: int = 0, cache: dict | None 
         scene.add_geometry(walls, node_name="walls", geom_name="walls", transform=GLTF_FROM_FLOOR)
     items = list(layout) if isinstance(layout, (list, tuple)) else placed_items(layout)
     for k, item in enumerate(items):
-        mesh = furniture_for(item, seed, None, cache).to_trimesh(world_from_item(item))
+        mesh = furniture_for(item, seed, assets, cache).to_trimesh(world_from_item(item))
         name = item.id or f"{item.kind}_{k + 1}"
         scene.add_geometry(mesh, node_name=name, geom_name=name, transform=GLTF_FROM_FLOOR)
     from trimesh.exchange.gltf import export_glb
@@ -820,7 +826,8 @@ def report_dict(result: FurnishResult) -> dict:
         "height": {**height.to_json(), "used_m": result.room_height_m},
         "furniture": {"source": result.source, "floor_polygon_m": np.round(result.spec.polygon_m, 4),
                       "height_m": result.room_height_m, "items": [i.id for i in result.spec.items],
-                      "kinds": [i.kind.name for i in result.spec.items], "dropped": result.dropped},
+                      "kinds": [i.kind.name for i in result.spec.items], "dropped": result.dropped,
+                      "assets": dict(result.assets)},
         "suggestions": suggestions,
         "files": {"contact_sheet": "staged_all.jpg", "energy": "energy.png", "report": "report.json",
                   "overlays": list(result.overlays), "per_suggestion": n},
@@ -833,6 +840,29 @@ def report_dict(result: FurnishResult) -> dict:
 # furnish
 # --------------------------------------------------------------------------------------
 
+def _load_assets(assets) -> dict:
+    """Kind -> parts of each of the user's models (see ``assets`` of :func:`furnish`)."""
+    if not assets:
+        return {}
+    from .furniture import load_asset
+
+    loaded = {}
+    for kind, source in dict(assets).items():
+        if not isinstance(kind, str) or not kind.strip():
+            raise FurnishError(f"asset kind {kind!r}: name a furniture kind (`layout kinds` lists them)")
+        if not isinstance(source, (str, Path)):
+            loaded[kind] = tuple(source)
+            continue
+        path = Path(source)
+        if path.suffix.lower() not in (".glb", ".gltf", ".obj"):
+            raise FurnishError(f"asset for {kind}: {path} is not a GLB, glTF or OBJ file")
+        try:
+            loaded[kind] = load_asset(path)
+        except ValueError as error:
+            raise FurnishError(f"asset for {kind}: {error}") from None
+    return loaded
+
+
 def _load_model(model):
     from .segment import DEFAULT_MODEL, FloorModel
 
@@ -842,8 +872,8 @@ def _load_model(model):
 
 
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
-            seed: int = 0, camera=None, model=None, progress: bool = False, reporter=None,
-            renderer=None, tol: Tolerances = TOL) -> FurnishResult:
+            seed: int = 0, camera=None, model=None, assets: dict | None = None, progress: bool = False,
+            reporter=None, renderer=None, tol: Tolerances = TOL) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
     Parameters
@@ -865,6 +895,10 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         A camera profile from ``stage calibrate``.
     model : path-like or FloorModel, optional
         Floor model (default :data:`augment.segment.DEFAULT_MODEL`).
+    assets : dict, optional
+        Kind -> the user's model of that kind, rendered and put in the scenes instead of
+        Stager's own, stretched onto each item's box: a GLB, glTF or OBJ path (y up,
+        front toward +z) or parts from :func:`augment.furniture.load_asset`.
     progress : bool
         A progress bar on stderr.
     reporter : callable, optional
@@ -897,6 +931,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     # Everything that can be checked without the photo is, first.
     source_name, source = _furniture_source(room, spec)
     floor_model = _load_model(model)
+    user_models = _load_assets(assets)
     steps = 6 + 3 * suggestions
     bar = _Progress(progress, steps) if reporter is None else reporter(steps)
     clock = _Clock(bar)
@@ -938,6 +973,10 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             fitted, dropped = fit_spec(spec, poly, room_height, tol)
             if not fitted.items:
                 raise _too_small(floor.area_m2, dropped)
+            unused = sorted(set(user_models) - {i.kind.name for i in fitted.items})
+            if unused:
+                warnings.append(f"no item of kind {', '.join(unused)} to show your model(s) on; the furniture is "
+                                + ", ".join(sorted({i.kind.name for i in fitted.items})))
         bar.step()
         with clock("layout"):
             fitted, layouts, reports = _solve(fitted, suggestions, seed, floor.area_m2, dropped, bar, tol)
@@ -955,8 +994,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 staged = []
                 for lay in layouts:
                     staged.append(render.render_staged(image, calibration, lay, gl, floor_mask=seg.mask,
-                                                       floor_polygon=floor, lighting=lighting,
-                                                       seed=seed).image)
+                                                       floor_polygon=floor, lighting=lighting, seed=seed,
+                                                       assets=user_models).image)
                     bar.step()
             finally:
                 if own:
@@ -965,7 +1004,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             cache = {}
             scenes = []
             for lay in layouts:
-                scenes.append(scene_glb(floor, room_height, lay, seed=seed, cache=cache))
+                scenes.append(scene_glb(floor, room_height, lay, seed=seed, cache=cache, assets=user_models))
                 bar.step()
         with clock("overlays"):
             overlays = {"overlay_calibration.png": calibration_overlay(image, calibration),
@@ -982,6 +1021,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     timings = dict(clock.timings, total=time.perf_counter() - t_start)
     result = FurnishResult(photo, image, calibration, seg, floor, height, room_height, source_name, fitted,
                            dropped, layouts, reports, staged, sheet, overlays, scenes, layout_files,
+                           assets={k: str(v) if isinstance(v, (str, Path)) else "parts" for k, v in
+                                   (assets or {}).items()},
                            timings_s=timings, warnings=warnings)
     result.report = report_dict(result)
     return result

@@ -203,6 +203,53 @@ def test_furnish_command_on_a_cramped_floor(tmp_path, capsys):
         assert (out / name).stat().st_size > 1000
 
 
+def _red_box(path: Path) -> Path:
+    box = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    box.visual.face_colors = [230, 20, 20, 255]
+    data = box.export(file_type=path.suffix[1:])
+    path.write_bytes(data.encode() if isinstance(data, str) else data)
+    return path
+
+
+def _red_pixels(image: np.ndarray) -> int:
+    r, g, b = (image[..., c].astype(int) for c in range(3))
+    return int(np.sum((r > 80) & (r > 2 * g + 30) & (r > 2 * b + 30)))
+
+
+def test_a_users_model_replaces_a_kind(roomy, tmp_path, capsys):
+    red = _red_box(tmp_path / "red.glb")
+    out = tmp_path / "staged"
+    code, _, err = run(["furnish", ROOMY, "--suggestions", "1", "--asset", f"sofa={red}", "--asset",
+                        f"piano={red}", "--out", out, "--quiet"], capsys)
+    assert code == 0, err
+    # The sofa is the red box, in the photo and in the scene; the piano is said to be unused.
+    staged = cv2.cvtColor(cv2.imread(str(out / "staged_1.jpg")), cv2.COLOR_BGR2RGB)
+    assert _red_pixels(staged) > 5000
+    assert _red_pixels(roomy[0].staged[0]) < 50
+    scene = trimesh.load(out / "scene_1.glb", force="scene")
+    sofa = scene.geometry["sofa"]
+    assert len(sofa.vertices) == len(trimesh.load(red, force="mesh").vertices)
+    assert "warning: no item of kind piano" in err
+    assert json.loads((out / "report.json").read_text())["furniture"]["assets"] == {"sofa": str(red), "piano": str(red)}
+
+
+def test_bad_asset_flags(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    garbage = tmp_path / "broken.glb"
+    garbage.write_bytes(b"glTF but not really")
+    text = tmp_path / "notes.txt"
+    text.write_text("a sofa")
+    for value, needle in (("sofa", "give KIND=FILE"), (f"sofa={tmp_path / 'none.glb'}", "no such file"),
+                          (f"sofa={garbage}", "could not be read as a 3-D model"),
+                          (f"sofa={text}", "is not a GLB, glTF or OBJ file")):
+        err = _refused(["furnish", ROOMY, "--asset", value, "--out", out], out, capsys, needle)
+        assert "--asset" in err or "asset for sofa" in err, err
+    red = _red_box(tmp_path / "red.obj")
+    _refused(["furnish", ROOMY, "--asset", f"sofa={red}", "--asset", f"sofa={red}", "--out", out], out, capsys,
+             "sofa given more than once")
+
+
 @pytest.fixture
 def out_with_a_file(tmp_path):
     out = tmp_path / "out"
