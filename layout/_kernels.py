@@ -938,11 +938,17 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
     cy = np.empty(m)
     ex = np.empty(m)
     ey = np.empty(m)
+    # A pair is listed only for two bodies, at least one of them movable. Looked up
+    # once per box here: in the pair loop, through idx, they cost more than the test.
+    body = np.empty(m, np.int64)
+    movable = np.empty(m, np.bool_)
     for q in range(m):
         # The box covers the footprint and its access boxes (sides 0/2 behind/ahead
         # along the depth axis, 1/3 left/right), so it is off-center when only one
         # side needs clearance.
         i = idx[q]
+        body[q] = P.body[i]
+        movable[q] = P.inv_mass[body[q]] != 0.0
         a0, a1, a2, a3 = P.access_depth[i, 0], P.access_depth[i, 1], P.access_depth[i, 2], P.access_depth[i, 3]
         ox = 0.5 * (a2 - a0)
         oy = 0.5 * (a1 - a3)
@@ -994,12 +1000,15 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
     sy = cy[order]
     sex = ex[order]
     sey = ey[order]
+    sidx = idx[order]
+    sbody = body[order]
+    smovable = movable[order]
     npairs = 0
     for g in range(nx * ny):
         gx = g % nx
         gy = g // nx
         for u in range(start[g], start[g + 1]):
-            xa, ya, exa, eya = sx[u], sy[u], sex[u], sey[u]
+            xa, ya, exa, eya, ba, ma = sx[u], sy[u], sex[u], sey[u], sbody[u], smovable[u]
             for run in range(2):
                 # Half stencil: this cell (later entries) and its east neighbour; then
                 # the three cells above.
@@ -1014,10 +1023,10 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
                 for v in range(first, last):
                     if abs(xa - sx[v]) > exa + sex[v] or abs(ya - sy[v]) > eya + sey[v]:
                         continue
-                    i = idx[order[u]]
-                    j = idx[order[v]]
-                    if not _may_meet(P, i, j):
+                    if ba == sbody[v] or not (ma or smovable[v]):
                         continue
+                    i = sidx[u]
+                    j = sidx[v]
                     if npairs == pairs.shape[0]:
                         pairs = _grown(pairs)
                     pairs[npairs, 0] = min(i, j)
@@ -1030,22 +1039,16 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
                 continue
             if abs(cx[qa] - cx[qb]) > ex[qa] + ex[qb] or abs(cy[qa] - cy[qb]) > ey[qa] + ey[qb]:
                 continue
+            if body[qa] == body[qb] or not (movable[qa] or movable[qb]):
+                continue
             i = idx[qa]
             j = idx[qb]
-            if not _may_meet(P, i, j):
-                continue
             if npairs == pairs.shape[0]:
                 pairs = _grown(pairs)
             pairs[npairs, 0] = min(i, j)
             pairs[npairs, 1] = max(i, j)
             npairs += 1
     return pairs[:npairs]
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _may_meet(P, i, j):
-    """A pair to list: two bodies, at least one of them movable."""
-    return P.body[i] != P.body[j] and (P.inv_mass[P.body[i]] != 0.0 or P.inv_mass[P.body[j]] != 0.0)
 
 
 @njit(cache=True, error_model="numpy")
