@@ -74,12 +74,11 @@ from layout.builder import LayoutBuilder
 from layout.errors import LayoutError
 from layout.fileio import staged_folder
 from layout.geometry import edge_distances
-from layout.presets import PRESETS
+from layout.presets import DEFAULT_ROOM, PRESETS
 
 from . import __version__
 from .imageio import encode_image
 
-DEFAULT_ROOM = "living_room"
 DEFAULT_SUGGESTIONS = 4
 
 

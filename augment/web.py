@@ -8,7 +8,8 @@ described on the app's OpenAPI page (``/docs``):
 ``POST /api/jobs``                  multipart: ``photo`` and the options of ``stage
                                     furnish`` (``board``, ``square``, ``room``,
                                     ``suggestions``, ``seed``, an optional ``camera``
-                                    profile file) -> 202 ``{"id": ...}``
+                                    profile file, an optional ``spec`` file instead of
+                                    the room preset) -> 202 ``{"id": ...}``
 ``GET /api/jobs/{id}``              ``status`` (queued, running, done, failed), per-stage
                                     progress, ``error`` (what went wrong, in words),
                                     ``files``, ``warnings``
@@ -25,10 +26,12 @@ is decoded, so more than :data:`MAX_PIXELS` pixels (a decompression bomb) is ref
 (413); anything OpenCV cannot decode is refused (415); job ids are random UUIDs; files
 are served only by name from the job's own output listing; finished jobs are deleted
 after ``keep_minutes``. Nothing the user sends is used as a path: the photo is stored
-as ``photo.<type>`` with the type found by decoding it.
+as ``photo.<type>`` with the type found by decoding it, a spec as ``spec.toml`` once it
+has been checked as ``stage furnish --spec`` would check it (422 with the reason
+otherwise; it is data, read by :mod:`tomllib`, and names no files).
 
 Layout of ``jobs_dir``: one folder per job, ``<id>/input/`` (the photo, the camera
-profile), ``<id>/out/`` (the files of :func:`augment.pipeline.write_outputs`),
+profile, the spec), ``<id>/out/`` (the files of :func:`augment.pipeline.write_outputs`),
 ``<id>/progress.json`` (written by the worker as stages finish).
 """
 from __future__ import annotations
@@ -53,10 +56,11 @@ from pathlib import Path
 from typing import Annotated
 
 from fastapi import FastAPI, File, Form, HTTPException, Request, UploadFile
-from fastapi.responses import FileResponse, JSONResponse, Response
+from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response
 
 MAX_PIXELS = 50_000_000
 MAX_PROFILE_BYTES = 1 << 20
+MAX_SPEC_BYTES = 256 << 10
 MAX_SUGGESTIONS = 12
 # A busy server says when to come back: about when a worker frees up, from the recent
 # jobs' times (this default until one is done), within these bounds.
@@ -64,7 +68,7 @@ DEFAULT_JOB_S = 20.0
 RETRY_AFTER_BOUNDS_S = (2, 60)
 DEFAULT_JOBS_DIR = Path("out") / "jobs"
 STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene", "overlays",
-          "write")
+          "plans", "write")
 STATIC_DIR = Path(__file__).with_name("web_static")
 # Kinds of user error: the class name in the worker, the key in a job's "error".
 _USER_ERRORS = {"CalibrationError": "calibration", "SegmentationError": "segmentation",
@@ -140,18 +144,20 @@ def _run_job(job_dir: str, options: dict) -> dict:
         _renderer = Renderer()
     photo = job / "input" / options["photo"]
     camera = job / "input" / options["camera"] if options.get("camera") else None
+    spec = job / "input" / options["spec"] if options.get("spec") else None
     try:
         result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
-                                  room=options["room"], suggestions=options["suggestions"],
-                                  seed=options["seed"], camera=camera, reporter=_FileProgress,
-                                  renderer=_renderer)
+                                  room=None if spec is not None else options["room"], spec=spec,
+                                  suggestions=options["suggestions"], seed=options["seed"], camera=camera,
+                                  reporter=_FileProgress, renderer=_renderer)
         state = json.loads(_progress_path.read_text())
         _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
         paths = pipeline.write_outputs(result, job / "out")
     except (CalibrationError, SegmentationError, LayoutError, pipeline.FurnishError) as error:
         message = str(error).replace(str(photo), "the photo")
-        if camera is not None:
-            message = message.replace(str(camera), "the camera profile")
+        for path, name in ((camera, "the camera profile"), (spec, "the spec file")):
+            if path is not None:
+                message = message.replace(str(path), name)
         return {"error": {"kind": _USER_ERRORS[type(error).__name__], "message": message},
                 "seconds": time.perf_counter() - start}
     state = json.loads(_progress_path.read_text())
@@ -219,6 +225,17 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
     return _SUFFIXES[kind]
 
 
+def _check_spec(data: bytes) -> None:
+    """Refuse (422) a layout spec that ``stage furnish --spec`` would refuse."""
+    from layout.errors import LayoutError
+    from layout.spec import spec_from_bytes
+
+    try:
+        spec_from_bytes(data, "the spec file")
+    except LayoutError as error:
+        raise UploadError(422, str(error)) from None
+
+
 def _check_options(board: str, square: float, room: str, suggestions: int) -> tuple:
     import argparse
 
@@ -266,6 +283,7 @@ def _job_state(job: Job) -> dict:
     state = {"id": job.id, "status": "queued", "stage": None, "stages": {s: "pending" for s in STAGES},
              "progress": 0.0, "error": None, "files": [], "warnings": [],
              "options": {"board": board, "square": job.options["square"], "room": job.options["room"],
+                         "spec": job.options.get("spec") is not None,
                          "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
     try:
         progress = json.loads((job.folder / "progress.json").read_text())
@@ -298,6 +316,17 @@ def _board_hint(job: Job) -> dict:
     square = job.options["square"]
     return {"board": spec, "square": square,
             "pdf": f"/api/board.pdf?board={spec}&square={square:g}"}
+
+
+def _page() -> str:
+    """The one page, its room list filled from the presets (as ``stage furnish --room``)."""
+    import html
+
+    from layout.presets import DEFAULT_ROOM, PRESETS
+
+    options = "".join(f'<option value="{name}"{" selected" if name == DEFAULT_ROOM else ""}>'
+                      f'{html.escape(name.replace("_", " "))}</option>' for name in PRESETS)
+    return (STATIC_DIR / "index.html").read_text(encoding="utf-8").replace("<!-- PRESETS -->", options)
 
 
 def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: int | None = None,
@@ -382,9 +411,11 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
             return JSONResponse({"detail": _too_large(int(length), max_bytes)}, status_code=413)
         return await call_next(request)
 
+    page = _page()
+
     @app.get("/", include_in_schema=False)
     async def index():
-        return FileResponse(STATIC_DIR / "index.html", media_type="text/html")
+        return HTMLResponse(page)
 
     @app.post("/api/jobs", status_code=202)
     async def submit(photo: Annotated[UploadFile, File(description="photo of the empty room, the board on "
@@ -396,9 +427,12 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                      suggestions: Annotated[int, Form()] = 4,
                      seed: Annotated[int, Form()] = 0,
                      camera: Annotated[UploadFile | None, File(description="camera profile from "
-                                                                           "`stage calibrate`")] = None):
+                                                                           "`stage calibrate`")] = None,
+                     spec: Annotated[UploadFile | None, File(description="a layout spec (TOML, see `layout "
+                                                                         "solve`) instead of the room preset")]
+                     = None):
         """Start furnishing a photo; answers the job's id."""
-        spec = _check_options(board, square, room, suggestions)
+        board_spec = _check_options(board, square, room, suggestions)
         data = await photo.read(max_bytes + 1)
         if len(data) > max_bytes:
             raise UploadError(413, _too_large(len(data), max_bytes))
@@ -415,6 +449,13 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                 json.loads(profile)
             except (UnicodeDecodeError, json.JSONDecodeError):
                 raise UploadError(422, "the camera profile is not JSON; make one with `stage calibrate`") from None
+        layout_spec = None
+        if spec is not None and spec.filename:
+            layout_spec = await spec.read(MAX_SPEC_BYTES + 1)
+            if len(layout_spec) > MAX_SPEC_BYTES:
+                raise UploadError(413, f"the spec file is larger than {MAX_SPEC_BYTES >> 10} KB; a layout spec "
+                                       "is a short TOML text")
+            _check_spec(layout_spec)
         active = sum(j.result is None for j in jobs.values())
         if active >= workers + max_queued:
             wait = retry_after_s([j.result["seconds"] for j in sorted(jobs.values(), key=lambda j: j.finished or 0)
@@ -427,9 +468,13 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
         (folder / "input" / f"photo{suffix}").write_bytes(data)
         if profile is not None:
             (folder / "input" / "camera.json").write_bytes(profile)
+        if layout_spec is not None:
+            (folder / "input" / "spec.toml").write_bytes(layout_spec)
         options = {"photo": f"photo{suffix}", "camera": "camera.json" if profile is not None else None,
-                   "board": (spec.cols, spec.rows), "kind": spec.kind, "square": float(square), "room": room,
-                   "suggestions": int(suggestions), "seed": int(seed)}
+                   "spec": "spec.toml" if layout_spec is not None else None,
+                   "board": (board_spec.cols, board_spec.rows), "kind": board_spec.kind, "square": float(square),
+                   "room": None if layout_spec is not None else room, "suggestions": int(suggestions),
+                   "seed": int(seed)}
         job = jobs[job_id] = Job(job_id, folder, options)
         try:
             job.future = pool["executor"].submit(_run_job, str(folder), options)

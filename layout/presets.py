@@ -172,6 +172,8 @@ def _outdoor_yard(area):
     return groups, items, [{"type": "against_wall", "items": ["grill", "trash_can"]}]
 
 
+# The preset of `stage furnish` and the web page when none is chosen.
+DEFAULT_ROOM = "living_room"
 PRESETS = {
     "living_room": _living_room,
     "bedroom": _bedroom,

@@ -824,21 +824,40 @@ def load_spec(path) -> Spec:
         column) or any invalid entry; the message starts with the file path.
     """
     path = Path(path)
-    r = _Reader(path)
     try:
-        with open(path, "rb") as f:
-            doc = tomllib.load(f)
+        data = path.read_bytes()
     except FileNotFoundError:
         raise LayoutError(f"{path}: no such file") from None
     except IsADirectoryError:
         raise LayoutError(f"{path}: is a directory, not a spec file") from None
     except PermissionError:
         raise LayoutError(f"{path}: permission denied") from None
+    return spec_from_bytes(data, path)
+
+
+def spec_from_bytes(data: bytes, where) -> Spec:
+    """Check a spec file's contents (an upload, say), as :func:`load_spec` does.
+
+    Parameters
+    ----------
+    data : bytes
+        The TOML file, UTF-8.
+    where : str or os.PathLike
+        Names the spec in error messages and becomes ``Spec.path``.
+
+    Raises
+    ------
+    LayoutError
+        For text that is not UTF-8, a TOML syntax error (with its line and column) or any
+        invalid entry; the message starts with ``where``.
+    """
+    try:
+        doc = tomllib.loads(bytes(data).decode("utf-8"))
     except UnicodeDecodeError as e:
-        raise LayoutError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start})") from None
+        raise LayoutError(f"{where}: not UTF-8 text ({e.reason} at byte {e.start})") from None
     except tomllib.TOMLDecodeError as e:
-        raise LayoutError(f"{path}: invalid TOML: {e}") from None
-    return _parse(r, path, doc)
+        raise LayoutError(f"{where}: invalid TOML: {e}") from None
+    return _parse(_Reader(where), Path(where), doc)
 
 
 def spec_from_dict(doc, where="<spec>") -> Spec:

@@ -66,8 +66,8 @@ def test_job_runs_to_completion(finished):
     assert {"staged_1.jpg", "staged_all.jpg", "plan_1.png", "overlay_calibration.png", "overlay_floor.png",
             "report.json", "scene_1.glb"} <= set(state["files"])
     assert any("focal length" in w for w in state["warnings"])
-    assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "suggestions": 1,
-                                "seed": 0}
+    assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "spec": False,
+                                "suggestions": 1, "seed": 0}
 
 
 def test_files_and_zip(finished):
@@ -134,6 +134,17 @@ def test_bad_uploads(finished):
         response = client.post("/api/jobs", files={"photo": ("x.jpg", data, "image/jpeg")}, data=options)
         assert response.status_code == status, (words, response.text)
         assert words in response.json()["detail"], response.text
+    specs = [  # (spec file content, status, words in the message)
+        (b"[room\nheight = 2.5", 422, "the spec file: invalid TOML"),
+        (b'[room]\nheight = 2.5\n[[items]]\nid = "sofa"\nkind = "sofaa"\n', 422, "sofaa"),
+        (b"\xff\xfe not text", 422, "not UTF-8"),
+        (b"# " + b"x" * 300_000, 413, "larger than 256 KB"),
+    ]
+    for spec, status, words in specs:
+        response = client.post("/api/jobs", files={"photo": ("x.jpg", PHOTO.read_bytes(), "image/jpeg"),
+                                                   "spec": ("my.toml", spec, "text/plain")})
+        assert response.status_code == status, (words, response.text)
+        assert words in response.json()["detail"], response.text
     assert client.post("/api/jobs", data={"board": "7x5"}).status_code == 422  # no photo at all
 
 
@@ -144,6 +155,9 @@ def test_board_pdf_and_page(finished):
     assert client.get("/api/board.pdf", params={"board": "7x5", "square": "400"}).status_code == 422
     page = client.get("/")
     assert page.status_code == 200 and "<html" in page.text and "/api/jobs" in page.text
+    # Every room preset of `stage furnish`, living room first and chosen; a spec upload.
+    assert '<option value="living_room" selected>living room</option>' in page.text
+    assert '<option value="outdoor_yard">outdoor yard</option>' in page.text and 'name="spec"' in page.text
 
 
 def _wait(client, job_id, timeout_s=40):
@@ -170,6 +184,29 @@ def test_board_not_found_says_which_board_to_print(finished):
     assert state["stages"]["calibrate"] == "failed"
     assert client.get(state["error"]["board"]["pdf"]).content.startswith(b"%PDF")
     assert client.get(f"/api/jobs/{state['id']}/download.zip").status_code == 409
+
+
+def test_a_spec_file_brings_its_own_furniture(finished):
+    client = finished[0]
+    spec = b"""[room]
+height = 2.5
+[[items]]
+id = "reading_chair"
+kind = "armchair"
+[[items]]
+id = "lamp"
+kind = "floor_lamp"
+"""
+    response = client.post("/api/jobs", files={"photo": ("room_4.jpg", PHOTO.read_bytes(), "image/jpeg"),
+                                               "spec": ("my room.toml", spec, "text/plain")},
+                           data={"suggestions": "1"})
+    assert response.status_code == 202, response.text
+    state = _wait(client, response.json()["id"])
+    assert state["status"] == "done", state
+    assert state["options"]["spec"] is True and state["options"]["room"] is None
+    report = client.get(f"/api/jobs/{state['id']}/files/report.json").json()
+    assert report["furniture"]["items"] == ["reading_chair", "lamp"]
+    assert report["furniture"]["kinds"] == ["armchair", "floor_lamp"]
 
 
 def test_finished_jobs_are_deleted(finished):
