@@ -9,7 +9,7 @@
     stage measure PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
     stage furnish PHOTO [--board 7x5] [--square 45] [--room NAME | --spec FILE] [--suggestions 4]
                   [--seed 0] [--camera profile.json] [--model M.onnx] [--asset KIND=FILE ...]
-                  [--out DIR] [--quiet]
+                  [--layers] [--out DIR] [--quiet]
     stage serve [--host 127.0.0.1] [--port 8000] [--workers N] [--jobs DIR]
 
 ``--board`` counts inner corners, ``COLSxROWS`` for a plain checkerboard (the default
@@ -238,6 +238,9 @@ def _parser():
                    help="your own model of a furniture kind (GLB, glTF or OBJ; y up, front toward +z), "
                         "stretched onto each item of that kind; repeat for more kinds "
                         "(e.g. --asset sofa=models/my_sofa.glb)")
+    f.add_argument("--layers", action="store_true",
+                   help="also write staged_K_layer.png: what suggestion K adds to the photo (furniture and "
+                        "shadows) as RGBA, to composite by hand")
     f.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
                    help="output folder (default out/<photo name>; created)")
     f.add_argument("--quiet", "-q", action="store_true",
@@ -612,6 +615,7 @@ def _furnish_cmd(args):
         raise StageError(f"--asset: {', '.join(twice)} given more than once; give one model per kind")
     result = furnish(args.photo, board, room=args.room, spec=args.spec, suggestions=args.suggestions,
                      seed=args.seed, camera=args.camera, model=args.model, assets=dict(args.asset),
+                     layers=args.layers,
                      progress=not args.quiet and sys.stderr.isatty())
     paths = write_outputs(result, out)
     if not args.quiet:

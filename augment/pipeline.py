@@ -35,6 +35,7 @@ Files written by :func:`write_outputs` (K = 1 … N):
 =========================== =========================================================
 ``staged_K.jpg``            the photo furnished with suggestion K (JPEG quality 92)
 ``staged_all.jpg``          contact sheet: all suggestions side by side, numbered
+``staged_K_layer.png``      with ``layers=True``: what suggestion K adds (RGBA)
 ``layout_K.json``           suggestion K (see ``layout solve``): room, items, energy, metrics
 ``plan_K.png``              its top-down plan on the measured floor
 ``energy.png``              energy per solver iteration of every suggestion
@@ -148,6 +149,9 @@ class FurnishResult:
         (:func:`layout.report.output_files`).
     assets : dict of str -> str
         The user's models by kind (``assets`` of :func:`furnish`), as given.
+    layers : list of (h, w, 4) uint8
+        With ``layers=True``: what each suggestion adds to the photo (furniture and
+        shadows) as straight-alpha RGBA; laid over the photo it gives the staged image.
     report : dict
         What ``report.json`` holds (:func:`report_dict`).
     timings_s : dict of str -> float
@@ -173,6 +177,7 @@ class FurnishResult:
     scenes_glb: list
     layout_files: dict
     assets: dict = field(default_factory=dict)
+    layers: list = field(default_factory=list)
     report: dict = field(default_factory=dict)
     timings_s: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
@@ -871,8 +876,8 @@ def _load_model(model):
 
 
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
-            seed: int = 0, camera=None, model=None, assets: dict | None = None, progress: bool = False,
-            reporter=None, renderer=None, tol: Tolerances = TOL) -> FurnishResult:
+            seed: int = 0, camera=None, model=None, assets: dict | None = None, layers: bool = False,
+            progress: bool = False, reporter=None, renderer=None, tol: Tolerances = TOL) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
     Parameters
@@ -898,6 +903,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         Kind -> the user's model of that kind, rendered and put in the scenes instead of
         Stager's own, stretched onto each item's box: a GLB, glTF or OBJ path (y up,
         front toward +z) or parts from :func:`augment.furniture.load_asset`.
+    layers : bool
+        Also keep each suggestion's RGBA layer (``FurnishResult.layers``; written as
+        ``staged_K_layer.png``), to composite by hand.
     progress : bool
         A progress bar on stderr.
     reporter : callable, optional
@@ -990,11 +998,14 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             gl = render.Renderer() if own else renderer
             try:
                 lighting = render.estimate_lighting(image, calibration, seg.mask)
-                staged = []
+                staged, staged_layers = [], []
                 for lay in layouts:
-                    staged.append(render.render_staged(image, calibration, lay, gl, floor_mask=seg.mask,
-                                                       floor_polygon=floor, lighting=lighting, seed=seed,
-                                                       assets=user_models).image)
+                    done = render.render_staged(image, calibration, lay, gl, floor_mask=seg.mask,
+                                                floor_polygon=floor, lighting=lighting, seed=seed,
+                                                assets=user_models, layer=layers)
+                    staged.append(done.image)
+                    if layers:
+                        staged_layers.append(done.layer)
                     bar.step()
             finally:
                 if own:
@@ -1021,7 +1032,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     result = FurnishResult(photo, image, calibration, seg, floor, height, room_height, source_name, fitted,
                            dropped, layouts, reports, staged, sheet, overlays, scenes, layout_files,
                            assets={k: str(v) if isinstance(v, (str, Path)) else "parts" for k, v in
-                                   (assets or {}).items()},
+                                   (assets or {}).items()}, layers=staged_layers,
                            timings_s=timings, warnings=warnings)
     result.report = report_dict(result)
     return result
@@ -1043,6 +1054,8 @@ def _write_files(result: FurnishResult, folder: Path) -> list[str]:
 
     for k, img in enumerate(result.staged, start=1):
         put(f"staged_{k}.jpg", encode_image(img, ".jpg"))
+    for k, rgba in enumerate(result.layers, start=1):
+        put(f"staged_{k}_layer.png", encode_image(rgba, ".png"))
     put("staged_all.jpg", encode_image(result.contact_sheet, ".jpg"))
     for name, data in result.layout_files.items():
         put(name, data)

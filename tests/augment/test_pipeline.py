@@ -220,7 +220,7 @@ def test_a_users_model_replaces_a_kind(roomy, tmp_path, capsys):
     red = _red_box(tmp_path / "red.glb")
     out = tmp_path / "staged"
     code, _, err = run(["furnish", ROOMY, "--suggestions", "1", "--asset", f"sofa={red}", "--asset",
-                        f"piano={red}", "--out", out, "--quiet"], capsys)
+                        f"piano={red}", "--layers", "--out", out, "--quiet"], capsys)
     assert code == 0, err
     # The sofa is the red box, in the photo and in the scene; the piano is said to be unused.
     staged = cv2.cvtColor(cv2.imread(str(out / "staged_1.jpg")), cv2.COLOR_BGR2RGB)
@@ -231,6 +231,13 @@ def test_a_users_model_replaces_a_kind(roomy, tmp_path, capsys):
     assert len(sofa.vertices) == len(trimesh.load(red, force="mesh").vertices)
     assert "warning: no item of kind piano" in err
     assert json.loads((out / "report.json").read_text())["furniture"]["assets"] == {"sofa": str(red), "piano": str(red)}
+    # --layers: the RGBA layer laid over the photo gives the staged photo (up to its JPEG).
+    layer = cv2.cvtColor(cv2.imread(str(out / "staged_1_layer.png"), cv2.IMREAD_UNCHANGED), cv2.COLOR_BGRA2RGBA)
+    photo = read_photo(ROOMY).astype(np.float32)
+    a = layer[..., 3:].astype(np.float32) / 255.0
+    laid = a * layer[..., :3] + (1.0 - a) * photo
+    assert np.abs(laid - staged).mean() < 2.0
+    assert 0.01 < (a > 0).mean() < 0.6 and np.all(laid[a[..., 0] == 0] == photo[a[..., 0] == 0])
 
 
 def test_bad_asset_flags(tmp_path, capsys):
