@@ -7,7 +7,7 @@
     stage check PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
     stage segment PHOTO [--model M.onnx] [--method onnx|grabcut] [--board ...] [--out MASK.png] [--quiet]
     stage measure PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
-    stage furnish PHOTO [--board 7x5] [--square 45] [--room NAME | --spec FILE] [--suggestions 4]
+    stage furnish PHOTO... [--board 7x5] [--square 45] [--room NAME | --spec FILE] [--suggestions 4]
                   [--seed 0] [--camera profile.json] [--model M.onnx] [--asset KIND=FILE ...]
                   [--layers] [--out DIR] [--quiet]
     stage serve [--host 127.0.0.1] [--port 8000] [--workers N] [--jobs DIR]
@@ -43,7 +43,7 @@ import sys
 from pathlib import Path
 from typing import NamedTuple
 
-from layout.command import EXIT_OK, Parser, dispatch, parse, run as run_command
+from layout.command import EXIT_INPUT, EXIT_OK, Parser, dispatch, parse, run as run_command
 from layout.presets import PRESETS
 
 from .board import BOARD_KINDS, CHARUCO_DICTIONARY, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM, PAPER_MM
@@ -218,7 +218,9 @@ def _parser():
                                    "staged_all.jpg (contact sheet), layout_K.json, plan_K.png, energy.png, "
                                    "scene_K.glb (glTF: floor, walls, furniture), overlay_calibration.png, "
                                    "overlay_floor.png, overlay_height.png and report.json.")
-    f.add_argument("photo", type=Path, metavar="PHOTO")
+    f.add_argument("photo", type=Path, nargs="+", metavar="PHOTO",
+                   help="the photo; with several, each one's files go to DIR/<photo name>/ and one process "
+                        "(one GL context, one floor model) furnishes them all")
     _add_board_args(f)
     what = f.add_mutually_exclusive_group()
     what.add_argument("--room", choices=tuple(PRESETS), default=None, metavar="NAME",
@@ -592,16 +594,32 @@ def _asset(text: str) -> tuple[str, Path]:
 
 
 def _furnish_cmd(args):
-    from .pipeline import dropped_summary, furnish, write_outputs
+    from layout.errors import LayoutError
 
+    from .calibrate import CalibrationError
+    from .pipeline import FurnishError, furnish, write_outputs
+    from .segment import SegmentationError
+
+    photos = args.photo
     board = _board(args)
-    out = args.out if args.out is not None else Path("out") / args.photo.stem
-    _prepare_dir_out(out)
-    # The files are made in a folder beside out, then moved in: both places must take them.
-    for folder in ([out] if out.is_dir() else []) + [next(p for p in out.parents if p.exists())]:
-        if not os.access(folder, os.W_OK | os.X_OK):
-            raise StageError(f"--out {out}: cannot write in {folder}; choose a folder you can write to")
-    if args.photo.is_file():
+    batch = len(photos) > 1
+    if batch:
+        stems = [p.stem for p in photos]
+        twice = sorted({stem for stem in stems if stems.count(stem) > 1})
+        if twice:
+            raise StageError(f"several photos are named {', '.join(twice)}: each photo's files go to "
+                             "--out/<photo name>/; give them different names")
+        parent = args.out if args.out is not None else Path("out")
+        outs = [parent / p.stem for p in photos]
+    else:
+        outs = [args.out if args.out is not None else Path("out") / photos[0].stem]
+    for out in outs:
+        _prepare_dir_out(out)
+        # The files are made in a folder beside out, then moved in: both places must take them.
+        for folder in ([out] if out.is_dir() else []) + [next(p for p in out.parents if p.exists())]:
+            if not os.access(folder, os.W_OK | os.X_OK):
+                raise StageError(f"--out {out}: cannot write in {folder}; choose a folder you can write to")
+    if any(p.is_file() for p in photos):
         for flag, path, hint in (("--camera", args.camera, "make a camera profile with `stage calibrate`"),
                                  ("--model", args.model, "give an ONNX floor model, or leave --model out"),
                                  ("--spec", args.spec, "write one (see `layout solve --help`)"),
@@ -613,12 +631,45 @@ def _furnish_cmd(args):
     if len(set(kinds)) < len(kinds):
         twice = sorted({k for k in kinds if kinds.count(k) > 1})
         raise StageError(f"--asset: {', '.join(twice)} given more than once; give one model per kind")
-    result = furnish(args.photo, board, room=args.room, spec=args.spec, suggestions=args.suggestions,
-                     seed=args.seed, camera=args.camera, model=args.model, assets=dict(args.asset),
-                     layers=args.layers,
-                     progress=not args.quiet and sys.stderr.isatty())
-    paths = write_outputs(result, out)
-    if not args.quiet:
+    shared = {}
+    if batch:
+        # Loaded once for every photo: the floor model's session and the GL context.
+        from .gl import Renderer
+        from .segment import DEFAULT_MODEL, FloorModel
+
+        shared = {"model": FloorModel(DEFAULT_MODEL if args.model is None else args.model), "renderer": Renderer()}
+    refused = 0
+    try:
+        for photo, out in zip(photos, outs):
+            try:
+                result = furnish(photo, board, room=args.room, spec=args.spec, suggestions=args.suggestions,
+                                 seed=args.seed, camera=args.camera, model=shared.get("model", args.model),
+                                 assets=dict(args.asset), layers=args.layers, renderer=shared.get("renderer"),
+                                 progress=not args.quiet and sys.stderr.isatty())
+                paths = write_outputs(result, out)
+            except (CalibrationError, SegmentationError, LayoutError, FurnishError) as error:
+                if not batch:
+                    raise
+                print(f"error: {error}", file=sys.stderr)
+                refused += 1
+                continue
+            _print_furnished(result, out, paths, args.quiet, photo if batch else None)
+    finally:
+        if "renderer" in shared:
+            shared["renderer"].close()
+    if batch and not args.quiet:
+        print(f"furnished {len(photos) - refused} of {len(photos)} photos into {parent}/"
+              + (f"; {refused} refused (errors above)" if refused else ""))
+    return EXIT_INPUT if refused else EXIT_OK
+
+
+def _print_furnished(result, out: Path, paths: list, quiet: bool, photo: Path | None) -> None:
+    """What ``stage furnish`` says of one photo; ``photo`` names it when there are several."""
+    from .pipeline import dropped_summary
+
+    if not quiet:
+        if photo is not None:
+            print(f"== {photo}")
         cal, floor, height = result.calibration, result.floor, result.height
         i = cal.intrinsics
         print(f"camera      {cal.camera_height_m:.2f} m above the floor, focal {i.K[0, 0]:.0f} px from {i.source}, "
@@ -643,8 +694,7 @@ def _furnish_cmd(args):
               + f", side by side in {out / 'staged_all.jpg'}")
         print(f"wrote {len(paths)} files to {out}/")
     for warning in result.warnings:
-        print(f"warning: {warning}", file=sys.stderr)
-    return EXIT_OK
+        print(f"warning: {'' if photo is None else f'{photo.name}: '}{warning}", file=sys.stderr)
 
 
 def _serve_cmd(args):

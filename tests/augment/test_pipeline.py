@@ -257,6 +257,27 @@ def test_bad_asset_flags(tmp_path, capsys):
              "sofa given more than once")
 
 
+def test_several_photos_in_one_command(tmp_path, capsys):
+    gray = tmp_path / "gray.png"
+    gray.write_bytes(cv2.imencode(".png", np.full((480, 640, 3), 128, np.uint8))[1].tobytes())
+    out = tmp_path / "batch"
+    code, stdout, err = run(["furnish", CRAMPED, gray, ROOMY, "--room", "bedroom", "--suggestions", "1",
+                             "--out", out], capsys)
+    # The photo without a board is refused with its own error; the others are furnished.
+    assert code == 2
+    assert f"error: " in err and str(gray) in err and "no 7x5 checkerboard" in err
+    assert "furnished 2 of 3 photos" in stdout and f"== {ROOMY}" in stdout
+    assert sorted(p.name for p in out.iterdir()) == ["room_1", "room_4"]
+    for name in ("room_1", "room_4"):
+        report = json.loads((out / name / "report.json").read_text())
+        assert report["photo"].endswith(f"{name}.jpg") and len(report["suggestions"]) == 1
+    assert "warning: room_4.jpg: " in err
+    twin = tmp_path / "room_4.jpg"
+    twin.write_bytes(ROOMY.read_bytes())
+    code, _, err = run(["furnish", ROOMY, twin, "--out", tmp_path / "twins"], capsys)
+    assert code == 2 and "several photos are named room_4" in err and not (tmp_path / "twins").exists()
+
+
 @pytest.fixture
 def out_with_a_file(tmp_path):
     out = tmp_path / "out"
