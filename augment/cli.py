@@ -635,9 +635,8 @@ def _furnish_cmd(args):
     if batch:
         # Loaded once for every photo: the floor model's session and the GL context.
         from .gl import Renderer
-        from .segment import DEFAULT_MODEL, FloorModel
 
-        shared = {"model": FloorModel(DEFAULT_MODEL if args.model is None else args.model), "renderer": Renderer()}
+        shared = {"model": _load_model(args.model), "renderer": Renderer()}
     refused = 0
     try:
         for photo, out in zip(photos, outs):
