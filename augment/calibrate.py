@@ -585,8 +585,48 @@ def exif_intrinsics(focal_px: float, size_px: tuple[int, int]) -> Intrinsics:
     return Intrinsics(K, np.zeros(5), "exif", 0.03, "EXIF 35 mm equivalent focal length; principal point at center")
 
 
-def load_profile(path, size_px: tuple[int, int]) -> Intrinsics:
+def exif_orientation(path) -> int | None:
+    """The EXIF orientation tag of an image file (1-8), or None."""
+    from PIL import Image
+
+    try:
+        with Image.open(path) as im:
+            value = im.getexif().get(0x0112)
+    except (OSError, ValueError):
+        return None
+    return int(value) if value else None
+
+
+def _quarter_turn(K: np.ndarray, dist: np.ndarray, size_px, clockwise: bool):
+    """Intrinsics of the frame turned a quarter: K (3, 3), distortion and the new size.
+
+    Turned clockwise, sensor pixel (u, v) shows at (h - 1 - v, u): the camera's x axis is
+    its old -y and its y axis its old x, so fx and fy swap and the tangential terms
+    become (p2, -p1); anticlockwise (u, v) shows at (v, w - 1 - u) and they become
+    (-p2, p1). Radial terms do not change."""
+    w, h = size_px
+    fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
+    d = np.zeros(max(5, len(dist)))
+    d[: len(dist)] = dist
+    if np.any(d[8:]):
+        raise CalibrationError("the profile's thin-prism or tilt terms cannot be turned; calibrate the camera "
+                               "held the way the photo was taken")
+    if clockwise:
+        K2 = np.array([[fy, 0, h - 1 - cy], [0, fx, cx], [0, 0, 1.0]])
+        d[2], d[3] = d[3], -d[2]
+    else:
+        K2 = np.array([[fy, 0, cy], [0, fx, w - 1 - cx], [0, 0, 1.0]])
+        d[2], d[3] = -d[3], d[2]
+    return K2, d[: max(5, len(dist))], (h, w)
+
+
+def load_profile(path, size_px: tuple[int, int], orientation: int | None = None) -> Intrinsics:
     """Intrinsics from a camera profile JSON (``stage calibrate``), scaled to ``size_px``.
+
+    A photo whose frame is the profile's turned a quarter (the phone held the other way)
+    gets the turned intrinsics: ``orientation``, the photo's EXIF orientation tag, says
+    which way (6 clockwise, 8 anticlockwise; clockwise when it does not say, and the
+    note tells).
 
     Raises
     ------
@@ -605,7 +645,14 @@ def load_profile(path, size_px: tuple[int, int]) -> Intrinsics:
         raise CalibrationError(
             f"camera profile {path}: cannot read it ({type(error).__name__}: {error}); expected the JSON "
             "written by `stage calibrate` with fields K, distortion, size_px") from None
+    rms = float(data.get("rms_px", 0.0))
+    note = f"camera profile {path.name} (RMS {rms:.2f} px)"
     width, height = size_px
+    if abs(w0 / h0 - width / height) > 0.01 and abs(h0 / w0 - width / height) <= 0.01:
+        K, dist, (w0, h0) = _quarter_turn(K, dist, (w0, h0), clockwise=orientation != 8)
+        way = {6: "clockwise (EXIF)", 8: "anticlockwise (EXIF)"}.get(orientation, "clockwise (assumed: no EXIF "
+                                                                                   "orientation)")
+        note += f", turned a quarter {way}"
     if (w0, h0) != (width, height):
         if abs(w0 / h0 - width / height) > 0.01:
             raise CalibrationError(
@@ -616,9 +663,7 @@ def load_profile(path, size_px: tuple[int, int]) -> Intrinsics:
         K[:2, :] *= s
         # Pixel centers at integers: the image edge, at -0.5, is what scales.
         K[:2, 2] += 0.5 * s - 0.5
-    rms = float(data.get("rms_px", 0.0))
-    return Intrinsics(K, dist, "profile", float(data.get("focal_uncertainty", 0.005)),
-                      f"camera profile {path.name} (RMS {rms:.2f} px)")
+    return Intrinsics(K, dist, "profile", float(data.get("focal_uncertainty", 0.005)), note)
 
 
 def _pose(detection: BoardDetection, board: Board, intrinsics: Intrinsics):
@@ -744,7 +789,7 @@ def calibrate_file(path, board: Board, profile=None) -> Calibration:
     image = read_photo(path)
     size_px = (image.shape[1], image.shape[0])
     if profile is not None:
-        intrinsics = load_profile(profile, size_px)
+        intrinsics = load_profile(profile, size_px, exif_orientation(path))
     else:
         focal = exif_focal_px(path, size_px)
         intrinsics = None if focal is None else exif_intrinsics(focal, size_px)

@@ -12,7 +12,7 @@ import pytest
 from augment.board import Board
 from augment.calibrate import (CalibrationError, _find_chessboard, _focal_from_homography, _saddle_refine,
                                calibrate_file, calibrate_photo, camera_profile, detect_board, exif_intrinsics,
-                               load_profile, read_photo, single_view_intrinsics)
+                               exif_orientation, load_profile, read_photo, single_view_intrinsics)
 from augment.gl import Renderer
 from augment.synth import render_sample
 from augment.synth.camera import look_pose
@@ -164,6 +164,45 @@ def test_profile_scales_to_another_resolution_and_refuses_another_aspect(tmp_pat
     (tmp_path / "bad.json").write_text("{")
     with pytest.raises(CalibrationError, match="cannot read"):
         load_profile(tmp_path / "bad.json", (640, 480))
+
+
+@pytest.mark.parametrize("orientation", [6, 8, None])
+def test_profile_turns_with_the_camera(tmp_path, orientation):
+    """A portrait photo from a camera calibrated in landscape: the turned intrinsics show
+    every point where the landscape camera, turned with the phone, puts it."""
+    K = np.array([[500.0, 0, 330.0], [0, 502.0, 236.0], [0, 0, 1]])
+    dist = np.array([-0.2, 0.05, 0.001, -0.002, 0.01])
+    path = tmp_path / "profile.json"
+    path.write_text(json.dumps({"K": K.tolist(), "distortion": dist.tolist(), "size_px": [640, 480]}))
+    rng = np.random.default_rng(3)
+    X = np.column_stack([rng.uniform(-1, 1, 50), rng.uniform(-0.8, 0.8, 50), rng.uniform(1.5, 4, 50)])
+    uv = cv2.projectPoints(X, np.zeros(3), np.zeros(3), K, dist)[0].reshape(-1, 2)
+    if orientation == 8:    # shown turned anticlockwise: (u, v) -> (v, w - 1 - u)
+        shown, X_turned = np.column_stack([uv[:, 1], 639 - uv[:, 0]]), np.column_stack([X[:, 1], -X[:, 0], X[:, 2]])
+    else:                   # clockwise: (u, v) -> (h - 1 - v, u)
+        shown, X_turned = np.column_stack([479 - uv[:, 1], uv[:, 0]]), np.column_stack([-X[:, 1], X[:, 0], X[:, 2]])
+    for scale in (1, 2):
+        turned = load_profile(path, (480 * scale, 640 * scale), orientation)
+        got = cv2.projectPoints(X_turned, np.zeros(3), np.zeros(3), turned.K, turned.distortion)[0].reshape(-1, 2)
+        # Pixel centers at integers: scaling maps x to (x + 0.5) * scale - 0.5.
+        np.testing.assert_allclose(got, (shown + 0.5) * scale - 0.5, atol=1e-6)
+        assert "turned a quarter" in turned.note and ("assumed" in turned.note) == (orientation is None)
+    with pytest.raises(CalibrationError, match="aspect ratio"):
+        load_profile(path, (720, 1280), orientation)
+
+
+def test_exif_orientation(tmp_path):
+    from PIL import Image
+
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    Image.new("RGB", (40, 20)).save(tmp_path / "turned.jpg", exif=exif.tobytes())
+    Image.new("RGB", (40, 20)).save(tmp_path / "plain.png")
+    assert exif_orientation(tmp_path / "turned.jpg") == 6
+    assert exif_orientation(tmp_path / "plain.png") is None
+    assert exif_orientation(tmp_path / "missing.jpg") is None
+    # OpenCV applies it when it reads the photo: the pixels are the turned frame.
+    assert read_photo(tmp_path / "turned.jpg").shape == (40, 20, 3)
 
 
 def test_unreadable_photo(tmp_path):
