@@ -566,6 +566,9 @@ def exif_focal_px(path, size_px: tuple[int, int]) -> float | None:
     """Focal length in pixels from the EXIF 35 mm equivalent focal length, or None."""
     from PIL import Image
 
+    from .imageio import register_heif
+
+    register_heif()
     try:
         with Image.open(path) as im:
             exif = im.getexif()
@@ -772,16 +775,17 @@ def read_photo(path) -> np.ndarray:
     Raises
     ------
     CalibrationError
-        When the file is missing or not an image OpenCV can decode.
+        When the file is missing or not an image Stager can decode.
     """
+    from .imageio import decode_image
+
     path = Path(path)
-    data = np.fromfile(str(path), dtype=np.uint8) if path.is_file() else None
-    if data is None:
+    if not path.is_file():
         raise CalibrationError(f"photo {path} does not exist or is not a file")
-    image = cv2.imdecode(data, cv2.IMREAD_COLOR)
+    image = decode_image(path.read_bytes())
     if image is None:
-        raise CalibrationError(f"photo {path} is not an image OpenCV can read (JPEG, PNG, TIFF, WebP, ...)")
-    return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
+        raise CalibrationError(f"photo {path} is not an image Stager can read (JPEG, PNG, HEIC, TIFF, WebP, BMP)")
+    return image
 
 
 def calibrate_file(path, board: Board, profile=None) -> Calibration:

@@ -1,11 +1,17 @@
-"""Images to file bytes: one encoder for every picture Stager writes.
+"""Images to and from file bytes: one encoder for every picture Stager writes, one
+decoder for every photo it reads.
 
 Images are RGB ``(h, w, 3)``, RGBA ``(h, w, 4)`` or grey ``(h, w)`` uint8 arrays.
 """
 from __future__ import annotations
 
+import io
+
 import cv2
 import numpy as np
+
+# The ISO base-media brands of HEIF stills: HEIC is what iPhones save by default.
+_HEIF_BRANDS = (b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"mif1", b"msf1")
 
 JPEG_QUALITY = 92  # staged photos: no visible loss, about a third of the PNG's size
 
@@ -22,3 +28,37 @@ def encode_image(image: np.ndarray, ext: str, quality: int = JPEG_QUALITY) -> by
     if not ok:
         raise RuntimeError(f"OpenCV could not encode an image as {ext}")
     return data.tobytes()
+
+
+def is_heif(data: bytes) -> bool:
+    """Whether ``data`` starts like a HEIF/HEIC file."""
+    return len(data) >= 12 and data[4:8] == b"ftyp" and bytes(data[8:12]) in _HEIF_BRANDS
+
+
+def register_heif() -> None:
+    """Let Pillow open HEIF/HEIC files (for their size and EXIF); idempotent."""
+    import pillow_heif
+
+    pillow_heif.register_heif_opener()
+
+
+def decode_image(data: bytes) -> np.ndarray | None:
+    """An encoded photo as RGB ``(h, w, 3)`` uint8, turned upright as it says, or None
+    when it cannot be decoded.
+
+    JPEG, PNG, TIFF, WebP and BMP go through OpenCV (which applies the EXIF
+    orientation); HEIC/HEIF, what iPhones save, through pillow-heif (which applies the
+    file's rotation).
+    """
+    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    if image is not None:
+        return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
+    if not is_heif(data):
+        return None
+    import pillow_heif
+
+    try:
+        heif = pillow_heif.open_heif(io.BytesIO(bytes(data)), convert_hdr_to_8bit=True)
+        return np.asarray(heif.to_pillow().convert("RGB"))
+    except (ValueError, RuntimeError, OSError, SyntaxError):
+        return None

@@ -73,8 +73,10 @@ STATIC_DIR = Path(__file__).with_name("web_static")
 # Kinds of user error: the class name in the worker, the key in a job's "error".
 _USER_ERRORS = {"CalibrationError": "calibration", "SegmentationError": "segmentation",
                 "LayoutError": "layout", "FurnishError": "furnish"}
-# OpenCV's decoder -> the photo's stored suffix (PIL names the format from the header).
-_SUFFIXES = {"JPEG": ".jpg", "MPO": ".jpg", "PNG": ".png", "TIFF": ".tif", "WEBP": ".webp", "BMP": ".bmp"}
+# The format PIL reads from the header -> the photo's stored suffix.
+_SUFFIXES = {"JPEG": ".jpg", "MPO": ".jpg", "PNG": ".png", "TIFF": ".tif", "WEBP": ".webp", "BMP": ".bmp",
+             "HEIF": ".heic"}
+_FORMATS = "a JPEG, PNG, HEIC, TIFF, WebP or BMP photo"
 
 
 # --------------------------------------------------------------------------------------
@@ -191,18 +193,20 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
     """Check an uploaded photo; returns the suffix to store it under (``".jpg"``, ...).
 
     The header's size is read first (PIL, without decoding the pixels), so a small file
-    that claims a huge image is refused before it can fill the memory; then OpenCV
-    decodes it, as the pipeline will.
+    that claims a huge image is refused before it can fill the memory; then it is
+    decoded as the pipeline will (:func:`augment.imageio.decode_image`).
 
     Raises
     ------
     UploadError
-        415 when it is not an image OpenCV can decode, 413 when it has more than
+        415 when it is not an image Stager can decode, 413 when it has more than
         ``max_pixels`` pixels.
     """
-    import cv2
-    import numpy as np
     from PIL import Image, UnidentifiedImageError
+
+    from .imageio import decode_image, register_heif
+
+    register_heif()
 
     with warnings.catch_warnings():
         # PIL warns above its own (larger) limit; this check refuses those anyway.
@@ -214,14 +218,12 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
             raise UploadError(413, f"the photo has too many pixels (at most {max_pixels / 1e6:g} megapixels)") \
                 from None
         except (UnidentifiedImageError, OSError, ValueError):
-            raise UploadError(415, "the file is not an image this app can read; send a JPEG, PNG, TIFF, WebP "
-                                   "or BMP photo") from None
+            raise UploadError(415, f"the file is not an image this app can read; send {_FORMATS}") from None
     if width * height > max_pixels:
         raise UploadError(413, f"the photo is {width} x {height} = {width * height / 1e6:.0f} megapixels; at "
                                f"most {max_pixels / 1e6:g} megapixels are accepted: send a smaller photo")
-    if kind not in _SUFFIXES or cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR) is None:
-        raise UploadError(415, f"the photo ({kind or 'unknown'} format) cannot be decoded; send a JPEG, PNG, "
-                               "TIFF, WebP or BMP photo")
+    if kind not in _SUFFIXES or decode_image(data) is None:
+        raise UploadError(415, f"the photo ({kind or 'unknown'} format) cannot be decoded; send {_FORMATS}")
     return _SUFFIXES[kind]
 
 

@@ -12,7 +12,8 @@ import pytest
 from augment.board import Board
 from augment.calibrate import (CalibrationError, _find_chessboard, _focal_from_homography, _saddle_refine,
                                calibrate_file, calibrate_photo, camera_profile, detect_board, exif_intrinsics,
-                               exif_orientation, load_profile, read_photo, single_view_intrinsics)
+                               exif_focal_px, exif_orientation, load_profile, read_photo,
+                               single_view_intrinsics)
 from augment.gl import Renderer
 from augment.synth import render_sample
 from augment.synth.camera import look_pose
@@ -203,6 +204,35 @@ def test_exif_orientation(tmp_path):
     assert exif_orientation(tmp_path / "missing.jpg") is None
     # OpenCV applies it when it reads the photo: the pixels are the turned frame.
     assert read_photo(tmp_path / "turned.jpg").shape == (40, 20, 3)
+
+
+def test_heic_photo_is_read_upright_with_its_exif(tmp_path):
+    """iPhones save HEIC: it is decoded turned as the file says, and its EXIF focal
+    length is found (26 mm equivalent on a 100 px diagonal: 100 * 26 / 43.27 px)."""
+    import io
+
+    import pillow_heif
+    from PIL import Image
+
+    pillow_heif.register_heif_opener()
+    image = np.zeros((60, 80, 3), np.uint8)
+    image[:, :40] = (220, 30, 30)   # red left half
+    image[:, 40:] = (30, 30, 220)
+    exif = Image.Exif()
+    exif[0x0112] = 6                # shown turned clockwise: the red half on top
+    exif.get_ifd(0x8769)[0xA405] = 26
+    buffer = io.BytesIO()
+    Image.fromarray(image).save(buffer, format="HEIF", exif=exif.tobytes(), quality=95)
+    path = tmp_path / "IMG_0001.HEIC"
+    path.write_bytes(buffer.getvalue())
+    photo = read_photo(path)
+    assert photo.shape == (80, 60, 3)
+    assert photo[:30, :, 0].mean() > 200 and photo[50:, :, 2].mean() > 200
+    assert exif_focal_px(path, (60, 80)) == pytest.approx(100 * 26 / 43.2666, rel=1e-3)
+    broken = tmp_path / "broken.heic"
+    broken.write_bytes(buffer.getvalue()[:200])
+    with pytest.raises(CalibrationError, match="HEIC"):
+        read_photo(broken)
 
 
 def test_unreadable_photo(tmp_path):

@@ -148,6 +148,22 @@ def test_bad_uploads(finished):
     assert client.post("/api/jobs", data={"board": "7x5"}).status_code == 422  # no photo at all
 
 
+def test_heic_uploads_are_accepted(finished):
+    """An iPhone's HEIC photo is stored and furnished as it is; a broken one is refused."""
+    import pillow_heif
+    from PIL import Image
+
+    from augment.web import UploadError, check_photo
+
+    pillow_heif.register_heif_opener()
+    buffer = io.BytesIO()
+    Image.open(PHOTO).save(buffer, format="HEIF", quality=90)
+    assert check_photo(buffer.getvalue()) == ".heic"
+    with pytest.raises(UploadError) as refused:
+        check_photo(buffer.getvalue()[:3000])
+    assert refused.value.status == 415 and "HEIC" in str(refused.value)
+
+
 def test_board_pdf_and_page(finished):
     client = finished[0]
     pdf = client.get("/api/board.pdf", params={"board": "7x5", "square": "45"})
