@@ -594,11 +594,7 @@ def _asset(text: str) -> tuple[str, Path]:
 
 
 def _furnish_cmd(args):
-    from layout.errors import LayoutError
-
-    from .calibrate import CalibrationError
-    from .pipeline import FurnishError, furnish, write_outputs
-    from .segment import SegmentationError
+    from .pipeline import furnish, write_outputs
 
     photos = args.photo
     board = _board(args)
@@ -646,7 +642,7 @@ def _furnish_cmd(args):
                                  assets=dict(args.asset), layers=args.layers, renderer=shared.get("renderer"),
                                  progress=not args.quiet and sys.stderr.isatty())
                 paths = write_outputs(result, out)
-            except (CalibrationError, SegmentationError, LayoutError, FurnishError) as error:
+            except _input_errors() as error:
                 if not batch:
                     raise
                 print(f"error: {error}", file=sys.stderr)
@@ -729,16 +725,20 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_OK
+    commands = {"board": _board_cmd, "calibrate": _calibrate_cmd, "check": _check_cmd, "segment": _segment_cmd,
+                "measure": _measure_cmd, "furnish": _furnish_cmd, "serve": _serve_cmd}
+    return dispatch(commands[args.command], args, "stage", [(_input_errors(), str)])
+
+
+def _input_errors() -> tuple:
+    """The exceptions that mean bad input (one ``error:`` line, status 2), not a bug."""
     from layout.errors import LayoutError
 
     from .calibrate import CalibrationError
     from .pipeline import FurnishError
     from .segment import SegmentationError
 
-    commands = {"board": _board_cmd, "calibrate": _calibrate_cmd, "check": _check_cmd, "segment": _segment_cmd,
-                "measure": _measure_cmd, "furnish": _furnish_cmd, "serve": _serve_cmd}
-    return dispatch(commands[args.command], args, "stage",
-                    [((StageError, CalibrationError, SegmentationError, LayoutError, FurnishError), str)])
+    return StageError, CalibrationError, SegmentationError, LayoutError, FurnishError
 
 
 def run() -> None:
