@@ -23,7 +23,7 @@ context reused for all its jobs (:class:`augment.gl.Renderer`); at most ``worker
 max_queued`` jobs are waiting or running, beyond that ``POST /api/jobs`` answers 503 with
 ``Retry-After``. Safety: the upload's size is limited (413); its header is read before it
 is decoded, so more than :data:`MAX_PIXELS` pixels (a decompression bomb) is refused
-(413); anything OpenCV cannot decode is refused (415); job ids are random UUIDs; files
+(413); anything Stager cannot decode is refused (415); job ids are random UUIDs; files
 are served only by name from the job's own output listing; finished jobs are deleted
 after ``keep_minutes``. Nothing the user sends is used as a path: the photo is stored
 as ``photo.<type>`` with the type found by decoding it, a spec as ``spec.toml`` once it
