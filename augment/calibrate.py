@@ -562,8 +562,9 @@ def single_view_intrinsics(corners_px: np.ndarray, board: Board, size_px: tuple[
     return Intrinsics(K, dist if use_radial else np.zeros(5), "single-view", uncertainty, note)
 
 
-def exif_focal_px(path, size_px: tuple[int, int]) -> float | None:
-    """Focal length in pixels from the EXIF 35 mm equivalent focal length, or None."""
+def _exif(path) -> tuple[dict, dict]:
+    """The EXIF tags of an image file (HEIC too): its main directory and its Exif
+    sub-directory, both empty when it has none or cannot be opened."""
     from PIL import Image
 
     from .imageio import register_heif
@@ -572,10 +573,15 @@ def exif_focal_px(path, size_px: tuple[int, int]) -> float | None:
     try:
         with Image.open(path) as im:
             exif = im.getexif()
-            sub = exif.get_ifd(0x8769)
+            return dict(exif), dict(exif.get_ifd(0x8769))
     except (OSError, ValueError):
-        return None
-    f35 = sub.get(0xA405) or exif.get(0xA405)
+        return {}, {}
+
+
+def exif_focal_px(path, size_px: tuple[int, int]) -> float | None:
+    """Focal length in pixels from the EXIF 35 mm equivalent focal length, or None."""
+    main, sub = _exif(path)
+    f35 = sub.get(0xA405) or main.get(0xA405)
     if not f35:
         return None
     return float(f35) / _FILM_DIAGONAL_MM * float(np.hypot(*size_px))
@@ -590,13 +596,7 @@ def exif_intrinsics(focal_px: float, size_px: tuple[int, int]) -> Intrinsics:
 
 def exif_orientation(path) -> int | None:
     """The EXIF orientation tag of an image file (1-8), or None."""
-    from PIL import Image
-
-    try:
-        with Image.open(path) as im:
-            value = im.getexif().get(0x0112)
-    except (OSError, ValueError):
-        return None
+    value = _exif(path)[0].get(0x0112)
     return int(value) if value else None
 
 
@@ -777,14 +777,14 @@ def read_photo(path) -> np.ndarray:
     CalibrationError
         When the file is missing or not an image Stager can decode.
     """
-    from .imageio import decode_image
+    from .imageio import PHOTO_FORMATS, decode_image
 
     path = Path(path)
     if not path.is_file():
         raise CalibrationError(f"photo {path} does not exist or is not a file")
     image = decode_image(path.read_bytes())
     if image is None:
-        raise CalibrationError(f"photo {path} is not an image Stager can read (JPEG, PNG, HEIC, TIFF, WebP, BMP)")
+        raise CalibrationError(f"photo {path} is not an image Stager can read ({PHOTO_FORMATS})")
     return image
 
 

@@ -13,6 +13,8 @@ import numpy as np
 # The ISO base-media brands of HEIF stills: HEIC is what iPhones save by default.
 _HEIF_BRANDS = (b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"mif1", b"msf1")
 
+# What decode_image reads, as error messages name it.
+PHOTO_FORMATS = "JPEG, PNG, HEIC, TIFF, WebP or BMP"
 JPEG_QUALITY = 92  # staged photos: no visible loss, about a third of the PNG's size
 
 

@@ -980,10 +980,11 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             fitted, dropped = fit_spec(spec, poly, room_height, tol)
             if not fitted.items:
                 raise _too_small(floor.area_m2, dropped)
-            unused = sorted(set(user_models) - {i.kind.name for i in fitted.items})
+            kinds = {i.kind.name for i in fitted.items}
+            unused = sorted(set(user_models) - kinds)
             if unused:
                 warnings.append(f"no item of kind {', '.join(unused)} to show your model(s) on; the furniture is "
-                                + ", ".join(sorted({i.kind.name for i in fitted.items})))
+                                + ", ".join(sorted(kinds)))
         bar.step()
         with clock("layout"):
             fitted, layouts, reports = _solve(fitted, suggestions, seed, floor.area_m2, dropped, bar, tol)

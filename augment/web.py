@@ -76,7 +76,6 @@ _USER_ERRORS = {"CalibrationError": "calibration", "SegmentationError": "segment
 # The format PIL reads from the header -> the photo's stored suffix.
 _SUFFIXES = {"JPEG": ".jpg", "MPO": ".jpg", "PNG": ".png", "TIFF": ".tif", "WEBP": ".webp", "BMP": ".bmp",
              "HEIF": ".heic"}
-_FORMATS = "a JPEG, PNG, HEIC, TIFF, WebP or BMP photo"
 
 
 # --------------------------------------------------------------------------------------
@@ -204,7 +203,7 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
     """
     from PIL import Image, UnidentifiedImageError
 
-    from .imageio import decode_image, register_heif
+    from .imageio import PHOTO_FORMATS, decode_image, register_heif
 
     register_heif()
 
@@ -218,12 +217,14 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
             raise UploadError(413, f"the photo has too many pixels (at most {max_pixels / 1e6:g} megapixels)") \
                 from None
         except (UnidentifiedImageError, OSError, ValueError):
-            raise UploadError(415, f"the file is not an image this app can read; send {_FORMATS}") from None
+            raise UploadError(415, f"the file is not an image this app can read; send a {PHOTO_FORMATS} "
+                                   "photo") from None
     if width * height > max_pixels:
         raise UploadError(413, f"the photo is {width} x {height} = {width * height / 1e6:.0f} megapixels; at "
                                f"most {max_pixels / 1e6:g} megapixels are accepted: send a smaller photo")
     if kind not in _SUFFIXES or decode_image(data) is None:
-        raise UploadError(415, f"the photo ({kind or 'unknown'} format) cannot be decoded; send {_FORMATS}")
+        raise UploadError(415, f"the photo ({kind or 'unknown'} format) cannot be decoded; send a {PHOTO_FORMATS} "
+                               "photo")
     return _SUFFIXES[kind]
 
 
