@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._codes import (
     ARC,
@@ -912,106 +912,191 @@ def residual_boundary(R, P, pos, yaw, out):
 # ------------------------------------------------- collision and accessibility
 
 
-@njit(cache=True, error_model="numpy")
-def candidate_pairs(P, pos, yaw, cell_m, pad_m):
-    """Pairs (i < j) whose padded bounding boxes overlap, from a uniform grid.
+@njit(cache=True, inline="always", error_model="numpy")
+def pair_box(P, pos, yaw, i, pad_m):
+    """Axis-aligned box round item i's footprint and its access boxes, padded by
+    ``pad_m``: (center x, center y, half extent x, half extent y). The access boxes
+    lie on sides 0/2 (behind/ahead along the depth axis) and 1/3 (left/right), so the
+    box is off-center when only one side needs clearance."""
+    a0, a1, a2, a3 = P.access_depth[i, 0], P.access_depth[i, 1], P.access_depth[i, 2], P.access_depth[i, 3]
+    ox = 0.5 * (a2 - a0)
+    oy = 0.5 * (a1 - a3)
+    hd = 0.5 * (P.size[i, 1] + a0 + a2)
+    hw = 0.5 * (P.size[i, 0] + a1 + a3)
+    c = math.cos(yaw[i])
+    s = math.sin(yaw[i])
+    return (pos[i, 0] + c * ox - s * oy, pos[i, 1] + s * ox + c * oy,
+            abs(c) * hd + abs(s) * hw + pad_m, abs(s) * hd + abs(c) * hw + pad_m)
 
-    Each box covers an item's footprint and its access boxes, so the pair list serves
-    the accessibility constraints too. Every box goes into the one cell of its
-    center, and the cell is at least as wide as every box, so overlapping boxes sit in
-    the same or adjacent cells: each cell is checked against itself and four of its
-    eight neighbours (a half stencil), which reports every pair once. Boxes much wider
-    than typical (a stage, a door zone) would blow up the cell, so they are checked
-    against every box instead.
+
+@njit(cache=True, error_model="numpy")
+def pair_grid(P, pos, yaw, cell_m, pad_m):
+    """The uniform grid behind the pair list, a Verlet list kept per item.
+
+    Every item that collides or needs clearance, and every obstacle, gets the box of
+    :func:`pair_box` in the one cell of its center. The cell is at least as wide as
+    every box at any yaw, so overlapping boxes sit in the same or adjacent cells. Boxes
+    much wider than typical (a stage, a door zone) would blow up the cell; they are
+    "big" and checked against every box instead.
+
+    Returns the tuple G that :func:`all_pairs` and :func:`refresh_pairs` take: per box
+    q its particle ``idx`` (and ``qof``, particle -> q or -1), its body, whether that
+    body moves, its reach (footprint radius plus deepest clearance: how far a turn
+    swings the box), the pose ``ref`` (x, y, yaw) the box was made at, the box (m, 4),
+    the big flags and list, each box's cell ``home`` (-1 when big), each cell's boxes
+    as a doubly linked list (``head``, ``nxt``, ``prv``), the geometry (x0, y0, cell,
+    nx, ny), and scratch for the movers (a list of boxes, a flag per particle).
     """
     n = P.role.shape[0]
     idx = np.empty(n, np.int64)
+    qof = np.full(n, -1, np.int64)
     m = 0
     for i in range(n):
         if P.role[i] == OBSTACLE or (P.role[i] == ITEM and (P.collides[i] or P.access_max[i] > 0.0)):
             idx[m] = i
+            qof[i] = m
             m += 1
-    pairs = np.empty((max(16, 8 * m), 2), np.int64)
-    if m < 2:
-        return pairs[:0]
-    cx = np.empty(m)
-    cy = np.empty(m)
-    ex = np.empty(m)
-    ey = np.empty(m)
-    # A pair is listed only for two bodies, at least one of them movable. Looked up
-    # once per box here: in the pair loop, through idx, they cost more than the test.
+    idx = idx[:m]
+    # Looked up once per box here: in the pair loop, through idx, they cost more than
+    # the test.
     body = np.empty(m, np.int64)
     movable = np.empty(m, np.bool_)
+    reach = np.empty(m)
+    ref = np.empty((m, 3))
+    box = np.empty((m, 4))
+    wide = np.empty(m)
     for q in range(m):
-        # The box covers the footprint and its access boxes (sides 0/2 behind/ahead
-        # along the depth axis, 1/3 left/right), so it is off-center when only one
-        # side needs clearance.
         i = idx[q]
         body[q] = P.body[i]
         movable[q] = P.inv_mass[body[q]] != 0.0
-        a0, a1, a2, a3 = P.access_depth[i, 0], P.access_depth[i, 1], P.access_depth[i, 2], P.access_depth[i, 3]
-        ox = 0.5 * (a2 - a0)
-        oy = 0.5 * (a1 - a3)
-        hd = 0.5 * (P.size[i, 1] + a0 + a2)
-        hw = 0.5 * (P.size[i, 0] + a1 + a3)
-        c = math.cos(yaw[i])
-        s = math.sin(yaw[i])
-        cx[q] = pos[i, 0] + c * ox - s * oy
-        cy[q] = pos[i, 1] + s * ox + c * oy
-        ex[q] = abs(c) * hd + abs(s) * hw + pad_m
-        ey[q] = abs(s) * hd + abs(c) * hw + pad_m
-    width = 2.0 * np.maximum(ex, ey)
-    big_above = 4.0 * max(np.median(width), 0.5 * cell_m)
+        reach[q] = P.radius[i] + P.access_max[i]
+        ref[q, 0] = pos[i, 0]
+        ref[q, 1] = pos[i, 1]
+        ref[q, 2] = yaw[i]
+        box[q, 0], box[q, 1], box[q, 2], box[q, 3] = pair_box(P, pos, yaw, i, pad_m)
+        hd = 0.5 * (P.size[i, 1] + P.access_depth[i, 0] + P.access_depth[i, 2])
+        hw = 0.5 * (P.size[i, 0] + P.access_depth[i, 1] + P.access_depth[i, 3])
+        # The box's width at its widest yaw, so a turn never outgrows the cell.
+        wide[q] = 2.0 * (math.sqrt(hd * hd + hw * hw) + pad_m)
     cell = cell_m
-    for q in range(m):
-        if width[q] <= big_above:
-            cell = max(cell, width[q])
-    x0 = cx.min()
-    y0 = cy.min()
-    nx = int((cx.max() - x0) / cell) + 1
-    ny = int((cy.max() - y0) / cell) + 1
-    while nx * ny > 4 * m + 64:
-        cell *= 1.5
-        nx = int((cx.max() - x0) / cell) + 1
-        ny = int((cy.max() - y0) / cell) + 1
-    home = np.empty(m, np.int64)
-    start = np.zeros(nx * ny + 1, np.int64)
-    big = np.empty(m, np.int64)
-    nbig = 0
-    for q in range(m):
-        if width[q] > cell:
-            home[q] = -1
-            big[nbig] = q
-            nbig += 1
+    x0 = 0.0
+    y0 = 0.0
+    nx = 1
+    ny = 1
+    if m > 0:
+        big_above = 4.0 * max(np.median(wide), 0.5 * cell_m)
+        for q in range(m):
+            if wide[q] <= big_above:
+                cell = max(cell, wide[q])
+        x0 = box[:, 0].min()
+        y0 = box[:, 1].min()
+        nx = int((box[:, 0].max() - x0) / cell) + 1
+        ny = int((box[:, 1].max() - y0) / cell) + 1
+        while nx * ny > 4 * m + 64:
+            cell *= 1.5
+            nx = int((box[:, 0].max() - x0) / cell) + 1
+            ny = int((box[:, 1].max() - y0) / cell) + 1
+    big = wide > cell
+    home = np.full(m, -1, np.int64)
+    head = np.full(nx * ny, -1, np.int64)
+    nxt = np.full(m, -1, np.int64)
+    prv = np.full(m, -1, np.int64)
+    geom = np.array([x0, y0, cell, nx, ny], np.float64)
+    G = (idx, qof, body, movable, reach, ref, box, big, np.flatnonzero(big), home, head, nxt, prv, geom,
+         np.empty(m, np.int64), np.zeros(n, np.bool_))
+    for q in range(m - 1, -1, -1):
+        grid_place(box, big, home, head, nxt, prv, geom, q)
+    return G
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def grid_place(box, big, home, head, nxt, prv, geom, q):
+    """Move box q to the cell of its center, clamped to the grid (the grid is sized at
+    the start; clamping keeps neighbours neighbours). Big boxes stay out of the grid."""
+    if big[q]:
+        return
+    nx, ny = int(geom[3]), int(geom[4])
+    gx = min(nx - 1, max(0, int(math.floor((box[q, 0] - geom[0]) / geom[2]))))
+    gy = min(ny - 1, max(0, int(math.floor((box[q, 1] - geom[1]) / geom[2]))))
+    g = gy * nx + gx
+    if g == home[q]:
+        return
+    if home[q] >= 0:
+        if prv[q] >= 0:
+            nxt[prv[q]] = nxt[q]
         else:
-            home[q] = int((cy[q] - y0) / cell) * nx + int((cx[q] - x0) / cell)
-            start[home[q] + 1] += 1
+            head[home[q]] = nxt[q]
+        if nxt[q] >= 0:
+            prv[nxt[q]] = prv[q]
+    home[q] = g
+    prv[q] = -1
+    nxt[q] = head[g]
+    if head[g] >= 0:
+        prv[head[g]] = q
+    head[g] = q
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def boxes_pair(box, body, movable, qa, qb):
+    """True when boxes qa and qb overlap, belong to two bodies and one of them moves.
+    (Arrays, not the tuple G: unpacking G per call costs more than the test.)"""
+    if abs(box[qa, 0] - box[qb, 0]) > box[qa, 2] + box[qb, 2] or abs(box[qa, 1] - box[qb, 1]) > box[qa, 3] + box[qb, 3]:
+        return False
+    return body[qa] != body[qb] and (movable[qa] or movable[qb])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def append_pair(pairs, npairs, i, j):
+    """Write the pair (min, max) at row ``npairs``, growing the list when full."""
+    if npairs == pairs.shape[0]:
+        pairs = _grown(pairs)
+    pairs[npairs, 0] = min(i, j)
+    pairs[npairs, 1] = max(i, j)
+    return pairs
+
+
+@njit(cache=True, error_model="numpy")
+def all_pairs(G):
+    """Every pair (i < j) whose boxes overlap, once: each cell against itself and four
+    of its eight neighbours (a half stencil), then the big boxes against all."""
+    idx, qof, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag = G
+    m = box.shape[0]
+    nx, ny = int(geom[3]), int(geom[4])
+    pairs = np.empty((max(16, 8 * m), 2), np.int64)
+    npairs = 0
+    # Copies in cell order: the stencil's cells are two runs of consecutive cells, so
+    # the inner loop streams through memory.
+    start = np.zeros(nx * ny + 1, np.int64)
     for g in range(nx * ny):
-        start[g + 1] += start[g]
-    # Copies in cell order: the stencil's cells are two runs of consecutive cells,
-    # so the inner loop streams through memory.
-    fill = start.copy()
-    order = np.empty(m - nbig, np.int64)
-    for q in range(m):
-        if home[q] >= 0:
-            order[fill[home[q]]] = q
-            fill[home[q]] += 1
-    sx = cx[order]
-    sy = cy[order]
-    sex = ex[order]
-    sey = ey[order]
+        q = head[g]
+        count = 0
+        while q >= 0:
+            count += 1
+            q = nxt[q]
+        start[g + 1] = start[g] + count
+    order = np.empty(start[-1], np.int64)
+    for g in range(nx * ny):
+        u = start[g]
+        q = head[g]
+        while q >= 0:
+            order[u] = q
+            u += 1
+            q = nxt[q]
+    sx = box[order, 0]
+    sy = box[order, 1]
+    sex = box[order, 2]
+    sey = box[order, 3]
     sidx = idx[order]
     sbody = body[order]
     smovable = movable[order]
-    npairs = 0
     for g in range(nx * ny):
         gx = g % nx
         gy = g // nx
         for u in range(start[g], start[g + 1]):
             xa, ya, exa, eya, ba, ma = sx[u], sy[u], sex[u], sey[u], sbody[u], smovable[u]
             for run in range(2):
-                # Half stencil: this cell (later entries) and its east neighbour; then
-                # the three cells above.
+                # This cell (later entries) and its east neighbour; then the three
+                # cells above.
                 if run == 0:
                     first = u + 1
                     last = start[g + 2] if gx + 1 < nx else start[g + 1]
@@ -1025,30 +1110,85 @@ def candidate_pairs(P, pos, yaw, cell_m, pad_m):
                         continue
                     if ba == sbody[v] or not (ma or smovable[v]):
                         continue
-                    i = sidx[u]
-                    j = sidx[v]
-                    if npairs == pairs.shape[0]:
-                        pairs = _grown(pairs)
-                    pairs[npairs, 0] = min(i, j)
-                    pairs[npairs, 1] = max(i, j)
+                    pairs = append_pair(pairs, npairs, sidx[u], sidx[v])
                     npairs += 1
-    for a in range(nbig):
-        qa = big[a]
+    for qa in bigs:
         for qb in range(m):
-            if qb == qa or (home[qb] < 0 and qb < qa):
-                continue
-            if abs(cx[qa] - cx[qb]) > ex[qa] + ex[qb] or abs(cy[qa] - cy[qb]) > ey[qa] + ey[qb]:
-                continue
-            if body[qa] == body[qb] or not (movable[qa] or movable[qb]):
-                continue
-            i = idx[qa]
-            j = idx[qb]
-            if npairs == pairs.shape[0]:
-                pairs = _grown(pairs)
-            pairs[npairs, 0] = min(i, j)
-            pairs[npairs, 1] = max(i, j)
-            npairs += 1
+            if qb != qa and not (big[qb] and qb < qa) and boxes_pair(box, body, movable, qa, qb):
+                pairs = append_pair(pairs, npairs, idx[qa], idx[qb])
+                npairs += 1
     return pairs[:npairs]
+
+
+@njit(cache=True, error_model="numpy")
+def candidate_pairs(P, pos, yaw, cell_m, pad_m):
+    """Pairs (i < j) whose padded boxes (footprint and access boxes, see
+    :func:`pair_box`) overlap; the pair list serves the accessibility constraints too."""
+    return all_pairs(pair_grid(P, pos, yaw, cell_m, pad_m))
+
+
+@njit(cache=True, error_model="numpy")
+def refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs):
+    """Keep the first ``npairs`` of ``pairs`` a valid Verlet list for the current state.
+
+    A pair listed from boxes padded by ``pad_m`` stays valid while neither item has
+    moved (or swung, at its reach) by half the padding since its box was made. Only
+    the items that have get new boxes: their pairs are dropped and found again in the
+    grid. (Rebuilding the whole list whenever any item had moved that far happened on
+    every iteration of a large, crowded floor: something always moves.) Returns the
+    list, possibly grown, and its length.
+    """
+    idx, qof, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag = G
+    nm = 0
+    for q in range(box.shape[0]):
+        i = idx[q]
+        d = math.sqrt((pos[i, 0] - ref[q, 0]) ** 2 + (pos[i, 1] - ref[q, 1]) ** 2) + reach[q] * abs(yaw[i] - ref[q, 2])
+        if d > 0.5 * pad_m:
+            movers[nm] = q
+            nm += 1
+            flag[i] = True
+            ref[q, 0] = pos[i, 0]
+            ref[q, 1] = pos[i, 1]
+            ref[q, 2] = yaw[i]
+            box[q, 0], box[q, 1], box[q, 2], box[q, 3] = pair_box(P, pos, yaw, i, pad_m)
+            grid_place(box, big, home, head, nxt, prv, geom, q)
+    if nm == 0:
+        return pairs, npairs
+    keep = 0
+    for p in range(npairs):
+        if not (flag[pairs[p, 0]] or flag[pairs[p, 1]]):
+            pairs[keep, 0] = pairs[p, 0]
+            pairs[keep, 1] = pairs[p, 1]
+            keep += 1
+    npairs = keep
+    nx, ny = int(geom[3]), int(geom[4])
+    # Each mover against its cell, all eight neighbours and the big boxes (against
+    # every box when it is big itself); a pair of two movers is found by the lower one.
+    for t in range(nm):
+        qa = movers[t]
+        if big[qa]:
+            for qb in range(box.shape[0]):
+                if qb != qa and boxes_pair(box, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
+                    pairs = append_pair(pairs, npairs, idx[qa], idx[qb])
+                    npairs += 1
+            continue
+        gx = home[qa] % nx
+        gy = home[qa] // nx
+        for cy in range(max(0, gy - 1), min(ny, gy + 2)):
+            for cx in range(max(0, gx - 1), min(nx, gx + 2)):
+                qb = head[cy * nx + cx]
+                while qb >= 0:
+                    if qb != qa and boxes_pair(box, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
+                        pairs = append_pair(pairs, npairs, idx[qa], idx[qb])
+                        npairs += 1
+                    qb = nxt[qb]
+        for qb in bigs:
+            if boxes_pair(box, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
+                pairs = append_pair(pairs, npairs, idx[qa], idx[qb])
+                npairs += 1
+    for t in range(nm):
+        flag[idx[movers[t]]] = False
+    return pairs, npairs
 
 
 @njit(cache=True, error_model="numpy")
@@ -1096,6 +1236,17 @@ def trig(yaw, cs):
     for i in range(yaw.shape[0]):
         cs[i, 0] = math.cos(yaw[i])
         cs[i, 1] = math.sin(yaw[i])
+
+
+@njit(cache=True, error_model="numpy")
+def trig_update(yaw, cs, cs_yaw):
+    """:func:`trig` for the yaws that differ from ``cs_yaw``, the yaws ``cs`` was made
+    from (most items do not turn in an iteration, and sin and cos cost 30 ns)."""
+    for i in range(yaw.shape[0]):
+        if yaw[i] != cs_yaw[i]:
+            cs[i, 0] = math.cos(yaw[i])
+            cs[i, 1] = math.sin(yaw[i])
+            cs_yaw[i] = yaw[i]
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -1159,8 +1310,11 @@ def collision_pass(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen, 
         wi = P.inv_mass[P.body[i]]
         wj = P.inv_mass[P.body[j]]
         f = k * C / (wi + wj)
-        push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
-        push(P.body[j], wj * f * nx, wj * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+        # A fixed body is never written, not even with a zero: two threads may share it.
+        if wi > 0.0:
+            push(P.body[i], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+        if wj > 0.0:
+            push(P.body[j], wj * f * nx, wj * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
         # Door and window zones sit on a wall too: a wall-bound item slides past them.
         if (P.wall_bound[i] or P.role[i] == OBSTACLE) and (P.wall_bound[j] or P.role[j] == OBSTACLE):
             C2, tx, ty, ok = wall_points_pair(P, R, pos, yaw, i, j, model, gap_m)
@@ -1168,8 +1322,10 @@ def collision_pass(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen, 
                 degen[K_COLLISION] += 1
             elif C2 < 0.0:
                 f = k * C2 / (wi + wj)
-                push(P.body[i], -wi * f * tx, -wi * f * ty, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
-                push(P.body[j], wj * f * tx, wj * f * ty, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+                if wi > 0.0:
+                    push(P.body[i], -wi * f * tx, -wi * f * ty, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+                if wj > 0.0:
+                    push(P.body[j], wj * f * tx, wj * f * ty, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
     return colliding
 
 
@@ -1283,8 +1439,10 @@ def access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, out, project):
                     total += C * C
                     continue
                 f = k * C / (wo + wi)
-                push(P.body[other], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
-                push(P.body[owner], wo * f * nx, wo * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+                if wi > 0.0:
+                    push(P.body[other], -wi * f * nx, -wi * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
+                if wo > 0.0:
+                    push(P.body[owner], wo * f * nx, wo * f * ny, 0.0, pos, yaw, acc, jac, P.mstart, P.mlist)
         if not project:
             out[p] = -math.sqrt(total)
 
@@ -1335,14 +1493,6 @@ def access_in_floor(R, P, pos, yaw, cs, i, k, project):
 
 
 @njit(cache=True, error_model="numpy")
-def project_access_in_floor(R, P, pos, yaw, cs, k):
-    for i in range(P.role.shape[0]):
-        if P.role[i] == ITEM and P.access_max[i] > 0.0 and P.inv_mass[P.body[i]] > 0.0:
-            if not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i] + P.access_max[i]):
-                access_in_floor(R, P, pos, yaw, cs, i, k, True)
-
-
-@njit(cache=True, error_model="numpy")
 def residual_access_in_floor(R, P, pos, yaw, cs):
     total = 0.0
     for i in range(P.role.shape[0]):
@@ -1358,6 +1508,120 @@ def residual_access(P, pairs, pos, cs, model, out):
     access_pass(P, pairs, pos, np.empty(0), cs, np.empty((0, 6)), False, 0.0, model, out, False)
 
 
+# ------------------------------------------- two threads for the pair passes
+
+# Two threads pay off from about this many boxes in the pair list (a parallel
+# region costs 10-20 us to start; measured with benchmarks/scaling.py).
+THREADS_MIN_BOXES = 2000
+
+
+@njit(cache=True, error_model="numpy")
+def split_pairs(pairs, side, out, bounds):
+    """Order the pairs for two threads: first those whose movable bodies all lie on
+    side 0, then side 1, then the pairs across (stable within each run). The two
+    first runs share no movable body, so both can be projected at the same time
+    and the result does not depend on timing. ``side`` (n,) is the side of each
+    particle's body, -1 for a fixed one (:func:`body_sides`); ``out`` (>= pairs rows,
+    2) receives the pairs, ``bounds`` (4,) the ends of the runs."""
+    n = pairs.shape[0]
+    tag = np.empty(n, np.int8)
+    count = np.zeros(3, np.int64)
+    for p in range(n):
+        si = side[pairs[p, 0]]
+        sj = side[pairs[p, 1]]
+        if si < 0:
+            si = sj
+        if sj < 0:
+            sj = si
+        tag[p] = si if si == sj and si >= 0 else 2
+        count[tag[p]] += 1
+    bounds[0] = 0
+    for t in range(3):
+        bounds[t + 1] = bounds[t] + count[t]
+    fill = bounds[:3].copy()
+    for p in range(n):
+        t = tag[p]
+        out[fill[t], 0] = pairs[p, 0]
+        out[fill[t], 1] = pairs[p, 1]
+        fill[t] += 1
+
+
+@njit(cache=True, error_model="numpy")
+def body_sides(P, pos, threads):
+    """For :func:`split_pairs`: the side of every particle's body, -1 where the body
+    is fixed. With two ``threads``, 0 or 1 split at the median x of the movable
+    bodies; with one, 0 for all."""
+    n = pos.shape[0]
+    xs = np.empty(n)
+    k = 0
+    for b in range(n):
+        if P.body[b] == b and P.inv_mass[b] != 0.0:
+            xs[k] = pos[b, 0]
+            k += 1
+    cut = np.median(xs[:k]) if k > 0 and threads > 1 else np.inf
+    side = np.full(n, -1, np.int8)
+    for i in range(n):
+        b = P.body[i]
+        if P.inv_mass[b] != 0.0:
+            side[i] = 1 if pos[b, 0] >= cut else 0
+    return side
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def project_collision_split(P, R, pairs, bounds, pos, yaw, cs, acc, jac, k, model, gap_m, degen):
+    """:func:`project_collision` over the runs of :func:`split_pairs`: the first two
+    on two threads, then the pairs across."""
+    local = np.zeros((2, N_KINDS), np.int64)
+    for t in prange(2):
+        project_collision(P, R, pairs[bounds[t]:bounds[t + 1]], pos, yaw, cs, acc, jac, k, model, gap_m, local[t])
+    project_collision(P, R, pairs[bounds[2]:bounds[3]], pos, yaw, cs, acc, jac, k, model, gap_m, degen)
+    for q in range(N_KINDS):
+        degen[q] += local[0, q] + local[1, q]
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def project_access_split(P, pairs, bounds, pos, yaw, cs, acc, jac, k, model, degen):
+    """:func:`project_access` over the runs of :func:`split_pairs`, like
+    :func:`project_collision_split`."""
+    for t in prange(2):
+        project_access(P, pairs[bounds[t]:bounds[t + 1]], pos, yaw, cs, acc, jac, k, model, degen)
+    project_access(P, pairs[bounds[2]:bounds[3]], pos, yaw, cs, acc, jac, k, model, degen)
+
+
+@njit(cache=True, error_model="numpy")
+def floor_pass(R, P, pos, yaw, cs, k_access, side, t, access):
+    """The clearances on the floor (with ``access``), then the layout boundary, for
+    the particles whose body lies on side ``t`` (:func:`body_sides`)."""
+    if access:
+        for i in range(P.role.shape[0]):
+            if side[i] == t and P.role[i] == ITEM and P.access_max[i] > 0.0:
+                if not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i] + P.access_max[i]):
+                    access_in_floor(R, P, pos, yaw, cs, i, k_access, True)
+    for i in range(P.role.shape[0]):
+        if side[i] == t and P.bounded[i] and not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
+            boundary_item(R, P, pos, yaw, i, True)
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def project_floor_split(R, P, pos, yaw, cs, k_access, side, access):
+    """:func:`floor_pass` for both sides, each on its own thread: a thread moves only
+    its own bodies, so the boundary still comes last for each."""
+    for t in prange(2):
+        floor_pass(R, P, pos, yaw, cs, k_access, side, t, access)
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def pair_residuals(P, R, pairs, pos, cs, model, out_collision, out_access):
+    """Collision and access residuals of every pair, the list cut in two halves for
+    two threads (each writes its own entries, so the sums stay exact)."""
+    half = pairs.shape[0] // 2
+    for t in prange(2):
+        lo = 0 if t == 0 else half
+        hi = half if t == 0 else pairs.shape[0]
+        residual_collision(P, R, pairs[lo:hi], pos, cs, model, out_collision[lo:hi])
+        residual_access(P, pairs[lo:hi], pos, cs, model, out_access[lo:hi])
+
+
 # ------------------------------------------------------------------ energy, loop
 
 
@@ -1370,11 +1634,27 @@ def sumsq(values, n):
 
 
 @njit(cache=True, error_model="numpy")
-def energy_terms(M, pos, yaw, pairs, model, weights):
-    """Weighted squared residual of each kind, Σ_j g_j C_j² (Eq. 1, before the root)."""
+def energy_terms(M, pos, yaw, cs, pairs, model, weights):
+    """Weighted squared residual of each kind, Σ_j g_j C_j² (Eq. 1, before the root);
+    ``cs`` holds (cos, sin) of every yaw (:func:`trig`)."""
+    R = M[11]
+    collision = np.empty(pairs.shape[0])
+    access = np.empty(pairs.shape[0])
+    residual_collision(M[0], R, pairs, pos, cs, model, collision)
+    residual_access(M[0], pairs, pos, cs, model, access)
+    return kind_terms(M, pos, yaw, cs, collision, access, weights)
+
+
+@njit(cache=True, error_model="numpy")
+def kind_terms(M, pos, yaw, cs, collision, access, weights):
+    """:func:`energy_terms` from the residuals of the pairs, ``collision`` and
+    ``access`` (:func:`residual_collision` and :func:`residual_access`, or
+    :func:`pair_residuals` on two threads: kept out of :func:`energy_terms`, which the
+    annealer in another module calls, because numba's disk cache does not notice
+    when a parallel kernel of another module changes)."""
     P, D, L, H, S, B, W, WO, O, ST, U, R = M
     terms = np.zeros(N_KINDS)
-    out = np.empty(max(P.role.shape[0], pairs.shape[0], D.rest.shape[0], L.origin.shape[0],
+    out = np.empty(max(P.role.shape[0], D.rest.shape[0], L.origin.shape[0],
                        H.frame.shape[0], S.focal.shape[0], B.target.shape[0], W.item.shape[0],
                        WO.item.shape[0], O.mode.shape[0], ST.k0.shape[0], U.group.shape[0], 1))
     if D.rest.shape[0] > 0:
@@ -1409,22 +1689,20 @@ def energy_terms(M, pos, yaw, pairs, model, weights):
         terms[K_CURVE] = sumsq(out, U.group.shape[0])
     residual_boundary(R, P, pos, yaw, out)
     terms[K_BOUNDARY] = sumsq(out, P.role.shape[0])
-    cs = np.empty((pos.shape[0], 2))
-    trig(yaw, cs)
-    if pairs.shape[0] > 0:
-        residual_collision(P, R, pairs, pos, cs, model, out)
-        terms[K_COLLISION] = sumsq(out, pairs.shape[0])
-    residual_access(P, pairs, pos, cs, model, out)
-    terms[K_ACCESS] = sumsq(out, pairs.shape[0]) + residual_access_in_floor(R, P, pos, yaw, cs)
+    terms[K_COLLISION] = sumsq(collision, collision.shape[0])
+    terms[K_ACCESS] = sumsq(access, access.shape[0]) + residual_access_in_floor(R, P, pos, yaw, cs)
     for k in range(N_KINDS):
         terms[k] *= weights[k]
     return terms
 
 
 @njit(cache=True, error_model="numpy")
-def iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, model, k_collision, k_access, gap_m):
+def iterate(M, pos, yaw, pairs, bounds, side, threads, acc, cs, cs_yaw, degen, it, rate, jac, omega, order, model,
+            k_collision, k_access, gap_m):
     """One solver iteration ``it`` (1-based): the constraints of its row of the
     interleaving table, then stacking, collision, accessibility and the boundary.
+    With two ``threads``, ``pairs`` come in the runs ``bounds`` of :func:`split_pairs`
+    made with ``side``; ``cs`` is kept current with :func:`trig_update`.
     Kinds without constraints are skipped: a kernel call costs a few hundred
     nanoseconds of argument passing, which adds up in a ten-item room."""
     P, D, L, H, S, B, W, WO, O, ST, U, R = M
@@ -1463,14 +1741,22 @@ def iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, mod
         project_stack(ST, P, pos, yaw, acc, jac, it, rate, degen)
         batch_end(jac, pos, yaw, acc, omega, P)
     if order[row, 2]:
-        trig(yaw, cs)
+        trig_update(yaw, cs, cs_yaw)
         kc = stiffness(k_collision, GROW, it, rate)
-        project_collision(P, R, pairs, pos, yaw, cs, acc, jac, kc, model, gap_m, degen)
+        if threads > 1:
+            project_collision_split(P, R, pairs, bounds, pos, yaw, cs, acc, jac, kc, model, gap_m, degen)
+        else:
+            project_collision(P, R, pairs, pos, yaw, cs, acc, jac, kc, model, gap_m, degen)
         batch_end(jac, pos, yaw, acc, omega, P)
-        project_access(P, pairs, pos, yaw, cs, acc, jac, k_access, model, degen)
+        if threads > 1:
+            project_access_split(P, pairs, bounds, pos, yaw, cs, acc, jac, k_access, model, degen)
+        else:
+            project_access(P, pairs, pos, yaw, cs, acc, jac, k_access, model, degen)
         batch_end(jac, pos, yaw, acc, omega, P)
-        project_access_in_floor(R, P, pos, yaw, cs, k_access)
-    project_boundary(R, P, pos, yaw)
+    if threads > 1:
+        project_floor_split(R, P, pos, yaw, cs, k_access, side, order[row, 2])
+    else:
+        floor_pass(R, P, pos, yaw, cs, k_access, side, 0, order[row, 2])
 
 
 @njit(cache=True, error_model="numpy")
@@ -1527,26 +1813,35 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
     ref_e = np.inf
     ref_it = 0
     it = 0
-    reach = np.empty(n)
-    for i in range(n):
-        reach[i] = P.radius[i] + P.access_max[i]
-    ref_pos = pos.copy()
-    ref_yaw = yaw.copy()
-    pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
+    trig(yaw, cs)
+    cs_yaw = yaw.copy()
+    G = pair_grid(P, pos, yaw, cell_m, pad_m)
+    pairs = all_pairs(G)
+    npairs = pairs.shape[0]
+    threads = 2 if G[0].shape[0] >= THREADS_MIN_BOXES else 1
+    side = body_sides(P, pos, threads)
+    split = np.empty((0, 2), np.int64)
+    bounds = np.zeros(4, np.int64)
+    rc = np.empty(0)
+    ra = np.empty(0)
     while True:
-        # Verlet list: the pairs found with padding pad_m stay valid until something
-        # has moved (or swung, at its reach) by half the padding.
-        moved = 0.0
-        for i in range(n):
-            d = math.sqrt((pos[i, 0] - ref_pos[i, 0]) ** 2 + (pos[i, 1] - ref_pos[i, 1]) ** 2)
-            d += reach[i] * abs(yaw[i] - ref_yaw[i])
-            moved = max(moved, d)
-        if moved > 0.5 * pad_m:
-            pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
-            ref_pos[:] = pos
-            ref_yaw[:] = yaw
+        pairs, npairs = refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs)
+        live = pairs[:npairs]
+        if threads > 1:
+            if split.shape[0] < npairs:
+                split = np.empty_like(pairs)
+            split_pairs(live, side, split, bounds)
+            live = split[:npairs]
         if it % energy_every == 0 or it >= max_iter:
-            terms = energy_terms(M, pos, yaw, pairs, model, weights)
+            trig_update(yaw, cs, cs_yaw)
+            if threads > 1:
+                if rc.shape[0] < npairs:
+                    rc = np.empty(pairs.shape[0])
+                    ra = np.empty(pairs.shape[0])
+                pair_residuals(P, R, live, pos, cs, model, rc[:npairs], ra[:npairs])
+                terms = kind_terms(M, pos, yaw, cs, rc[:npairs], ra[:npairs], weights)
+            else:
+                terms = energy_terms(M, pos, yaw, cs, live, model, weights)
             e = math.sqrt(terms.sum())
             trace[it] = e
             if e < best_e:
@@ -1563,14 +1858,16 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
         else:
             trace[it] = trace[it - 1]
         it += 1
-        iterate(M, pos, yaw, pairs, acc, cs, degen, it, rate, jac, omega, order, model, k_collision, k_access, gap_m)
+        iterate(M, pos, yaw, live, bounds, side, threads, acc, cs, cs_yaw, degen, it, rate, jac, omega, order,
+                model, k_collision, k_access, gap_m)
     if polish_rounds > 0:
         pos[:] = best_pos
         yaw[:] = best_yaw
         polish(M, pos, yaw, polish_rounds, model, gap_m, cell_m, pad_m)
         pairs = candidate_pairs(P, pos, yaw, cell_m, pad_m)
+        trig(yaw, cs)
         # Keep the polished layout when it collides less (hard constraints first).
-        terms = energy_terms(M, pos, yaw, pairs, model, weights)
+        terms = energy_terms(M, pos, yaw, cs, pairs, model, weights)
         hard_after = terms[K_COLLISION] + terms[K_BOUNDARY]
         hard_before = best_terms[K_COLLISION] + best_terms[K_BOUNDARY]
         if hard_after < hard_before or (hard_after == hard_before and terms.sum() <= best_terms.sum()):

@@ -153,11 +153,14 @@ def _anneal(M, pos, yaw, bodies, iterations, t_start, step_m, step_rad, p_rotate
     for i in range(n):
         reach[i] = P.radius[i] + P.access_max[i]
     pairs = K.candidate_pairs(P, pos, yaw, cell_m, pad_m)
+    cs = np.empty((n, 2))
+    K.trig(yaw, cs)
+    cs_yaw = yaw.copy()
     ref_pos = pos.copy()
     ref_yaw = yaw.copy()
     keep_pos = pos.copy()
     keep_yaw = yaw.copy()
-    e = math.sqrt(K.energy_terms(M, pos, yaw, pairs, model, weights).sum())
+    e = math.sqrt(K.energy_terms(M, pos, yaw, cs, pairs, model, weights).sum())
     temp0 = t_start * max(e, 1e-9)
     best_e = e
     best_pos = pos.copy()
@@ -202,7 +205,8 @@ def _anneal(M, pos, yaw, bodies, iterations, t_start, step_m, step_rad, p_rotate
             pairs = K.candidate_pairs(P, pos, yaw, cell_m, pad_m)
             ref_pos[:] = pos
             ref_yaw[:] = yaw
-        e_new = math.sqrt(K.energy_terms(M, pos, yaw, pairs, model, weights).sum())
+        K.trig_update(yaw, cs, cs_yaw)
+        e_new = math.sqrt(K.energy_terms(M, pos, yaw, cs, pairs, model, weights).sum())
         d_e = e_new - e
         if d_e <= 0.0 or (temp > 0.0 and np.random.random() < math.exp(-d_e / temp)):
             e = e_new

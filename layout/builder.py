@@ -474,10 +474,12 @@ class LayoutBuilder:
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)
         prev = poly - np.roll(poly, 1, axis=0)
         reflex = (prev[:, 0] * edges[:, 1] - prev[:, 1] * edges[:, 0]) < 0
-        # At most ~250k cells of at least 5 cm: one lookup then settles "far inside"
-        # for most items, instead of a walk over every wall.
+        # About 16k cells of at least 5 cm: one lookup then settles "far inside" for
+        # most items, instead of a walk over every wall. More cells would only fall
+        # out of the cache on a large floor (the solver asks twice per item and
+        # iteration, in no spatial order).
         lo, hi = poly.min(0), poly.max(0)
-        grid_cell = max(0.05, float(np.sqrt(np.prod(hi - lo) / 250_000.0)))
+        grid_cell = max(0.05, float(np.sqrt(np.prod(hi - lo) / 16_000.0)))
         grid_origin = lo - grid_cell
         gx, gy = (np.ceil((hi - lo) / grid_cell).astype(int) + 2)
         clearance = K.clearance_grid(poly, grid_origin, grid_cell, int(gx), int(gy))

@@ -371,7 +371,9 @@ def energy_terms(model: Model, state: State, collision: str = "box") -> dict:
     """g_j Σ C_j² per constraint kind for a state (E = sqrt of the sum)."""
     P = model.packed()[0]
     pairs = K.candidate_pairs(P, state.position_m, state.yaw_rad, _cell_size(model), 0.05)
-    terms = K.energy_terms(model.packed(), state.position_m, state.yaw_rad, pairs,
+    cs = np.empty((model.n, 2))
+    K.trig(state.yaw_rad, cs)
+    terms = K.energy_terms(model.packed(), state.position_m, state.yaw_rad, cs, pairs,
                            codes.COLLISION_NAMES[collision], np.array(codes.ENERGY_WEIGHTS))
     return {k: float(v) for k, v in zip(codes.KINDS, terms)}
 

@@ -495,6 +495,91 @@ def test_spatial_hash_matches_brute_force(rng):
     assert 0 < len(pairs) < n * (n - 1) // 20  # a real test: some pairs, far from all
 
 
+def _boxes_meet(box, body, movable):
+    """Brute force over the boxes of a pair grid: (i, j) particle pairs, i < j."""
+    lo, hi = box[:, :2] - box[:, 2:], box[:, :2] + box[:, 2:]
+    meet = np.all((lo[:, None] <= hi[None] + 1e-12) & (lo[None] <= hi[:, None] + 1e-12), axis=-1)
+    meet &= (body[:, None] != body[None]) & (movable[:, None] | movable[None])
+    q, r = np.nonzero(np.triu(meet, 1))
+    return q, r
+
+
+def test_verlet_refresh_lists_exactly_the_pairs_of_its_boxes(rng):
+    b = LayoutBuilder([[0, 0], [20, 0], [20, 20], [0, 20]], 3.0)
+    n = 300
+    sizes = rng.uniform(0.2, 1.5, size=(n, 3))
+    sizes[:2, :2] = [[9.0, 2.0], [0.3, 8.0]]  # big: checked against every box
+    for k in range(n):
+        b.add_item(f"i{k}", sizes[k], access_m=(0, 0, rng.choice([0, 0.5]), 0), fixed=k % 50 == 7,
+                   position_m=(1.0, 1.0) if k % 50 == 7 else None)
+    m = b.finalize()
+    P = m.packed()[0]
+    pos, yaw = _state(m, rng.uniform(0, 20, size=(n, 2)), yaw=rng.uniform(-3, 3, n))
+    pad = 0.1
+    G = K.pair_grid(P, pos, yaw, 1.0, pad)
+    pairs = K.all_pairs(G)
+    npairs = len(pairs)
+    idx, body, movable, box = G[0], G[2], G[3], G[6]
+    movers_seen = 0
+    for step in range(25):
+        # Most items creep (below half the padding since their box was made, in
+        # total), some jump or turn.
+        free = m.particle_inv_mass[m.particle_body] > 0
+        creep = rng.uniform(-0.004, 0.004, size=(n, 2))
+        jump = (rng.uniform(size=n) < 0.1)[:, None] * rng.uniform(-0.5, 0.5, size=(n, 2))
+        pos[free, :2] += (creep + jump)[free]
+        turn = free & (rng.uniform(size=n) < 0.05)
+        yaw[turn] += rng.uniform(-0.3, 0.3, size=int(turn.sum()))
+        before = box.copy()
+        pairs, npairs = K.refresh_pairs(G, P, pos, yaw, pad, pairs, npairs)
+        movers_seen += int(np.any(box != before, axis=1).sum())
+        listed = [tuple(p) for p in pairs[:npairs]]
+        assert len(listed) == len(set(listed))  # each pair once
+        # Exactly the pairs of the boxes as last made...
+        q, r = _boxes_meet(box, body, movable)
+        expect = {(min(i, j), max(i, j)) for i, j in zip(idx[q], idx[r])}
+        assert set(listed) == expect
+        # ...which include every pair whose boxes meet now.
+        assert {tuple(p) for p in K.candidate_pairs(P, pos, yaw, 1.0, 0.0)} <= set(listed)
+    assert movers_seen > 100  # a real test: boxes were remade
+
+
+def test_split_runs_share_no_movable_body(rng):
+    b = LayoutBuilder([[0, 0], [12, 0], [12, 12], [0, 12]], 3.0)
+    items = [b.add_item(f"i{k}", (0.6, 0.5, 0.8), access_m=(0, 0, 0.4, 0)) for k in range(120)]
+    for g in range(6):  # rigid pairs: one body, two footprints
+        group = b.add_group(f"g{g}", rigid=True)
+        for k in range(2):
+            b.add_item(f"g{g}m{k}", (0.5, 0.5, 0.8), group=group, offset_m=(0.6 * k, 0.0))
+    b.add_item("pillar", (0.8, 0.8, 2.0), position_m=(6.0, 6.0), fixed=True)
+    m = b.finalize()
+    P = m.packed()[0]
+    pos, yaw = _state(m, rng.uniform(0.5, 11.5, size=(m.n, 2)), yaw=rng.uniform(-3, 3, m.n))
+    K.sync_members(P, pos, yaw)
+    pairs = K.candidate_pairs(P, pos, yaw, 1.0, 0.3)
+    side = K.body_sides(P, pos, 2)
+    out = np.empty_like(pairs)
+    bounds = np.zeros(4, np.int64)
+    K.split_pairs(pairs, side, out, bounds)
+    assert bounds[3] == len(pairs)
+    assert sorted(map(tuple, out)) == sorted(map(tuple, pairs))
+    movable_bodies = []
+    for t in range(2):
+        run = out[bounds[t]:bounds[t + 1]]
+        bodies = set(P.body[run.ravel()])
+        movable_bodies.append({x for x in bodies if P.inv_mass[x] > 0})
+        assert all(side[x] == t for x in run.ravel() if P.inv_mass[P.body[x]] > 0)
+        assert len(run) > 10
+    assert not movable_bodies[0] & movable_bodies[1]
+    across = out[bounds[2]:]
+    assert all(side[i] != side[j] and side[i] >= 0 and side[j] >= 0 for i, j in across)
+    # Both sides hold about half of the movable bodies.
+    free = [x for x in range(m.n) if P.body[x] == x and P.inv_mass[x] > 0]
+    assert abs(sum(side[x] for x in free) - len(free) / 2) <= 1
+    # One thread: everything on side 0.
+    assert set(K.body_sides(P, pos, 1)[[x for x in range(m.n) if P.inv_mass[P.body[x]] > 0]]) == {0}
+
+
 def test_nested_rigid_groups_compose_offsets_once():
     b = LayoutBuilder(ROOM)
     outer = b.add_group("outer", rigid=True)

@@ -102,11 +102,17 @@ def test_restarts_are_reported_and_paper_mode_runs_once():
 
 def test_energy_trace_and_best_layout():
     model, solver = build(load_spec(SAMPLES / "living_room.toml"))
-    layout = dataclasses.replace(solver, restarts=0, polish_rounds=0).solve(model, seed=1)
-    assert len(layout.trace) == layout.iterations + 1
-    # The returned layout is the best seen: its energy is the trace's minimum.
-    assert math.isclose(layout.energy, np.nanmin(layout.trace), rel_tol=1e-9)
-    assert layout.trace[0] > 10 * layout.energy
+    paper = dataclasses.replace(solver, restarts=0, polish_rounds=0)
+    gains = []
+    for seed in range(5):
+        layout = paper.solve(model, seed=seed)
+        assert len(layout.trace) == layout.iterations + 1
+        # The returned layout is the best seen: its energy is the trace's minimum.
+        assert math.isclose(layout.energy, np.nanmin(layout.trace), rel_tol=1e-9)
+        gains.append(layout.trace[0] / layout.energy)
+    # Some starts end in a worse local minimum (about half of them in this room,
+    # over 150 seeds), but every run gains a lot, and typically tenfold.
+    assert min(gains) > 3 and np.median(gains) > 10
 
 
 def test_builder_never_modifies_inputs():
@@ -164,3 +170,26 @@ def test_residuals_by_kind_match_the_energy():
     for kind, g in zip(KINDS, ENERGY_WEIGHTS):
         if kind != "access":
             assert math.isclose(g * float((res[kind] ** 2).sum()), layout.energy_by_kind[kind], rel_tol=1e-9, abs_tol=1e-12)
+
+
+def test_large_floor_on_two_threads_is_reproducible_and_clean():
+    """Above K.THREADS_MIN_BOXES boxes the pair passes run on two threads: the result
+    must not depend on their timing, and the layout must still be clean."""
+    from layout import _kernels as K
+
+    rng = np.random.default_rng(3)
+    n = K.THREADS_MIN_BOXES + 100
+    size = rng.uniform(0.4, 1.0, size=(n, 2))
+    side = float(np.sqrt((size[:, 0] * size[:, 1]).sum() / 0.3))
+    b = LayoutBuilder([[0, 0], [side, 0], [side, side], [0, side]])
+    items = [b.add_item(f"box_{i}", (w, d, 0.8), access_m=(0, 0, 0.3, 0)) for i, (w, d) in enumerate(size)]
+    for i in range(0, n - 1, 2):
+        b.distance(items[i], items[i + 1], 1.5, mode="max")
+    model = b.finalize()
+    solver = Solver(restarts=0)
+    first, again = solver.solve(model, seed=5), solver.solve(model, seed=5)
+    np.testing.assert_array_equal(first.position_m, again.position_m)
+    np.testing.assert_array_equal(first.trace, again.trace)
+    ev = evaluate(first)
+    assert ev["overlaps"]["count"] == 0 and ev["outside_m2"] == 0.0
+    assert first.energy < 0.05 * first.trace[0]
