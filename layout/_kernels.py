@@ -930,7 +930,7 @@ def pair_box(P, pos, yaw, i, pad_m):
 
 
 @njit(cache=True, error_model="numpy")
-def pair_grid(P, pos, yaw, cell_m, pad_m):
+def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
     """The uniform grid behind the pair list, a Verlet list kept per item.
 
     Every item that collides or needs clearance, and every obstacle, gets the box of
@@ -945,7 +945,11 @@ def pair_grid(P, pos, yaw, cell_m, pad_m):
     swings the box), the pose ``ref`` (x, y, yaw) the box was made at, the box (m, 4),
     the big flags and list, each box's cell ``home`` (-1 when big), each cell's boxes
     as a doubly linked list (``head``, ``nxt``, ``prv``), the geometry (x0, y0, cell,
-    nx, ny), and scratch for the movers (a list of boxes, a flag per particle).
+    nx, ny), scratch for the movers (a list of boxes, a flag per particle) and the
+    side of every particle's body (:func:`body_sides`), for two threads when there
+    are at least ``threads_from`` boxes.
+
+    Pair lists are (k, 3): i < j and the run of the pair (:func:`pair_run`).
     """
     n = P.role.shape[0]
     idx = np.empty(n, np.int64)
@@ -1002,8 +1006,9 @@ def pair_grid(P, pos, yaw, cell_m, pad_m):
     nxt = np.full(m, -1, np.int64)
     prv = np.full(m, -1, np.int64)
     geom = np.array([x0, y0, cell, nx, ny], np.float64)
+    side = body_sides(P, pos, 2 if m >= threads_from else 1)
     G = (idx, qof, body, movable, reach, ref, box, big, np.flatnonzero(big), home, head, nxt, prv, geom,
-         np.empty(m, np.int64), np.zeros(n, np.bool_))
+         np.empty(m, np.int64), np.zeros(n, np.bool_), side)
     for q in range(m - 1, -1, -1):
         grid_place(box, big, home, head, nxt, prv, geom, q)
     return G
@@ -1046,23 +1051,38 @@ def boxes_pair(box, body, movable, qa, qb):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def append_pair(pairs, npairs, i, j):
-    """Write the pair (min, max) at row ``npairs``, growing the list when full."""
+def append_pair(pairs, npairs, i, j, side):
+    """Write the pair (min, max) and its run at row ``npairs``, growing the list when
+    full."""
     if npairs == pairs.shape[0]:
         pairs = _grown(pairs)
     pairs[npairs, 0] = min(i, j)
     pairs[npairs, 1] = max(i, j)
+    pairs[npairs, 2] = pair_run(side[i], side[j])
     return pairs
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def pair_run(si, sj):
+    """Run of a pair for two threads, from the sides of its bodies (-1: fixed): 0 or 1
+    when its movable bodies all lie on that side, 2 across. Runs 0 and 1 share no
+    movable body, so two threads can project them at the same time, and the result
+    does not depend on their timing."""
+    if si < 0:
+        si = sj
+    if sj < 0:
+        sj = si
+    return si if si == sj and si >= 0 else 2
 
 
 @njit(cache=True, error_model="numpy")
 def all_pairs(G):
     """Every pair (i < j) whose boxes overlap, once: each cell against itself and four
     of its eight neighbours (a half stencil), then the big boxes against all."""
-    idx, qof, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag = G
+    idx, qof, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag, side = G
     m = box.shape[0]
     nx, ny = int(geom[3]), int(geom[4])
-    pairs = np.empty((max(16, 8 * m), 2), np.int64)
+    pairs = np.empty((max(16, 8 * m), 3), np.int64)
     npairs = 0
     # Copies in cell order: the stencil's cells are two runs of consecutive cells, so
     # the inner loop streams through memory.
@@ -1110,21 +1130,21 @@ def all_pairs(G):
                         continue
                     if ba == sbody[v] or not (ma or smovable[v]):
                         continue
-                    pairs = append_pair(pairs, npairs, sidx[u], sidx[v])
+                    pairs = append_pair(pairs, npairs, sidx[u], sidx[v], side)
                     npairs += 1
     for qa in bigs:
         for qb in range(m):
             if qb != qa and not (big[qb] and qb < qa) and boxes_pair(box, body, movable, qa, qb):
-                pairs = append_pair(pairs, npairs, idx[qa], idx[qb])
+                pairs = append_pair(pairs, npairs, idx[qa], idx[qb], side)
                 npairs += 1
     return pairs[:npairs]
 
 
 @njit(cache=True, error_model="numpy")
 def candidate_pairs(P, pos, yaw, cell_m, pad_m):
-    """Pairs (i < j) whose padded boxes (footprint and access boxes, see
+    """Pairs (i < j), (k, 2), whose padded boxes (footprint and access boxes, see
     :func:`pair_box`) overlap; the pair list serves the accessibility constraints too."""
-    return all_pairs(pair_grid(P, pos, yaw, cell_m, pad_m))
+    return all_pairs(pair_grid(P, pos, yaw, cell_m, pad_m, np.iinfo(np.int64).max))[:, :2].copy()
 
 
 @njit(cache=True, error_model="numpy")
@@ -1138,7 +1158,7 @@ def refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs):
     every iteration of a large, crowded floor: something always moves.) Returns the
     list, possibly grown, and its length.
     """
-    idx, qof, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag = G
+    idx, qof, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag, side = G
     nm = 0
     for q in range(box.shape[0]):
         i = idx[q]
@@ -1159,6 +1179,7 @@ def refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs):
         if not (flag[pairs[p, 0]] or flag[pairs[p, 1]]):
             pairs[keep, 0] = pairs[p, 0]
             pairs[keep, 1] = pairs[p, 1]
+            pairs[keep, 2] = pairs[p, 2]
             keep += 1
     npairs = keep
     nx, ny = int(geom[3]), int(geom[4])
@@ -1169,7 +1190,7 @@ def refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs):
         if big[qa]:
             for qb in range(box.shape[0]):
                 if qb != qa and boxes_pair(box, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
-                    pairs = append_pair(pairs, npairs, idx[qa], idx[qb])
+                    pairs = append_pair(pairs, npairs, idx[qa], idx[qb], side)
                     npairs += 1
             continue
         gx = home[qa] % nx
@@ -1179,12 +1200,12 @@ def refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs):
                 qb = head[cy * nx + cx]
                 while qb >= 0:
                     if qb != qa and boxes_pair(box, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
-                        pairs = append_pair(pairs, npairs, idx[qa], idx[qb])
+                        pairs = append_pair(pairs, npairs, idx[qa], idx[qb], side)
                         npairs += 1
                     qb = nxt[qb]
         for qb in bigs:
             if boxes_pair(box, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
-                pairs = append_pair(pairs, npairs, idx[qa], idx[qb])
+                pairs = append_pair(pairs, npairs, idx[qa], idx[qb], side)
                 npairs += 1
     for t in range(nm):
         flag[idx[movers[t]]] = False
@@ -1193,7 +1214,7 @@ def refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs):
 
 @njit(cache=True, error_model="numpy")
 def _grown(pairs):
-    grown = np.empty((2 * pairs.shape[0], 2), np.int64)
+    grown = np.empty((max(16, 2 * pairs.shape[0]), pairs.shape[1]), np.int64)
     grown[: pairs.shape[0]] = pairs
     return grown
 
@@ -1281,15 +1302,18 @@ def wall_points_pair(P, R, pos, yaw, i, j, model, gap_m):
 
 
 @njit(cache=True, error_model="numpy")
-def collision_pass(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen, out, project):
-    """Every candidate pair once: with ``project``, push colliding pairs apart by ``k``
-    of their penetration (Gauss–Seidel or Jacobi); without, write each pair's C
-    (0 when apart) to ``out``. Returns the number of colliding pairs."""
+def collision_pass(P, R, pairs, run, pos, yaw, cs, acc, jac, k, model, gap_m, degen, out, project):
+    """Every candidate pair once (of ``run`` only, when >= 0: see :func:`pair_run`):
+    with ``project``, push colliding pairs apart by ``k`` of their penetration
+    (Gauss–Seidel or Jacobi); without, write each pair's C (0 when apart) to ``out``.
+    Returns the number of colliding pairs."""
     size = P.size
     radius = P.radius
     collides = P.collides
     colliding = 0
     for p in range(pairs.shape[0]):
+        if run >= 0 and pairs[p, 2] != run:
+            continue
         i = pairs[p, 0]
         j = pairs[p, 1]
         if not project:
@@ -1331,13 +1355,13 @@ def collision_pass(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen, 
 
 @njit(cache=True, error_model="numpy")
 def project_collision(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen):
-    return collision_pass(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen, np.empty(0), True)
+    return collision_pass(P, R, pairs, -1, pos, yaw, cs, acc, jac, k, model, gap_m, degen, np.empty(0), True)
 
 
 @njit(cache=True, error_model="numpy")
 def residual_collision(P, R, pairs, pos, cs, model, out):
     # The projection-only arguments are placeholders here.
-    return collision_pass(P, R, pairs, pos, np.empty(0), cs, np.empty((0, 6)), False, 0.0, model, 0.0,
+    return collision_pass(P, R, pairs, -1, pos, np.empty(0), cs, np.empty((0, 6)), False, 0.0, model, 0.0,
                           np.zeros(N_KINDS, np.int64), out, False)
 
 
@@ -1389,7 +1413,7 @@ def access_side(xo, yo, co, so, wo, do, depth_m, side, xi, yi, ci, si, wi, di, m
 
 
 @njit(cache=True, error_model="numpy")
-def access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, out, project):
+def access_pass(P, pairs, run, pos, yaw, cs, acc, jac, k, model, out, project):
     """Accessibility of both items of every candidate pair: with ``project``, push the
     intruder out of each access box it enters by ``k`` of the depth (the owner takes
     its share by mass); without, write each pair's -sqrt(Σ C²) to ``out``.
@@ -1403,6 +1427,8 @@ def access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, out, project):
     # turns them).
     zone = P.access_zone
     for p in range(pairs.shape[0]):
+        if run >= 0 and pairs[p, 2] != run:
+            continue
         total = 0.0
         for turn_ in range(2):
             owner = pairs[p, turn_]
@@ -1449,7 +1475,7 @@ def access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, out, project):
 
 @njit(cache=True, error_model="numpy")
 def project_access(P, pairs, pos, yaw, cs, acc, jac, k, model, degen):
-    access_pass(P, pairs, pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
+    access_pass(P, pairs, -1, pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -1505,52 +1531,18 @@ def residual_access_in_floor(R, P, pos, yaw, cs):
 @njit(cache=True, error_model="numpy")
 def residual_access(P, pairs, pos, cs, model, out):
     """Squared-sum violation of all access sides, per candidate pair."""
-    access_pass(P, pairs, pos, np.empty(0), cs, np.empty((0, 6)), False, 0.0, model, out, False)
+    access_pass(P, pairs, -1, pos, np.empty(0), cs, np.empty((0, 6)), False, 0.0, model, out, False)
 
 
 # ------------------------------------------- two threads for the pair passes
 
-# Two threads pay off from about this many boxes in the pair list (a parallel
-# region costs 10-20 us to start; measured with benchmarks/scaling.py).
-THREADS_MIN_BOXES = 2000
-
-
-@njit(cache=True, error_model="numpy")
-def split_pairs(pairs, side, out, bounds):
-    """Order the pairs for two threads: first those whose movable bodies all lie on
-    side 0, then side 1, then the pairs across (stable within each run). The two
-    first runs share no movable body, so both can be projected at the same time
-    and the result does not depend on timing. ``side`` (n,) is the side of each
-    particle's body, -1 for a fixed one (:func:`body_sides`); ``out`` (>= pairs rows,
-    2) receives the pairs, ``bounds`` (4,) the ends of the runs."""
-    n = pairs.shape[0]
-    tag = np.empty(n, np.int8)
-    count = np.zeros(3, np.int64)
-    for p in range(n):
-        si = side[pairs[p, 0]]
-        sj = side[pairs[p, 1]]
-        if si < 0:
-            si = sj
-        if sj < 0:
-            sj = si
-        tag[p] = si if si == sj and si >= 0 else 2
-        count[tag[p]] += 1
-    bounds[0] = 0
-    for t in range(3):
-        bounds[t + 1] = bounds[t] + count[t]
-    fill = bounds[:3].copy()
-    for p in range(n):
-        t = tag[p]
-        out[fill[t], 0] = pairs[p, 0]
-        out[fill[t], 1] = pairs[p, 1]
-        fill[t] += 1
 
 
 @njit(cache=True, error_model="numpy")
 def body_sides(P, pos, threads):
-    """For :func:`split_pairs`: the side of every particle's body, -1 where the body
-    is fixed. With two ``threads``, 0 or 1 split at the median x of the movable
-    bodies; with one, 0 for all."""
+    """The side of every particle's body for :func:`pair_run`, -1 where the body is
+    fixed. With two ``threads``, 0 or 1 split at the median x of the movable bodies;
+    with one, 0 for all."""
     n = pos.shape[0]
     xs = np.empty(n)
     k = 0
@@ -1568,24 +1560,24 @@ def body_sides(P, pos, threads):
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
-def project_collision_split(P, R, pairs, bounds, pos, yaw, cs, acc, jac, k, model, gap_m, degen):
-    """:func:`project_collision` over the runs of :func:`split_pairs`: the first two
-    on two threads, then the pairs across."""
+def project_collision_split(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen):
+    """:func:`project_collision` over the runs of :func:`pair_run`: runs 0 and 1 on
+    two threads, then the pairs across."""
     local = np.zeros((2, N_KINDS), np.int64)
     for t in prange(2):
-        project_collision(P, R, pairs[bounds[t]:bounds[t + 1]], pos, yaw, cs, acc, jac, k, model, gap_m, local[t])
-    project_collision(P, R, pairs[bounds[2]:bounds[3]], pos, yaw, cs, acc, jac, k, model, gap_m, degen)
+        collision_pass(P, R, pairs, t, pos, yaw, cs, acc, jac, k, model, gap_m, local[t], np.empty(0), True)
+    collision_pass(P, R, pairs, 2, pos, yaw, cs, acc, jac, k, model, gap_m, degen, np.empty(0), True)
     for q in range(N_KINDS):
         degen[q] += local[0, q] + local[1, q]
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
-def project_access_split(P, pairs, bounds, pos, yaw, cs, acc, jac, k, model, degen):
-    """:func:`project_access` over the runs of :func:`split_pairs`, like
+def project_access_split(P, pairs, pos, yaw, cs, acc, jac, k, model):
+    """:func:`project_access` over the runs of :func:`pair_run`, like
     :func:`project_collision_split`."""
     for t in prange(2):
-        project_access(P, pairs[bounds[t]:bounds[t + 1]], pos, yaw, cs, acc, jac, k, model, degen)
-    project_access(P, pairs[bounds[2]:bounds[3]], pos, yaw, cs, acc, jac, k, model, degen)
+        access_pass(P, pairs, t, pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
+    access_pass(P, pairs, 2, pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
 
 
 @njit(cache=True, error_model="numpy")
@@ -1697,12 +1689,12 @@ def kind_terms(M, pos, yaw, cs, collision, access, weights):
 
 
 @njit(cache=True, error_model="numpy")
-def iterate(M, pos, yaw, pairs, bounds, side, threads, acc, cs, cs_yaw, degen, it, rate, jac, omega, order, model,
+def iterate(M, pos, yaw, pairs, side, threads, acc, cs, cs_yaw, degen, it, rate, jac, omega, order, model,
             k_collision, k_access, gap_m):
     """One solver iteration ``it`` (1-based): the constraints of its row of the
     interleaving table, then stacking, collision, accessibility and the boundary.
-    With two ``threads``, ``pairs`` come in the runs ``bounds`` of :func:`split_pairs`
-    made with ``side``; ``cs`` is kept current with :func:`trig_update`.
+    With two ``threads``, the pairs' runs (:func:`pair_run`) come from ``side``;
+    ``cs`` is kept current with :func:`trig_update`.
     Kinds without constraints are skipped: a kernel call costs a few hundred
     nanoseconds of argument passing, which adds up in a ten-item room."""
     P, D, L, H, S, B, W, WO, O, ST, U, R = M
@@ -1744,12 +1736,12 @@ def iterate(M, pos, yaw, pairs, bounds, side, threads, acc, cs, cs_yaw, degen, i
         trig_update(yaw, cs, cs_yaw)
         kc = stiffness(k_collision, GROW, it, rate)
         if threads > 1:
-            project_collision_split(P, R, pairs, bounds, pos, yaw, cs, acc, jac, kc, model, gap_m, degen)
+            project_collision_split(P, R, pairs, pos, yaw, cs, acc, jac, kc, model, gap_m, degen)
         else:
             project_collision(P, R, pairs, pos, yaw, cs, acc, jac, kc, model, gap_m, degen)
         batch_end(jac, pos, yaw, acc, omega, P)
         if threads > 1:
-            project_access_split(P, pairs, bounds, pos, yaw, cs, acc, jac, k_access, model, degen)
+            project_access_split(P, pairs, pos, yaw, cs, acc, jac, k_access, model)
         else:
             project_access(P, pairs, pos, yaw, cs, acc, jac, k_access, model, degen)
         batch_end(jac, pos, yaw, acc, omega, P)
@@ -1781,7 +1773,7 @@ def polish(M, pos, yaw, rounds, model, gap_m, cell_m, pad_m):
 
 @njit(cache=True, error_model="numpy")
 def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, omega, order, model, k_collision,
-               k_access, gap_m, cell_m, pad_m, weights, energy_every, polish_rounds):
+               k_access, gap_m, cell_m, pad_m, weights, energy_every, polish_rounds, threads_from):
     """Algorithm 1: project all constraints per iteration, keep the best layout.
 
     Per iteration ``it`` (1-based) the interleaving row ``order[(it - 1) % 6]`` says
@@ -1795,6 +1787,11 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
 
     The best layout is then polished (:func:`polish`, ``polish_rounds`` at most) and
     the polished one kept if it collides less.
+
+    The pair list is a Verlet list kept per item (:func:`refresh_pairs`). From
+    ``threads_from`` boxes on, the pair passes, the floor pass and the pairs' energy
+    run on two threads (:func:`pair_run`): the result depends on that choice, never
+    on the threads' timing.
 
     Returns the best positions and yaws, the energy trace (trace[l] = energy before
     iteration l + 1), the best iteration, the iterations run and degenerate counts.
@@ -1815,23 +1812,16 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
     it = 0
     trig(yaw, cs)
     cs_yaw = yaw.copy()
-    G = pair_grid(P, pos, yaw, cell_m, pad_m)
+    G = pair_grid(P, pos, yaw, cell_m, pad_m, threads_from)
+    threads = 2 if G[0].shape[0] >= threads_from else 1
+    side = G[-1]
     pairs = all_pairs(G)
     npairs = pairs.shape[0]
-    threads = 2 if G[0].shape[0] >= THREADS_MIN_BOXES else 1
-    side = body_sides(P, pos, threads)
-    split = np.empty((0, 2), np.int64)
-    bounds = np.zeros(4, np.int64)
     rc = np.empty(0)
     ra = np.empty(0)
     while True:
         pairs, npairs = refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs)
         live = pairs[:npairs]
-        if threads > 1:
-            if split.shape[0] < npairs:
-                split = np.empty_like(pairs)
-            split_pairs(live, side, split, bounds)
-            live = split[:npairs]
         if it % energy_every == 0 or it >= max_iter:
             trig_update(yaw, cs, cs_yaw)
             if threads > 1:
@@ -1858,7 +1848,7 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
         else:
             trace[it] = trace[it - 1]
         it += 1
-        iterate(M, pos, yaw, live, bounds, side, threads, acc, cs, cs_yaw, degen, it, rate, jac, omega, order,
+        iterate(M, pos, yaw, live, side, threads, acc, cs, cs_yaw, degen, it, rate, jac, omega, order,
                 model, k_collision, k_access, gap_m)
     if polish_rounds > 0:
         pos[:] = best_pos

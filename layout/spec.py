@@ -32,7 +32,7 @@ Only the fields listed here are allowed: a misspelt field is an error, not ignor
 
 ``[solver]`` (optional)
     Settings of :class:`layout.Solver`: ``max_iterations``, ``min_iterations``,
-    ``restarts``, ``polish_rounds``, ``energy_every`` (ints), ``patience`` (int),
+    ``restarts``, ``polish_rounds``, ``energy_every``, ``threads_from`` (ints), ``patience`` (int),
     ``rate``, ``method`` ("gauss-seidel" | "jacobi"), ``omega``, ``collision``
     ("box" | "sphere"), ``collision_stiffness``, ``access_stiffness``.
 
@@ -128,6 +128,7 @@ SOLVER_FIELDS = {
     "restarts": int,
     "polish_rounds": int,
     "energy_every": int,
+    "threads_from": int,
     "patience": int,
     "rate": float,
     "method": str,

@@ -516,7 +516,7 @@ def test_verlet_refresh_lists_exactly_the_pairs_of_its_boxes(rng):
     P = m.packed()[0]
     pos, yaw = _state(m, rng.uniform(0, 20, size=(n, 2)), yaw=rng.uniform(-3, 3, n))
     pad = 0.1
-    G = K.pair_grid(P, pos, yaw, 1.0, pad)
+    G = K.pair_grid(P, pos, yaw, 1.0, pad, 1)
     pairs = K.all_pairs(G)
     npairs = len(pairs)
     idx, body, movable, box = G[0], G[2], G[3], G[6]
@@ -533,7 +533,7 @@ def test_verlet_refresh_lists_exactly_the_pairs_of_its_boxes(rng):
         before = box.copy()
         pairs, npairs = K.refresh_pairs(G, P, pos, yaw, pad, pairs, npairs)
         movers_seen += int(np.any(box != before, axis=1).sum())
-        listed = [tuple(p) for p in pairs[:npairs]]
+        listed = [tuple(p) for p in pairs[:npairs, :2]]
         assert len(listed) == len(set(listed))  # each pair once
         # Exactly the pairs of the boxes as last made...
         q, r = _boxes_meet(box, body, movable)
@@ -544,7 +544,22 @@ def test_verlet_refresh_lists_exactly_the_pairs_of_its_boxes(rng):
     assert movers_seen > 100  # a real test: boxes were remade
 
 
-def test_split_runs_share_no_movable_body(rng):
+def test_verlet_refresh_grows_an_empty_list():
+    b = LayoutBuilder([[0, 0], [10, 0], [10, 10], [0, 10]], 3.0)
+    b.add_item("a", (1.0, 1.0, 1.0))
+    b.add_item("b", (1.0, 1.0, 1.0))
+    m = b.finalize()
+    P = m.packed()[0]
+    pos, yaw = _state(m, [[2.0, 2.0], [8.0, 8.0]])
+    G = K.pair_grid(P, pos, yaw, 1.0, 0.1, 1)
+    pairs = K.all_pairs(G)
+    assert len(pairs) == 0
+    pos[1, :2] = [2.5, 2.5]
+    pairs, npairs = K.refresh_pairs(G, P, pos, yaw, 0.1, pairs, 0)
+    assert npairs == 1 and tuple(pairs[0, :2]) == (0, 1)
+
+
+def test_pair_runs_share_no_movable_body(rng):
     b = LayoutBuilder([[0, 0], [12, 0], [12, 12], [0, 12]], 3.0)
     items = [b.add_item(f"i{k}", (0.6, 0.5, 0.8), access_m=(0, 0, 0.4, 0)) for k in range(120)]
     for g in range(6):  # rigid pairs: one body, two footprints
@@ -558,20 +573,17 @@ def test_split_runs_share_no_movable_body(rng):
     K.sync_members(P, pos, yaw)
     pairs = K.candidate_pairs(P, pos, yaw, 1.0, 0.3)
     side = K.body_sides(P, pos, 2)
-    out = np.empty_like(pairs)
-    bounds = np.zeros(4, np.int64)
-    K.split_pairs(pairs, side, out, bounds)
-    assert bounds[3] == len(pairs)
-    assert sorted(map(tuple, out)) == sorted(map(tuple, pairs))
+    run = np.array([K.pair_run(side[i], side[j]) for i, j in pairs])
     movable_bodies = []
     for t in range(2):
-        run = out[bounds[t]:bounds[t + 1]]
-        bodies = set(P.body[run.ravel()])
+        these = pairs[run == t]
+        bodies = set(P.body[these.ravel()])
         movable_bodies.append({x for x in bodies if P.inv_mass[x] > 0})
-        assert all(side[x] == t for x in run.ravel() if P.inv_mass[P.body[x]] > 0)
-        assert len(run) > 10
+        assert all(side[x] == t for x in these.ravel() if P.inv_mass[P.body[x]] > 0)
+        assert len(these) > 10
     assert not movable_bodies[0] & movable_bodies[1]
-    across = out[bounds[2]:]
+    across = pairs[run == 2]
+    assert len(across) > 0
     assert all(side[i] != side[j] and side[i] >= 0 and side[j] >= 0 for i, j in across)
     # Both sides hold about half of the movable bodies.
     free = [x for x in range(m.n) if P.body[x] == x and P.inv_mass[x] > 0]
