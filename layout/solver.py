@@ -319,11 +319,14 @@ class Solver:
             walkable = clean and (self.restarts == 0 or _walkable(model, pos, yaw))
             key = (not clean, not walkable, float(np.sqrt(sum(terms.values()))))
             if best is None or key < best[0]:
-                best = (key, pos, yaw, trace, best_it, iters, degen, terms, run + 1)
+                best = (key, pos, yaw, trace, best_it, iters, degen, terms)
             if clean and walkable:
                 break
         elapsed = time.perf_counter() - t0
-        _, pos, yaw, trace, best_it, iters, degen, terms, runs = best
+        # All the runs it took, not the index of the best one (they differ when no run
+        # is clean and walkable).
+        runs = run + 1
+        _, pos, yaw, trace, best_it, iters, degen, terms = best
         return Layout.from_state(model, pos, yaw, terms, trace, iters, best_it, seed, elapsed,
                                  degenerate={k: int(v) for k, v in zip(codes.KINDS, degen) if v}, runs=runs)
 

@@ -197,3 +197,13 @@ def test_two_threads_are_reproducible_and_clean():
         ev = evaluate(layout)
         assert ev["overlaps"]["count"] == 0 and ev["outside_m2"] == 0.0
         assert layout.energy < 0.05 * layout.trace[0]
+
+
+def test_runs_counts_every_run_taken_when_none_is_clean():
+    # Two 1.9 m squares in a 3 m room always overlap: every restart is used.
+    b = LayoutBuilder([[0, 0], [3, 0], [3, 3], [0, 3]])
+    b.add_item("a", (1.9, 1.9, 0.5))
+    b.add_item("b", (1.9, 1.9, 0.5))
+    layout = Solver(restarts=3, max_iterations=150).solve(b.finalize(), seed=0)
+    assert evaluate(layout)["overlaps"]["count"] == 1
+    assert layout.runs == 4
