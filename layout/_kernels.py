@@ -940,9 +940,9 @@ def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
     "big" and checked against every box instead.
 
     Returns the tuple G that :func:`all_pairs` and :func:`refresh_pairs` take: per box
-    q its particle ``idx`` (and ``qof``, particle -> q or -1), its body, whether that
-    body moves, its reach (footprint radius plus deepest clearance: how far a turn
-    swings the box), the pose ``ref`` (x, y, yaw) the box was made at, the box (m, 4),
+    q its particle ``idx``, its body, whether that body moves, its reach (footprint
+    radius plus deepest clearance: how far a turn swings the box), the pose ``ref``
+    (x, y, yaw) the box was made at, the box (m, 4),
     the big flags and list, each box's cell ``home`` (-1 when big), each cell's boxes
     as a doubly linked list (``head``, ``nxt``, ``prv``), the geometry (x0, y0, cell,
     nx, ny), scratch for the movers (a list of boxes, a flag per particle) and the
@@ -953,12 +953,10 @@ def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
     """
     n = P.role.shape[0]
     idx = np.empty(n, np.int64)
-    qof = np.full(n, -1, np.int64)
     m = 0
     for i in range(n):
         if P.role[i] == OBSTACLE or (P.role[i] == ITEM and (P.collides[i] or P.access_max[i] > 0.0)):
             idx[m] = i
-            qof[i] = m
             m += 1
     idx = idx[:m]
     # Looked up once per box here: in the pair loop, through idx, they cost more than
@@ -1007,7 +1005,7 @@ def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
     prv = np.full(m, -1, np.int64)
     geom = np.array([x0, y0, cell, nx, ny], np.float64)
     side = body_sides(P, pos, 2 if m >= threads_from else 1)
-    G = (idx, qof, body, movable, reach, ref, box, big, np.flatnonzero(big), home, head, nxt, prv, geom,
+    G = (idx, body, movable, reach, ref, box, big, np.flatnonzero(big), home, head, nxt, prv, geom,
          np.empty(m, np.int64), np.zeros(n, np.bool_), side)
     for q in range(m - 1, -1, -1):
         grid_place(box, big, home, head, nxt, prv, geom, q)
@@ -1079,7 +1077,7 @@ def pair_run(si, sj):
 def all_pairs(G):
     """Every pair (i < j) whose boxes overlap, once: each cell against itself and four
     of its eight neighbours (a half stencil), then the big boxes against all."""
-    idx, qof, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag, side = G
+    idx, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag, side = G
     m = box.shape[0]
     nx, ny = int(geom[3]), int(geom[4])
     pairs = np.empty((max(16, 8 * m), 3), np.int64)
@@ -1158,7 +1156,7 @@ def refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs):
     every iteration of a large, crowded floor: something always moves.) Returns the
     list, possibly grown, and its length.
     """
-    idx, qof, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag, side = G
+    idx, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag, side = G
     nm = 0
     for q in range(box.shape[0]):
         i = idx[q]

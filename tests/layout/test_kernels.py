@@ -519,7 +519,7 @@ def test_verlet_refresh_lists_exactly_the_pairs_of_its_boxes(rng):
     G = K.pair_grid(P, pos, yaw, 1.0, pad, 1)
     pairs = K.all_pairs(G)
     npairs = len(pairs)
-    idx, body, movable, box = G[0], G[2], G[3], G[6]
+    idx, body, movable, box = G[0], G[1], G[2], G[5]
     movers_seen = 0
     for step in range(25):
         # Most items creep (below half the padding since their box was made, in
