@@ -895,9 +895,8 @@ def boundary_item(R, P, pos, yaw, i, project):
 
 @njit(cache=True, error_model="numpy")
 def project_boundary(R, P, pos, yaw):
-    for i in range(P.role.shape[0]):
-        if P.bounded[i] and P.inv_mass[P.body[i]] > 0.0 and not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
-            boundary_item(R, P, pos, yaw, i, True)
+    """The layout boundary alone, every movable body (:func:`floor_pass`)."""
+    floor_pass(R, P, pos, yaw, np.empty((0, 2)), 0.0, body_sides(P, pos, 1), 0, False)
 
 
 @njit(cache=True, error_model="numpy")
@@ -913,16 +912,20 @@ def residual_boundary(R, P, pos, yaw, out):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def pair_box(P, pos, yaw, i, pad_m):
-    """Axis-aligned box round item i's footprint and its access boxes, padded by
-    ``pad_m``: (center x, center y, half extent x, half extent y). The access boxes
-    lie on sides 0/2 (behind/ahead along the depth axis) and 1/3 (left/right), so the
-    box is off-center when only one side needs clearance."""
+def pair_extent(P, i):
+    """Item i's footprint and access boxes as one box in the item's frame: center
+    offset (ox, oy) and half depth, half width. The access boxes lie on sides 0/2
+    (behind/ahead along the depth axis) and 1/3 (left/right), so the box is
+    off-center when only one side needs clearance."""
     a0, a1, a2, a3 = P.access_depth[i, 0], P.access_depth[i, 1], P.access_depth[i, 2], P.access_depth[i, 3]
-    ox = 0.5 * (a2 - a0)
-    oy = 0.5 * (a1 - a3)
-    hd = 0.5 * (P.size[i, 1] + a0 + a2)
-    hw = 0.5 * (P.size[i, 0] + a1 + a3)
+    return 0.5 * (a2 - a0), 0.5 * (a1 - a3), 0.5 * (P.size[i, 1] + a0 + a2), 0.5 * (P.size[i, 0] + a1 + a3)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def pair_box(P, pos, yaw, i, pad_m):
+    """Axis-aligned box round item i's :func:`pair_extent` at its pose, padded by
+    ``pad_m``: (center x, center y, half extent x, half extent y)."""
+    ox, oy, hd, hw = pair_extent(P, i)
     c = math.cos(yaw[i])
     s = math.sin(yaw[i])
     return (pos[i, 0] + c * ox - s * oy, pos[i, 1] + s * ox + c * oy,
@@ -976,8 +979,7 @@ def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
         ref[q, 1] = pos[i, 1]
         ref[q, 2] = yaw[i]
         box[q, 0], box[q, 1], box[q, 2], box[q, 3] = pair_box(P, pos, yaw, i, pad_m)
-        hd = 0.5 * (P.size[i, 1] + P.access_depth[i, 0] + P.access_depth[i, 2])
-        hw = 0.5 * (P.size[i, 0] + P.access_depth[i, 1] + P.access_depth[i, 3])
+        _, _, hd, hw = pair_extent(P, i)
         # The box's width at its widest yaw, so a turn never outgrows the cell.
         wide[q] = 2.0 * (math.sqrt(hd * hd + hw * hw) + pad_m)
     cell = cell_m
@@ -1004,12 +1006,18 @@ def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
     nxt = np.full(m, -1, np.int64)
     prv = np.full(m, -1, np.int64)
     geom = np.array([x0, y0, cell, nx, ny], np.float64)
-    side = body_sides(P, pos, 2 if m >= threads_from else 1)
+    side = body_sides(P, pos, pair_threads(m, threads_from))
     G = (idx, body, movable, reach, ref, box, big, np.flatnonzero(big), home, head, nxt, prv, geom,
          np.empty(m, np.int64), np.zeros(n, np.bool_), side)
     for q in range(m - 1, -1, -1):
         grid_place(box, big, home, head, nxt, prv, geom, q)
     return G
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def pair_threads(m, threads_from):
+    """Threads for the pair passes of ``m`` boxes: two from ``threads_from`` on."""
+    return 2 if m >= threads_from else 1
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -1535,7 +1543,6 @@ def residual_access(P, pairs, pos, cs, model, out):
 # ------------------------------------------- two threads for the pair passes
 
 
-
 @njit(cache=True, error_model="numpy")
 def body_sides(P, pos, threads):
     """The side of every particle's body for :func:`pair_run`, -1 where the body is
@@ -1811,7 +1818,7 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
     trig(yaw, cs)
     cs_yaw = yaw.copy()
     G = pair_grid(P, pos, yaw, cell_m, pad_m, threads_from)
-    threads = 2 if G[0].shape[0] >= threads_from else 1
+    threads = pair_threads(G[0].shape[0], threads_from)
     side = G[-1]
     pairs = all_pairs(G)
     npairs = pairs.shape[0]
