@@ -6,7 +6,7 @@ Prints a table per solver mode and writes ``benchmarks/results/scenarios.{json,m
 Modes:
   paper   one run per seed, as in Weiss et al. (restarts=0), exact box collisions
   sphere  the same with the paper's bounding-sphere collisions
-  default Stager's defaults: up to 10 fresh restarts when a run's best layout still
+  default Stager's defaults: up to 20 fresh restarts when a run's best layout still
           collides, leaves the floor or is not walkable (the time covers all runs)
 
 "clean" = zero exact box overlaps (> 1 cm²), nothing outside the floor, and walkable

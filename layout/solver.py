@@ -254,7 +254,9 @@ class Solver:
         faster on two threads, 3,000 theater seats 17 % slower). The layout depends
         on the choice (the order of the projections changes), not on timing.
     restarts : fresh random starts allowed when a run's best layout still collides,
-        leaves the floor or is not walkable (0: one run, as in the paper).
+        leaves the floor or is not walkable (0: one run, as in the paper). In the
+        tightly packed bedroom one run in three is clean, so 10 restarts left 5 of 40
+        seeds unwalkable; with 20, none of 140 (seeds 0-139).
     polish_rounds : after the loop, at most this many rounds of collision and
         boundary projection at full stiffness on the best layout (kept if its energy
         is no higher); 0 returns the best layout as seen, as in the paper.
@@ -277,7 +279,7 @@ class Solver:
     pad_m: float = 0.1
     polish_rounds: int = 30
     threads_from: int = 5000
-    restarts: int = 10
+    restarts: int = 20
 
     def __post_init__(self):
         if self.method not in ("gauss-seidel", "jacobi"):

@@ -21,10 +21,11 @@ def _clean(layout):
 
 @pytest.mark.parametrize(
     "name,seeds",
-    [("living_room", (0, 1)), ("desk", (0, 1)), ("tp_bedroom", (0, 2)), ("tp_picnic", (0,)), ("picnic", (0,)),
+    [("living_room", (0, 1)), ("desk", (0, 1)), ("tp_bedroom", (0, 2, 4)), ("tp_picnic", (0,)), ("picnic", (0,)),
      ("theater", (0,)), ("l_shaped_office", (0, 1))],
 )
 def test_paper_scenarios_solve_clean(name, seeds):
+    # tp_bedroom seed 4 needs more than 11 runs: none of its first 11 is clean and walkable.
     model, solver = build(load_spec(SAMPLES / f"{name}.toml"))
     for seed in seeds:
         ok, ev = _clean(solver.solve(model, seed=seed))
