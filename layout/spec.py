@@ -32,9 +32,10 @@ Only the fields listed here are allowed: a misspelt field is an error, not ignor
 
 ``[solver]`` (optional)
     Settings of :class:`layout.Solver`: ``max_iterations``, ``min_iterations``,
-    ``restarts``, ``polish_rounds``, ``energy_every``, ``threads_from`` (ints), ``patience`` (int),
-    ``rate``, ``method`` ("gauss-seidel" | "jacobi"), ``omega``, ``collision``
-    ("box" | "sphere"), ``collision_stiffness``, ``access_stiffness``.
+    ``restarts``, ``polish_rounds``, ``energy_every``, ``threads_from``,
+    ``stratify_from`` (ints), ``patience`` (int), ``rate``, ``method``
+    ("gauss-seidel" | "jacobi"), ``omega``, ``collision`` ("box" | "sphere"),
+    ``collision_stiffness``, ``access_stiffness``.
 
 ``[[groups]]`` (optional)
     ``id``        unique name (items and groups share one namespace).
@@ -129,6 +130,7 @@ SOLVER_FIELDS = {
     "polish_rounds": int,
     "energy_every": int,
     "threads_from": int,
+    "stratify_from": int,
     "patience": int,
     "rate": float,
     "method": str,

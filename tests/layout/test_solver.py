@@ -7,8 +7,11 @@ import numpy as np
 import pytest
 
 from layout import LayoutBuilder, LayoutError, Solver, State, diversity, residuals
-from layout.geometry import polygon_area
+from layout._kernels import inside_polygon
+from layout.geometry import box_corners, polygon_area
+from layout.metrics import box_overlaps
 from layout.report import evaluate
+from layout.solver import _random_inside, _stratified_inside, initial_state
 from layout.spec import build, load_spec
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
@@ -173,18 +176,24 @@ def test_residuals_by_kind_match_the_energy():
             assert math.isclose(g * float((res[kind] ** 2).sum()), layout.energy_by_kind[kind], rel_tol=1e-9, abs_tol=1e-12)
 
 
-def test_two_threads_are_reproducible_and_clean():
-    """With ``threads_from`` boxes or more the pair passes run on two threads: the
-    result must not depend on their timing, and the layout must still be clean."""
-    rng = np.random.default_rng(3)
-    n = 600
+def _crowd(n, seed):
+    """n boxes of 0.4-1.0 m with a front clearance on a square floor they cover to
+    30 %, in pairs kept within 1.5 m."""
+    rng = np.random.default_rng(seed)
     size = rng.uniform(0.4, 1.0, size=(n, 2))
     side = float(np.sqrt((size[:, 0] * size[:, 1]).sum() / 0.3))
     b = LayoutBuilder([[0, 0], [side, 0], [side, side], [0, side]])
     items = [b.add_item(f"box_{i}", (w, d, 0.8), access_m=(0, 0, 0.3, 0)) for i, (w, d) in enumerate(size)]
     for i in range(0, n - 1, 2):
         b.distance(items[i], items[i + 1], 1.5, mode="max")
-    model = b.finalize()
+    return b.finalize()
+
+
+def test_two_threads_are_reproducible_and_clean():
+    """With ``threads_from`` boxes or more the pair passes run on two threads: the
+    result must not depend on their timing, and the layout must still be clean."""
+    n = 600
+    model = _crowd(n, 3)
     threaded = Solver(restarts=0, threads_from=n)
     runs = [threaded.solve(model, seed=5) for _ in range(3)]
     for again in runs[1:]:
@@ -208,3 +217,37 @@ def test_runs_counts_every_run_taken_when_none_is_clean():
     layout = Solver(restarts=3, max_iterations=150).solve(b.finalize(), seed=0)
     assert evaluate(layout)["overlaps"]["count"] == 1
     assert layout.runs == 4
+
+
+def test_stratified_start_puts_one_point_in_each_cell():
+    square = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], float)
+    points = _stratified_inside(square, 100, np.random.default_rng(0))
+    # Cells of 1 m: all 100 are taken (a uniform sample leaves about a third empty).
+    assert len(np.unique(np.floor(points).astype(int), axis=0)) == 100
+    uniform = _random_inside(square, 100, np.random.default_rng(0))
+    assert len(np.unique(np.floor(uniform).astype(int), axis=0)) < 80
+    ell = np.array([[0, 0], [6, 0], [6, 2], [2, 2], [2, 6], [0, 6]], float)
+    points = _stratified_inside(ell, 50, np.random.default_rng(1))
+    assert points.shape == (50, 2)
+    assert all(inside_polygon(ell, x, y) for x, y in points)
+    assert len(np.unique(points, axis=0)) == 50
+
+
+def test_a_crowd_starts_stratified_and_settles_lower():
+    model = _crowd(300, 4)
+    size = model.particle_size_m[model.items]
+    z = np.stack([np.zeros(len(size)), size[:, 2]], axis=1)
+    energies = {}
+    for stratify_from in (10**9, 100):  # the paper's uniform start, then Stager's
+        solver = Solver(restarts=0, stratify_from=stratify_from)
+        energies[stratify_from] = [solver.solve(model, seed=seed).energy for seed in range(8)]
+    for seed in range(8):
+        overlaps = []
+        for stratify_from in (10**9, 100):
+            start = initial_state(model, np.random.default_rng(seed), stratify_from=stratify_from)
+            corners = box_corners(start.position_m[model.items, :2], start.yaw_rad[model.items], size[:, 0], size[:, 1])
+            overlaps.append(len(box_overlaps(corners, z, np.ones(len(size), bool))[0]))
+        assert overlaps[1] < overlaps[0], (seed, overlaps)
+    # Partners and clearances settle better from the spread start (measured: median
+    # 0.88 against 1.24, lower in 6 of 8).
+    assert np.median(energies[100]) < 0.85 * np.median(energies[10**9]), energies
