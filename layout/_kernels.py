@@ -922,22 +922,39 @@ def pair_extent(P, i):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def pair_box(P, pos, yaw, i, pad_m):
-    """Axis-aligned box round item i's :func:`pair_extent` at its pose, padded by
-    ``pad_m``: (center x, center y, half extent x, half extent y)."""
+def pair_box(P, pos, yaw, i, pad_m, box, obb, q):
+    """Write row q of ``obb``, item i's :func:`pair_extent` at its pose padded by
+    ``pad_m`` (center x, y, cos and sin of the yaw, half depth, half width), and of
+    ``box``, the axis-aligned box round it (center x, y, half extent x, y)."""
     ox, oy, hd, hw = pair_extent(P, i)
     c = math.cos(yaw[i])
     s = math.sin(yaw[i])
-    return (pos[i, 0] + c * ox - s * oy, pos[i, 1] + s * ox + c * oy,
-            abs(c) * hd + abs(s) * hw + pad_m, abs(s) * hd + abs(c) * hw + pad_m)
+    x = pos[i, 0] + c * ox - s * oy
+    y = pos[i, 1] + s * ox + c * oy
+    hd += pad_m
+    hw += pad_m
+    obb[q, 0], obb[q, 1], obb[q, 2], obb[q, 3], obb[q, 4], obb[q, 5] = x, y, c, s, hd, hw
+    box[q, 0], box[q, 1], box[q, 2], box[q, 3] = x, y, abs(c) * hd + abs(s) * hw, abs(s) * hd + abs(c) * hw
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def obbs_meet(obb, qa, qb):
+    """True when the oriented pair boxes qa and qb overlap or touch."""
+    depth, _, _ = sat(obb[qa, 0], obb[qa, 1], obb[qa, 2], obb[qa, 3], obb[qa, 4], obb[qa, 5],
+                      obb[qb, 0], obb[qb, 1], obb[qb, 2], obb[qb, 3], obb[qb, 4], obb[qb, 5])
+    return depth >= 0.0
 
 
 @njit(cache=True, error_model="numpy")
-def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
+def pair_grid(P, pos, yaw, cell_m, pad_m, move_m, threads_from):
     """The uniform grid behind the pair list, a Verlet list kept per item.
 
-    Every item that collides or needs clearance, and every obstacle, gets the box of
-    :func:`pair_box` in the one cell of its center. The cell is at least as wide as
+    Every item that collides or needs clearance, and every obstacle, gets the boxes of
+    :func:`pair_box`, padded by ``pad_m``, in the one cell of its center; a pair is
+    listed when both its axis-aligned and its oriented boxes meet (the oriented ones
+    drop a fifth of the pairs of a crowd of turned boxes), and
+    :func:`refresh_pairs` remakes an item's boxes once it has moved by ``move_m``.
+    The list misses no pair within ``2 * (pad_m - move_m)`` of meeting. The cell is at least as wide as
     every box at any yaw, so overlapping boxes sit in the same or adjacent cells. Boxes
     much wider than typical (a stage, a door zone) would blow up the cell; they are
     "big" and checked against every box instead.
@@ -945,10 +962,10 @@ def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
     Returns the tuple G that :func:`all_pairs` and :func:`refresh_pairs` take: per box
     q its particle ``idx``, its body, whether that body moves, its reach (footprint
     radius plus deepest clearance: how far a turn swings the box), the pose ``ref``
-    (x, y, yaw) the box was made at, the box (m, 4),
+    (x, y, yaw) the boxes were made at, the boxes (m, 4) and (m, 6),
     the big flags and list, each box's cell ``home`` (-1 when big), each cell's boxes
     as a doubly linked list (``head``, ``nxt``, ``prv``), the geometry (x0, y0, cell,
-    nx, ny), scratch for the movers (a list of boxes, a flag per particle) and the
+    nx, ny, pad_m, move_m), scratch for the movers (a list of boxes, a flag per particle) and the
     side of every particle's body (:func:`body_sides`), for two threads when there
     are at least ``threads_from`` boxes.
 
@@ -969,6 +986,7 @@ def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
     reach = np.empty(m)
     ref = np.empty((m, 3))
     box = np.empty((m, 4))
+    obb = np.empty((m, 6))
     wide = np.empty(m)
     for q in range(m):
         i = idx[q]
@@ -978,7 +996,7 @@ def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
         ref[q, 0] = pos[i, 0]
         ref[q, 1] = pos[i, 1]
         ref[q, 2] = yaw[i]
-        box[q, 0], box[q, 1], box[q, 2], box[q, 3] = pair_box(P, pos, yaw, i, pad_m)
+        pair_box(P, pos, yaw, i, pad_m, box, obb, q)
         _, _, hd, hw = pair_extent(P, i)
         # The box's width at its widest yaw, so a turn never outgrows the cell.
         wide[q] = 2.0 * (math.sqrt(hd * hd + hw * hw) + pad_m)
@@ -1005,9 +1023,9 @@ def pair_grid(P, pos, yaw, cell_m, pad_m, threads_from):
     head = np.full(nx * ny, -1, np.int64)
     nxt = np.full(m, -1, np.int64)
     prv = np.full(m, -1, np.int64)
-    geom = np.array([x0, y0, cell, nx, ny], np.float64)
+    geom = np.array([x0, y0, cell, nx, ny, pad_m, move_m], np.float64)
     side = body_sides(P, pos, pair_threads(m, threads_from))
-    G = (idx, body, movable, reach, ref, box, big, np.flatnonzero(big), home, head, nxt, prv, geom,
+    G = (idx, body, movable, reach, ref, box, obb, big, np.flatnonzero(big), home, head, nxt, prv, geom,
          np.empty(m, np.int64), np.zeros(n, np.bool_), side)
     for q in range(m - 1, -1, -1):
         grid_place(box, big, home, head, nxt, prv, geom, q)
@@ -1048,12 +1066,12 @@ def grid_place(box, big, home, head, nxt, prv, geom, q):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def boxes_pair(box, body, movable, qa, qb):
+def boxes_pair(box, obb, body, movable, qa, qb):
     """True when boxes qa and qb overlap, belong to two bodies and one of them moves.
     (Arrays, not the tuple G: unpacking G per call costs more than the test.)"""
     if abs(box[qa, 0] - box[qb, 0]) > box[qa, 2] + box[qb, 2] or abs(box[qa, 1] - box[qb, 1]) > box[qa, 3] + box[qb, 3]:
         return False
-    return body[qa] != body[qb] and (movable[qa] or movable[qb])
+    return body[qa] != body[qb] and (movable[qa] or movable[qb]) and obbs_meet(obb, qa, qb)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -1085,7 +1103,7 @@ def pair_run(si, sj):
 def all_pairs(G):
     """Every pair (i < j) whose boxes overlap, once: each cell against itself and four
     of its eight neighbours (a half stencil), then the big boxes against all."""
-    idx, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag, side = G
+    idx, body, movable, reach, ref, box, obb, big, bigs, home, head, nxt, prv, geom, movers, flag, side = G
     m = box.shape[0]
     nx, ny = int(geom[3]), int(geom[4])
     pairs = np.empty((max(16, 8 * m), 3), np.int64)
@@ -1134,13 +1152,13 @@ def all_pairs(G):
                 for v in range(first, last):
                     if abs(xa - sx[v]) > exa + sex[v] or abs(ya - sy[v]) > eya + sey[v]:
                         continue
-                    if ba == sbody[v] or not (ma or smovable[v]):
+                    if ba == sbody[v] or not (ma or smovable[v]) or not obbs_meet(obb, order[u], order[v]):
                         continue
                     pairs = append_pair(pairs, npairs, sidx[u], sidx[v], side)
                     npairs += 1
     for qa in bigs:
         for qb in range(m):
-            if qb != qa and not (big[qb] and qb < qa) and boxes_pair(box, body, movable, qa, qb):
+            if qb != qa and not (big[qb] and qb < qa) and boxes_pair(box, obb, body, movable, qa, qb):
                 pairs = append_pair(pairs, npairs, idx[qa], idx[qb], side)
                 npairs += 1
     return pairs[:npairs]
@@ -1150,33 +1168,35 @@ def all_pairs(G):
 def candidate_pairs(P, pos, yaw, cell_m, pad_m):
     """Pairs (i < j), (k, 2), whose padded boxes (footprint and access boxes, see
     :func:`pair_box`) overlap; the pair list serves the accessibility constraints too."""
-    return all_pairs(pair_grid(P, pos, yaw, cell_m, pad_m, np.iinfo(np.int64).max))[:, :2].copy()
+    return all_pairs(pair_grid(P, pos, yaw, cell_m, pad_m, 0.0, np.iinfo(np.int64).max))[:, :2].copy()
 
 
 @njit(cache=True, error_model="numpy")
-def refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs):
+def refresh_pairs(G, P, pos, yaw, pairs, npairs):
     """Keep the first ``npairs`` of ``pairs`` a valid Verlet list for the current state.
 
     A pair listed from boxes padded by ``pad_m`` stays valid while neither item has
-    moved (or swung, at its reach) by half the padding since its box was made. Only
+    moved (or swung, at its reach) by more than ``move_m`` (:func:`pair_grid`) since
+    its boxes were made. Only
     the items that have get new boxes: their pairs are dropped and found again in the
     grid. (Rebuilding the whole list whenever any item had moved that far happened on
     every iteration of a large, crowded floor: something always moves.) Returns the
     list, possibly grown, and its length.
     """
-    idx, body, movable, reach, ref, box, big, bigs, home, head, nxt, prv, geom, movers, flag, side = G
+    idx, body, movable, reach, ref, box, obb, big, bigs, home, head, nxt, prv, geom, movers, flag, side = G
+    pad_m, move_m = geom[5], geom[6]
     nm = 0
     for q in range(box.shape[0]):
         i = idx[q]
         d = math.sqrt((pos[i, 0] - ref[q, 0]) ** 2 + (pos[i, 1] - ref[q, 1]) ** 2) + reach[q] * abs(yaw[i] - ref[q, 2])
-        if d > 0.5 * pad_m:
+        if d > move_m:
             movers[nm] = q
             nm += 1
             flag[i] = True
             ref[q, 0] = pos[i, 0]
             ref[q, 1] = pos[i, 1]
             ref[q, 2] = yaw[i]
-            box[q, 0], box[q, 1], box[q, 2], box[q, 3] = pair_box(P, pos, yaw, i, pad_m)
+            pair_box(P, pos, yaw, i, pad_m, box, obb, q)
             grid_place(box, big, home, head, nxt, prv, geom, q)
     if nm == 0:
         return pairs, npairs
@@ -1195,7 +1215,7 @@ def refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs):
         qa = movers[t]
         if big[qa]:
             for qb in range(box.shape[0]):
-                if qb != qa and boxes_pair(box, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
+                if qb != qa and boxes_pair(box, obb, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
                     pairs = append_pair(pairs, npairs, idx[qa], idx[qb], side)
                     npairs += 1
             continue
@@ -1205,12 +1225,12 @@ def refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs):
             for cx in range(max(0, gx - 1), min(nx, gx + 2)):
                 qb = head[cy * nx + cx]
                 while qb >= 0:
-                    if qb != qa and boxes_pair(box, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
+                    if qb != qa and boxes_pair(box, obb, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
                         pairs = append_pair(pairs, npairs, idx[qa], idx[qb], side)
                         npairs += 1
                     qb = nxt[qb]
         for qb in bigs:
-            if boxes_pair(box, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
+            if boxes_pair(box, obb, body, movable, qa, qb) and not (flag[idx[qb]] and qb < qa):
                 pairs = append_pair(pairs, npairs, idx[qa], idx[qb], side)
                 npairs += 1
     for t in range(nm):
@@ -1817,7 +1837,9 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
     it = 0
     trig(yaw, cs)
     cs_yaw = yaw.copy()
-    G = pair_grid(P, pos, yaw, cell_m, pad_m, threads_from)
+    # Boxes padded by half the slack and remade after half: two items must close in
+    # by pad_m before a pair within the collision gap could be missed.
+    G = pair_grid(P, pos, yaw, cell_m, 0.5 * pad_m + gap_m, 0.5 * pad_m, threads_from)
     threads = pair_threads(G[0].shape[0], threads_from)
     side = G[-1]
     pairs = all_pairs(G)
@@ -1825,7 +1847,7 @@ def solve_loop(M, pos, yaw, max_iter, min_iter, patience, tol, atol, rate, jac, 
     rc = np.empty(0)
     ra = np.empty(0)
     while True:
-        pairs, npairs = refresh_pairs(G, P, pos, yaw, pad_m, pairs, npairs)
+        pairs, npairs = refresh_pairs(G, P, pos, yaw, pairs, npairs)
         live = pairs[:npairs]
         if it % energy_every == 0 or it >= max_iter:
             trig_update(yaw, cs, cs_yaw)

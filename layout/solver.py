@@ -278,8 +278,9 @@ class Solver:
     energy_every : evaluate the energy (to keep the best layout and decide when to
         stop) every this many iterations; 1 is the paper's every iteration. Between
         evaluations the trace repeats the last value.
-    pad_m : padding of the collision pair list; an item's pairs are found again once
-        it has moved by half of it.
+    pad_m : slack of the collision pair list: an item's pair boxes (footprint and
+        clearances, axis-aligned and turned) are padded by half of it plus ``gap_m``,
+        and its pairs are found again once it has moved by half of it.
     threads_from : from this many boxes in the pair list (items that collide or need
         clearance, and door and window zones), the collision, clearance and floor
         passes run on two threads; below it the thread start-up costs more than it

@@ -472,8 +472,9 @@ def test_spatial_hash_matches_brute_force(rng):
     pos, yaw = _state(m, rng.uniform(0, 30, size=(n, 2)), yaw=rng.uniform(-3, 3, n))
     P = m.packed()[0]
     pairs = {tuple(p) for p in K.candidate_pairs(P, pos, yaw, 1.0, 0.0)}
-    # Brute force on the world bounding boxes of footprint plus access boxes: the
-    # access box of side k (back, left, front, right) extends the footprint there.
+    # Brute force on the world boxes of footprint plus access boxes (the access box of
+    # side k, back, left, front, right, extends the footprint there): listed when both
+    # their bounding boxes and the turned boxes themselves meet.
     a = m.particle_access_depth_m
     local = np.stack([
         np.stack([-0.5 * sizes[:, 1] - a[:, 0], -0.5 * sizes[:, 0] - a[:, 3]], 1),
@@ -485,23 +486,41 @@ def test_spatial_hash_matches_brute_force(rng):
     wx = pos[:, None, 0] + c * local[..., 0] - s * local[..., 1]
     wy = pos[:, None, 1] + s * local[..., 0] + c * local[..., 1]
     lo, hi = np.stack([wx.min(1), wy.min(1)], 1), np.stack([wx.max(1), wy.max(1)], 1)
-    expect = {
+    corners = np.stack([wx, wy], axis=-1)
+    bounding = {
         (i, j)
         for i in range(n)
         for j in range(i + 1, n)
         if np.all(lo[i] <= hi[j] + 1e-12) and np.all(lo[j] <= hi[i] + 1e-12)
     }
+    expect = {(i, j) for i, j in bounding if _rects_meet(corners[i], corners[j])}
     assert pairs == expect
     assert 0 < len(pairs) < n * (n - 1) // 20  # a real test: some pairs, far from all
+    assert len(expect) < 0.9 * len(bounding)  # the turned boxes drop pairs
 
 
-def _boxes_meet(box, body, movable):
+def _rects_meet(a, b):
+    """Separating-axis test of two rectangles given by their (4, 2) corners."""
+    for rect in (a, b):
+        for k in range(2):
+            axis = rect[k + 1] - rect[k]
+            pa, pb = a @ axis, b @ axis
+            if pa.max() < pb.min() - 1e-9 or pb.max() < pa.min() - 1e-9:
+                return False
+    return True
+
+
+def _boxes_meet(box, obb, body, movable):
     """Brute force over the boxes of a pair grid: (i, j) particle pairs, i < j."""
     lo, hi = box[:, :2] - box[:, 2:], box[:, :2] + box[:, 2:]
     meet = np.all((lo[:, None] <= hi[None] + 1e-12) & (lo[None] <= hi[:, None] + 1e-12), axis=-1)
     meet &= (body[:, None] != body[None]) & (movable[:, None] | movable[None])
     q, r = np.nonzero(np.triu(meet, 1))
-    return q, r
+    center, c, s, hd, hw = obb[:, :2], obb[:, 2], obb[:, 3], obb[:, 4], obb[:, 5]
+    corners = np.stack([center + np.stack([c * u * hd - s * v * hw, s * u * hd + c * v * hw], 1)
+                        for u, v in ((-1, -1), (1, -1), (1, 1), (-1, 1))], axis=1)
+    turned = np.array([_rects_meet(corners[a], corners[b]) for a, b in zip(q, r)], bool)
+    return q[turned], r[turned]
 
 
 def test_verlet_refresh_lists_exactly_the_pairs_of_its_boxes(rng):
@@ -516,10 +535,10 @@ def test_verlet_refresh_lists_exactly_the_pairs_of_its_boxes(rng):
     P = m.packed()[0]
     pos, yaw = _state(m, rng.uniform(0, 20, size=(n, 2)), yaw=rng.uniform(-3, 3, n))
     pad = 0.1
-    G = K.pair_grid(P, pos, yaw, 1.0, pad, 1)
+    G = K.pair_grid(P, pos, yaw, 1.0, pad, 0.5 * pad, 1)
     pairs = K.all_pairs(G)
     npairs = len(pairs)
-    idx, body, movable, box = G[0], G[1], G[2], G[5]
+    idx, body, movable, box, obb = G[0], G[1], G[2], G[5], G[6]
     movers_seen = 0
     for step in range(25):
         # Most items creep (below half the padding since their box was made, in
@@ -531,12 +550,12 @@ def test_verlet_refresh_lists_exactly_the_pairs_of_its_boxes(rng):
         turn = free & (rng.uniform(size=n) < 0.05)
         yaw[turn] += rng.uniform(-0.3, 0.3, size=int(turn.sum()))
         before = box.copy()
-        pairs, npairs = K.refresh_pairs(G, P, pos, yaw, pad, pairs, npairs)
+        pairs, npairs = K.refresh_pairs(G, P, pos, yaw, pairs, npairs)
         movers_seen += int(np.any(box != before, axis=1).sum())
         listed = [tuple(p) for p in pairs[:npairs, :2]]
         assert len(listed) == len(set(listed))  # each pair once
         # Exactly the pairs of the boxes as last made...
-        q, r = _boxes_meet(box, body, movable)
+        q, r = _boxes_meet(box, obb, body, movable)
         expect = {(min(i, j), max(i, j)) for i, j in zip(idx[q], idx[r])}
         assert set(listed) == expect
         # ...which include every pair whose boxes meet now.
@@ -551,11 +570,11 @@ def test_verlet_refresh_grows_an_empty_list():
     m = b.finalize()
     P = m.packed()[0]
     pos, yaw = _state(m, [[2.0, 2.0], [8.0, 8.0]])
-    G = K.pair_grid(P, pos, yaw, 1.0, 0.1, 1)
+    G = K.pair_grid(P, pos, yaw, 1.0, 0.1, 0.05, 1)
     pairs = K.all_pairs(G)
     assert len(pairs) == 0
     pos[1, :2] = [2.5, 2.5]
-    pairs, npairs = K.refresh_pairs(G, P, pos, yaw, 0.1, pairs, 0)
+    pairs, npairs = K.refresh_pairs(G, P, pos, yaw, pairs, 0)
     assert npairs == 1 and tuple(pairs[0, :2]) == (0, 1)
 
 
