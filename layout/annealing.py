@@ -121,6 +121,13 @@ class Annealer:
 
 
 @njit(cache=True, error_model="numpy")
+def _move(b, dx, dy, da, pos, yaw, mstart, mlist):
+    """Move body b and its rigid members (a proposal)."""
+    if K.move(b, dx, dy, 0.0, da, pos, yaw, mstart):
+        K.carry(b, dx, dy, 0.0, da, pos, yaw, mstart, mlist)
+
+
+@njit(cache=True, error_model="numpy")
 def _copy_body(b, src_pos, src_yaw, mstart, mlist, dst_pos, dst_yaw):
     """Copy the pose of body b and its rigid members (to save or to restore it)."""
     dst_pos[b] = src_pos[b]
@@ -188,13 +195,13 @@ def _anneal(M, pos, yaw, bodies, iterations, t_start, step_m, step_rad, p_rotate
                 _copy_body(b2, pos, yaw, mstart, mlist, keep_pos, keep_yaw)
                 dx = pos[b2, 0] - pos[b, 0]
                 dy = pos[b2, 1] - pos[b, 1]
-                K.move(b, dx, dy, 0.0, 0.0, pos, yaw, mstart, mlist)
-                K.move(b2, -dx, -dy, 0.0, 0.0, pos, yaw, mstart, mlist)
+                _move(b, dx, dy, 0.0, pos, yaw, mstart, mlist)
+                _move(b2, -dx, -dy, 0.0, pos, yaw, mstart, mlist)
         elif u < p_swap + p_rotate:
-            K.move(b, 0.0, 0.0, 0.0, np.random.normal() * step_rad * shrink, pos, yaw, mstart, mlist)
+            _move(b, 0.0, 0.0, np.random.normal() * step_rad * shrink, pos, yaw, mstart, mlist)
         else:
             s = step_m * shrink
-            K.move(b, np.random.normal() * s, np.random.normal() * s, 0.0, 0.0, pos, yaw, mstart, mlist)
+            _move(b, np.random.normal() * s, np.random.normal() * s, 0.0, pos, yaw, mstart, mlist)
         # Keep the pair list valid for the proposed state: a rotation swings the
         # clearance boxes at the body's reach.
         moved = _shift(b, pos, ref_pos, mstart, mlist) + reach[b] * abs(yaw[b] - ref_yaw[b])
