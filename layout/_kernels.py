@@ -984,20 +984,20 @@ def pair_grid(P, pos, yaw, cell_m, pad_m, move_m, threads_from):
     Every item that collides or needs clearance, and every obstacle, gets the boxes of
     :func:`pair_box`, padded by ``pad_m``, in the one cell of its center; a pair is
     listed when both its axis-aligned and its oriented boxes meet (the oriented ones
-    drop a fifth of the pairs of a crowd of turned boxes), and
-    :func:`refresh_pairs` remakes an item's boxes once it has moved by ``move_m``.
-    The list misses no pair within ``2 * (pad_m - move_m)`` of meeting. The cell is at least as wide as
-    every box at any yaw, so overlapping boxes sit in the same or adjacent cells. Boxes
-    much wider than typical (a stage, a door zone) would blow up the cell; they are
-    "big" and checked against every box instead.
+    drop a fifth of the pairs of a crowd of turned boxes), and :func:`refresh_pairs`
+    remakes an item's boxes once it has moved by ``move_m``. The list misses no pair
+    within ``2 * (pad_m - move_m)`` of meeting. The cell is at least as wide as every
+    box at any yaw, so overlapping boxes sit in the same or adjacent cells. Boxes much
+    wider than typical (a stage, a door zone) would blow up the cell; they are "big"
+    and checked against every box instead.
 
     Returns the tuple G that :func:`all_pairs` and :func:`refresh_pairs` take: per box
     q its particle ``idx``, its body, whether that body moves, its reach (footprint
     radius plus deepest clearance: how far a turn swings the box), the pose ``ref``
-    (x, y, yaw) the boxes were made at, the boxes (m, 4) and (m, 6),
-    the big flags and list, each box's cell ``home`` (-1 when big), each cell's boxes
-    as a doubly linked list (``head``, ``nxt``, ``prv``), the geometry (x0, y0, cell,
-    nx, ny, pad_m, move_m), scratch for the movers (a list of boxes, a flag per particle) and the
+    (x, y, yaw) the boxes were made at, the boxes (m, 4) and (m, 6), the big flags and
+    list, each box's cell ``home`` (-1 when big), each cell's boxes as a doubly linked
+    list (``head``, ``nxt``, ``prv``), the geometry (x0, y0, cell, nx, ny, pad_m,
+    move_m), scratch for the movers (a list of boxes, a flag per particle) and the
     side of every particle's body (:func:`body_sides`), for two threads when there
     are at least ``threads_from`` boxes.
 
@@ -1209,9 +1209,8 @@ def refresh_pairs(G, P, pos, yaw, pairs, npairs):
 
     A pair listed from boxes padded by ``pad_m`` stays valid while neither item has
     moved (or swung, at its reach) by more than ``move_m`` (:func:`pair_grid`) since
-    its boxes were made. Only
-    the items that have get new boxes: their pairs are dropped and found again in the
-    grid. (Rebuilding the whole list whenever any item had moved that far happened on
+    its boxes were made. Only the items that have get new boxes: their pairs are
+    dropped and found again in the grid. (Rebuilding the whole list whenever any item had moved that far happened on
     every iteration of a large, crowded floor: something always moves.) Returns the
     list, possibly grown, and its length.
     """

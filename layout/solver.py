@@ -127,14 +127,18 @@ class Layout:
         }
 
 
+def _inside(polygon_m, points_m):
+    """(k,) bool: which of the (k, 2) points lie inside the polygon."""
+    return np.array([K.inside_polygon(polygon_m, x, y) for x, y in points_m], bool)
+
+
 def _random_inside(polygon_m, k, rng):
     """k points uniformly distributed inside a simple polygon (rejection sampling)."""
     lo, hi = polygon_m.min(0), polygon_m.max(0)
     out = np.empty((0, 2))
     while len(out) < k:
         cand = rng.uniform(lo, hi, size=(max(16, 2 * (k - len(out))), 2))
-        keep = np.array([K.inside_polygon(polygon_m, x, y) for x, y in cand], bool)
-        out = np.concatenate([out, cand[keep]])
+        out = np.concatenate([out, cand[_inside(polygon_m, cand)]])
     return out[:k]
 
 
@@ -146,7 +150,7 @@ def _stratified_inside(polygon_m, k, rng):
     while True:
         gx, gy = np.meshgrid(np.arange(lo[0], hi[0], cell), np.arange(lo[1], hi[1], cell))
         cand = np.stack([gx.ravel(), gy.ravel()], axis=1) + rng.uniform(0.0, cell, size=(gx.size, 2))
-        keep = np.array([K.inside_polygon(polygon_m, x, y) for x, y in cand], bool)
+        keep = _inside(polygon_m, cand)
         if keep.sum() >= k:
             return cand[keep][rng.choice(int(keep.sum()), k, replace=False)]
         # Cells cut by the outline often lose their point: a finer grid has enough.
