@@ -9,7 +9,9 @@ than that: on 37 held-out renders this strip caused most of the polygon area err
 column. Where a wall stands on the floor, a board shows as a uniform strip that ends in
 a sharp step to the floor colour; a shadow at the foot of the wall fades out instead,
 and so does not count. Boards have one height all round a room, so the strip is cut
-only where the photo agrees on that height.
+only where the photo agrees on that height, and then along every stretch of wall where
+most columns show it (a column that cannot tell, left standing, is a spike in the
+outline that puts the wall back at the board's top).
 """
 from __future__ import annotations
 
@@ -31,6 +33,14 @@ SHARPNESS = 0.6
 # an interquartile range of heights below this fraction of the median.
 MIN_AGREEING = 0.3
 MAX_SPREAD = 0.3
+# Columns between two that show the board, no more than this far apart (at the working
+# size) on one stretch of wall, are cut too.
+GAP_PX = 16
+# A stretch of wall where this fraction of the columns show the board is cut all along.
+STRETCH_AGREEING = 0.5
+# Neighbouring columns whose top floor pixels are more than this many rows apart are on
+# different walls (or either side of something standing on the floor).
+STEP_PX = 6
 
 
 def _wall_columns(mask: np.ndarray, calibration):
@@ -92,6 +102,27 @@ def _prefix_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
     return (0.5 * (take(ordered, lo, axis=1) + take(ordered, hi, axis=1)))[:, 0]
 
 
+def _bridge(cols: np.ndarray, rows: np.ndarray, height_m: np.ndarray) -> np.ndarray:
+    """Board heights per column (NaN: no board seen) spread along each stretch of wall
+    where enough columns saw it; elsewhere only gaps of up to ``GAP_PX`` columns between
+    boards are filled. 0 where no board is cut."""
+    out = np.nan_to_num(height_m)
+    breaks = np.flatnonzero((np.diff(cols) > 1) | (np.abs(np.diff(rows)) > STEP_PX)) + 1
+    for stretch in np.split(np.arange(len(cols)), breaks):
+        found = stretch[~np.isnan(height_m[stretch])]
+        if len(found) < 2:
+            continue
+        x = cols[found]
+        if len(found) >= STRETCH_AGREEING * len(stretch):
+            fill = stretch
+        else:
+            gap = stretch[(cols[stretch] > x[0]) & (cols[stretch] < x[-1])]
+            right = np.searchsorted(x, cols[gap])
+            fill = gap[x[right] - x[right - 1] <= GAP_PX]
+        out[fill] = np.interp(cols[fill], x, height_m[found])
+    return out
+
+
 def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.ndarray, float | None]:
     """Remove the skirting board from the top of a floor mask.
 
@@ -136,10 +167,14 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
     q1, q3 = np.percentile(height, [25, 75])
     if not (MIN_HEIGHT_M <= median <= MAX_HEIGHT_M) or q3 - q1 > MAX_SPREAD * median:
         return mask.copy(), None
-    cut = np.zeros(small_mask.shape, np.uint8)
     agree = shown & (t / px_per_m > 0.5 * median) & (t / px_per_m < 1.5 * median)
-    for col, row, n in zip(cols[agree], rows[agree], t[agree].astype(int)):
-        cut[row:row + n, col] = 1
+    depth_px = _bridge(cols, rows, np.where(agree, t / px_per_m, np.nan)) * px_per_m
+    cut = np.zeros(small_mask.shape, np.uint8)
+    for col, row, n in zip(cols, rows, depth_px):
+        if n > 0:
+            # From a little above the top: at full size the mask's edge wavers by a pixel
+            # around the working size's, and a sliver left above the cut is a spike.
+            cut[max(0, row - 2):row + int(round(n)), col] = 1
     if scale < 1.0:
         cut = cv2.resize(cut, (cols_px, rows_px), interpolation=cv2.INTER_NEAREST)
     return mask & (cut == 0), median

@@ -88,3 +88,19 @@ def test_floor_reaching_the_top_of_the_photo_is_left_alone():
     trimmed, height_m = trim_skirting(image, cropped, calibration)
     assert height_m is None
     np.testing.assert_array_equal(trimmed, cropped)
+
+
+def test_board_is_cut_along_the_wall_where_single_columns_cannot_tell():
+    """Where the board looks almost like the floor (in shade, or scuffed), single columns
+    cannot tell it from the floor; the rest of the wall shows the board, so those columns
+    are cut too, not left standing as a comb that puts the wall back at the board's top."""
+    image, truth, mask, calibration = _room(0.12)
+    block = np.zeros(truth.shape, bool)
+    block[:, 300:420] = True
+    faint = block & mask & ~truth
+    image = image.copy()
+    image[faint] = (160, 118, 78)  # 10 or so from the floor's colour below
+    trimmed, height_m = trim_skirting(image, mask, calibration)
+    assert height_m == pytest.approx(0.12, abs=0.01)
+    assert (trimmed & faint).sum() < 0.05 * faint.sum()
+    assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
