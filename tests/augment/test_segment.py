@@ -1,5 +1,5 @@
 """Floor segmentation and the floor polygon against known answers: synthetic renders the
-model never saw (its training seeds were 100 and 101), a hand-built ONNX model, and
+model never saw (its training seeds were 100 to 103), a hand-built ONNX model, and
 floors drawn from known polygons through a real calibration."""
 from __future__ import annotations
 
