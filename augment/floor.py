@@ -21,6 +21,7 @@ from .segment import MAX_FLOOR_DISTANCE_M, floor_distance_m
 POLYGON_LONG_PX = 1024
 SIMPLIFY_M = 0.05        # how far the straightened outline may stray from the mask's
 NOTCH_AREA_M2 = 0.02     # vertices cutting off less than this are noise, not corners
+CORNER_MIN_DEG = 10.0    # edges meeting at less than this are one wall, not a corner
 BORDER_PX = 2            # a contour point this near the photo's edge is the photo's edge
 EDGE_KINDS = ("boundary", "image", "far")
 
@@ -77,6 +78,59 @@ def _drop_notches(poly: np.ndarray, keep: np.ndarray) -> np.ndarray:
     return np.asarray(idx)
 
 
+def _pixel_edge(contour: np.ndarray) -> np.ndarray:
+    """Move a traced outline from its boundary pixels' centers out to their outer edges.
+
+    A floor pixel is floor over its whole square, so the floor ends at the pixel's outer
+    edge; an outline through the centers leaves out a half-pixel band all round, which
+    at a far wall is centimeters deep (on held-out renders, 0.7 % of the floor's area).
+    A staircase of pixels at angle a to the rows reaches out 0.5 max(|cos a|, |sin a|)
+    on average, hence the offset along the outward normal.
+    """
+    n = len(contour)
+    if n < 5:
+        return contour
+    tangent = np.roll(contour, -2, axis=0) - np.roll(contour, 2, axis=0)
+    # Outward is to the right of travel for a positively oriented outline, left otherwise.
+    normal = np.column_stack([tangent[:, 1], -tangent[:, 0]]) * np.sign(_signed_area(contour))
+    length = np.linalg.norm(normal, axis=1, keepdims=True)
+    normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
+    reach = 0.5 * np.abs(normal).max(axis=1, keepdims=True)
+    return contour + reach * normal
+
+
+def _span(a: int, b: int, n: int) -> np.ndarray:
+    """Indices from a to b along a closed outline of n points, both ends included."""
+    return np.arange(a, b + 1) if b > a else np.concatenate([np.arange(a, n), np.arange(0, b + 1)])
+
+
+def _fit_corners(outline: np.ndarray, vertex_idx: np.ndarray) -> np.ndarray:
+    """Polygon corners where the straight lines fitted to neighbouring edges meet.
+
+    The simplified polygon's vertices are outline points, and the outline rounds a
+    room's corners off by a pixel or so; each edge is refitted (least squares) to the
+    outline points it stands for, and a corner moves to where its two lines cross, unless
+    they are nearly parallel or cross far from it (then the outline point stays).
+    """
+    n = len(vertex_idx)
+    lines = []
+    for a, b in zip(vertex_idx, np.roll(vertex_idx, -1)):
+        pts = outline[_span(a, b, len(outline))]
+        center = pts.mean(axis=0)
+        _, _, vt = np.linalg.svd(pts - center, full_matrices=False)
+        lines.append((center, vt[0]))
+    poly = outline[vertex_idx].copy()
+    for i in range(n):
+        (p, d), (q, e) = lines[i - 1], lines[i]
+        cross = d[0] * e[1] - d[1] * e[0]
+        if abs(cross) < np.sin(np.radians(CORNER_MIN_DEG)):
+            continue
+        corner = p + d * ((q - p)[0] * e[1] - (q - p)[1] * e[0]) / cross
+        if np.linalg.norm(corner - poly[i]) <= 2 * SIMPLIFY_M:
+            poly[i] = corner
+    return poly
+
+
 def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     """Simplified floor polygon (meters) of the largest floor region of ``mask``.
 
@@ -127,7 +181,7 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     kind = np.where(on_border, 1, np.where(at_far, 2, 0))
 
     # Pixel centers of the scaled image map back to full-size pixel coordinates.
-    outline_px = (contour + 0.5) / scale - 0.5
+    outline_px = (_pixel_edge(contour) + 0.5) / scale - 0.5
     floor_m = calibration.floor_from_pixels(outline_px)
     approx = cv2.approxPolyDP(floor_m.astype(np.float32).reshape(-1, 1, 2), SIMPLIFY_M, True)[:, 0, :]
     # approxPolyDP returns a subset of the input points: find their indices, in order.
@@ -138,11 +192,11 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     pinned = np.isin(vertex_idx, np.flatnonzero(changes))
     keep = _drop_notches(floor_m[vertex_idx], pinned)
     vertex_idx = vertex_idx[keep]
-    poly = floor_m[vertex_idx]
+    poly = _fit_corners(floor_m, vertex_idx)
 
     edge_kind = []
     for a, b in zip(vertex_idx, np.roll(vertex_idx, -1)):
-        span = np.arange(a, b + 1) if b > a else np.concatenate([np.arange(a, len(kind)), np.arange(0, b + 1)])
+        span = _span(a, b, len(kind))
         votes = np.bincount(kind[span[1:-1]] if len(span) > 2 else kind[span], minlength=3)
         edge_kind.append(EDGE_KINDS[int(np.argmax(votes))])
     if _signed_area(poly) < 0:

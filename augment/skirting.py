@@ -8,10 +8,11 @@ than that: on 37 held-out renders this strip caused most of the polygon area err
 :func:`trim_skirting` looks straight down from the mask's top edge in every image
 column. Where a wall stands on the floor, a board shows as a uniform strip that ends in
 a sharp step to the floor colour; a shadow at the foot of the wall fades out instead,
-and so does not count. Boards have one height all round a room, so the strip is cut
-only where the photo agrees on that height, and then along every stretch of wall where
-most columns show it (a column that cannot tell, left standing, is a spike in the
-outline that puts the wall back at the board's top).
+and so does not count. A hard-edged shadow does not fade, but it keeps the floor's
+colour, only darker: strips like that are left alone. Boards have one height all round
+a room, so the strip is cut only where the photo agrees on that height, and then along
+every stretch of wall where most columns show it (a column that cannot tell, left
+standing, is a spike in the outline that puts the wall back at the board's top).
 """
 from __future__ import annotations
 
@@ -29,6 +30,10 @@ SEARCH_M = 0.25
 # fraction of the change happens in one 3-pixel step.
 MIN_CONTRAST = 15.0
 SHARPNESS = 0.6
+# Strips darker than the floor below them by this ratio, and within this angle of its
+# colour (RGB direction), are the floor in the walls' shadow, not boards.
+SHADOW_RATIO = 0.8
+SHADOW_DEG = 8.0
 # The photo agrees on a board when this fraction of the wall columns shows one, with
 # an interquartile range of heights below this fraction of the median.
 MIN_AGREEING = 0.3
@@ -57,10 +62,12 @@ def _wall_columns(mask: np.ndarray, calibration):
     return cols, rows, px_per_m
 
 
-def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m) -> np.ndarray:
+def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
     """Per column, the board's height in pixels below the mask's top edge: 0 where the
     column shows none, NaN where it cannot tell (too close to the photo's bottom, or
-    the floor below the strip is not in the mask)."""
+    the floor below the strip is not in the mask); and how the strip's colour compares
+    with the floor's below it: brightness ratio, and angle between the RGB directions
+    (degrees)."""
     h = image.shape[0]
     span = np.ceil(SEARCH_M * px_per_m).astype(int)
     first = np.maximum(4, np.ceil(MIN_HEIGHT_M * px_per_m).astype(int))
@@ -87,7 +94,10 @@ def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m) -> np
     out = np.where(board, t, 0).astype(np.float64)
     unknown = (span < 4) | (rows + span + 8 >= h) | (board & ~floor_below)
     out[unknown] = np.nan
-    return out
+    strip_norm, below_norm = np.linalg.norm(strip_color, axis=1), np.linalg.norm(below_color, axis=1)
+    brightness = strip_norm / np.maximum(below_norm, 1e-6)
+    cos = np.sum(strip_color * below_color, axis=1) / np.maximum(strip_norm * below_norm, 1e-6)
+    return out, brightness, np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
 def _prefix_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
@@ -157,10 +167,12 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
     small_image = np.zeros((size[1], size[0], 3), np.uint8)
     small_image[top:bottom] = cv2.resize(band, (size[0], bottom - top), interpolation=cv2.INTER_AREA)
     small_image = cv2.GaussianBlur(small_image, (3, 3), 0)
-    t = _board_rows(small_image, small_mask, cols, rows, px_per_m)
+    t, brightness, hue_deg = _board_rows(small_image, small_mask, cols, rows, px_per_m)
     known = ~np.isnan(t)
     shown = known & (t > 0)
     if known.sum() < 0.3 * len(cols) or shown.sum() < MIN_AGREEING * known.sum():
+        return mask.copy(), None
+    if np.median(brightness[shown]) < SHADOW_RATIO and np.median(hue_deg[shown]) < SHADOW_DEG:
         return mask.copy(), None
     height_m = t / px_per_m
     median = float(np.median(height_m[shown]))

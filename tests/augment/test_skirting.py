@@ -12,7 +12,7 @@ WALL_Y_M = 4.0
 SIZE = (960, 720)
 
 
-def _room(board_m: float, shadow: bool = False, seed: int = 0):
+def _room(board_m: float, shadow: str | None = None, seed: int = 0, board_rgb=(238, 236, 230)):
     """A camera 1.5 m up looking at a wall 4 m ahead, 20 degrees down. Returns the photo,
     the true floor mask, the floor plus the board's face (the mistake to undo) and the
     exact calibration."""
@@ -43,9 +43,11 @@ def _room(board_m: float, shadow: bool = False, seed: int = 0):
     grain = 12 * np.sin(hit_x * 40.0)[..., None]  # planks along the view
     image[:] = (200, 185, 160)  # wall
     image[floor] = (np.array([150.0, 110.0, 70.0]) + grain)[floor]
-    if shadow:  # a soft darkening at the foot of the wall, no edge
+    if shadow == "soft":  # a darkening at the foot of the wall, no edge
         image[floor] *= (1 - 0.35 * np.exp(-(WALL_Y_M - hit_y[floor]) / 0.15))[:, None]
-    image[board] = (238, 236, 230)
+    elif shadow == "sharp":  # a band of shade 15 cm deep on the floor, hard-edged
+        image[floor & (hit_y > WALL_Y_M - 0.15)] *= 0.55
+    image[board] = board_rgb
     image += rng.normal(0, 3, image.shape)
     image = np.clip(image, 0, 255).astype(np.uint8)
 
@@ -74,8 +76,10 @@ def test_board_is_trimmed_to_the_floor_line(board_m):
     np.testing.assert_array_equal(before[1], mask)
 
 
-def test_shadow_at_the_wall_is_not_a_board():
-    image, truth, _, calibration = _room(0.0, shadow=True)
+@pytest.mark.parametrize("shadow", ["soft", "sharp"])
+def test_shadow_at_the_wall_is_not_a_board(shadow):
+    """A soft shadow fades out; a sharp one keeps the floor's colour, only darker."""
+    image, truth, _, calibration = _room(0.0, shadow=shadow)
     trimmed, height_m = trim_skirting(image, truth, calibration)
     assert height_m is None
     np.testing.assert_array_equal(trimmed, truth)
@@ -104,3 +108,11 @@ def test_board_is_cut_along_the_wall_where_single_columns_cannot_tell():
     assert height_m == pytest.approx(0.12, abs=0.01)
     assert (trimmed & faint).sum() < 0.05 * faint.sum()
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
+
+
+def test_board_darker_than_the_floor_is_still_a_board():
+    """Darker than the floor, as a shadow is, but another colour: a board."""
+    image, truth, mask, calibration = _room(0.08, board_rgb=(70, 72, 80))
+    trimmed, height_m = trim_skirting(image, mask, calibration)
+    assert height_m == pytest.approx(0.08, abs=0.01)
+    assert (trimmed & mask & ~truth).sum() < 0.05 * (mask & ~truth).sum()
