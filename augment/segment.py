@@ -34,6 +34,11 @@ MIN_IMAGE_PX = 64
 MAX_FLOOR_DISTANCE_M = 15.0
 
 
+# Larger photos are shrunk to this long side once, before the smaller working sizes of
+# the model and GrabCut are made from it: shrinking a 12 MP photo costs more than the model.
+PRESHRINK_LONG_PX = 2048
+
+
 class SegmentationError(ValueError):
     """Bad input or no floor: the message says what and what would work."""
 
@@ -47,6 +52,10 @@ class ModelSpec:
     input_size : (rows, cols) or None
         A fixed input size; None for a fully convolutional model, fed the photo scaled so
         its long side is ``input_long_px``, each side a multiple of ``multiple_px``.
+    input_long_px : int or tuple of int
+        With several long sides the model runs at each and the floor probabilities are
+        averaged (the shipped model: its training size and one a little larger, which
+        finds more of the floor in dark corners and under tables of real rooms).
     channel_order : "RGB" or "BGR"
     scale, mean, std : float, (3,), (3,)
         Input = (pixel * scale - mean) / std, per channel in ``channel_order``.
@@ -59,7 +68,7 @@ class ModelSpec:
     """
 
     input_size: tuple[int, int] | None = None
-    input_long_px: int = 256
+    input_long_px: int | tuple[int, ...] = 256
     multiple_px: int = 32
     channel_order: str = "RGB"
     scale: float = 1 / 255
@@ -70,6 +79,11 @@ class ModelSpec:
     layout: str = "NCHW"
 
     def __post_init__(self):
+        longs = self.input_long_px if isinstance(self.input_long_px, (list, tuple)) else (self.input_long_px,)
+        if not longs or min(int(v) for v in longs) < self.multiple_px:
+            raise SegmentationError(f"model input_long_px {self.input_long_px}: need one or more sizes "
+                                    f">= multiple_px ({self.multiple_px}), e.g. 256 or [256, 320]")
+        object.__setattr__(self, "input_long_px", tuple(int(v) for v in longs))
         if self.channel_order not in ("RGB", "BGR"):
             raise SegmentationError(f"model channel_order {self.channel_order!r}: use RGB or BGR")
         if self.output not in ("logits", "probabilities"):
@@ -137,23 +151,32 @@ class FloorModel:
             raise SegmentationError(f"model {self.path}: expected one input, found {len(inputs)}")
         self.input_name = inputs[0].name
 
-    def _input_shape(self, rows: int, cols: int) -> tuple[int, int]:
+    def input_shapes(self, rows: int, cols: int) -> list[tuple[int, int]]:
+        """The (rows, cols) the model is fed for a photo of ``rows`` x ``cols``, one per
+        input size of the spec."""
         s = self.spec
         if s.input_size is not None:
-            return tuple(s.input_size)
-        scale = s.input_long_px / max(rows, cols)
+            return [tuple(s.input_size)]
         m = s.multiple_px
-        return max(m, round(rows * scale / m) * m), max(m, round(cols * scale / m) * m)
+        return [(max(m, round(rows * long / max(rows, cols) / m) * m),
+                 max(m, round(cols * long / max(rows, cols) / m) * m)) for long in s.input_long_px]
 
     def floor_probability(self, image: np.ndarray, size_px: tuple[int, int] | None = None) -> np.ndarray:
         """Floor probability float32 in [0, 1], ``(rows, cols)`` of the image or of
-        ``size_px = (width, height)`` when given (cheaper than resizing twice)."""
+        ``size_px = (width, height)`` when given (cheaper than resizing twice); the mean
+        over the spec's input sizes."""
         image = _check_image(image)
         rows, cols = image.shape[:2]
         if size_px is not None:
             cols, rows = int(size_px[0]), int(size_px[1])
+        shapes = self.input_shapes(rows, cols)
+        image = _shrink_to(image, PRESHRINK_LONG_PX)
+        p = sum(self._probability(image, shape, (cols, rows)) for shape in shapes)
+        return np.clip(p / len(shapes), 0, 1)
+
+    def _probability(self, image: np.ndarray, in_shape: tuple[int, int], size_px: tuple[int, int]) -> np.ndarray:
         s = self.spec
-        in_rows, in_cols = self._input_shape(rows, cols)
+        in_rows, in_cols = in_shape
         x = cv2.resize(image, (in_cols, in_rows), interpolation=cv2.INTER_AREA).astype(np.float32)
         if s.channel_order == "BGR":
             x = x[..., ::-1]
@@ -169,7 +192,15 @@ class FloorModel:
             out = np.exp(out - out.max(axis=0, keepdims=True))
             out /= out.sum(axis=0, keepdims=True)
         p = out[list(s.floor_class)].sum(axis=0).astype(np.float32)
-        return np.clip(cv2.resize(p, (cols, rows), interpolation=cv2.INTER_LINEAR), 0, 1)
+        return cv2.resize(p, size_px, interpolation=cv2.INTER_LINEAR)
+
+
+def _shrink_to(image: np.ndarray, long_px: int) -> np.ndarray:
+    scale = long_px / max(image.shape[:2])
+    if scale >= 1:
+        return image
+    size = (round(image.shape[1] * scale), round(image.shape[0] * scale))
+    return cv2.resize(image, size, interpolation=cv2.INTER_AREA)
 
 
 def _check_image(image: np.ndarray) -> np.ndarray:
@@ -317,14 +348,15 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     warnings = []
     scale = _working_scale((rows, cols), GRABCUT_LONG_PX)
     size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
-    small = _hide_board(cv2.resize(image, size_small, interpolation=cv2.INTER_AREA), calibration, scale)
+    work = _shrink_to(image, PRESHRINK_LONG_PX)
+    small = _hide_board(cv2.resize(work, size_small, interpolation=cv2.INTER_AREA), calibration, scale)
     shape_small = small.shape[:2]
     probability = None
 
     if method == "onnx":
         if model is None:
             raise SegmentationError("method onnx needs a model; give --model PATH or use --method grabcut")
-        probability = p_small = model.floor_probability(image, size_small)
+        probability = p_small = model.floor_probability(work, size_small)
         if refine:
             trimap = np.where(p_small > 0.5, cv2.GC_PR_FGD, cv2.GC_PR_BGD).astype(np.uint8)
             # Only well inside a confident region is the model taken as given: its edges

@@ -52,6 +52,9 @@ MEAN_RGB = (0.485, 0.456, 0.406)
 STD_RGB = (0.229, 0.224, 0.225)
 # Long side of the network input; the short side keeps the photo's aspect, rounded to 32.
 INPUT_LONG_PX = 256
+# At run time the model also looks at the photo a little larger and averages the two:
+# on real rooms that finds floor the training size misses (dark corners, under tables).
+RUN_LONG_PX = (INPUT_LONG_PX, 320)
 TRAIN_SHAPES = {"landscape": (192, 256), "portrait": (256, 192)}  # (rows, cols)
 LITE0_FROZEN_BLOCKS = 3  # --arch lite0 trains from its fourth block on
 # Parameter names of FloorLiteNet's encoder (the pretrained part), as in the ImageNet file.
@@ -504,7 +507,7 @@ def export(model, out: Path, log, args, n_params, seconds) -> None:
     # The torch weights too (not shipped): to fine-tune or inspect later.
     torch.save(model.state_dict(), out.with_suffix(".pt"))
     sidecar = {
-        "input_long_px": INPUT_LONG_PX, "multiple_px": 32, "channel_order": "RGB",
+        "input_long_px": list(RUN_LONG_PX), "multiple_px": 32, "channel_order": "RGB",
         "mean": list(MEAN_RGB), "std": list(STD_RGB), "scale": 1 / 255, "floor_class": 1,
         "output": "logits",
         "training": {"arch": args.arch, "data": [str(p) for p in args.data], "epochs_done": len(log),

@@ -3,6 +3,7 @@ model never saw (its training seeds were 100 to 103), a hand-built ONNX model, a
 floors drawn from known polygons through a real calibration."""
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import cv2
@@ -118,6 +119,21 @@ def test_a_users_onnx_model_is_fed_as_its_spec_says(tmp_path):
     (tmp_path / "tiny_NCHW.json").write_text(json.dumps({"input_size": [48, 64], "mean": [0, 0, 0],
                                                          "std": [1, 1, 1], "floor_class": 2, "note": "x"}))
     assert FloorModel(tmp_path / "tiny_NCHW.onnx").spec.floor_class == (2,)
+
+
+def test_several_input_sizes_average_the_floor_probability(held_out, model):
+    """A spec with two long sides runs the model at both; the probability is their mean."""
+    sample, _ = held_out[0]
+    single = [FloorModel(model.path, spec=dataclasses.replace(model.spec, input_long_px=long)) for long in (256, 320)]
+    p256, p320 = (m.floor_probability(sample.image) for m in single)
+    assert np.abs(p256 - p320).max() > 0.1  # the two scales see the photo differently
+    both = FloorModel(model.path, spec=dataclasses.replace(model.spec, input_long_px=[256, 320]))
+    assert both.spec.input_long_px == (256, 320)
+    np.testing.assert_allclose(both.floor_probability(sample.image), (p256 + p320) / 2, atol=1e-5)
+    with pytest.raises(SegmentationError, match="input_long_px"):
+        ModelSpec(input_long_px=[])
+    with pytest.raises(SegmentationError, match="input_long_px"):
+        ModelSpec(input_long_px=16)
 
 
 def test_bad_models_and_images_get_clear_errors(tmp_path):
