@@ -80,10 +80,14 @@ class ModelSpec:
 
     def __post_init__(self):
         longs = self.input_long_px if isinstance(self.input_long_px, (list, tuple)) else (self.input_long_px,)
-        if not longs or min(int(v) for v in longs) < self.multiple_px:
-            raise SegmentationError(f"model input_long_px {self.input_long_px}: need one or more sizes "
-                                    f">= multiple_px ({self.multiple_px}), e.g. 256 or [256, 320]")
-        object.__setattr__(self, "input_long_px", tuple(int(v) for v in longs))
+        try:
+            longs = tuple(int(v) for v in longs)
+        except (TypeError, ValueError):
+            longs = ()
+        if not longs or min(longs) < self.multiple_px:
+            raise SegmentationError(f"model input_long_px {self.input_long_px!r}: need one or more whole "
+                                    f"sizes >= multiple_px ({self.multiple_px}), e.g. 256 or [256, 320]")
+        object.__setattr__(self, "input_long_px", longs)
         if self.channel_order not in ("RGB", "BGR"):
             raise SegmentationError(f"model channel_order {self.channel_order!r}: use RGB or BGR")
         if self.output not in ("logits", "probabilities"):

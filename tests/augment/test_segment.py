@@ -132,8 +132,9 @@ def test_several_input_sizes_average_the_floor_probability(held_out, model):
     np.testing.assert_allclose(both.floor_probability(sample.image), (p256 + p320) / 2, atol=1e-5)
     with pytest.raises(SegmentationError, match="input_long_px"):
         ModelSpec(input_long_px=[])
-    with pytest.raises(SegmentationError, match="input_long_px"):
-        ModelSpec(input_long_px=16)
+    for bad in (16, [256, "big"]):
+        with pytest.raises(SegmentationError, match="input_long_px"):
+            ModelSpec(input_long_px=bad)
 
 
 def test_bad_models_and_images_get_clear_errors(tmp_path):
