@@ -200,8 +200,8 @@ class FloorModel:
 
 
 def _shrink_to(image: np.ndarray, long_px: int) -> np.ndarray:
-    scale = long_px / max(image.shape[:2])
-    if scale >= 1:
+    scale = _working_scale(image.shape[:2], long_px)
+    if scale == 1.0:
         return image
     size = (round(image.shape[1] * scale), round(image.shape[0] * scale))
     return cv2.resize(image, size, interpolation=cv2.INTER_AREA)
