@@ -10,9 +10,12 @@ column. Where a wall stands on the floor, a board shows as a uniform strip that 
 a sharp step to the floor colour; a shadow at the foot of the wall fades out instead,
 and so does not count. A hard-edged shadow does not fade, but it keeps the floor's
 colour, only darker: strips like that are left alone. Boards have one height all round
-a room, so the strip is cut only where the photo agrees on that height, and then along
-every stretch of wall where most columns show it (a column that cannot tell, left
-standing, is a spike in the outline that puts the wall back at the board's top).
+a room, so the strip is cut only where the photo agrees on that height. In a column on
+its own the strongest step may be a plank joint or a grout line instead of the board's
+lower edge, so once the photo agrees, every column looks again for its step within a
+pixel or two of the most common height. The cut then runs along every stretch of wall
+where most columns show the board (a column that cannot tell, left standing, is a spike
+in the outline that puts the wall back at the board's top).
 """
 from __future__ import annotations
 
@@ -25,6 +28,10 @@ WORK_LONG_PX = 1280
 MIN_HEIGHT_M, MAX_HEIGHT_M = 0.02, 0.20
 # Search down to this height above the floor.
 SEARCH_M = 0.25
+# Heights are grouped in bins this wide to find the most common; then each column looks
+# for its board's lower edge within this many pixels of that height.
+MODE_BIN_M = 0.01
+NEAR_PX = 2
 # A column counts as showing a board when the strip differs from the floor below it by
 # this much (RGB distance), several times either's own texture, and at least this
 # fraction of the change happens in one 3-pixel step.
@@ -56,13 +63,17 @@ def _wall_columns(mask: np.ndarray, calibration):
     rows = top[cols]
     if len(cols) == 0:
         return cols, rows, np.zeros(0)
+    return cols, rows, _px_per_m(calibration, cols, rows)
+
+
+def _px_per_m(calibration, cols, rows) -> np.ndarray:
+    """How many pixels one meter upright spans, standing on the floor at each pixel."""
     foot = calibration.floor_from_pixels(np.column_stack([cols, rows]).astype(np.float64))
     head = calibration.pixels_from_floor(np.column_stack([foot, np.full(len(foot), SEARCH_M)]))
-    px_per_m = np.hypot(head[:, 0] - cols, head[:, 1] - rows) / SEARCH_M
-    return cols, rows, px_per_m
+    return np.hypot(head[:, 0] - cols, head[:, 1] - rows) / SEARCH_M
 
 
-def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
+def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m, near_m: float | None = None):
     """Per column, the board's height in pixels below the mask's top edge: 0 where the
     column shows none, NaN where it cannot tell (too close to the photo's bottom, or
     the floor below the strip is not in the mask); and how the strip's colour compares
@@ -78,6 +89,8 @@ def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
     step = np.linalg.norm(c[:, 3:] - c[:, :-3], axis=2)  # step[j]: between rows j and j + 3
     t_of = np.arange(step.shape[1]) + 2  # the row a step ends the strip at
     allowed = (t_of[None] >= first[:, None]) & (t_of[None] < span[:, None])
+    if near_m is not None:
+        allowed &= np.abs(t_of[None] - near_m * px_per_m[:, None]) <= NEAR_PX
     best = np.argmax(np.where(allowed, step, -1.0), axis=1)
     t = t_of[best]
     k = np.arange(len(cols))
@@ -91,13 +104,22 @@ def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
     board = ((contrast >= np.maximum(MIN_CONTRAST, np.maximum(4 * below_noise, 3 * strip_noise)))
              & (step[k, best] >= SHARPNESS * contrast))
     floor_below = mask[np.minimum(rows[:, None] + t[:, None] + np.arange(8)[None], h - 1), cols[:, None]].all(axis=1)
-    out = np.where(board, t, 0).astype(np.float64)
+    out = np.where(board & allowed.any(axis=1), t, 0).astype(np.float64)
     unknown = (span < 4) | (rows + span + 8 >= h) | (board & ~floor_below)
     out[unknown] = np.nan
     strip_norm, below_norm = np.linalg.norm(strip_color, axis=1), np.linalg.norm(below_color, axis=1)
     brightness = strip_norm / np.maximum(below_norm, 1e-6)
     cos = np.sum(strip_color * below_color, axis=1) / np.maximum(strip_norm * below_norm, 1e-6)
     return out, brightness, np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
+def _mode(heights_m: np.ndarray) -> float:
+    """The most common height, from a histogram of ``MODE_BIN_M`` bins smoothed over three."""
+    bins = np.arange(0.0, MAX_HEIGHT_M + 2 * MODE_BIN_M, MODE_BIN_M)
+    counts, _ = np.histogram(heights_m, bins)
+    smooth = np.convolve(counts, np.ones(3), mode="same")
+    i = int(np.argmax(smooth))
+    return float(0.5 * (bins[i] + bins[i + 1]))
 
 
 def _prefix_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
@@ -179,6 +201,16 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
     q1, q3 = np.percentile(height_m[shown], [25, 75])
     if not (MIN_HEIGHT_M <= median <= MAX_HEIGHT_M) or q3 - q1 > MAX_SPREAD * median:
         return mask.copy(), None
+    # Each column's strongest step is the board's lower edge in most columns, but a
+    # plank seam or a grout line in others: the heights' mode is the board, and each
+    # column looks again for its step at that height.
+    mode_m = _mode(height_m[shown])
+    t, _, _ = _board_rows(small_image, small_mask, cols, rows, px_per_m, mode_m)
+    shown = ~np.isnan(t) & (t > 0)
+    if not shown.any():
+        return mask.copy(), None
+    height_m = t / px_per_m
+    median = float(np.median(height_m[shown]))
     agree = shown & (height_m > 0.5 * median) & (height_m < 1.5 * median)
     depth_px = _bridge(cols, rows, np.where(agree, height_m, np.nan)) * px_per_m
     cut = np.zeros(small_mask.shape, np.uint8)
@@ -189,4 +221,7 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
             cut[max(0, row - 2):row + int(round(n)), col] = 1
     if scale < 1.0:
         cut = cv2.resize(cut, (cols_px, rows_px), interpolation=cv2.INTER_NEAREST)
-    return mask & (cut == 0), median
+    # The height to report is measured where the board stands: the mask's top is the
+    # board's top, which lies on the floor beyond the wall, where a meter looks shorter.
+    at_foot = _px_per_m(small_cal, cols[agree], rows[agree] + t[agree])
+    return mask & (cut == 0), float(np.median(t[agree] / at_foot))

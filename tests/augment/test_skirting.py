@@ -116,3 +116,22 @@ def test_board_darker_than_the_floor_is_still_a_board():
     trimmed, height_m = trim_skirting(image, mask, calibration)
     assert height_m == pytest.approx(0.08, abs=0.01)
     assert (trimmed & mask & ~truth).sum() < 0.05 * (mask & ~truth).sum()
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_plank_joints_below_the_board_do_not_deepen_the_cut(seed):
+    """Plank ends make dark lines a little below the board, darker than the board's own
+    lower edge: a column on its own would take the joint for the floor line and cut
+    floor away. The board's height, common to the wall, says where to look."""
+    image, truth, mask, calibration = _room(0.10, seed=seed, board_rgb=(178, 134, 90))
+    rng = np.random.default_rng(seed)
+    floor_line = np.argmax(truth, axis=0)
+    image = image.copy()
+    for c0 in range(0, SIZE[0], 24):  # planks 24 px wide, 60 % with a joint near the wall
+        if rng.random() < 0.6:
+            r = floor_line[c0:c0 + 24].min() + int(rng.integers(4, 40))
+            image[r:r + 2, c0:c0 + 24] = (95, 70, 45)
+    trimmed, height_m = trim_skirting(image, mask, calibration)
+    assert height_m == pytest.approx(0.10, abs=0.01)
+    below = np.argmax(trimmed, axis=0) - floor_line
+    assert np.abs(below).max() <= 2  # every column cut at the floor line, none deeper
