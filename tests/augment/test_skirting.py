@@ -12,15 +12,15 @@ WALL_Y_M = 4.0
 SIZE = (960, 720)
 
 
-def _room(board_m: float, shadow: str | None = None, seed: int = 0, board_rgb=(238, 236, 230)):
-    """A camera 1.5 m up looking at a wall 4 m ahead, 20 degrees down. Returns the photo,
-    the true floor mask, the floor plus the board's face (the mistake to undo) and the
-    exact calibration."""
+def _room(board_m: float, shadow: str | None = None, seed: int = 0, board_rgb=(238, 236, 230), yaw_deg=0.0):
+    """A camera 1.5 m up looking at a wall 4 m ahead, 20 degrees down, turned ``yaw_deg``
+    from square to the wall. Returns the photo, the true floor mask, the floor plus the
+    board's face (the mistake to undo) and the exact calibration."""
     w, h = SIZE
     K = np.array([[800.0, 0, (w - 1) / 2], [0, 800.0, (h - 1) / 2], [0, 0, 1]])
-    pitch = np.radians(20.0)
-    x = np.array([1.0, 0, 0])
-    z = np.array([0, np.cos(pitch), -np.sin(pitch)])
+    pitch, yaw = np.radians(20.0), np.radians(yaw_deg)
+    x = np.array([np.cos(yaw), -np.sin(yaw), 0])
+    z = np.array([np.sin(yaw) * np.cos(pitch), np.cos(yaw) * np.cos(pitch), -np.sin(pitch)])
     world_from_camera = np.eye(4)
     world_from_camera[:3, :3] = np.column_stack([x, np.cross(z, x), z])
     world_from_camera[:3, 3] = [0.0, 0.0, 1.5]
@@ -74,6 +74,18 @@ def test_board_is_trimmed_to_the_floor_line(board_m):
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()  # and the floor stays
     np.testing.assert_array_equal(before[0], image)  # inputs untouched
     np.testing.assert_array_equal(before[1], mask)
+
+
+@pytest.mark.parametrize("board_m", [0.06, 0.12])
+def test_board_on_a_wall_seen_at_an_angle(board_m):
+    """Turned 45 degrees, the wall recedes: the board is many pixels tall at one side of
+    the photo and few at the other, and its height is still one number in meters."""
+    image, truth, mask, calibration = _room(board_m, yaw_deg=45.0)
+    band = mask & ~truth
+    trimmed, height_m = trim_skirting(image, mask, calibration)
+    assert height_m == pytest.approx(board_m, abs=0.01)
+    assert (trimmed & band).sum() < 0.1 * band.sum()
+    assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
 
 
 @pytest.mark.parametrize("shadow", ["soft", "sharp"])
