@@ -78,7 +78,8 @@ def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m, near_
     column shows none, NaN where it cannot tell (too close to the photo's bottom, or
     the floor below the strip is not in the mask); and how the strip's colour compares
     with the floor's below it: brightness ratio, and angle between the RGB directions
-    (degrees)."""
+    (degrees). With ``near_m``, a column looks for the board's lower edge only within
+    ``NEAR_PX`` of that height, and shows none where that window is outside its search."""
     h = image.shape[0]
     span = np.ceil(SEARCH_M * px_per_m).astype(int)
     first = np.maximum(4, np.ceil(MIN_HEIGHT_M * px_per_m).astype(int))
