@@ -32,6 +32,9 @@ OTHER, FLOOR, WALL, CEILING = 0, 1, 2, 3
 # A board corner counts as visible when the render's depth there is within this of the
 # board's own depth (anything nearer is an occluder).
 _VISIBLE_DEPTH_TOL_M = 0.02
+# The label and colour passes see the same surface where their depths agree within this
+# fraction (or the tolerance above).
+_SAME_SURFACE_REL = 0.01
 
 
 @dataclass
@@ -142,11 +145,7 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     # Small frames cannot show a 2048-texel shadow map's detail; it would cost half the time.
     shadow_px = 1024 if max(size_px) <= 800 else 2048
     color, depth_m = renderer.render(built.scene, width, height, flags=flags, shadow_map_px=shadow_px)
-    seg, _ = renderer.render(built.scene, width, height, flags=pyrender.RenderFlags.SEG,
-                             seg_node_map=built.seg_node_map)
-    labels = np.zeros((height, width), np.uint8)
-    for value, rgb in ((FLOOR, SEG_FLOOR), (WALL, SEG_WALL), (CEILING, SEG_CEILING)):
-        labels[seg[..., int(np.argmax(rgb))] > 127] = value
+    labels = render_labels(renderer, built.scene, built.seg_node_map, depth_m)
 
     if photographic:
         image, photo_params = degrade(rng, color)
@@ -162,6 +161,36 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     visible[inside] = np.abs(seen - corner_depth[inside]) < _VISIBLE_DEPTH_TOL_M
     truth = _truth(seed, room, shot, board, world_from_board, corners_px, visible, built.info, photo_params)
     return Sample(image, labels == FLOOR, labels, depth_m, truth)
+
+
+def render_labels(renderer: Renderer, scene, seg_node_map: dict, depth_m: np.ndarray) -> np.ndarray:
+    """The label image (OTHER / FLOOR / WALL / CEILING) of ``scene``, as its photo shows it.
+
+    Parameters
+    ----------
+    renderer : Renderer
+    scene : pyrender.Scene
+        With its camera; ``seg_node_map`` gives each mesh node its ``SEG_*`` colour.
+    depth_m : (h, w) float32
+        Depth of the colour render (:meth:`Renderer.render`), 0 where nothing was drawn.
+
+    Returns
+    -------
+    (h, w) uint8
+    """
+    height, width = depth_m.shape
+    seg, seg_depth_m = renderer.render(scene, width, height, flags=pyrender.RenderFlags.SEG,
+                                       seg_node_map=seg_node_map)
+    # pyrender's label pass culls back faces even of two-sided materials, which the colour
+    # pass draws: where the photo shows a wall or a door from behind (through a window,
+    # across the notch of an L-shaped room) the labels would show what lies beyond it. A
+    # label counts only where its surface is the one the photo shows. (The two passes'
+    # depths of one surface differ by up to 0.3 % on the floor at a grazing angle.)
+    shown = np.abs(seg_depth_m - depth_m) <= np.maximum(_VISIBLE_DEPTH_TOL_M, _SAME_SURFACE_REL * depth_m)
+    labels = np.zeros((height, width), np.uint8)
+    for value, rgb in ((FLOOR, SEG_FLOOR), (WALL, SEG_WALL), (CEILING, SEG_CEILING)):
+        labels[(seg[..., int(np.argmax(rgb))] > 127) & shown] = value
+    return labels
 
 
 def _openings_json(room: Room, kind: str) -> list[dict]:

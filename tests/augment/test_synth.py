@@ -9,11 +9,12 @@ import pytest
 
 from augment.board import Board
 from layout.geometry import self_intersection
-from augment.gl import Renderer
-from augment.synth import CEILING, FLOOR, render_sample, write_sample
+from augment.gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
+from augment.synth import CEILING, FLOOR, render_labels, render_sample, write_sample
 from augment.synth.__main__ import main as synth_main
 from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, ROLL_DEG, look_pose,
                                   random_handling, random_shot)
+from augment.synth.scene import SEG_FLOOR, SEG_WALL, _Batch
 from augment.synth.rooms import ROOM_SIDE_M, WALL_HEIGHT_M, random_polygon, random_room
 from augment.synth.truth import polygon_mask, project_floor_polygon
 
@@ -94,6 +95,30 @@ def test_floor_mask_matches_the_reprojected_floor_polygon(renderer):
             if rectangles == 3:
                 break
     assert rectangles == 3
+
+
+def test_labels_follow_what_the_photo_shows_behind_a_two_sided_wall(renderer):
+    """A camera 1.5 m up looks level at the back of a two-sided wall 5 m away, with floor
+    on both sides. pyrender's label pass culls the wall's back face that the colour pass
+    draws; the labels must still end the floor at the wall's foot, f * 1.5 / 5 = 150 px
+    below the image center (the label of a back face is not known: it counts as other)."""
+    f, size = 500.0, (640, 480)
+    K = np.array([[f, 0, 319.5], [0, f, 239.5], [0, 0, 1]])
+    scene = Scene(bg_color=np.ones(4))
+    material = pyrender.MetallicRoughnessMaterial(baseColorFactor=(0.6, 0.6, 0.6, 1.0), doubleSided=True)
+    floor, wall = _Batch(), _Batch()
+    floor.quad([[-20, 0.2, 0], [20, 0.2, 0], [20, 30, 0], [-20, 30, 0]], [0, 0, 1.0])
+    wall.quad([[-20, 5, 0], [20, 5, 0], [20, 5, 10], [-20, 5, 10]], [0, 1.0, 0])  # faces away
+    seg_node_map = {scene.add(floor.mesh(material), name="mesh000"): SEG_FLOOR,
+                    scene.add(wall.mesh(material), name="mesh001"): SEG_WALL}
+    scene.add(pyrender.DirectionalLight(intensity=2.0), pose=np.eye(4), name="light0")
+    world_from_camera = look_pose([0, 0, 1.5], np.pi / 2, 0.0, 0.0)
+    scene.add(pyrender_camera(K), pose=gl_from_cv_pose(world_from_camera), name="camera")
+    _, depth_m = renderer.render(scene, *size)
+    labels = render_labels(renderer, scene, seg_node_map, depth_m)
+    foot_row = 239.5 + f * 1.5 / 5
+    assert (labels[int(foot_row) + 2:] == FLOOR).all()
+    assert not (labels[:int(foot_row) - 1] == FLOOR).any()
 
 
 def test_board_pixels_count_as_floor(samples):
