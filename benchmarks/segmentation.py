@@ -5,12 +5,14 @@ Prints tables and writes ``benchmarks/results/segmentation.{json,md}`` plus pict
 ``segmentation_real_masks.png`` (real rooms: truth vs prediction as colours only - the
 photos' licence allows measuring, not copying them).
 
-    .venv/bin/python benchmarks/segmentation.py [--count 40] [--real ../shared/data/real-rooms-dev]
+    .venv/bin/python benchmarks/segmentation.py [--count 40] [--seed 901] [--real ../shared/data/real-rooms-dev]
 
-Held-out renders use seed 901 (training used 100 and 101, validation 900), random phone
-sizes and orientations. Each is calibrated from its board with the true focal length
-(the floor's accuracy is measured here, the focal estimate in calibration.py); a render
-whose board is not found is segmented without calibration and counted.
+Held-out renders use seed 901 (training used 100-103, validation 900), random phone
+sizes and orientations; ``--seed`` picks another set, whose results go to
+``segmentation_seedN.{json,md}`` and ``segmentation_seedN_worst.png`` beside seed 901's.
+Each is calibrated from its board with the true focal length (the floor's accuracy is
+measured here, the focal estimate in calibration.py); a render whose board is not found
+is segmented without calibration and counted.
 
 The floor polygon is compared with the true visible floor area: the ground-truth mask,
 holes filled, integrated over the floor through the true camera.
@@ -89,7 +91,7 @@ def synthetic(args, model):
     with Renderer() as renderer:
         for i in tqdm(range(args.count), desc="held-out renders", disable=not sys.stderr.isatty()):
             size = None if args.size is None else tuple(args.size)
-            sample = render_sample([901, i], renderer, size_px=size)
+            sample = render_sample([args.seed, i], renderer, size_px=size)
             w, h = sample.truth["size_px"]
             try:
                 cal = calibrate_photo(sample.image, Board(),
@@ -118,7 +120,7 @@ def synthetic(args, model):
                 except ValueError:
                     row["area_error"] = None
             rows.append(row)
-            worst.append((row["onnx+grabcut"], f"synth 901/{i} IoU {row['onnx+grabcut']:.3f}", mask, sample.floor_mask,
+            worst.append((row["onnx+grabcut"], f"synth {args.seed}/{i} IoU {row['onnx+grabcut']:.3f}", mask, sample.floor_mask,
                           sample.image))
     worst.sort(key=lambda r: r[0])
     return rows, worst[:6]
@@ -149,6 +151,7 @@ def fmt(v, spec=".3f"):
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--count", type=int, default=40)
+    parser.add_argument("--seed", type=int, default=901, help="seed of the held-out renders (default 901)")
     parser.add_argument("--size", type=int, nargs=2, default=None, metavar=("W", "H"),
                         help="render size (default: random phone sizes)")
     parser.add_argument("--real", type=Path, default=ROOT.parent / "shared" / "data" / "real-rooms-dev")
@@ -192,7 +195,7 @@ def main(argv=None) -> int:
         "speed": speed,
     }
     lines = ["# Floor segmentation benchmark", "",
-             f"model `{args.model.name}`; {args.count} held-out renders (seed 901); "
+             f"model `{args.model.name}`; {args.count} held-out renders (seed {args.seed}); "
              f"machine: {__import__('os').cpu_count()} cores", "",
              "| render | size | IoU onnx | IoU onnx+grabcut | IoU grabcut | area error | step s |",
              "|---|---|---|---|---|---|---|"]
@@ -214,8 +217,9 @@ def main(argv=None) -> int:
     text = "\n".join(lines) + "\n"
     print(text)
     OUT.mkdir(parents=True, exist_ok=True)
-    write_atomic(OUT / "segmentation.md", text)
-    write_atomic(OUT / "segmentation.json", json.dumps({"summary": summary, "synthetic": synth_rows,
+    stem = "segmentation" if args.seed == 901 else f"segmentation_seed{args.seed}"
+    write_atomic(OUT / f"{stem}.md", text)
+    write_atomic(OUT / f"{stem}.json", json.dumps({"summary": summary, "synthetic": synth_rows,
                                                         "real": real_rows}, indent=1))
     tiles = []
     for _, name, mask, truth, image in worst:
@@ -227,7 +231,7 @@ def main(argv=None) -> int:
         cv2.putText(tile, name, (4, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
         tiles.append(tile)
     sheet = np.vstack([np.hstack(tiles[i:i + 3]) for i in range(0, len(tiles) - len(tiles) % 3, 3)])
-    write_atomic(OUT / "segmentation_synth_worst.png", cv2.imencode(".png", sheet[..., ::-1])[1].tobytes())
+    write_atomic(OUT / ("segmentation_synth_worst.png" if args.seed == 901 else f"{stem}_worst.png"), cv2.imencode(".png", sheet[..., ::-1])[1].tobytes())
     if real_pictures:
         write_atomic(OUT / "segmentation_real_masks.png",
                      cv2.imencode(".png", pair_picture(real_pictures)[..., ::-1])[1].tobytes())
