@@ -218,9 +218,10 @@ def main(argv=None) -> int:
     print(text)
     OUT.mkdir(parents=True, exist_ok=True)
     stem = "segmentation" if args.seed == 901 else f"segmentation_seed{args.seed}"
+    worst_png = "segmentation_synth_worst.png" if args.seed == 901 else f"{stem}_worst.png"
     write_atomic(OUT / f"{stem}.md", text)
     write_atomic(OUT / f"{stem}.json", json.dumps({"summary": summary, "synthetic": synth_rows,
-                                                        "real": real_rows}, indent=1))
+                                                   "real": real_rows}, indent=1))
     tiles = []
     for _, name, mask, truth, image in worst:
         tile = image.copy()
@@ -231,7 +232,7 @@ def main(argv=None) -> int:
         cv2.putText(tile, name, (4, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
         tiles.append(tile)
     sheet = np.vstack([np.hstack(tiles[i:i + 3]) for i in range(0, len(tiles) - len(tiles) % 3, 3)])
-    write_atomic(OUT / ("segmentation_synth_worst.png" if args.seed == 901 else f"{stem}_worst.png"), cv2.imencode(".png", sheet[..., ::-1])[1].tobytes())
+    write_atomic(OUT / worst_png, cv2.imencode(".png", sheet[..., ::-1])[1].tobytes())
     if real_pictures:
         write_atomic(OUT / "segmentation_real_masks.png",
                      cv2.imencode(".png", pair_picture(real_pictures)[..., ::-1])[1].tobytes())
