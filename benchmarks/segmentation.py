@@ -231,7 +231,8 @@ def main(argv=None) -> int:
         tile = cv2.resize(tile, (320, 240), interpolation=cv2.INTER_AREA)
         cv2.putText(tile, name, (4, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
         tiles.append(tile)
-    sheet = np.vstack([np.hstack(tiles[i:i + 3]) for i in range(0, len(tiles) - len(tiles) % 3, 3)])
+    # Rows of three; with fewer than three renders, one short row.
+    sheet = np.vstack([np.hstack(tiles[i:i + 3]) for i in range(0, max(1, len(tiles) - len(tiles) % 3), 3)])
     write_atomic(OUT / worst_png, cv2.imencode(".png", sheet[..., ::-1])[1].tobytes())
     if real_pictures:
         write_atomic(OUT / "segmentation_real_masks.png",
