@@ -325,7 +325,7 @@ def _hide_board(small, calibration, scale):
 
 
 def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibration=None,
-                  method: str = "onnx", refine: bool = True) -> Segmentation:
+                  method: str = "onnx", refine: bool = True, skirting: bool = True) -> Segmentation:
     """Find the floor in a photo.
 
     Parameters
@@ -340,6 +340,8 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         ``"grabcut"`` runs GrabCut alone, seeded from the calibration's geometry.
     refine : bool
         Refine the model's mask with GrabCut (``"onnx"`` only).
+    skirting : bool
+        Trim the skirting boards from the refined mask (needs ``calibration``).
 
     Returns
     -------
@@ -393,7 +395,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     # rather than staircased at the working pixel size.
     mask = cv2.resize(mask_small.astype(np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
     skirting_m = None
-    if calibration is not None and name != "onnx" and mask.any():
+    if skirting and calibration is not None and name != "onnx" and mask.any():
         # The refined mask's top edge sits on the skirting boards; the floor ends below.
         mask, skirting_m = trim_skirting(image, mask, calibration)
     return Segmentation(mask, probability, name, tuple(warnings), skirting_m)

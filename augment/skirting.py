@@ -16,11 +16,24 @@ lower edge, so once the photo agrees, every column looks again for its step with
 pixel or two of the most common height. The cut then runs along every stretch of wall
 where most columns show the board (a column that cannot tell, left standing, is a spike
 in the outline that puts the wall back at the board's top).
+
+Often GrabCut has already stopped at the floor line, and what lies below the mask's edge
+is floor: a plank along the wall, a band of light, a contact shadow, with a step at its
+far side just like a board's lower edge. Rules on colour cannot tell those from a board
+(24 of their 62 trims over 576 renders cut a band of floor), so a small learned model
+(``models/skirting_board.onnx``, trained by ``models/train_skirting.py`` on renders with
+known floor lines) looks at each column's colours across the mask's edge, and the trim
+is skipped when it sees no board anywhere along the walls.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+from pathlib import Path
+
 import cv2
 import numpy as np
+
+BOARD_MODEL = Path(__file__).resolve().parent.parent / "models" / "skirting_board.onnx"
 
 # Work at this long side at most (the board is 10 px or more there at 4 m).
 WORK_LONG_PX = 1280
@@ -53,6 +66,15 @@ STRETCH_AGREEING = 0.5
 # Neighbouring columns whose top floor pixels are more than this many rows apart are on
 # different walls (or either side of something standing on the floor).
 STEP_PX = 6
+# The board model reads each column from this far above the mask's edge to this far
+# below it, in steps of this many meters (upright, standing on the floor there), against
+# the floor's colour from this far down; with the mean of this many columns either side.
+PROFILE_FROM_M, PROFILE_TO_M, PROFILE_STEP_M = -0.10, 0.30, 0.005
+PROFILE_FLOOR_M = 0.22
+PROFILE_CONTEXT = 8
+# Below this mean board probability over the wall columns the photo shows no board in
+# the mask: the mask already ends at the floor line.
+NO_BOARD_P = 0.15
 
 
 def _wall_columns(mask: np.ndarray, calibration):
@@ -156,6 +178,108 @@ def _bridge(cols: np.ndarray, rows: np.ndarray, height_m: np.ndarray) -> np.ndar
     return out
 
 
+def board_profiles(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
+    """What the board model reads in each wall column.
+
+    Parameters
+    ----------
+    image : (rows, cols, 3) uint8
+        The photo at the working size, lightly blurred.
+    mask : (rows, cols) bool
+        The floor mask at that size.
+    cols, rows, px_per_m : (k,) arrays
+        The wall columns, their mask-edge rows and pixels per upright meter (from
+        ``_wall_columns``).
+
+    Returns
+    -------
+    profile : (k, 7, n) float32
+        Per column, n samples from ``PROFILE_FROM_M`` to ``PROFILE_TO_M`` around the
+        mask's edge: log colour against the floor's far below (3), the same averaged over
+        ``PROFILE_CONTEXT`` columns either side (3), and 1 where the sample is inside the
+        photo (1).
+    scalars : (k, 2) float32
+        log(pixels per meter) / 5, and the fraction of the 39 pixels below the edge that
+        are floor in the mask.
+    whole : (k,) bool
+        Columns whose window lies inside the photo.
+    """
+    offsets_m = np.arange(PROFILE_FROM_M, PROFILE_TO_M + PROFILE_STEP_M / 2, PROFILE_STEP_M)
+    h = image.shape[0]
+    y = rows[:, None] + offsets_m[None] * px_per_m[:, None]
+    inside = (y >= 0) & (y <= h - 1)
+    y = np.clip(y, 0, h - 1)
+    y0 = np.floor(y).astype(int)
+    y1 = np.minimum(y0 + 1, h - 1)
+    f = (y - y0)[..., None]
+    colour = image[y0, cols[:, None]].astype(np.float32) * (1 - f) + image[y1, cols[:, None]].astype(np.float32) * f
+    log_colour = np.log1p(colour) * inside[..., None]
+    floor = inside & (offsets_m >= PROFILE_FLOOR_M)[None]
+    # Near a wall the window runs off the photo: its lowest samples stand in for the floor.
+    last = inside.shape[1] - 1 - np.argmax(inside[:, ::-1], axis=1)
+    index = np.arange(inside.shape[1])[None]
+    lowest = inside & (index > last[:, None] - 8) & (index <= last[:, None])
+    floor = np.where(floor.any(axis=1)[:, None], floor, lowest).astype(np.float32)
+    reference = (log_colour * floor[..., None]).sum(axis=1) / np.maximum(floor.sum(axis=1), 1)[:, None]
+    own = (log_colour - reference[:, None]) * inside[..., None]
+    k = len(cols)
+    summed = np.cumsum(np.concatenate([np.zeros((1,) + own.shape[1:], np.float32), own]), axis=0)
+    lo = np.maximum(np.arange(k) - PROFILE_CONTEXT, 0)
+    hi = np.minimum(np.arange(k) + PROFILE_CONTEXT + 1, k)
+    context = (summed[hi] - summed[lo]) / (hi - lo)[:, None, None]
+    profile = np.concatenate([own, context, inside[..., None].astype(np.float32)], axis=2).transpose(0, 2, 1)
+    below = mask[np.clip(rows[:, None] + np.arange(1, 40)[None], 0, h - 1), cols[:, None]].mean(axis=1)
+    scalars = np.column_stack([np.log(px_per_m) / 5, below])
+    return profile.astype(np.float32), scalars.astype(np.float32), inside[:, -1]
+
+
+@lru_cache(maxsize=1)
+def _board_session(path: str):
+    import onnxruntime as ort
+
+    if not Path(path).is_file():
+        raise FileNotFoundError(f"the skirting-board model {path} is missing: it ships with Stager, "
+                                "restore it with `git checkout models/skirting_board.onnx`")
+    options = ort.SessionOptions()
+    options.log_severity_level = 3
+    return ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
+
+
+def board_probability(profile: np.ndarray, scalars: np.ndarray) -> np.ndarray:
+    """Per column, the board model's probability that the mask's edge is a board's top
+    edge (the floor line lies below it), from :func:`board_profiles`. (k,) float."""
+    if len(profile) == 0:
+        return np.zeros(0)
+    session = _board_session(str(BOARD_MODEL))
+    logits = session.run(None, {"profile": profile, "scalars": scalars})[0].reshape(-1)
+    return 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
+
+
+def working_view(image: np.ndarray, mask: np.ndarray, calibration):
+    """The photo, mask and calibration at the trim's working size, with the wall columns.
+
+    Returns None when no column of the mask meets a wall; else (scale, image (blurred,
+    filled only in the band of rows the search looks at), mask, calibration, cols, rows,
+    px_per_m).
+    """
+    rows_px, cols_px = mask.shape
+    scale = min(1.0, WORK_LONG_PX / max(rows_px, cols_px))
+    size = (round(cols_px * scale), round(rows_px * scale))
+    small_mask = cv2.resize(mask.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 if scale < 1 else mask
+    small_cal = calibration.scaled(scale)
+    cols, rows, px_per_m = _wall_columns(small_mask, small_cal)
+    if len(cols) == 0:
+        return None
+    # Only the band of rows the search looks at is needed at the working size.
+    top = max(0, int(rows.min()) - 2)
+    bottom = min(size[1], int((rows + np.ceil(SEARCH_M * px_per_m)).max()) + 12)
+    band = image[int(top / scale):min(rows_px, int(np.ceil(bottom / scale)) + 1)]
+    small_image = np.zeros((size[1], size[0], 3), np.uint8)
+    small_image[top:bottom] = cv2.resize(band, (size[0], bottom - top), interpolation=cv2.INTER_AREA)
+    small_image = cv2.GaussianBlur(small_image, (3, 3), 0)
+    return scale, small_image, small_mask, small_cal, cols, rows, px_per_m
+
+
 def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.ndarray, float | None]:
     """Remove the skirting board from the top of a floor mask.
 
@@ -176,20 +300,10 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
         The board's height when it was trimmed.
     """
     rows_px, cols_px = mask.shape
-    scale = min(1.0, WORK_LONG_PX / max(rows_px, cols_px))
-    size = (round(cols_px * scale), round(rows_px * scale))
-    small_mask = cv2.resize(mask.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 if scale < 1 else mask
-    small_cal = calibration.scaled(scale)
-    cols, rows, px_per_m = _wall_columns(small_mask, small_cal)
-    if len(cols) == 0:
+    view = working_view(image, mask, calibration)
+    if view is None:
         return mask.copy(), None
-    # Only the band of rows the search looks at is needed at the working size.
-    top = max(0, int(rows.min()) - 2)
-    bottom = min(size[1], int((rows + np.ceil(SEARCH_M * px_per_m)).max()) + 12)
-    band = image[int(top / scale):min(rows_px, int(np.ceil(bottom / scale)) + 1)]
-    small_image = np.zeros((size[1], size[0], 3), np.uint8)
-    small_image[top:bottom] = cv2.resize(band, (size[0], bottom - top), interpolation=cv2.INTER_AREA)
-    small_image = cv2.GaussianBlur(small_image, (3, 3), 0)
+    scale, small_image, small_mask, small_cal, cols, rows, px_per_m = view
     t, brightness, hue_deg = _board_rows(small_image, small_mask, cols, rows, px_per_m)
     known = ~np.isnan(t)
     shown = known & (t > 0)
@@ -201,6 +315,10 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
     median = float(np.median(height_m[shown]))
     q1, q3 = np.percentile(height_m[shown], [25, 75])
     if not (MIN_HEIGHT_M <= median <= MAX_HEIGHT_M) or q3 - q1 > MAX_SPREAD * median:
+        return mask.copy(), None
+    profile, scalars, whole = board_profiles(small_image, small_mask, cols, rows, px_per_m)
+    p_board = board_probability(profile, scalars)
+    if np.mean(p_board[whole] if whole.any() else p_board) < NO_BOARD_P:
         return mask.copy(), None
     # Each column's strongest step is the board's lower edge in most columns, but a
     # plank seam or a grout line in others: the heights' mode is the board, and each

@@ -147,3 +147,54 @@ def test_plank_joints_below_the_board_do_not_deepen_the_cut(seed):
     assert height_m == pytest.approx(0.10, abs=0.01)
     below = np.argmax(trimmed, axis=0) - floor_line
     assert np.abs(below).max() <= 2  # every column cut at the floor line, none deeper
+
+
+def _plank_along_the_wall(image, truth, calibration, depth_m: float, factor: float):
+    """The photo with the floor's first ``depth_m`` from the wall ``factor`` times as bright:
+    a plank laid along the wall, its far edge a step just like a board's lower edge."""
+    w, h = SIZE
+    u, v = np.meshgrid(np.arange(w), np.arange(h))
+    foot = calibration.floor_from_pixels(np.column_stack([u.ravel(), v.ravel()]).astype(float))
+    near_wall = truth & (WALL_Y_M - foot[:, 1].reshape(h, w) < depth_m)
+    out = image.astype(np.float64)
+    out[near_wall] *= factor
+    return np.clip(out, 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("depth_m, factor", [(0.12, 1.1), (0.12, 0.9), (0.10, 1.15)])
+def test_mask_already_at_the_floor_line_is_left_alone(depth_m, factor):
+    """GrabCut often stops at the floor line itself. A plank along the wall below it, a
+    little lighter or darker than the next, ends in a sharp step like a board: by colour
+    alone it is a board (the trim cut 2 % of this floor before the board model), but the
+    board model reads that the strip is floor and the wall above it is the board."""
+    image, truth, mask, calibration = _room(0.10, board_rgb=(190, 176, 152))
+    image = _plank_along_the_wall(image, truth, calibration, depth_m, factor)
+    trimmed, height_m = trim_skirting(image, truth, calibration)
+    assert height_m is None
+    np.testing.assert_array_equal(trimmed, truth)
+    # The same photo with the board still in the mask: trimmed to the floor line.
+    trimmed, height_m = trim_skirting(image, mask, calibration)
+    assert height_m == pytest.approx(0.10, abs=0.01)
+    assert (trimmed & mask & ~truth).sum() < 0.05 * (mask & ~truth).sum()
+    assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
+
+
+def test_board_profiles_measure_in_meters_against_the_floor():
+    """The board model's input, checked by hand: the mask's edge at the board's top, a
+    12 cm board 200 px per meter tall, the floor below."""
+    from augment.skirting import PROFILE_FROM_M, PROFILE_STEP_M, board_profiles
+
+    image = np.zeros((400, 3, 3), np.uint8)
+    image[:100] = (200, 200, 200)  # wall
+    image[100:124] = (100, 50, 25)  # board: 0.12 m at 200 px/m
+    image[124:] = (50, 50, 50)  # floor
+    mask = np.zeros((400, 3), bool)
+    mask[100:] = True
+    profile, scalars, whole = board_profiles(image, mask, np.arange(3), np.full(3, 100), np.full(3, 200.0))
+    assert profile.shape == (3, 7, 81) and whole.all()
+    at = lambda m: int(round((m - PROFILE_FROM_M) / PROFILE_STEP_M))  # noqa: E731
+    np.testing.assert_allclose(profile[1, :3, at(0.05)], np.log1p([100, 50, 25]) - np.log1p(50), atol=1e-5)
+    np.testing.assert_allclose(profile[1, :3, at(-0.05)], np.log1p(200) - np.log1p(50), atol=1e-5)
+    np.testing.assert_allclose(profile[1, :3, at(0.20)], 0, atol=1e-5)
+    np.testing.assert_allclose(profile[:, 3:6], profile[:, :3], atol=1e-5)  # every neighbour alike
+    np.testing.assert_allclose(scalars[0], [np.log(200) / 5, 1.0], atol=1e-6)

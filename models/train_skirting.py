@@ -1,0 +1,193 @@
+"""Train the skirting-board model (``models/skirting_board.onnx``) and export it to ONNX.
+
+The skirting trim (``augment/skirting.py``) cuts a strip off the top of the floor mask
+where a board seems to stand. Often the mask already ends at the floor line and the strip
+it would cut is floor: this model says, per image column, whether the mask's edge is a
+board's top edge. It reads what :func:`augment.skirting.board_profiles` gives (the
+column's colours from 10 cm above the mask's edge to 30 cm below it, in meters through
+the calibration), and learns from renders of the synthetic photographer whose floor line
+is known: segmented by the shipped pipeline without the trim, so the model sees the
+masks the trim sees.
+
+Recipe (what ``models/skirting_board.onnx`` was made with; 1,040 renders, about 15
+minutes of rendering on two cores, 4 of training)::
+
+    python models/train_skirting.py --seeds 950 951 952 954 955 956 957 --val 953 \\
+        --count 130 --out models/skirting_board.onnx
+
+Rendered columns are kept in ``--cache`` (one file per seed), so a second run trains
+without rendering. Everything random derives from ``--seed``. Training needs torch
+(``pip install -e '.[train]'``); Stager runs the exported model with onnxruntime.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import torch
+from torch import nn
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from augment.skirting import board_profiles, working_view  # noqa: E402
+
+# A column's mask edge is a board's top when the floor line lies this far below it or
+# more; columns between this and the first value are anti-aliasing, left out, and so
+# are columns whose edge is far from any floor line (a carton's top, say).
+BOARD_M, UNSURE_M = 0.025, 0.01
+KEEP_FROM_M, KEEP_TO_M = -0.05, 0.22
+
+
+def render_columns(seed: int, count: int) -> dict:
+    """Render ``count`` rooms of ``seed``, segment each without the trim and return every
+    wall column's profile, scalars and true floor-line offset (m, NaN: no floor)."""
+    from augment.board import Board
+    from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics
+    from augment.gl import Renderer
+    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
+    from augment.synth import render_sample
+
+    model = FloorModel(DEFAULT_MODEL)
+    out = {"profile": [], "scalars": [], "offset_m": [], "render": []}
+    with Renderer() as renderer:
+        for i in range(count):
+            sample = render_sample([seed, i], renderer)
+            w, h = sample.truth["size_px"]
+            try:
+                cal = calibrate_photo(sample.image, Board(),
+                                      intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
+            except CalibrationError:
+                continue
+            mask = segment_floor(sample.image, model, cal, skirting=False).mask
+            view = working_view(sample.image, mask, cal) if mask.any() else None
+            if view is None:
+                continue
+            _, small_image, small_mask, _, cols, rows, px_per_m = view
+            profile, scalars, _ = board_profiles(small_image, small_mask, cols, rows, px_per_m)
+            truth = cv2.resize(sample.floor_mask.astype(np.uint8), small_mask.shape[::-1],
+                               interpolation=cv2.INTER_NEAREST) > 0
+            floor_line = np.argmax(truth, axis=0)[cols]
+            offset_m = np.where(truth[:, cols].any(axis=0), (floor_line - rows) / px_per_m, np.nan)
+            out["profile"].append(profile)
+            out["scalars"].append(scalars)
+            out["offset_m"].append(offset_m.astype(np.float32))
+            out["render"].append(np.full(len(cols), i, np.int32))
+    return {k: np.concatenate(v) if v else np.zeros(0) for k, v in out.items()}
+
+
+def load_seed(seed: int, count: int, cache: Path) -> dict:
+    path = cache / f"skirting_{seed}_{count}.npz"
+    if not path.exists():
+        data = render_columns(seed, count)
+        cache.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(".tmp.npz")
+        np.savez_compressed(tmp, **data)
+        tmp.replace(path)
+    with np.load(path) as f:
+        return dict(f)
+
+
+def labelled(data: dict, every: int):
+    """Tensors of every ``every``-th usable column (neighbours are nearly the same)."""
+    off = data["offset_m"]
+    usable = (np.isfinite(off) & (off > KEEP_FROM_M) & (off < KEEP_TO_M)
+              & ~((off > UNSURE_M) & (off < BOARD_M)))
+    pick = np.flatnonzero(usable)[::every]
+    return (torch.tensor(data["profile"][pick]), torch.tensor(data["scalars"][pick]),
+            torch.tensor((off[pick] > BOARD_M).astype(np.float32)))
+
+
+class BoardNet(nn.Module):
+    """Two 1-D convolutions along the column's profile, a pooling, and a small head that
+    also sees the scalars. Output: one logit per column (board or not)."""
+
+    def __init__(self, channels: int = 16, samples: int = 81):
+        super().__init__()
+        self.conv = nn.Sequential(nn.Conv1d(7, channels, 5, padding=2), nn.ReLU(),
+                                  nn.Conv1d(channels, channels, 5, padding=4, dilation=2), nn.ReLU(),
+                                  nn.MaxPool1d(3, 3))
+        self.head = nn.Sequential(nn.Dropout(0.2), nn.Linear(channels * (samples // 3) + 2, 32), nn.ReLU(),
+                                  nn.Linear(32, 1))
+
+    def forward(self, profile, scalars):
+        return self.head(torch.cat([self.conv(profile).flatten(1), scalars], 1))[:, 0]
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seeds", type=int, nargs="+", required=True, help="render seeds to train on")
+    parser.add_argument("--val", type=int, nargs="+", required=True, help="render seeds to validate on")
+    parser.add_argument("--count", type=int, default=130, help="renders per seed")
+    parser.add_argument("--epochs", type=int, default=10)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--workers", type=int, default=2, help="processes rendering seeds at once")
+    parser.add_argument("--cache", type=Path, default=Path("data/skirting"))
+    parser.add_argument("--out", type=Path, default=Path("models/skirting_board.onnx"))
+    args = parser.parse_args(argv)
+
+    t0 = time.time()
+    seeds = args.seeds + args.val
+    missing = [s for s in seeds if not (args.cache / f"skirting_{s}_{args.count}.npz").exists()]
+    if missing:
+        with multiprocessing.get_context("spawn").Pool(min(args.workers, len(missing))) as pool:
+            pool.starmap(load_seed, [(s, args.count, args.cache) for s in missing])
+    data = {s: load_seed(s, args.count, args.cache) for s in seeds}
+    t_render = time.time() - t0
+
+    def joined(group, every):
+        parts = [labelled(data[s], every) for s in group]
+        return [torch.cat(x) for x in zip(*parts)]
+
+    profile, scalars, y = joined(args.seeds, 2)
+    profile_v, scalars_v, y_v = joined(args.val, 4)
+    print(f"{len(y)} training columns ({float(y.mean()):.1%} board), {len(y_v)} validation", flush=True)
+
+    torch.manual_seed(args.seed)
+    net = BoardNet(samples=profile.shape[2])
+    opt = torch.optim.AdamW(net.parameters(), 1e-3, weight_decay=1e-2)
+    loss_fn = nn.functional.binary_cross_entropy_with_logits
+    log, best = [], (float("inf"), None)
+    for epoch in range(args.epochs):
+        net.train()
+        order = torch.randperm(len(y))
+        for start in range(0, len(y), 256):
+            batch = order[start:start + 256]
+            loss = loss_fn(net(profile[batch], scalars[batch]), y[batch])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+        net.eval()
+        with torch.no_grad():
+            logits = net(profile_v, scalars_v)
+            val_loss = float(loss_fn(logits, y_v))
+            val_acc = float(((logits > 0) == (y_v > 0.5)).float().mean())
+        log.append({"epoch": epoch + 1, "val_loss": round(val_loss, 4), "val_accuracy": round(val_acc, 4)})
+        print(log[-1], flush=True)
+        if val_loss < best[0]:
+            best = (val_loss, {k: v.clone() for k, v in net.state_dict().items()})
+    net.load_state_dict(best[1])
+    net.eval()
+
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = args.out.with_suffix(".tmp.onnx")
+    torch.onnx.export(net, (profile_v[:4], scalars_v[:4]), str(tmp), input_names=["profile", "scalars"],
+                      output_names=["logit"], opset_version=17, dynamo=False,
+                      dynamic_axes={"profile": {0: "columns"}, "scalars": {0: "columns"}, "logit": {0: "columns"}})
+    tmp.replace(args.out)
+    sidecar = {"seeds": args.seeds, "val": args.val, "count": args.count, "seed": args.seed,
+               "epochs": args.epochs, "kept_epoch": min(log, key=lambda e: e["val_loss"])["epoch"],
+               "parameters": sum(p.numel() for p in net.parameters()), "training_columns": len(y),
+               "render_s": round(t_render), "train_s": round(time.time() - t0 - t_render), "log": log}
+    args.out.with_suffix(".json").write_text(json.dumps(sidecar, indent=1) + "\n")
+    print(f"wrote {args.out} ({sidecar['train_s']} s training)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
