@@ -22,8 +22,10 @@ is floor: a plank along the wall, a band of light, a contact shadow, with a step
 far side just like a board's lower edge. Rules on colour cannot tell those from a board
 (24 of their 62 trims over 576 renders cut a band of floor), so a small learned model
 (``models/skirting_board.onnx``, trained by ``models/train_skirting.py`` on renders with
-known floor lines) looks at each column's colours across the mask's edge, and the trim
-is skipped when it sees no board anywhere along the walls.
+known floor lines) looks at each column's colours across the mask's edge. The trim is
+skipped when it sees no board anywhere along the walls, and made when it is sure of one
+even where the rules doubt it (heights that spread past deep shadows); in between, the
+rules decide.
 """
 from __future__ import annotations
 
@@ -73,8 +75,9 @@ PROFILE_FROM_M, PROFILE_TO_M, PROFILE_STEP_M = -0.10, 0.30, 0.005
 PROFILE_FLOOR_M = 0.22
 PROFILE_CONTEXT = 8
 # Below this mean board probability over the wall columns the photo shows no board in
-# the mask: the mask already ends at the floor line.
-NO_BOARD_P = 0.15
+# the mask (it already ends at the floor line); above the second, it shows one, whatever
+# the rules above say; in between, the rules decide.
+NO_BOARD_P, BOARD_P = 0.15, 0.5
 
 
 def _wall_columns(mask: np.ndarray, calibration):
@@ -280,6 +283,17 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
     return scale, small_image, small_mask, small_cal, cols, rows, px_per_m
 
 
+def _rules_see_a_board(known, shown, height_m, brightness, hue_deg) -> bool:
+    """Whether enough wall columns show a strip of one height that is not shade."""
+    if known.sum() < 0.3 * len(known) or shown.sum() < MIN_AGREEING * known.sum():
+        return False
+    if np.median(brightness[shown]) < SHADOW_RATIO and np.median(hue_deg[shown]) < SHADOW_DEG:
+        return False
+    median = float(np.median(height_m[shown]))
+    q1, q3 = np.percentile(height_m[shown], [25, 75])
+    return MIN_HEIGHT_M <= median <= MAX_HEIGHT_M and q3 - q1 <= MAX_SPREAD * median
+
+
 def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.ndarray, float | None]:
     """Remove the skirting board from the top of a floor mask.
 
@@ -307,18 +321,13 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
     t, brightness, hue_deg = _board_rows(small_image, small_mask, cols, rows, px_per_m)
     known = ~np.isnan(t)
     shown = known & (t > 0)
-    if known.sum() < 0.3 * len(cols) or shown.sum() < MIN_AGREEING * known.sum():
-        return mask.copy(), None
-    if np.median(brightness[shown]) < SHADOW_RATIO and np.median(hue_deg[shown]) < SHADOW_DEG:
-        return mask.copy(), None
     height_m = t / px_per_m
-    median = float(np.median(height_m[shown]))
-    q1, q3 = np.percentile(height_m[shown], [25, 75])
-    if not (MIN_HEIGHT_M <= median <= MAX_HEIGHT_M) or q3 - q1 > MAX_SPREAD * median:
-        return mask.copy(), None
     profile, scalars, whole = board_profiles(small_image, small_mask, cols, rows, px_per_m)
     p_board = board_probability(profile, scalars)
-    if np.mean(p_board[whole] if whole.any() else p_board) < NO_BOARD_P:
+    p_mean = float(np.mean(p_board[whole] if whole.any() else p_board))
+    if p_mean < NO_BOARD_P or not shown.any():
+        return mask.copy(), None
+    if p_mean < BOARD_P and not _rules_see_a_board(known, shown, height_m, brightness, hue_deg):
         return mask.copy(), None
     # Each column's strongest step is the board's lower edge in most columns, but a
     # plank seam or a grout line in others: the heights' mode is the board, and each

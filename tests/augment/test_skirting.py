@@ -198,3 +198,29 @@ def test_board_profiles_measure_in_meters_against_the_floor():
     np.testing.assert_allclose(profile[1, :3, at(0.20)], 0, atol=1e-5)
     np.testing.assert_allclose(profile[:, 3:6], profile[:, :3], atol=1e-5)  # every neighbour alike
     np.testing.assert_allclose(scalars[0], [np.log(200) / 5, 1.0], atol=1e-6)
+
+
+def test_a_board_the_rules_doubt_is_trimmed_when_the_model_is_sure(monkeypatch):
+    """A render of the synthetic photographer (seed 905, render 73: a board whose heights,
+    measured column by column past deep shadows, spread from 7.9 to 10.6 cm between the
+    quartiles, more than the rules allow). The board model sees a board along the walls,
+    so it is trimmed anyway; the truth is the render's floor mask."""
+    import augment.skirting as skirting
+    from augment.calibrate import calibrate_photo, exif_intrinsics
+    from augment.gl import Renderer
+    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
+    from augment.synth import render_sample
+
+    with Renderer() as renderer:
+        sample = render_sample([905, 73], renderer)
+    w, h = sample.truth["size_px"]
+    calibration = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
+    mask = segment_floor(sample.image, FloorModel(DEFAULT_MODEL), calibration, skirting=False).mask
+    truth = sample.floor_mask
+    extra = mask & ~truth
+    trimmed, height_m = trim_skirting(sample.image, mask, calibration)
+    assert height_m is not None and 0.05 < height_m < 0.13
+    assert (trimmed & extra).sum() < 0.5 * extra.sum()  # most of what was not floor is gone
+    assert (truth & ~trimmed).sum() < 0.2 * (extra.sum() - (trimmed & extra).sum())  # little floor with it
+    monkeypatch.setattr(skirting, "BOARD_P", 1.1)  # the rules alone leave it
+    assert trim_skirting(sample.image, mask, calibration)[1] is None
