@@ -26,6 +26,7 @@ import json
 import multiprocessing
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import cv2
@@ -176,9 +177,12 @@ def main(argv=None) -> int:
 
     args.out.parent.mkdir(parents=True, exist_ok=True)
     tmp = args.out.with_suffix(".tmp.onnx")
-    torch.onnx.export(net, (profile_v[:4], scalars_v[:4]), str(tmp), input_names=["profile", "scalars"],
-                      output_names=["logit"], opset_version=17, dynamo=False,
-                      dynamic_axes={"profile": {0: "columns"}, "scalars": {0: "columns"}, "logit": {0: "columns"}})
+    with warnings.catch_warnings():  # the TorchScript exporter is deprecated, and does this model fine
+        warnings.simplefilter("ignore", DeprecationWarning)
+        torch.onnx.export(net, (profile_v[:4], scalars_v[:4]), str(tmp), input_names=["profile", "scalars"],
+                          output_names=["logit"], opset_version=17, dynamo=False,
+                          dynamic_axes={"profile": {0: "columns"}, "scalars": {0: "columns"},
+                                        "logit": {0: "columns"}})
     tmp.replace(args.out)
     sidecar = {"seeds": args.seeds, "val": args.val, "count": args.count, "seed": args.seed,
                "epochs": args.epochs, "kept_epoch": min(log, key=lambda e: e["val_loss"])["epoch"],
