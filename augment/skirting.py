@@ -321,11 +321,13 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
     t, brightness, hue_deg = _board_rows(small_image, small_mask, cols, rows, px_per_m)
     known = ~np.isnan(t)
     shown = known & (t > 0)
+    if not shown.any():
+        return mask.copy(), None
     height_m = t / px_per_m
     profile, scalars, whole = board_profiles(small_image, small_mask, cols, rows, px_per_m)
     p_board = board_probability(profile, scalars)
     p_mean = float(np.mean(p_board[whole] if whole.any() else p_board))
-    if p_mean < NO_BOARD_P or not shown.any():
+    if p_mean < NO_BOARD_P:
         return mask.copy(), None
     if p_mean < BOARD_P and not _rules_see_a_board(known, shown, height_m, brightness, hue_deg):
         return mask.copy(), None
