@@ -26,8 +26,11 @@ DEFAULT_MODEL = Path(__file__).resolve().parent.parent / "models" / "floor_segne
 # this size, and the mask is scaled back up with the model's smooth probabilities.
 GRABCUT_LONG_PX = 400
 GRABCUT_ITERATIONS = 3
-# Probabilities this sure are taken as given; GrabCut decides the rest.
-SURE_FLOOR, SURE_OTHER = 0.97, 0.03
+# Probabilities this sure are taken as given; GrabCut decides the rest. On floor in
+# shade (a carton's, a wall's) the model often says 0.01-0.03: taken as given there,
+# that floor is lost and it teaches GrabCut's background colours the floor's. Much
+# below 0.01 GrabCut leaks into walls of the floor's colour instead.
+SURE_FLOOR, SURE_OTHER = 0.97, 0.01
 MIN_IMAGE_PX = 64
 # Floor farther than this from the camera is not believed: a room photo rarely shows
 # more, and near the horizon one pixel spans meters.
