@@ -19,6 +19,7 @@ import cv2
 import numpy as np
 
 from .board import CHARUCO_DICTIONARY, Board, charuco_board
+from .height import LINE_SIDE_PX, detect_segments, is_vertical
 
 # Tolerances and limits, in one place.
 DETECT_MAX_SIDE_PX = 1280      # look for a checkerboard in a copy no larger than this
@@ -47,6 +48,16 @@ MAX_SADDLE_RADIUS_PX = 24
 CROP_CANDIDATES = 3
 CROP_MARGIN = 0.3              # of the group's extent, on each side
 CROP_ZOOM_BELOW_PX = 16        # corner spacing under which a crop is also tried enlarged 2x
+# A small or far board is a nearly affine view of a plane, which two tilts explain about
+# equally well (the planar pose ambiguity): on the synthetic renders the wrong one fit a
+# little better in 1 of 857, and both were within 2x of each other's RMS in 17. Within
+# this ratio the photo's vertical edges decide: the right tilt sends them to its vertical
+# vanishing point (together at least this many photo sides long, twice the other's), and
+# the pose is refit to the board and those edges together.
+AMBIGUOUS_RMS_RATIO = 2.0
+MIN_VERTICAL_SUPPORT = 0.25
+VERTICAL_SUPPORT_RATIO = 2.0
+LINE_NOISE_PX = 0.5            # least noise of a detected segment's end, in the detector's copy
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 40, 1e-3)
 _SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE
 _CLASSIC_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
@@ -690,6 +701,158 @@ def _pose(detection: BoardDetection, board: Board, intrinsics: Intrinsics):
     return pose, ids
 
 
+def _pose_rms(obj: np.ndarray, corners_px: np.ndarray, pose: np.ndarray, intrinsics: Intrinsics) -> float:
+    projected, _ = cv2.projectPoints(obj, cv2.Rodrigues(pose[:3, :3])[0], pose[:3, 3], intrinsics.K,
+                                     intrinsics.distortion)
+    return float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - corners_px) ** 2, axis=1))))
+
+
+def tilt_readings(corners_px: np.ndarray, obj_m: np.ndarray, intrinsics: Intrinsics
+                  ) -> list[tuple[np.ndarray, float]]:
+    """Both poses a planar board's corners allow, each refined, with its RMS.
+
+    Parameters
+    ----------
+    corners_px : (n, 2) float64
+        Detected corners, pixels.
+    obj_m : (n, 3) float64
+        The same corners on the board (z = 0), meters.
+    intrinsics : Intrinsics
+
+    Returns
+    -------
+    list of (camera_from_board (4, 4), rms_px), best fit first; only poses that put the
+    camera on the printed side of the board.
+    """
+    corners = np.ascontiguousarray(corners_px, dtype=np.float64)
+    obj = np.ascontiguousarray(obj_m, dtype=np.float64)
+    K, dist = intrinsics.K, intrinsics.distortion
+    _, rvecs, tvecs, _ = cv2.solvePnPGeneric(obj, corners, K, dist, flags=cv2.SOLVEPNP_IPPE)
+    readings = []
+    for rvec, tvec in zip(rvecs, tvecs):
+        rvec, tvec = cv2.solvePnPRefineLM(obj, corners, K, dist, rvec.copy(), tvec.copy())
+        pose = np.eye(4)
+        pose[:3, :3], pose[:3, 3] = cv2.Rodrigues(rvec)[0], tvec.ravel()
+        # IPPE returns NaN for some exact (noise-free) views.
+        if np.isfinite(pose).all() and (-pose[:3, :3].T @ pose[:3, 3])[2] > 0:
+            readings.append((pose, _pose_rms(obj, corners, pose, intrinsics)))
+    return sorted(readings, key=lambda r: r[1])
+
+
+def vertical_support(segments_px: np.ndarray, K: np.ndarray, poses: list[np.ndarray], side_px: int) -> np.ndarray:
+    """How much of the photo's straight edges each pose's floor normal explains.
+
+    Parameters
+    ----------
+    segments_px : (n, 4) float64
+        Line segments ``x1, y1, x2, y2`` (:func:`augment.height.detect_segments`), pixels.
+    K : (3, 3) float64
+    poses : list of (4, 4) camera_from_floor
+    side_px : int
+        The photo's longer side.
+
+    Returns
+    -------
+    (len(poses),) float64
+        Total length of the segments that pass :mod:`augment.height`'s test for a vertical
+        edge under each pose, in photo sides.
+    """
+    length = np.hypot(segments_px[:, 2] - segments_px[:, 0], segments_px[:, 3] - segments_px[:, 1])
+    return np.array([length[is_vertical(segments_px, K, pose, side_px)].sum() / side_px for pose in poses])
+
+
+def _vertical_residuals_px(segments_px: np.ndarray, K: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """Distances (2n,) of the segments' ends from the lines joining their midpoints to the
+    vertical vanishing point ``K R e3``."""
+    vp = K @ R[:, 2]
+    mid = (segments_px[:, :2] + segments_px[:, 2:]) / 2
+    toward = vp[:2] - mid * vp[2]
+    toward /= np.linalg.norm(toward, axis=1, keepdims=True)
+    across = np.column_stack([-toward[:, 1], toward[:, 0]])
+    return np.concatenate([np.sum((segments_px[:, :2] - mid) * across, axis=1),
+                           np.sum((segments_px[:, 2:] - mid) * across, axis=1)])
+
+
+def _fit_with_verticals(obj_m: np.ndarray, corners_px: np.ndarray, intrinsics: Intrinsics, pose: np.ndarray,
+                        segments_px: np.ndarray, corner_sigma_px: float, line_sigma_px: float) -> np.ndarray:
+    """Gauss-Newton on the board's corners and the vertical edges together, each residual
+    divided by its noise, from ``pose``."""
+    K, dist = intrinsics.K, intrinsics.distortion
+
+    def residuals(x):
+        projected, _ = cv2.projectPoints(obj_m, x[:3], x[3:], K, dist)
+        return np.concatenate([(projected.reshape(-1, 2) - corners_px).ravel() / corner_sigma_px,
+                               _vertical_residuals_px(segments_px, K, cv2.Rodrigues(x[:3])[0]) / line_sigma_px])
+
+    x = np.concatenate([cv2.Rodrigues(pose[:3, :3])[0].ravel(), pose[:3, 3]])
+    step = np.concatenate([np.full(3, 1e-7), np.full(3, 1e-7 * max(1.0, float(np.linalg.norm(x[3:]))))])
+    for _ in range(10):
+        r = residuals(x)
+        J = np.column_stack([(residuals(x + np.eye(6)[k] * step[k]) - r) / step[k] for k in range(6)])
+        delta = np.linalg.lstsq(J, -r, rcond=None)[0]
+        x = x + delta
+        if np.abs(delta[:3]).max() < 1e-9:
+            break
+    out = np.eye(4)
+    out[:3, :3], out[:3, 3] = cv2.Rodrigues(x[:3])[0], x[3:]
+    return out
+
+
+def _standing(segments_px: np.ndarray, K: np.ndarray, pose: np.ndarray, side_px: int) -> np.ndarray:
+    """(n,) bool: segments that can be vertical edges and reach above the horizon.
+
+    Planks and tiles running away from the camera pass the vertical test too (a floor
+    line straight away from the camera images through the vertical vanishing point), give
+    or take a few pixels over a long segment; none rises above the horizon, while room
+    corners and door frames, taller than the camera is high, do.
+    """
+    rays = np.column_stack([segments_px.reshape(-1, 2), np.ones(2 * len(segments_px))]) @ np.linalg.inv(K).T
+    rises = (rays @ pose[:3, 2]).reshape(-1, 2).max(axis=1) > 0
+    return rises & is_vertical(segments_px, K, pose, side_px)
+
+
+def _level_with_verticals(obj_m: np.ndarray, corners_px: np.ndarray, intrinsics: Intrinsics, pose: np.ndarray,
+                          segments_px: np.ndarray, side_px: int) -> np.ndarray:
+    """The pose refit to the board and the photo's standing vertical edges together.
+
+    Where the board cannot fix the tilt well (its two readings fit nearly alike), a few
+    long vertical edges can. The edges are reselected under each refit. Each residual is
+    divided by its noise: the corners' from their fit, the edges' from theirs, at least
+    ``LINE_NOISE_PX`` of the detector's shrunk copy.
+    """
+    corner_sigma = max(_pose_rms(obj_m, corners_px, pose, intrinsics), CORNER_NOISE_FLOOR_PX["chessboard"])
+    line_floor = LINE_NOISE_PX * max(1.0, side_px / LINE_SIDE_PX)
+    line_sigma = corner_sigma  # first refit: edges weigh like corners
+    for _ in range(4):
+        vertical = segments_px[_standing(segments_px, intrinsics.K, pose, side_px)]
+        if len(vertical) == 0:
+            break
+        pose = _fit_with_verticals(obj_m, corners_px, intrinsics, pose, vertical, corner_sigma, line_sigma)
+        line_sigma = max(float(np.sqrt(np.mean(_vertical_residuals_px(vertical, intrinsics.K, pose[:3, :3]) ** 2))),
+                         line_floor)
+    return pose
+
+
+def _settle_tilt(image: np.ndarray, corners_px: np.ndarray, obj_m: np.ndarray, intrinsics: Intrinsics,
+                 pose: np.ndarray, warnings: list) -> np.ndarray:
+    """``pose``, unless the board's fit cannot tell its two tilts apart: then the tilt the
+    photo's vertical edges side with, refit to them and the board together."""
+    readings = tilt_readings(corners_px, obj_m, intrinsics)
+    if len(readings) < 2 or readings[1][1] > AMBIGUOUS_RMS_RATIO * max(readings[0][1], 1e-6):
+        return pose
+    segments = detect_segments(image)
+    side = max(np.asarray(image).shape[:2])
+    support = vertical_support(segments, intrinsics.K, [r[0] for r in readings], side)
+    best = int(np.argmax(support))
+    if support[best] >= MIN_VERTICAL_SUPPORT and support[best] >= VERTICAL_SUPPORT_RATIO * support[1 - best]:
+        return _level_with_verticals(obj_m, corners_px, intrinsics, readings[best][0], segments, side)
+    (_, rms0), (_, rms1) = readings
+    warnings.append(f"the board is too small in the photo to fix the floor's tilt for sure: two tilts fit it "
+                    f"(RMS {rms0:.2f} and {rms1:.2f} px) and the photo's vertical edges do not tell them apart; "
+                    "the better fit was taken. A board nearer the camera, or larger, settles it")
+    return pose
+
+
 def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics | None = None,
                     where: str = "the photo") -> Calibration:
     """Calibrate one photo: detect the board, settle the intrinsics, solve the pose.
@@ -739,9 +902,9 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
         intrinsics = single_view_intrinsics(detection.corners_px, board, size_px, detection.ids)
     camera_from_floor, ids = _pose(detection, board, intrinsics)
     corners = detection.corners_px
-    projected, _ = cv2.projectPoints(board.corners_m()[ids], cv2.Rodrigues(camera_from_floor[:3, :3])[0],
-                                     camera_from_floor[:3, 3], intrinsics.K, intrinsics.distortion)
-    rms = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - corners) ** 2, axis=1))))
+    warnings = []
+    camera_from_floor = _settle_tilt(image, corners, board.corners_m()[ids], intrinsics, camera_from_floor, warnings)
+    rms = _pose_rms(board.corners_m()[ids], corners, camera_from_floor, intrinsics)
     if rms > MAX_RMS_PX:
         raise CalibrationError(
             f"the board in {where} fits its model with an RMS of {rms:.2f} px (at most {MAX_RMS_PX} accepted): "
@@ -757,7 +920,6 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
     center = corners.mean(axis=0)
     if horizon @ [center[0], center[1], 1.0] < 0:
         horizon = -horizon
-    warnings = []
     if intrinsics.source == "single-view":
         warnings.append("focal length estimated from the board alone (no EXIF, no camera profile): "
                         f"uncertain by about {100 * intrinsics.focal_uncertainty:.1f} %")

@@ -53,13 +53,15 @@ board's center); camera axes are OpenCV's. Public functions never modify their i
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
 from layout.geometry import point_segment_distances
 
-from .calibrate import Calibration
+if TYPE_CHECKING:  # calibrate uses the vertical-edge test below to settle a board's tilt
+    from .calibrate import Calibration
 
 # Tolerances and limits, in one place.
 FALLBACK_HEIGHT_M = 2.5
@@ -548,10 +550,26 @@ def _trace(grads: tuple[np.ndarray, np.ndarray], starts: np.ndarray, ends: np.nd
     return starts, ends
 
 
-def _is_vertical(seg: np.ndarray, K: np.ndarray, pose: np.ndarray, side: int) -> np.ndarray:
-    """(n,) bool: segments that can be images of vertical edges (3D cosine and vanishing point)."""
-    cos_3d, _, vp_dist = vertical_alignment(seg, K, pose)
-    return (cos_3d >= MIN_VERTICAL_COS) & (vp_dist <= VP_DISTANCE_FRACTION * side)
+def is_vertical(segments_px: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray, side_px: int) -> np.ndarray:
+    """Which segments can be images of vertical edges.
+
+    Parameters
+    ----------
+    segments_px : (n, 4) float64
+        Rows ``x1, y1, x2, y2``, undistorted pixels.
+    K : (3, 3) float64
+    camera_from_floor : (4, 4) float64
+    side_px : int
+        The photo's longer side, pixels (the vanishing-point tolerance scales with it).
+
+    Returns
+    -------
+    (n,) bool
+        3D cosine at least ``MIN_VERTICAL_COS`` and both ends within
+        ``VP_DISTANCE_FRACTION * side_px`` of the line to the vertical vanishing point.
+    """
+    cos_3d, _, vp_dist = vertical_alignment(segments_px, K, camera_from_floor)
+    return (cos_3d >= MIN_VERTICAL_COS) & (vp_dist <= VP_DISTANCE_FRACTION * side_px)
 
 
 def _merge_edges(vseg: np.ndarray, K: np.ndarray, pose: np.ndarray, side: int, bridge=None
@@ -878,7 +896,7 @@ def _candidates(seg: np.ndarray, K: np.ndarray, pose: np.ndarray, size_px: tuple
     side = max(size_px)
     k = _factor((height, width))
     grads = None if small is None else _gradients(small)
-    vertical = _is_vertical(seg, K, pose, side)
+    vertical = is_vertical(seg, K, pose, side)
     c = _edge_candidates(seg, vertical, K, pose, size_px, floor_mask, small, color, grads)
 
     # Long non-vertical lines: where tops end (the ceiling line), what blocks them, and

@@ -13,7 +13,7 @@ from augment.board import Board
 from augment.calibrate import (CalibrationError, _find_chessboard, _focal_from_homography, _saddle_refine,
                                calibrate_file, calibrate_photo, camera_profile, detect_board, exif_intrinsics,
                                exif_focal_px, exif_orientation, load_profile, read_photo,
-                               single_view_intrinsics)
+                               single_view_intrinsics, tilt_readings)
 from augment.gl import Renderer
 from augment.synth import render_sample
 from augment.synth.camera import look_pose
@@ -362,3 +362,63 @@ def test_hidden_checkerboard_is_refused_naming_charuco():
         sample = render_sample([99, 4], renderer, size_px=(640, 480), board_hidden=0.4)
     with pytest.raises(CalibrationError, match=r"no 7x5 checkerboard .*--board charuco:7x5, may be partly hidden"):
         calibrate_photo(sample.image, Board())
+
+
+def test_both_tilts_of_a_projected_board_are_read_best_first(rng):
+    """Corners projected by hand from a known pose (camera 1.5 m up, 3 m from a board it
+    looks down on at 26 degrees, 0.3 px of noise): the better-fitting reading is that pose,
+    and the other is the board's mirror tilt, tens of degrees away and fitting worse."""
+    board = Board()
+    intrinsics = exif_intrinsics(1000.0, (1280, 960))
+    camera_from_floor = np.linalg.inv(look_pose([0.0, -3.0, 1.5], np.radians(90.0), np.radians(26.0),
+                                                np.radians(4.0)))
+    obj = board.corners_m()
+    corners = cv2.projectPoints(obj, cv2.Rodrigues(camera_from_floor[:3, :3])[0], camera_from_floor[:3, 3],
+                                intrinsics.K, None)[0].reshape(-1, 2)
+    corners += rng.normal(0.0, 0.3, corners.shape)
+    (best, rms_best), (other, rms_other) = tilt_readings(corners, obj, intrinsics)
+
+    def tilt_error_deg(pose):
+        return np.degrees(np.arccos(np.clip(pose[:3, 2] @ camera_from_floor[:3, 2], -1, 1)))
+
+    assert tilt_error_deg(best) < 1.0 and np.allclose(best[:3, 3], camera_from_floor[:3, 3], atol=0.05)
+    assert tilt_error_deg(other) > 10.0 and rms_best < rms_other < 2.0
+
+
+@pytest.fixture(scope="module")
+def far_board():
+    """The synthetic photographer's seed 907, render 71: a 30 cm board 4 m away, 77 px across
+    a 1280 px photo, with a door and a room corner in view."""
+    with Renderer() as renderer:
+        return render_sample([907, 71], renderer)
+
+
+def _normal_error_deg(calibration, truth) -> float:
+    up = np.array(truth["camera_from_world"])[:3, 2]
+    return float(np.degrees(np.arccos(np.clip(calibration.camera_from_floor[:3, 2] @ up, -1, 1))))
+
+
+def test_far_board_tilt_is_settled_by_the_vertical_edges(far_board, monkeypatch):
+    """The board alone fits a floor tilted 60 degrees off a little better than the true one
+    (RMS 0.99 against 1.04 px); the door's and the corner's vertical edges pick the true one,
+    and refit with the board they bring its normal within 0.5 degrees."""
+    import augment.calibrate as calibrate
+
+    w, h = far_board.truth["size_px"]
+    intrinsics = exif_intrinsics(far_board.truth["K"][0][0], (w, h))
+    assert _normal_error_deg(calibrate_photo(far_board.image, Board(), intrinsics=intrinsics), far_board.truth) < 0.5
+    monkeypatch.setattr(calibrate, "AMBIGUOUS_RMS_RATIO", 1.0)  # the board's fit alone
+    assert _normal_error_deg(calibrate_photo(far_board.image, Board(), intrinsics=intrinsics), far_board.truth) > 30
+
+
+def test_far_board_without_vertical_edges_warns_that_its_tilt_is_unsure(far_board):
+    """Everything but the board painted over: nothing tells the two tilts apart, and the
+    calibration says so instead of passing the guess off as sure."""
+    image = np.full_like(far_board.image, 128)
+    corners = detect_board(far_board.image, Board()).corners_px
+    x0, y0 = corners.min(axis=0).astype(int) - 20
+    x1, y1 = corners.max(axis=0).astype(int) + 20
+    image[y0:y1, x0:x1] = far_board.image[y0:y1, x0:x1]
+    w, h = far_board.truth["size_px"]
+    c = calibrate_photo(image, Board(), intrinsics=exif_intrinsics(far_board.truth["K"][0][0], (w, h)))
+    assert any("tilt" in warning for warning in c.warnings)
