@@ -163,6 +163,11 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     distance = floor_distance_m(small.shape, small_cal)
     near = distance <= MAX_FLOOR_DISTANCE_M
     region = (small & near).astype(np.uint8)
+    # The outline is the floor's outer edge, holes and all; fill them first, or the opening
+    # below breaks a thin rim of floor behind a carton at a far wall and the outline runs
+    # round the carton instead (seed 904 render 75: -11.2 % from the true mask, -0.3 % filled).
+    outer, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    cv2.drawContours(region, outer, -1, 1, -1)
     # Opening removes hair-thin spurs (a skirting board's shadow) before tracing.
     region = cv2.morphologyEx(region, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     contours, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
