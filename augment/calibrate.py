@@ -539,6 +539,18 @@ def single_view_intrinsics(corners_px: np.ndarray, board: Board, size_px: tuple[
     advice = ("Give the camera's focal length another way: a photo with EXIF data, or a camera "
               "profile from `stage calibrate shots/*.jpg` (--camera profile.json).")
     if f0 is None or not (0.2 * max(size_px) < f0 < 10 * max(size_px)):
+        # Little perspective: a face-on board, or a small, far one (nearly an affine view).
+        # An affine fit's foreshortening tells them apart: its singular values' ratio is the
+        # cosine of the board's tilt from the view direction.
+        affine, _ = cv2.estimateAffine2D(obj[:, :2].astype(np.float32), corners_px.astype(np.float32))
+        ratio = np.linalg.svd(affine[:, :2], compute_uv=False) if affine is not None else np.ones(2)
+        tilt_deg = float(np.degrees(np.arccos(min(1.0, ratio[1] / ratio[0]))))
+        if tilt_deg >= MIN_TILT_DEG:
+            extent = corners_px.max(axis=0) - corners_px.min(axis=0)
+            raise CalibrationError(
+                f"the board is too small in the photo ({extent.max():.0f} px across a {max(size_px)} px photo) "
+                f"for its perspective to tell the focal length, though it is tilted about {tilt_deg:.0f} degrees. "
+                f"Lay it nearer the camera, or: {advice}")
         raise CalibrationError(
             "the board is seen almost face-on, so its perspective does not tell the focal length. "
             "Take the photo from standing height looking across the floor (the board well "

@@ -422,3 +422,11 @@ def test_far_board_without_vertical_edges_warns_that_its_tilt_is_unsure(far_boar
     w, h = far_board.truth["size_px"]
     c = calibrate_photo(image, Board(), intrinsics=exif_intrinsics(far_board.truth["K"][0][0], (w, h)))
     assert any("tilt" in warning for warning in c.warnings)
+
+
+def test_far_board_without_a_focal_length_is_called_small_not_face_on(far_board):
+    """Seen small and far, the board shows too little perspective for a focal length. It is
+    tilted 60 degrees, so the refusal says it is too small, not that it is face-on."""
+    with pytest.raises(CalibrationError, match="too small in the photo") as refusal:
+        calibrate_photo(far_board.image, Board())
+    assert "face-on" not in str(refusal.value) and "EXIF" in str(refusal.value)
