@@ -9,11 +9,12 @@ the calibration), and learns from renders of the synthetic photographer whose fl
 is known: segmented by the shipped pipeline without the trim, so the model sees the
 masks the trim sees.
 
-Recipe (what ``models/skirting_board.onnx`` was made with; 1,040 renders, about 15
-minutes of rendering on two cores, 4 of training)::
+Recipe (what ``models/skirting_board.onnx`` was made with; 1,040 renders of the
+photographer's 5-12 cm boards and 260 with boards of 10-20 cm, about 20 minutes of
+rendering on two cores, 2-4 of training)::
 
-    python models/train_skirting.py --seeds 950 951 952 954 955 956 957 --val 953 \\
-        --count 130 --out models/skirting_board.onnx
+    python models/train_skirting.py --seeds 950 951 952 954 955 956 957 --tall-seeds 958 959 \\
+        --val 953 --count 130 --out models/skirting_board.onnx
 
 Rendered columns are kept in ``--cache`` (one file per seed), so a second run trains
 without rendering. Everything random derives from ``--seed``. Training needs torch
@@ -43,11 +44,15 @@ from augment.skirting import board_profiles, working_view  # noqa: E402
 # are columns whose edge is far from any floor line (a carton's top, say).
 BOARD_M, UNSURE_M = 0.025, 0.01
 KEEP_FROM_M, KEEP_TO_M = -0.05, 0.22
+# The photographer draws boards 5-12 cm tall; real ones reach 20 cm, and a check that
+# never saw one takes it for no board. ``--tall-seeds`` are rendered with these.
+TALL_BASEBOARD_M = (0.10, 0.20)
 
 
-def render_columns(seed: int, count: int) -> dict:
-    """Render ``count`` rooms of ``seed``, segment each without the trim and return every
-    wall column's profile, scalars and true floor-line offset (m, NaN: no floor)."""
+def render_columns(seed: int, count: int, tall: bool = False) -> dict:
+    """Render ``count`` rooms of ``seed`` (with ``TALL_BASEBOARD_M`` boards when ``tall``),
+    segment each without the trim and return every wall column's profile, scalars and
+    true floor-line offset (m, NaN: no floor)."""
     from augment.board import Board
     from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics
     from augment.gl import Renderer
@@ -58,7 +63,7 @@ def render_columns(seed: int, count: int) -> dict:
     out = {"profile": [], "scalars": [], "offset_m": [], "render": []}
     with Renderer() as renderer:
         for i in range(count):
-            sample = render_sample([seed, i], renderer)
+            sample = render_sample([seed, i], renderer, **({"baseboard_m": TALL_BASEBOARD_M} if tall else {}))
             w, h = sample.truth["size_px"]
             try:
                 cal = calibrate_photo(sample.image, Board(),
@@ -82,10 +87,14 @@ def render_columns(seed: int, count: int) -> dict:
     return {k: np.concatenate(v) if v else np.zeros(0) for k, v in out.items()}
 
 
-def load_seed(seed: int, count: int, cache: Path) -> dict:
-    path = cache / f"skirting_{seed}_{count}.npz"
+def _cache_path(cache: Path, seed: int, count: int, tall: bool) -> Path:
+    return cache / f"skirting_{seed}_{count}{'_tall' if tall else ''}.npz"
+
+
+def load_seed(seed: int, count: int, cache: Path, tall: bool = False) -> dict:
+    path = _cache_path(cache, seed, count, tall)
     if not path.exists():
-        data = render_columns(seed, count)
+        data = render_columns(seed, count, tall)
         cache.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(".tmp.npz")
         np.savez_compressed(tmp, **data)
@@ -123,6 +132,8 @@ class BoardNet(nn.Module):
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seeds", type=int, nargs="+", required=True, help="render seeds to train on")
+    parser.add_argument("--tall-seeds", type=int, nargs="*", default=[],
+                        help="render seeds to train on, with baseboards of 10-20 cm")
     parser.add_argument("--val", type=int, nargs="+", required=True, help="render seeds to validate on")
     parser.add_argument("--count", type=int, default=130, help="renders per seed")
     parser.add_argument("--epochs", type=int, default=10)
@@ -133,20 +144,20 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     t0 = time.time()
-    seeds = args.seeds + args.val
-    missing = [s for s in seeds if not (args.cache / f"skirting_{s}_{args.count}.npz").exists()]
+    seeds = [(s, False) for s in args.seeds + args.val] + [(s, True) for s in args.tall_seeds]
+    missing = [(s, tall) for s, tall in seeds if not _cache_path(args.cache, s, args.count, tall).exists()]
     if missing:
         with multiprocessing.get_context("spawn").Pool(min(args.workers, len(missing))) as pool:
-            pool.starmap(load_seed, [(s, args.count, args.cache) for s in missing])
-    data = {s: load_seed(s, args.count, args.cache) for s in seeds}
+            pool.starmap(load_seed, [(s, args.count, args.cache, tall) for s, tall in missing])
+    data = {key: load_seed(key[0], args.count, args.cache, key[1]) for key in seeds}
     t_render = time.time() - t0
 
     def joined(group, every):
-        parts = [labelled(data[s], every) for s in group]
+        parts = [labelled(data[key], every) for key in group]
         return [torch.cat(x) for x in zip(*parts)]
 
-    profile, scalars, y = joined(args.seeds, 2)
-    profile_v, scalars_v, y_v = joined(args.val, 4)
+    profile, scalars, y = joined([(s, False) for s in args.seeds] + [(s, True) for s in args.tall_seeds], 2)
+    profile_v, scalars_v, y_v = joined([(s, False) for s in args.val], 4)
     print(f"{len(y)} training columns ({float(y.mean()):.1%} board), {len(y_v)} validation", flush=True)
 
     torch.manual_seed(args.seed)
@@ -184,7 +195,8 @@ def main(argv=None) -> int:
                           dynamic_axes={"profile": {0: "columns"}, "scalars": {0: "columns"},
                                         "logit": {0: "columns"}})
     tmp.replace(args.out)
-    sidecar = {"seeds": args.seeds, "val": args.val, "count": args.count, "seed": args.seed,
+    sidecar = {"seeds": args.seeds, "tall_seeds": args.tall_seeds, "tall_baseboard_m": list(TALL_BASEBOARD_M),
+               "val": args.val, "count": args.count, "seed": args.seed,
                "epochs": args.epochs, "kept_epoch": min(log, key=lambda e: e["val_loss"])["epoch"],
                "parameters": sum(p.numel() for p in net.parameters()), "training_columns": len(y),
                "render_s": round(t_render), "train_s": round(time.time() - t0 - t_render), "log": log}

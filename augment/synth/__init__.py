@@ -24,7 +24,7 @@ from ..gl import Renderer, pyrender
 from .camera import Shot, place_board, random_handling, random_shot, random_size
 from .photo import degrade
 from .rooms import Clutter, Room, add_clutter, add_furniture, random_room
-from .scene import SEG_CEILING, SEG_FLOOR, SEG_WALL, build_scene
+from .scene import BASEBOARD_M, SEG_CEILING, SEG_FLOOR, SEG_WALL, build_scene
 
 FORMAT = "stager-synth-1"
 # Label image values (``Sample.labels``).
@@ -86,7 +86,7 @@ def _board_cover(board: Board, world_from_board: np.ndarray, fraction: float) ->
 
 def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = None,
                   board: Board | None = None, clutter: bool = True, photographic: bool = True,
-                  board_hidden: float = 0.0, furnished: float = 0.0) -> Sample:
+                  board_hidden: float = 0.0, furnished: float = 0.0, baseboard_m=BASEBOARD_M) -> Sample:
     """Render one synthetic room photo with its ground truth.
 
     Parameters
@@ -111,6 +111,9 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         Put a flat carton over this fraction of the board's squares (across its width, from
         its +x edge): a partly hidden board, as ChArUco boards allow. The truth's
         ``corners_visible`` says which corners the render shows.
+    baseboard_m : (low, high)
+        The range the baseboards' height is drawn from, meters (another range keeps the
+        random stream: only the boards' heights change).
     """
     board = Board() if board is None else board
     rng = np.random.default_rng(seed)
@@ -139,7 +142,7 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     if board_hidden > 0:
         room = replace(room, clutter=room.clutter + (_board_cover(board, world_from_board, board_hidden),))
 
-    built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px))
+    built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px), baseboard_m)
     width, height = size_px
     flags = pyrender.RenderFlags.SHADOWS_DIRECTIONAL | pyrender.RenderFlags.SHADOWS_SPOT
     # Small frames cannot show a 2048-texel shadow map's detail; it would cost half the time.

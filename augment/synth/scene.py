@@ -19,6 +19,8 @@ from .camera import Shot
 from .rooms import FURNITURE_KINDS, Room, contains, inward_normal, wall_ends
 
 WALL_THICKNESS_M = 0.15
+# Baseboard heights drawn, low and high: most rooms' boards (real ones reach 20 cm).
+BASEBOARD_M = (0.05, 0.12)
 # Trim and clutter sink this far into the wall, floor or ceiling they touch: where two
 # meshes only meet, a pixel on the seam goes to whichever pyrender draws first, and it
 # draws in set order, which changes from run to run.
@@ -251,13 +253,13 @@ def _walls(room: Room, batch: _Batch, tile_m: float):
                 batch.quad([point(s0, z0), point(s1, z0), point(s1, z0, t), point(s0, z0, t)], np.array([0, 0, 1.0]))
 
 
-def _openings(rng, room: Room, frames: _Batch, doors: _Batch):
+def _openings(rng, room: Room, frames: _Batch, doors: _Batch, baseboard_m=BASEBOARD_M):
     """Door leaves and thresholds into ``doors``; casings, window frames and sills and the
-    baseboards (all trim paint) into ``frames``."""
+    baseboards (all trim paint, ``baseboard_m`` (low, high) tall) into ``frames``."""
     poly = room.polygon_m
     t = WALL_THICKNESS_M
     casing_m = rng.uniform(0.05, 0.09)
-    base_h, base_d = rng.uniform(0.05, 0.12), rng.uniform(0.012, 0.02)
+    base_h, base_d = rng.uniform(*baseboard_m), rng.uniform(0.012, 0.02)
     for o in room.openings:
         a, b = wall_ends(poly, o.wall)
         u2 = (b - a) / np.linalg.norm(b - a)
@@ -350,8 +352,9 @@ def _light_pose(direction, position=(0.0, 0.0, 0.0)):
 
 
 def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
-                world_from_board: np.ndarray, texture_px: int = 512) -> Scene:
-    """Sample materials and lights and assemble the scene seen by ``shot``."""
+                world_from_board: np.ndarray, texture_px: int = 512, baseboard_m=BASEBOARD_M) -> Scene:
+    """Sample materials and lights and assemble the scene seen by ``shot`` (baseboards
+    drawn ``baseboard_m`` (low, high) tall)."""
     info: dict = {}
     sky = np.clip([0.92, 0.95, 1.0] + rng.normal(0, 0.03, 3), 0.8, 1.0)
     scene = GLScene(bg_color=np.append(sky, 1.0))
@@ -387,7 +390,7 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
 
     # Doors, window frames, baseboards
     frames, doors = _Batch(), _Batch()
-    _openings(rng, room, frames, doors)
+    _openings(rng, room, frames, doors, baseboard_m)
     white = _random_tint(rng, [0.85, 0.85, 0.83], 0.03)
     trim = white if rng.random() < 0.7 else _random_tint(rng, [0.45, 0.3, 0.18], 0.08)
     if frames.positions:
