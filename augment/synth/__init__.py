@@ -23,8 +23,8 @@ from ..board import CHARUCO_DICTIONARY, Board
 from ..gl import Renderer, pyrender
 from .camera import Shot, place_board, random_handling, random_shot, random_size
 from .photo import degrade
-from .rooms import Clutter, Room, add_clutter, add_furniture, random_room
-from .scene import BASEBOARD_M, SEG_CEILING, SEG_FLOOR, SEG_WALL, build_scene
+from .rooms import BASEBOARD_M, Clutter, Room, add_clutter, add_furniture, random_room
+from .scene import SEG_CEILING, SEG_FLOOR, SEG_WALL, build_scene
 
 FORMAT = "stager-synth-1"
 # Label image values (``Sample.labels``).

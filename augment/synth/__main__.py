@@ -25,6 +25,7 @@ from layout.fileio import write_atomic
 from ..board import DEFAULT_INNER_CORNERS, DEFAULT_SQUARE_MM, Board
 from ..cli import DEFAULT_BOARD, parse_board
 from .dataset import contact_sheet, init_worker, render_one, truth_view
+from .rooms import BASEBOARD_M
 
 def _parse_size(text: str) -> tuple[int, int]:
     try:
@@ -52,6 +53,9 @@ def main(argv=None) -> int:
     parser.add_argument("--no-clutter", dest="clutter", action="store_false", help="keep floors clean")
     parser.add_argument("--furnished", type=float, default=0.0, metavar="P",
                         help="chance that a room gets 1-6 pieces of furniture (default 0: empty rooms)")
+    parser.add_argument("--baseboard-m", type=float, nargs=2, default=BASEBOARD_M, metavar=("LOW", "HIGH"),
+                        help="range of the baseboards' height, meters (default %g %g; real ones reach 0.2)"
+                             % BASEBOARD_M)
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="render processes (default: one per core)")
     parser.add_argument("--sheet", type=Path, default=None,
@@ -63,6 +67,12 @@ def main(argv=None) -> int:
         parser.error(f"--count {args.count}: must be at least 1")
     if args.square <= 0:
         parser.error(f"--square {args.square}: must be a positive size in millimeters, e.g. 50")
+    if not 0.0 <= args.furnished <= 1.0:
+        parser.error(f"--furnished {args.furnished}: must be a chance between 0 and 1, e.g. 0.7")
+    low, high = args.baseboard_m
+    if not 0.0 < low <= high <= 0.5:
+        parser.error(f"--baseboard-m {low:g} {high:g}: give a low and a high height in meters, "
+                     "0 < low <= high <= 0.5, e.g. 0.1 0.2")
     try:
         args.out.mkdir(parents=True, exist_ok=True)
         probe = args.out / ".write_test"
@@ -72,9 +82,8 @@ def main(argv=None) -> int:
         print(f"error: cannot write to --out {args.out}: {error.strerror}", file=sys.stderr)
         return 2
 
-    if not 0.0 <= args.furnished <= 1.0:
-        parser.error(f"--furnished {args.furnished}: must be a chance between 0 and 1, e.g. 0.7")
     options = dict(seed=args.seed, size=args.size, out=args.out, clutter=args.clutter, furnished=args.furnished,
+                   baseboard_m=(low, high),
                    board=Board(args.board.cols, args.board.rows, args.square, kind=args.board.kind))
     workers = max(1, min(args.workers, args.count))
     start = time.perf_counter()

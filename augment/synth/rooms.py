@@ -9,6 +9,9 @@ from dataclasses import dataclass
 import numpy as np
 from matplotlib.path import Path as _MplPath
 
+# Baseboard heights drawn, low and high, meters: most rooms' boards (real ones reach 0.2).
+BASEBOARD_M = (0.05, 0.12)
+
 ROOM_SIDE_M = (2.5, 8.0)
 WALL_HEIGHT_M = (2.3, 3.5)
 _CORNER_GAP_M = 0.15  # openings keep this far from a wall's ends (room for the frame)

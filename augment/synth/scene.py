@@ -16,11 +16,9 @@ from ..gl import Scene as GLScene
 from ..gl import gl_from_cv_pose, pyrender, pyrender_camera
 from . import textures
 from .camera import Shot
-from .rooms import FURNITURE_KINDS, Room, contains, inward_normal, wall_ends
+from .rooms import BASEBOARD_M, FURNITURE_KINDS, Room, contains, inward_normal, wall_ends
 
 WALL_THICKNESS_M = 0.15
-# Baseboard heights drawn, low and high: most rooms' boards (real ones reach 20 cm).
-BASEBOARD_M = (0.05, 0.12)
 # Trim and clutter sink this far into the wall, floor or ceiling they touch: where two
 # meshes only meet, a pixel on the seam goes to whichever pyrender draws first, and it
 # draws in set order, which changes from run to run.

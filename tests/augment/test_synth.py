@@ -306,3 +306,25 @@ def test_cli_rejects_a_bad_furnished_chance(tmp_path, capsys):
         synth_main(["--count", "1", "--out", str(tmp_path), "--furnished", "1.5"])
     assert exit_info.value.code == 2
     assert "--furnished 1.5" in capsys.readouterr().err
+
+
+def test_taller_baseboards_change_only_the_boards(renderer):
+    """Another baseboard range keeps the random stream: the same room, camera and floor
+    mask, and a few percent of the photo changes, most of it off the floor (the boards;
+    the rest is their light and shade on the floor)."""
+    default = render_sample(6, renderer, size_px=(320, 240), photographic=False)
+    tall = render_sample(6, renderer, size_px=(320, 240), photographic=False, baseboard_m=(0.18, 0.18))
+    assert tall.truth["camera_from_world"] == default.truth["camera_from_world"]
+    assert tall.truth["room"] == default.truth["room"]
+    assert np.array_equal(tall.floor_mask, default.floor_mask)
+    changed = np.any(tall.image != default.image, axis=2)
+    assert 0 < changed.mean() < 0.05
+    assert (changed & ~tall.floor_mask).sum() >= 0.8 * changed.sum()
+
+
+def test_cli_rejects_a_bad_baseboard_range(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        synth_main(["--count", "1", "--out", str(tmp_path / "new"), "--baseboard-m", "0.3", "0.1"])
+    assert exit_info.value.code == 2
+    assert "--baseboard-m 0.3 0.1" in capsys.readouterr().err
+    assert not (tmp_path / "new").exists()  # refused before anything was written
