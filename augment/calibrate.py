@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 
 from .board import CHARUCO_DICTIONARY, Board, charuco_board
-from .height import LINE_SIDE_PX, detect_segments, is_vertical
+from .height import LINE_SIDE_PX, detect_segments, floor_colored, is_vertical
 
 # Tolerances and limits, in one place.
 DETECT_MAX_SIDE_PX = 1280      # look for a checkerboard in a copy no larger than this
@@ -58,6 +58,7 @@ AMBIGUOUS_RMS_RATIO = 2.0
 MIN_VERTICAL_SUPPORT = 0.25
 VERTICAL_SUPPORT_RATIO = 2.0
 LINE_NOISE_PX = 0.5            # least noise of a detected segment's end, in the detector's copy
+FLOOR_SIDE_FRACTION = 0.004    # a segment's sides are read this far off it (x the longer side)
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 40, 1e-3)
 _SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE
 _CLASSIC_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
@@ -810,22 +811,35 @@ def _fit_with_verticals(obj_m: np.ndarray, corners_px: np.ndarray, intrinsics: I
     return out
 
 
-def _standing(segments_px: np.ndarray, K: np.ndarray, pose: np.ndarray, side_px: int) -> np.ndarray:
-    """(n,) bool: segments that can be vertical edges and reach above the horizon.
+def _on_the_floor(image: np.ndarray, segments_px: np.ndarray, K: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """(n,) bool: segments with the floor's colour on both sides (planks, tile joints)."""
+    start, end = segments_px[:, None, :2], segments_px[:, None, 2:]
+    along = np.linspace(0.1, 0.9, 7)[None, :, None]
+    points = start + along * (end - start)
+    direction = (end - start)[:, 0]
+    across = np.column_stack([-direction[:, 1], direction[:, 0]])
+    across /= np.maximum(np.linalg.norm(across, axis=1, keepdims=True), 1e-12)
+    offset = (FLOOR_SIDE_FRACTION * max(np.asarray(image).shape[:2])) * across[:, None, :]
+    return floor_colored(image, np.concatenate([points - offset, points + offset], axis=1), K, pose)
+
+
+def _wall_edges(segments_px: np.ndarray, K: np.ndarray, pose: np.ndarray, side_px: int,
+                on_floor: np.ndarray) -> np.ndarray:
+    """(n,) bool: segments that can be vertical edges and are not lines on the floor.
 
     Planks and tiles running away from the camera pass the vertical test too (a floor
     line straight away from the camera images through the vertical vanishing point), give
-    or take a few pixels over a long segment; none rises above the horizon, while room
-    corners and door frames, taller than the camera is high, do.
+    or take a few pixels over a long segment. What rises above the horizon is not on the
+    floor; below it, a segment with the floor's colour on both sides is taken to be.
     """
     rays = np.column_stack([segments_px.reshape(-1, 2), np.ones(2 * len(segments_px))]) @ np.linalg.inv(K).T
     rises = (rays @ pose[:3, 2]).reshape(-1, 2).max(axis=1) > 0
-    return rises & is_vertical(segments_px, K, pose, side_px)
+    return (rises | ~on_floor) & is_vertical(segments_px, K, pose, side_px)
 
 
-def _level_with_verticals(obj_m: np.ndarray, corners_px: np.ndarray, intrinsics: Intrinsics, pose: np.ndarray,
-                          segments_px: np.ndarray, side_px: int) -> np.ndarray:
-    """The pose refit to the board and the photo's standing vertical edges together.
+def _level_with_verticals(image: np.ndarray, obj_m: np.ndarray, corners_px: np.ndarray, intrinsics: Intrinsics,
+                          pose: np.ndarray, segments_px: np.ndarray, side_px: int) -> np.ndarray:
+    """The pose refit to the board and the photo's vertical edges together.
 
     Where the board cannot fix the tilt well (its two readings fit nearly alike), a few
     long vertical edges can. The edges are reselected under each refit. Each residual is
@@ -835,8 +849,9 @@ def _level_with_verticals(obj_m: np.ndarray, corners_px: np.ndarray, intrinsics:
     corner_sigma = max(_pose_rms(obj_m, corners_px, pose, intrinsics), CORNER_NOISE_FLOOR_PX["chessboard"])
     line_floor = LINE_NOISE_PX * max(1.0, side_px / LINE_SIDE_PX)
     line_sigma = corner_sigma  # first refit: edges weigh like corners
+    on_floor = _on_the_floor(image, segments_px, intrinsics.K, pose)
     for _ in range(4):
-        vertical = segments_px[_standing(segments_px, intrinsics.K, pose, side_px)]
+        vertical = segments_px[_wall_edges(segments_px, intrinsics.K, pose, side_px, on_floor)]
         if len(vertical) == 0:
             break
         pose = _fit_with_verticals(obj_m, corners_px, intrinsics, pose, vertical, corner_sigma, line_sigma)
@@ -857,7 +872,7 @@ def _settle_tilt(image: np.ndarray, corners_px: np.ndarray, obj_m: np.ndarray, i
     support = vertical_support(segments, intrinsics.K, [r[0] for r in readings], side)
     best = int(np.argmax(support))
     if support[best] >= MIN_VERTICAL_SUPPORT and support[best] >= VERTICAL_SUPPORT_RATIO * support[1 - best]:
-        return _level_with_verticals(obj_m, corners_px, intrinsics, readings[best][0], segments, side)
+        return _level_with_verticals(image, obj_m, corners_px, intrinsics, readings[best][0], segments, side)
     (_, rms0), (_, rms1) = readings
     warnings.append(f"the board is too small in the photo to fix the floor's tilt for sure: two tilts fit it "
                     f"(RMS {rms0:.2f} and {rms1:.2f} px) and the photo's vertical edges do not tell them apart; "

@@ -830,13 +830,12 @@ def _blocked_above(tops: np.ndarray, K: np.ndarray, pose: np.ndarray, lines: np.
     return np.array([_crossed(starts[i:i + 1], ends[i:i + 1], lines[far[i]])[0] for i in range(len(tops))])
 
 
-def _floor_like_below(color: np.ndarray, k: int, shape: tuple[int, int], bases: np.ndarray, tops: np.ndarray,
-                      K: np.ndarray, pose: np.ndarray) -> np.ndarray:
-    """Without a floor mask: does the image just below each base look like the floor around
-    the board (the floor frame's origin)? Colors in Lab; the floor's from a ring of floor
-    points ``FLOOR_RING_M`` around the origin, the base's from points ``FLOOR_COLOR_BELOW``
-    of the edge's length below it (past a baseboard). A weak test: walls and floors can
-    share a color. (n,) bool."""
+def _floor_share(color: np.ndarray, k: int, shape: tuple[int, int], points_px: np.ndarray, K: np.ndarray,
+                 pose: np.ndarray) -> np.ndarray | None:
+    """Share of each row of ``points_px`` (n, m, 2), full-size pixels, whose colour is the
+    floor's around the board (the floor frame's origin): Lab, the floor's from a ring of
+    floor points ``FLOOR_RING_M`` around the origin, within ``FLOOR_COLOR_Z`` spreads.
+    None when too little of that ring is in view to say. (n,) float."""
     lab = cv2.cvtColor(cv2.GaussianBlur(color, (5, 5), 0), cv2.COLOR_RGB2LAB).astype(np.float64)
     angles = np.linspace(0, 2 * np.pi, 48, endpoint=False)
     radii = np.linspace(*FLOOR_RING_M, 5)
@@ -848,19 +847,55 @@ def _floor_like_below(color: np.ndarray, k: int, shape: tuple[int, int], bases: 
     h, w = shape
     ok = (cam[:, 2] > 0) & (px[:, 0] >= 0) & (px[:, 0] <= w - 1) & (px[:, 1] >= 0) & (px[:, 1] <= h - 1)
     if ok.sum() < 20:
-        return np.ones(len(bases), bool)          # no floor reference in view: no verdict
+        return None
     ref = _sample(lab, _to_small(px[ok], k))
     center = np.median(ref, axis=0)
     scale = 1.4826 * np.median(np.abs(ref - center), axis=0) + FLOOR_COLOR_SLACK
+    z = np.abs(_sample(lab, _to_small(points_px, k)) - center) / scale
+    return np.all(z < FLOOR_COLOR_Z, axis=-1).mean(axis=1)
+
+
+def floor_colored(image: np.ndarray, points_px: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray
+                  ) -> np.ndarray:
+    """Whether each group of points looks like the floor around the board.
+
+    Parameters
+    ----------
+    image : (h, w, 3) uint8
+        RGB photo.
+    points_px : (n, m, 2) float64
+        n groups of m points, pixels.
+    K : (3, 3) float64
+    camera_from_floor : (4, 4) float64
+
+    Returns
+    -------
+    (n,) bool
+        At least ``FLOOR_SHARE`` of the group's points have the floor's colour (Lab, read
+        on a ring ``FLOOR_RING_M`` around the board); all False when too little of that
+        ring is in view to say. A weak test: walls and floors can share a colour.
+    """
+    _, color, k = _prepare(image)
+    points = np.asarray(points_px, dtype=np.float64)
+    if color is None:
+        return np.zeros(len(points), bool)
+    K, pose = _as_camera(K, camera_from_floor)
+    share = _floor_share(color, k, image.shape[:2], points, K, pose)
+    return np.zeros(len(points), bool) if share is None else share >= FLOOR_SHARE
+
+
+def _floor_like_below(color: np.ndarray, k: int, shape: tuple[int, int], bases: np.ndarray, tops: np.ndarray,
+                      K: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """Without a floor mask: does the image just below each base look like the floor around
+    the board? Read ``FLOOR_COLOR_BELOW`` of the edge's length below it (past a baseboard).
+    No floor reference in view: no verdict (all True). (n,) bool."""
     down = bases - tops
     length = np.linalg.norm(down, axis=1, keepdims=True)
     down /= np.maximum(length, 1e-12)
     ks = np.linspace(*FLOOR_COLOR_BELOW, 12)
     pts = bases[:, None, :] + (ks[None, :, None] * length[:, :, None]) * down[:, None, :]
-    values = _sample(lab, _to_small(pts, k))
-    z = np.abs(values - center) / scale
-    like = np.all(z < FLOOR_COLOR_Z, axis=-1)
-    return like.mean(axis=1) >= FLOOR_SHARE
+    share = _floor_share(color, k, shape, pts, K, pose)
+    return np.ones(len(bases), bool) if share is None else share >= FLOOR_SHARE
 
 
 def _edge_candidates(seg: np.ndarray, vertical: np.ndarray, K: np.ndarray, pose: np.ndarray,

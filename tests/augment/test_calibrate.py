@@ -430,3 +430,20 @@ def test_far_board_without_a_focal_length_is_called_small_not_face_on(far_board)
     with pytest.raises(CalibrationError, match="too small in the photo") as refusal:
         calibrate_photo(far_board.image, Board())
     assert "face-on" not in str(refusal.value) and "EXIF" in str(refusal.value)
+
+
+def test_steep_view_levels_with_the_wall_edges_below_its_horizon(monkeypatch):
+    """Seed 907 render 68: a small board whose two tilts fit alike, seen from above with the
+    horizon over the photo, so no edge rises above it. The window frame's and the corner's
+    edges below it are on the walls (not the floor's colour either side): refit with them
+    the floor normal is within 0.2 degrees. Taken for lines on the floor (every edge below
+    the horizon dropped) it stays 1.3 degrees off."""
+    import augment.calibrate as calibrate
+
+    with Renderer() as renderer:
+        sample = render_sample([907, 68], renderer)
+    w, h = sample.truth["size_px"]
+    intrinsics = exif_intrinsics(sample.truth["K"][0][0], (w, h))
+    assert _normal_error_deg(calibrate_photo(sample.image, Board(), intrinsics=intrinsics), sample.truth) < 0.2
+    monkeypatch.setattr(calibrate, "floor_colored", lambda image, points, K, pose: np.ones(len(points), bool))
+    assert _normal_error_deg(calibrate_photo(sample.image, Board(), intrinsics=intrinsics), sample.truth) > 1.0
