@@ -50,7 +50,7 @@ CROP_MARGIN = 0.3              # of the group's extent, on each side
 CROP_ZOOM_BELOW_PX = 16        # corner spacing under which a crop is also tried enlarged 2x
 # A small or far board is a nearly affine view of a plane, which two tilts explain about
 # equally well (the planar pose ambiguity): on the synthetic renders the wrong one fit a
-# little better in 1 of 857, and both were within 2x of each other's RMS in 17. Within
+# little better in 1 of 857, and both were within 2x of each other's RMS in 18. Within
 # this ratio the photo's vertical edges decide: the right tilt sends them to its vertical
 # vanishing point (together at least this many photo sides long, twice the other's), and
 # the pose is refit to the board and those edges together.
