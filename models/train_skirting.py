@@ -10,10 +10,10 @@ is known: segmented by the shipped pipeline without the trim, so the model sees 
 masks the trim sees.
 
 Recipe (what ``models/skirting_board.onnx`` was made with; 1,040 renders of the
-photographer's 5-12 cm boards and 260 with boards of 10-20 cm, about 20 minutes of
+photographer's 5-12 cm boards and 520 with boards of 10-20 cm, about 20 minutes of
 rendering on two cores, 2-4 of training)::
 
-    python models/train_skirting.py --seeds 950 951 952 954 955 956 957 --tall-seeds 958 959 \\
+    python models/train_skirting.py --seeds 950 951 952 954 955 956 957 --tall-seeds 958 959 962 963 \\
         --val 953 --count 130 --out models/skirting_board.onnx
 
 Rendered columns are kept in ``--cache`` (one file per seed), so a second run trains
