@@ -251,7 +251,7 @@ def _walls(room: Room, batch: _Batch, tile_m: float):
                 batch.quad([point(s0, z0), point(s1, z0), point(s1, z0, t), point(s0, z0, t)], np.array([0, 0, 1.0]))
 
 
-def _openings(rng, room: Room, frames: _Batch, doors: _Batch, baseboard_m=BASEBOARD_M):
+def _openings(rng, room: Room, frames: _Batch, doors: _Batch, baseboard_m):
     """Door leaves and thresholds into ``doors``; casings, window frames and sills and the
     baseboards (all trim paint, ``baseboard_m`` (low, high) tall) into ``frames``."""
     poly = room.polygon_m
