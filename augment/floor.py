@@ -1,7 +1,9 @@
 """The floor polygon in meters, from a floor mask and the board's calibration.
 
-The largest floor region's outline is taken back through the floor homography into the
-floor frame (the board's: origin at its center, z up), simplified so walls come out
+The outline of the floor region under the board, with any part a carton or a wall corner
+cut off from it at the photo's edge joined on along that edge
+(:func:`augment.segment.floor_parts`), is taken back through the floor homography into
+the floor frame (the board's: origin at its center, z up), simplified so walls come out
 straight, and each edge is labelled with what bounds it: a wall or an object standing on
 the floor (``"boundary"``), the photo's edge (``"image"``: the floor goes on beyond
 it), or the distance beyond which the floor is not believed (``"far"``). Only the first
@@ -14,7 +16,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .segment import MAX_FLOOR_DISTANCE_M, floor_distance_m
+from .segment import MAX_FLOOR_DISTANCE_M, floor_distance_m, floor_footprint_m2, floor_parts
 
 # Contour work happens at this size at most: enough to place a wall line within a
 # couple of centimeters at room distances, and fast for 12 MP photos.
@@ -131,8 +133,45 @@ def _fit_corners(outline: np.ndarray, vertex_idx: np.ndarray) -> np.ndarray:
     return poly
 
 
+def _perimeter_position(x: np.ndarray, y: np.ndarray, shape) -> np.ndarray:
+    """Position of border pixels along the photo's edge, clockwise from the top-left
+    corner, in pixels."""
+    h, w = shape
+    return np.select([y == 0, x == w - 1, y == h - 1],
+                     [x, (w - 1) + y, 2 * (w - 1) + (h - 1) - x],
+                     2 * (w - 1) + 2 * (h - 1) - y).astype(np.int64)
+
+
+def _join_along_edge(region: np.ndarray, part: np.ndarray) -> None:
+    """Add ``part`` to ``region`` (uint8, in place), joined by a one-pixel seam along the
+    photo's edge where the two come nearest: beyond the edge the floor goes on, so that
+    is where they meet. The seam's outline is an ``"image"`` edge, and its area is a
+    pixel's width."""
+    h, w = region.shape
+    border = np.zeros(region.shape, bool)
+    border[[0, -1], :] = border[:, [0, -1]] = True
+    ry, rx = np.nonzero(border & (region > 0))
+    py, px = np.nonzero(border & part)
+    region[part] = 1
+    if len(rx) == 0 or len(px) == 0:
+        return
+    length = 2 * (w - 1) + 2 * (h - 1)
+    a, b = _perimeter_position(rx, ry, region.shape), _perimeter_position(px, py, region.shape)
+    gap = (b[None, :] - a[:, None]) % length
+    i, j = np.unravel_index(np.argmin(np.minimum(gap, length - gap)), gap.shape)
+    start, steps = (a[i], gap[i, j]) if gap[i, j] <= length - gap[i, j] else (b[j], length - gap[i, j])
+    s = (start + np.arange(steps + 1)) % length
+    # Back from positions along the edge to pixels (the inverse of _perimeter_position).
+    x = np.select([s < w - 1, s < (w - 1) + (h - 1), s < 2 * (w - 1) + (h - 1)],
+                  [s, w - 1, 2 * (w - 1) + (h - 1) - s], 0)
+    y = np.select([s < w - 1, s < (w - 1) + (h - 1), s < 2 * (w - 1) + (h - 1)],
+                  [0, s - (w - 1), h - 1], length - s)
+    region[y, x] = 1
+
+
 def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
-    """Simplified floor polygon (meters) of the largest floor region of ``mask``.
+    """Simplified floor polygon (meters) of the floor region of ``mask`` under the board
+    (else the largest) and the parts cut off from it at the photo's edge.
 
     Parameters
     ----------
@@ -170,9 +209,13 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     cv2.drawContours(region, outer, -1, 1, -1)
     # Opening removes hair-thin spurs (a skirting board's shadow) before tracing.
     region = cv2.morphologyEx(region, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    contours, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    if not contours:
+    labels, main, parts = floor_parts(region, small_cal)
+    if main == 0:
         raise ValueError("no floor below the horizon in the mask")
+    region = (labels == main).astype(np.uint8)
+    for k in parts:
+        _join_along_edge(region, labels == k)
+    contours, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea)[:, 0, :].astype(np.float64)
     if len(contour) < 3 or cv2.contourArea(contour.astype(np.float32)) < 16:
         raise ValueError("the floor region is too small to outline")
@@ -230,17 +273,8 @@ def _caveat(poly: np.ndarray, edge_kind: list[str]) -> str:
 def floor_area_m2(mask: np.ndarray, calibration) -> float:
     """Area (m^2) of the floor pixels of ``mask``, each weighted by its footprint on the
     floor (the homography's local area scale). Measures a mask, holes and all."""
-    mask = np.asarray(mask, dtype=bool)
-    rows, cols = mask.shape
-    y, x = np.nonzero(mask)
-    if len(x) == 0:
-        return 0.0
-    H = np.linalg.inv(calibration.image_from_floor)
-    pts = np.column_stack([x, y, np.ones(len(x))]) @ H.T
-    w = pts[:, 2]
-    # |det J| of the projective map (x, y) -> floor at a point is det(H) / w^3.
-    det = abs(np.linalg.det(H) / w ** 3)
-    return float(det[np.abs(w) > 1e-12].sum())
+    y, x = np.nonzero(np.asarray(mask, dtype=bool))
+    return float(floor_footprint_m2(np.column_stack([x, y]), calibration).sum())
 
 
 EDGE_COLORS = {"boundary": (255, 210, 0), "image": (0, 200, 255), "far": (170, 170, 170)}

@@ -35,6 +35,11 @@ MIN_IMAGE_PX = 64
 # Floor farther than this from the camera is not believed: a room photo rarely shows
 # more, and near the horizon one pixel spans meters.
 MAX_FLOOR_DISTANCE_M = 15.0
+# A part of the floor cut off from the board's (floor_parts) smaller than these is more
+# often a leak or a sliver than floor. The share of the main region's pixels sits between
+# a strip of board the skirting trim cut loose (0.2 %) and floor behind a carton far away
+# (0.7 %), the two cases that set it.
+MIN_PART_M2, MIN_PART_SHARE = 0.05, 0.005
 
 
 # Larger photos are shrunk to this long side once, before the smaller working sizes of
@@ -253,6 +258,73 @@ def floor_distance_m(shape: tuple[int, int], calibration) -> np.ndarray:
     return d
 
 
+def floor_footprint_m2(points_px: np.ndarray, calibration) -> np.ndarray:
+    """Floor area (m^2) a pixel at each of ``points_px`` (n, 2) covers, through the floor
+    homography: its local area scale. Meaningless at and above the horizon."""
+    pts = np.asarray(points_px, dtype=np.float64).reshape(-1, 2)
+    H = np.linalg.inv(calibration.image_from_floor)
+    w = pts @ H[2, :2] + H[2, 2]
+    # |det J| of the projective map (x, y) -> floor at a point is det(H) / w^3.
+    return np.abs(np.linalg.det(H) / np.where(np.abs(w) > 1e-12, w, np.inf) ** 3)
+
+
+def floor_parts(mask: np.ndarray, calibration=None,
+                probability: np.ndarray | None = None) -> tuple[np.ndarray, int, list[int]]:
+    """The floor's connected regions: the main one and the parts cut off from it.
+
+    A carton or a wall corner standing at the photo's edge cuts the visible floor in two;
+    both are floor, and they meet beyond the edge. Such a part is kept when it reaches
+    the photo's edge and is substantial both on the floor (``MIN_PART_M2`` or more within
+    ``MAX_FLOOR_DISTANCE_M``) and in the photo (``MIN_PART_SHARE`` of the main region's
+    pixels or more: a far sliver, such as a strip of skirting board the trim cut loose,
+    spans many square meters in a few pixels), and, when a model's probabilities are
+    given, the model calls it floor on average: GrabCut's leaks into the foot of a near
+    wall or a carton's side also reach the photo's edge.
+
+    Parameters
+    ----------
+    mask : (rows, cols) bool or uint8
+    calibration : Calibration or None
+        At the mask's size (:meth:`Calibration.scaled`). Without it only the main region
+        is the floor.
+    probability : (rows, cols) float or None
+        The model's floor probability at the mask's size.
+
+    Returns
+    -------
+    labels : (rows, cols) int32
+        8-connected regions, 0 = not floor.
+    main : int
+        The region under the board, else the largest; 0 when the mask is empty.
+    parts : list of int
+        The other regions kept, largest first.
+    """
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(np.asarray(mask, np.uint8), connectivity=8)
+    if n <= 1:
+        return labels, 0, []
+    main = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    if calibration is None:
+        return labels, main, []
+    x, y = calibration.pixels_from_floor(np.zeros((1, 2)))[0].round().astype(int)
+    if 0 <= y < labels.shape[0] and 0 <= x < labels.shape[1] and labels[y, x] > 0:
+        main = int(labels[y, x])
+    rows, cols = labels.shape
+    y, x = np.mgrid[0:rows, 0:cols]
+    footprint = floor_footprint_m2(np.column_stack([x.ravel(), y.ravel()]), calibration)
+    footprint *= (floor_distance_m(labels.shape, calibration) <= MAX_FLOOR_DISTANCE_M).ravel()
+    keep = np.bincount(labels.ravel(), footprint, minlength=n) >= MIN_PART_M2
+    keep &= stats[:, cv2.CC_STAT_AREA] >= MIN_PART_SHARE * stats[main, cv2.CC_STAT_AREA]
+    edge = np.zeros(n, bool)
+    edge[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = True
+    keep &= edge
+    if probability is not None:
+        count = np.maximum(stats[:, cv2.CC_STAT_AREA], 1)
+        keep &= np.bincount(labels.ravel(), np.asarray(probability, np.float64).ravel(), minlength=n) / count >= 0.5
+    keep[[0, main]] = False
+    parts = np.flatnonzero(keep)
+    return labels, main, [int(k) for k in parts[np.argsort(-stats[parts, cv2.CC_STAT_AREA])]]
+
+
 # ----------------------------------------------------------------------------- segmentation
 
 @dataclass(frozen=True)
@@ -391,7 +463,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         small_mask = _grabcut(small, _geometry_trimap(shape_small, scale, calibration), 5)
         name = "grabcut"
 
-    mask_small = _clean(small_mask, calibration, scale)
+    mask_small = _clean(small_mask, calibration, scale, probability)
     if not mask_small.any():
         warnings.append("no floor found")
     # Linear interpolation of the 0/1 mask, cut at one half: edges come out straight
@@ -419,20 +491,19 @@ def _geometry_trimap(shape_small, scale, calibration) -> np.ndarray:
     return trimap
 
 
-def _clean(mask: np.ndarray, calibration, scale) -> np.ndarray:
-    """The floor is one region: keep the component under the board (else the largest),
-    close pinholes, and drop specks."""
+def _clean(mask: np.ndarray, calibration, scale, probability=None) -> np.ndarray:
+    """Keep the floor's region under the board (else the largest) and the parts cut off
+    from it at the photo's edge (:func:`floor_parts`), close pinholes, drop specks."""
     mask = mask.astype(np.uint8)
     mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-    if n <= 1:
+    labels, main, parts = floor_parts(mask, None if calibration is None else calibration.scaled(scale),
+                                      probability)
+    if probability is None:
+        # GrabCut alone has only colour to go on: a part it cut off is not trusted.
+        parts = []
+    if main == 0:
         return np.zeros(mask.shape, bool)
-    keep = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    if calibration is not None:
-        x, y = (calibration.pixels_from_floor(np.zeros((1, 2)))[0] * scale).round().astype(int)
-        if 0 <= y < mask.shape[0] and 0 <= x < mask.shape[1] and labels[y, x] > 0:
-            keep = labels[y, x]
-    out = labels == keep
+    out = np.isin(labels, [main, *parts])
     # Pinholes (texture, a knot in the wood) are not things standing on the floor.
     holes = ~out
     n, hl, hs, _ = cv2.connectedComponentsWithStats(holes.astype(np.uint8), connectivity=4)

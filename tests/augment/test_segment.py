@@ -15,7 +15,7 @@ from augment.board import Board
 from augment.calibrate import calibrate_photo, exif_intrinsics
 from augment.floor import floor_area_m2, floor_overlay, floor_polygon
 from augment.gl import Renderer
-from augment.segment import DEFAULT_MODEL, FloorModel, ModelSpec, SegmentationError, segment_floor
+from augment.segment import DEFAULT_MODEL, FloorModel, ModelSpec, SegmentationError, floor_parts, segment_floor
 from augment.synth import render_sample
 
 
@@ -264,3 +264,52 @@ def test_mask_of_the_wrong_size_is_refused(held_out):
     _, cal = held_out[0]
     with pytest.raises(ValueError, match="does not match"):
         floor_polygon(np.ones((10, 10), bool), cal)
+
+
+def _split_floor(cal):
+    """A floor running out of the photo at the bottom, cut in two by a wall corner 15 cm
+    thick that also runs out of it, plus a patch of 'floor' beyond the far wall that
+    touches nothing. Returns the mask and the two parts' and the island's masks."""
+    cam = np.linalg.inv(cal.camera_from_floor)[:2, 3]
+    toward = -cam / np.linalg.norm(cam)
+    side = np.array([-toward[1], toward[0]])
+    near, far = cam + 0.3 * toward, toward
+
+    def band(s0, s1, a=near, b=far):
+        return _floor_mask(cal, np.array([a + s0 * side, a + s1 * side, b + s1 * side, b + s0 * side]))
+
+    left, right = band(-0.6, -0.3), band(-0.15, 0.6)
+    island = band(-0.2, 0.2, far + 0.3 * toward, far + 0.6 * toward)
+    assert not (island[0].any() or island[-1].any() or island[:, 0].any() or island[:, -1].any())
+    return left | right | island, left, right, island
+
+
+def test_floor_cut_in_two_at_the_photo_edge_is_one_polygon(held_out):
+    """Both parts of a floor split by a wall corner at the photo's edge are in the polygon
+    (area within 1 % of theirs, where the board's part alone is over 10 % short), joined
+    along the photo's edge; a patch touching neither the edge nor the floor is left out."""
+    _, cal = held_out[0]
+    mask, left, right, island = _split_floor(cal)
+    both = floor_area_m2(left | right, cal)
+    assert floor_area_m2(left, cal) > 0.1 * both
+    poly = floor_polygon(mask, cal)
+    assert abs(poly.area_m2 - both) / both < 0.01
+    # The seam runs along the photo's edge, where the floor goes on.
+    assert "image" in poly.edge_kind
+    labels, main, parts = floor_parts(mask, cal)
+    assert np.all(labels[right] == main) and [np.unique(labels[left])[-1]] == parts
+
+
+def test_a_part_the_model_calls_no_floor_is_left_out(held_out):
+    """A part cut off at the photo's edge stays only where the model calls it floor on
+    average; GrabCut's colour alone does not keep it."""
+    _, cal = held_out[0]
+    mask, left, right, _ = _split_floor(cal)
+    p = np.where(mask, 0.9, 0.05)
+    assert len(floor_parts(mask, cal, p)[2]) == 1
+    p[left] = 0.3
+    assert floor_parts(mask, cal, p)[2] == []
+    # A part too small to hold anything is a leak more often than floor.
+    speck = np.zeros_like(mask)
+    speck[-3:, :3] = True
+    assert floor_parts(right | speck, cal)[2] == []
