@@ -78,6 +78,8 @@ PROFILE_CONTEXT = 8
 # the mask (it already ends at the floor line); above the second, it shows one, whatever
 # the rules above say; in between, the rules decide.
 NO_BOARD_P, BOARD_P = 0.15, 0.5
+# A column where the board model's probability reaches this shows the board.
+SEEN_P = 0.5
 
 
 def _wall_columns(mask: np.ndarray, calibration):
@@ -160,10 +162,11 @@ def _prefix_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
     return (0.5 * (take(ordered, lo, axis=1) + take(ordered, hi, axis=1)))[:, 0]
 
 
-def _bridge(cols: np.ndarray, rows: np.ndarray, height_m: np.ndarray) -> np.ndarray:
+def _bridge(cols: np.ndarray, rows: np.ndarray, height_m: np.ndarray, seen: np.ndarray) -> np.ndarray:
     """Board heights per column (NaN: no board seen) spread along each stretch of wall
-    where enough columns saw it; elsewhere only gaps of up to ``GAP_PX`` columns between
-    boards are filled. 0 where no board is cut."""
+    where enough columns saw it; elsewhere gaps between boards are filled where they are
+    up to ``GAP_PX`` columns wide, or where the board model ``seen`` (k,) bool sees the
+    board. 0 where no board is cut."""
     out = np.nan_to_num(height_m)
     breaks = np.flatnonzero((np.diff(cols) > 1) | (np.abs(np.diff(rows)) > STEP_PX)) + 1
     for stretch in np.split(np.arange(len(cols)), breaks):
@@ -176,7 +179,7 @@ def _bridge(cols: np.ndarray, rows: np.ndarray, height_m: np.ndarray) -> np.ndar
         else:
             gap = stretch[(cols[stretch] > x[0]) & (cols[stretch] < x[-1])]
             right = np.searchsorted(x, cols[gap])
-            fill = gap[x[right] - x[right - 1] <= GAP_PX]
+            fill = gap[(x[right] - x[right - 1] <= GAP_PX) | seen[gap]]
         out[fill] = np.interp(cols[fill], x, height_m[found])
     return out
 
@@ -329,20 +332,26 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
     p_mean = float(np.mean(p_board[whole] if whole.any() else p_board))
     if p_mean < NO_BOARD_P:
         return mask.copy(), None
-    if p_mean < BOARD_P and not _rules_see_a_board(known, shown, height_m, brightness, hue_deg):
-        return mask.copy(), None
     # Each column's strongest step is the board's lower edge in most columns, but a
     # plank seam or a grout line in others: the heights' mode is the board, and each
     # column looks again for its step at that height.
     mode_m = _mode(height_m[shown])
-    t, _, _ = _board_rows(small_image, small_mask, cols, rows, px_per_m, mode_m)
-    shown = ~np.isnan(t) & (t > 0)
-    if not shown.any():
+    t_mode, brightness_mode, hue_mode = _board_rows(small_image, small_mask, cols, rows, px_per_m, mode_m)
+    shown_mode = ~np.isnan(t_mode) & (t_mode > 0)
+    if not shown_mode.any():
         return mask.copy(), None
-    height_m = t / px_per_m
+    # The rules judge both readings: on a grained floor the strongest steps spread too
+    # widely for one height even where the board is plain to see at the mode.
+    if p_mean < BOARD_P and not (
+            _rules_see_a_board(known, shown, height_m, brightness, hue_deg)
+            or _rules_see_a_board(~np.isnan(t_mode), shown_mode, t_mode / px_per_m, brightness_mode, hue_mode)):
+        return mask.copy(), None
+    t, shown, height_m = t_mode, shown_mode, t_mode / px_per_m
     median = float(np.median(height_m[shown]))
     agree = shown & (height_m > 0.5 * median) & (height_m < 1.5 * median)
-    depth_px = _bridge(cols, rows, np.where(agree, height_m, np.nan)) * px_per_m
+    # A board in dashes (its lower edge too faint for the rules in some columns, as on a
+    # grained floor) is cut whole where the board model sees it between the dashes.
+    depth_px = _bridge(cols, rows, np.where(agree, height_m, np.nan), p_board >= SEEN_P) * px_per_m
     cut = np.zeros(small_mask.shape, np.uint8)
     for col, row, n in zip(cols, rows, depth_px):
         if n > 0:

@@ -200,11 +200,13 @@ def test_board_profiles_measure_in_meters_against_the_floor():
     np.testing.assert_allclose(scalars[0], [np.log(200) / 5, 1.0], atol=1e-6)
 
 
-def test_a_board_the_rules_doubt_is_trimmed_when_the_model_is_sure(monkeypatch):
+def test_a_board_whose_strongest_steps_spread_is_trimmed(monkeypatch):
     """A render of the synthetic photographer (seed 905, render 73: a board whose heights,
-    measured column by column past deep shadows, spread from 7.9 to 10.6 cm between the
-    quartiles, more than the rules allow). The board model sees a board along the walls,
-    so it is trimmed anyway; the truth is the render's floor mask."""
+    measured column by column past deep shadows at each column's strongest step, spread
+    from 7.9 to 10.6 cm between the quartiles, more than the rules allow). Read again at
+    the most common height, the columns agree: the rules alone trim it. The board model
+    sees a board along the walls too, and trims it when the rules doubt both readings.
+    The truth is the render's floor mask."""
     import augment.skirting as skirting
     from augment.calibrate import calibrate_photo, exif_intrinsics
     from augment.gl import Renderer
@@ -218,9 +220,62 @@ def test_a_board_the_rules_doubt_is_trimmed_when_the_model_is_sure(monkeypatch):
     mask = segment_floor(sample.image, FloorModel(DEFAULT_MODEL), calibration, skirting=False).mask
     truth = sample.floor_mask
     extra = mask & ~truth
-    trimmed, height_m = trim_skirting(sample.image, mask, calibration)
-    assert height_m is not None and 0.05 < height_m < 0.13
-    assert (trimmed & extra).sum() < 0.5 * extra.sum()  # most of what was not floor is gone
-    assert (truth & ~trimmed).sum() < 0.2 * (extra.sum() - (trimmed & extra).sum())  # little floor with it
-    monkeypatch.setattr(skirting, "BOARD_P", 1.1)  # the rules alone leave it
+
+    def check(trimmed, height_m):
+        assert height_m is not None and 0.05 < height_m < 0.13
+        assert (trimmed & extra).sum() < 0.5 * extra.sum()  # most of what was not floor is gone
+        assert (truth & ~trimmed).sum() < 0.2 * (extra.sum() - (trimmed & extra).sum())  # little floor with it
+
+    # The first reading alone is too spread for the rules.
+    _, small_image, small_mask, _, cols, rows, px_per_m = skirting.working_view(sample.image, mask, calibration)
+    t, brightness, hue = skirting._board_rows(small_image, small_mask, cols, rows, px_per_m)
+    known = ~np.isnan(t)
+    assert not skirting._rules_see_a_board(known, known & (t > 0), t / px_per_m, brightness, hue)
+    monkeypatch.setattr(skirting, "BOARD_P", 1.1)  # the rules decide
+    check(*trim_skirting(sample.image, mask, calibration))
+    monkeypatch.setattr(skirting, "_rules_see_a_board", lambda *args: False)
     assert trim_skirting(sample.image, mask, calibration)[1] is None
+    monkeypatch.undo()
+    monkeypatch.setattr(skirting, "_rules_see_a_board", lambda *args: False)
+    check(*trim_skirting(sample.image, mask, calibration))  # the model is sure
+
+def test_a_board_in_dashes_is_cut_whole_where_the_board_model_sees_it():
+    """One stretch of wall, 100 columns on one row: the rules found the board (4 cm, then
+    6 cm) in columns 0-9 and 60-69 only, too few to cut the whole stretch and 50 columns
+    apart. The gap is cut, at heights interpolated between the dashes, where the board
+    model sees the board, and nowhere past the last dash."""
+    from augment.skirting import GAP_PX, _bridge
+
+    cols, rows = np.arange(100), np.full(100, 40)
+    height = np.full(100, np.nan)
+    height[:10], height[60:70] = 0.04, 0.06
+    assert 60 - 9 > GAP_PX
+    unseen = _bridge(cols, rows, height, np.zeros(100, bool))
+    assert np.all(unseen[10:60] == 0) and np.all(unseen[70:] == 0)
+    seen = _bridge(cols, rows, height, np.ones(100, bool))
+    assert np.allclose(seen[10:60], 0.04 + 0.02 * (cols[10:60] - 9) / 51)
+    assert np.all(seen[70:] == 0)
+    np.testing.assert_array_equal(seen[:10], 0.04)
+
+
+def test_a_render_with_its_board_in_dashes(monkeypatch):
+    """Seed 907 render 34: a board whose lower edge the rules find in dashes along the
+    walls. With the board model's say between the dashes the trimmed mask keeps under a
+    quarter of what the untrimmed mask holds beyond the floor (11 % when written); by the
+    dashes alone, over 40 % (49 %), and its polygon is 12 % too large."""
+    import augment.skirting as skirting
+    from augment.calibrate import calibrate_photo, exif_intrinsics
+    from augment.gl import Renderer
+    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
+    from augment.synth import render_sample
+
+    with Renderer() as renderer:
+        sample = render_sample([907, 34], renderer)
+    w, h = sample.truth["size_px"]
+    calibration = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
+    mask = segment_floor(sample.image, FloorModel(DEFAULT_MODEL), calibration, skirting=False).mask
+    extra = mask & ~sample.floor_mask
+    left = (trim_skirting(sample.image, mask, calibration)[0] & extra).sum() / extra.sum()
+    assert left < 0.25
+    monkeypatch.setattr(skirting, "SEEN_P", 1.1)  # the board model sees no column
+    assert (trim_skirting(sample.image, mask, calibration)[0] & extra).sum() / extra.sum() > 0.4
