@@ -308,6 +308,8 @@ def floor_parts(mask: np.ndarray, calibration=None,
     x, y = calibration.pixels_from_floor(np.zeros((1, 2)))[0].round().astype(int)
     if 0 <= y < labels.shape[0] and 0 <= x < labels.shape[1] and labels[y, x] > 0:
         main = int(labels[y, x])
+    if n == 2:
+        return labels, main, []
     rows, cols = labels.shape
     y, x = np.mgrid[0:rows, 0:cols]
     footprint = floor_footprint_m2(np.column_stack([x.ravel(), y.ravel()]), calibration)
