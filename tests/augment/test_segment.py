@@ -313,3 +313,16 @@ def test_a_part_the_model_calls_no_floor_is_left_out(held_out):
     speck = np.zeros_like(mask)
     speck[-3:, :3] = True
     assert floor_parts(right | speck, cal)[2] == []
+
+
+def test_grabcut_alone_keeps_only_the_boards_region(held_out):
+    """The clean-up keeps a part cut off at the photo's edge only on the model's word:
+    with GrabCut alone (no probabilities) the board's region is the floor."""
+    from augment.segment import _clean
+
+    _, cal = held_out[0]
+    mask, left, right, island = _split_floor(cal)
+    alone = _clean(mask, cal, 1.0)
+    assert alone[right].mean() > 0.99 and not alone[left].any() and not alone[island].any()
+    with_model = _clean(mask, cal, 1.0, np.where(mask, 0.9, 0.05))
+    assert with_model[left].mean() > 0.95 and not with_model[island].any()
