@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 
 from .board import CHARUCO_DICTIONARY, Board, charuco_board
-from .height import LINE_SIDE_PX, detect_segments, floor_colored, is_vertical
+from .height import LINE_SIDE_PX, detect_segments, floor_colored, is_vertical, toward_vanishing_point
 
 # Tolerances and limits, in one place.
 DETECT_MAX_SIDE_PX = 1280      # look for a checkerboard in a copy no larger than this
@@ -777,10 +777,8 @@ def vertical_support(segments_px: np.ndarray, K: np.ndarray, poses: list[np.ndar
 def _vertical_residuals_px(segments_px: np.ndarray, K: np.ndarray, R: np.ndarray) -> np.ndarray:
     """Distances (2n,) of the segments' ends from the lines joining their midpoints to the
     vertical vanishing point ``K R e3``."""
-    vp = K @ R[:, 2]
     mid = (segments_px[:, :2] + segments_px[:, 2:]) / 2
-    toward = vp[:2] - mid * vp[2]
-    toward /= np.linalg.norm(toward, axis=1, keepdims=True)
+    toward = toward_vanishing_point(mid, K @ R[:, 2])
     across = np.column_stack([-toward[:, 1], toward[:, 0]])
     return np.concatenate([np.sum((segments_px[:, :2] - mid) * across, axis=1),
                            np.sum((segments_px[:, 2:] - mid) * across, axis=1)])

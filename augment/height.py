@@ -323,6 +323,13 @@ def vertical_vanishing_point(K: np.ndarray, camera_from_floor: np.ndarray) -> np
     return vp / np.linalg.norm(vp)
 
 
+def toward_vanishing_point(points_px: np.ndarray, vp: np.ndarray) -> np.ndarray:
+    """Unit directions (n, 2) in the image from each of ``points_px`` (n, 2) toward the
+    homogeneous image point ``vp`` (3,), a vanishing point at infinity included."""
+    toward = vp[:2] - np.asarray(points_px, dtype=np.float64) * vp[2]
+    return toward / np.linalg.norm(toward, axis=1, keepdims=True)
+
+
 def vertical_alignment(segments_px: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """How well each segment could be the image of a vertical 3D edge.
@@ -355,10 +362,8 @@ def vertical_alignment(segments_px: np.ndarray, K: np.ndarray, camera_from_floor
     norm = np.linalg.norm(normals, axis=1)
     sin = np.abs(normals @ up_camera) / np.where(norm > 0, norm, 1.0)
     cos_3d = np.where(norm > 0, np.sqrt(np.clip(1 - sin ** 2, 0, 1)), 0.0)
-    vp = K @ up_camera
     mid = (seg[:, :2] + seg[:, 2:]) / 2
-    toward = vp[:2] - mid * vp[2]                  # direction from the midpoint to the vanishing point
-    toward /= np.linalg.norm(toward, axis=1, keepdims=True)
+    toward = toward_vanishing_point(mid, K @ up_camera)
     direction = seg[:, 2:] - seg[:, :2]
     length = np.linalg.norm(direction, axis=1)
     along = np.abs(np.sum(direction * toward, axis=1)) / np.where(length > 0, length, 1.0)
@@ -443,8 +448,7 @@ def _merge_vertical(seg: np.ndarray, vp: np.ndarray, tol_px: float, gap_px: floa
     or up to ``bridge_px`` where ``bridge(p, q)`` says the edge runs on across the gap."""
     n = len(seg)
     mid = (seg[:, :2] + seg[:, 2:]) / 2
-    u = vp[:2] - mid * vp[2]
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    u = toward_vanishing_point(mid, vp)
     parent = np.arange(n)
 
     def root(i):
@@ -584,8 +588,7 @@ def _merge_edges(vseg: np.ndarray, K: np.ndarray, pose: np.ndarray, side: int, b
         s = vseg[g]
         lengths = np.hypot(s[:, 2] - s[:, 0], s[:, 3] - s[:, 1])
         c = np.sum((s[:, :2] + s[:, 2:]) / 2 * lengths[:, None], axis=0) / max(lengths.sum(), 1e-12)
-        u = vp[:2] - c * vp[2]
-        u /= np.linalg.norm(u)
+        u = toward_vanishing_point(c[None], vp)[0]
         ends = np.vstack([s[:, :2], s[:, 2:]])
         ends = c + np.outer((ends - c) @ u, u)     # onto the line through c and the vanishing point
         e = _elevation(ends, K, up)
