@@ -162,10 +162,9 @@ def _join_along_edge(region: np.ndarray, part: np.ndarray) -> None:
     start, steps = (a[i], gap[i, j]) if gap[i, j] <= length - gap[i, j] else (b[j], length - gap[i, j])
     s = (start + np.arange(steps + 1)) % length
     # Back from positions along the edge to pixels (the inverse of _perimeter_position).
-    x = np.select([s < w - 1, s < (w - 1) + (h - 1), s < 2 * (w - 1) + (h - 1)],
-                  [s, w - 1, 2 * (w - 1) + (h - 1) - s], 0)
-    y = np.select([s < w - 1, s < (w - 1) + (h - 1), s < 2 * (w - 1) + (h - 1)],
-                  [0, s - (w - 1), h - 1], length - s)
+    sides = [s < w - 1, s < (w - 1) + (h - 1), s < 2 * (w - 1) + (h - 1)]  # top, right, bottom; else left
+    x = np.select(sides, [s, w - 1, 2 * (w - 1) + (h - 1) - s], 0)
+    y = np.select(sides, [0, s - (w - 1), h - 1], length - s)
     region[y, x] = 1
 
 
