@@ -58,12 +58,13 @@ def render_columns(seed: int, count: int, tall: bool = False) -> dict:
     from augment.gl import Renderer
     from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
     from augment.synth import render_sample
+    from augment.synth.rooms import BASEBOARD_M
 
     model = FloorModel(DEFAULT_MODEL)
     out = {"profile": [], "scalars": [], "offset_m": [], "render": []}
     with Renderer() as renderer:
         for i in range(count):
-            sample = render_sample([seed, i], renderer, **({"baseboard_m": TALL_BASEBOARD_M} if tall else {}))
+            sample = render_sample([seed, i], renderer, baseboard_m=TALL_BASEBOARD_M if tall else BASEBOARD_M)
             w, h = sample.truth["size_px"]
             try:
                 cal = calibrate_photo(sample.image, Board(),
