@@ -208,7 +208,7 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     cv2.drawContours(region, outer, -1, 1, -1)
     # Opening removes hair-thin spurs (a skirting board's shadow) before tracing.
     region = cv2.morphologyEx(region, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    labels, main, parts = floor_parts(region, small_cal)
+    labels, main, parts = floor_parts(region, small_cal, distance_m=distance)
     if main == 0:
         raise ValueError("no floor below the horizon in the mask")
     region = (labels == main).astype(np.uint8)

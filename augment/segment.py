@@ -268,8 +268,8 @@ def floor_footprint_m2(points_px: np.ndarray, calibration) -> np.ndarray:
     return np.abs(np.linalg.det(H) / np.where(np.abs(w) > 1e-12, w, np.inf) ** 3)
 
 
-def floor_parts(mask: np.ndarray, calibration=None,
-                probability: np.ndarray | None = None) -> tuple[np.ndarray, int, list[int]]:
+def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | None = None,
+                distance_m: np.ndarray | None = None) -> tuple[np.ndarray, int, list[int]]:
     """The floor's connected regions: the main one and the parts cut off from it.
 
     A carton or a wall corner standing at the photo's edge cuts the visible floor in two;
@@ -289,6 +289,8 @@ def floor_parts(mask: np.ndarray, calibration=None,
         is the floor.
     probability : (rows, cols) float or None
         The model's floor probability at the mask's size.
+    distance_m : (rows, cols) float or None
+        :func:`floor_distance_m` of the mask's size, when the caller has it already.
 
     Returns
     -------
@@ -313,7 +315,9 @@ def floor_parts(mask: np.ndarray, calibration=None,
     rows, cols = labels.shape
     y, x = np.mgrid[0:rows, 0:cols]
     footprint = floor_footprint_m2(np.column_stack([x.ravel(), y.ravel()]), calibration)
-    footprint *= (floor_distance_m(labels.shape, calibration) <= MAX_FLOOR_DISTANCE_M).ravel()
+    if distance_m is None:
+        distance_m = floor_distance_m(labels.shape, calibration)
+    footprint *= (distance_m <= MAX_FLOOR_DISTANCE_M).ravel()
     keep = np.bincount(labels.ravel(), footprint, minlength=n) >= MIN_PART_M2
     keep &= stats[:, cv2.CC_STAT_AREA] >= MIN_PART_SHARE * stats[main, cv2.CC_STAT_AREA]
     edge = np.zeros(n, bool)
