@@ -26,6 +26,11 @@ known floor lines) looks at each column's colours across the mask's edge. The tr
 skipped when it sees no board anywhere along the walls, and made when it is sure of one
 even where the rules doubt it (heights that spread past deep shadows); in between, the
 rules decide.
+
+Whether the mask holds the board can differ from wall to wall: GrabCut may stop at the
+floor line along one wall and at the board's top along another. When the photo as a
+whole does not show a board, each wall is judged on its own (its columns between corners
+of the mask's top edge), and the walls where the board model is sure of one are cut.
 """
 from __future__ import annotations
 
@@ -80,6 +85,10 @@ PROFILE_CONTEXT = 8
 NO_BOARD_P, BOARD_P = 0.15, 0.5
 # A column where the board model's probability reaches this shows the board.
 SEEN_P = 0.5
+# The mask's top edge bends at a wall's corner by more than this (pixels at the working
+# size); a wall judged on its own needs this many columns.
+CORNER_PX = 3.0
+MIN_WALL_COLUMNS = 24
 
 
 def _wall_columns(mask: np.ndarray, calibration):
@@ -182,6 +191,38 @@ def _bridge(cols: np.ndarray, rows: np.ndarray, height_m: np.ndarray, seen: np.n
             fill = gap[(x[right] - x[right - 1] <= GAP_PX) | seen[gap]]
         out[fill] = np.interp(cols[fill], x, height_m[found])
     return out
+
+
+def _walls(cols: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
+    """The wall columns split into walls: indices into ``cols`` per wall, in order.
+
+    A wall's floor line is straight in the photo (a straight line on the floor stays
+    straight), so the mask's top edge is split where it jumps (``STEP_PX``, as in
+    :func:`_bridge`) and where it bends by more than ``CORNER_PX``."""
+    breaks = np.flatnonzero((np.diff(cols) > 1) | (np.abs(np.diff(rows)) > STEP_PX)) + 1
+    walls = []
+    for stretch in np.split(np.arange(len(cols)), breaks):
+        if len(stretch) < 3:
+            walls.append(stretch)
+            continue
+        line = np.column_stack([cols[stretch], rows[stretch]]).astype(np.float32).reshape(-1, 1, 2)
+        corners = cv2.approxPolyDP(line, CORNER_PX, False)[1:-1, 0, 0]
+        walls.extend(np.split(stretch, np.searchsorted(cols[stretch], corners)))
+    return walls
+
+
+def _walls_with_a_board(cols: np.ndarray, rows: np.ndarray, p_board: np.ndarray, whole: np.ndarray) -> np.ndarray:
+    """(k,) bool: the columns of each wall of ``MIN_WALL_COLUMNS`` or more where the board
+    model's mean probability (over the columns whose window lies in the photo, if any)
+    reaches ``BOARD_P``."""
+    judged = np.zeros(len(cols), bool)
+    for wall in _walls(cols, rows):
+        if len(wall) < MIN_WALL_COLUMNS:
+            continue
+        inside = wall[whole[wall]]
+        if np.mean(p_board[inside if len(inside) else wall]) >= BOARD_P:
+            judged[wall] = True
+    return judged
 
 
 def board_profiles(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
@@ -330,28 +371,37 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
     profile, scalars, whole = board_profiles(small_image, small_mask, cols, rows, px_per_m)
     p_board = board_probability(profile, scalars)
     p_mean = float(np.mean(p_board[whole] if whole.any() else p_board))
-    if p_mean < NO_BOARD_P:
-        return mask.copy(), None
     # Each column's strongest step is the board's lower edge in most columns, but a
     # plank seam or a grout line in others: the heights' mode is the board, and each
     # column looks again for its step at that height.
-    mode_m = _mode(height_m[shown])
-    t_mode, brightness_mode, hue_mode = _board_rows(small_image, small_mask, cols, rows, px_per_m, mode_m)
-    shown_mode = ~np.isnan(t_mode) & (t_mode > 0)
-    if not shown_mode.any():
-        return mask.copy(), None
-    # The rules judge both readings: on a grained floor the strongest steps spread too
-    # widely for one height even where the board is plain to see at the mode.
-    if p_mean < BOARD_P and not (
-            _rules_see_a_board(known, shown, height_m, brightness, hue_deg)
-            or _rules_see_a_board(~np.isnan(t_mode), shown_mode, t_mode / px_per_m, brightness_mode, hue_mode)):
-        return mask.copy(), None
+    t_mode = None
+    if p_mean >= NO_BOARD_P:
+        t_mode, brightness_mode, hue_mode = _board_rows(small_image, small_mask, cols, rows, px_per_m,
+                                                        _mode(height_m[shown]))
+        shown_mode = ~np.isnan(t_mode) & (t_mode > 0)
+        # The rules judge both readings: on a grained floor the strongest steps spread too
+        # widely for one height even where the board is plain to see at the mode.
+        if not shown_mode.any() or not (
+                p_mean >= BOARD_P
+                or _rules_see_a_board(known, shown, height_m, brightness, hue_deg)
+                or _rules_see_a_board(~np.isnan(t_mode), shown_mode, t_mode / px_per_m, brightness_mode, hue_mode)):
+            t_mode = None
+    if t_mode is None:
+        judged = _walls_with_a_board(cols, rows, p_board, whole)
+        if not (shown & judged).any():
+            return mask.copy(), None
+        t_mode, _, _ = _board_rows(small_image, small_mask, cols, rows, px_per_m, _mode(height_m[shown & judged]))
+        shown_mode = ~np.isnan(t_mode) & (t_mode > 0) & judged
+        if not shown_mode.any():
+            return mask.copy(), None
+    else:
+        judged = np.ones(len(cols), bool)
     t, shown, height_m = t_mode, shown_mode, t_mode / px_per_m
     median = float(np.median(height_m[shown]))
     agree = shown & (height_m > 0.5 * median) & (height_m < 1.5 * median)
     # A board in dashes (its lower edge too faint for the rules in some columns, as on a
     # grained floor) is cut whole where the board model sees it between the dashes.
-    depth_px = _bridge(cols, rows, np.where(agree, height_m, np.nan), p_board >= SEEN_P) * px_per_m
+    depth_px = _bridge(cols, rows, np.where(agree, height_m, np.nan), p_board >= SEEN_P) * px_per_m * judged
     cut = np.zeros(small_mask.shape, np.uint8)
     for col, row, n in zip(cols, rows, depth_px):
         if n > 0:
