@@ -171,14 +171,20 @@ def _prefix_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
     return (0.5 * (take(ordered, lo, axis=1) + take(ordered, hi, axis=1)))[:, 0]
 
 
+def _stretches(cols: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
+    """Indices into ``cols`` per unbroken stretch of the mask's top edge: split where a
+    column is missing or the edge jumps by more than ``STEP_PX`` rows."""
+    breaks = np.flatnonzero((np.diff(cols) > 1) | (np.abs(np.diff(rows)) > STEP_PX)) + 1
+    return np.split(np.arange(len(cols)), breaks)
+
+
 def _bridge(cols: np.ndarray, rows: np.ndarray, height_m: np.ndarray, seen: np.ndarray) -> np.ndarray:
     """Board heights per column (NaN: no board seen) spread along each stretch of wall
     where enough columns saw it; elsewhere gaps between boards are filled where they are
     up to ``GAP_PX`` columns wide, or where the board model ``seen`` (k,) bool sees the
     board. 0 where no board is cut."""
     out = np.nan_to_num(height_m)
-    breaks = np.flatnonzero((np.diff(cols) > 1) | (np.abs(np.diff(rows)) > STEP_PX)) + 1
-    for stretch in np.split(np.arange(len(cols)), breaks):
+    for stretch in _stretches(cols, rows):
         found = stretch[~np.isnan(height_m[stretch])]
         if len(found) < 2:
             continue
@@ -197,11 +203,10 @@ def _walls(cols: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
     """The wall columns split into walls: indices into ``cols`` per wall, in order.
 
     A wall's floor line is straight in the photo (a straight line on the floor stays
-    straight), so the mask's top edge is split where it jumps (``STEP_PX``, as in
-    :func:`_bridge`) and where it bends by more than ``CORNER_PX``."""
-    breaks = np.flatnonzero((np.diff(cols) > 1) | (np.abs(np.diff(rows)) > STEP_PX)) + 1
+    straight), so the mask's top edge is split where it jumps (the stretches of
+    :func:`_stretches`) and where it bends by more than ``CORNER_PX``."""
     walls = []
-    for stretch in np.split(np.arange(len(cols)), breaks):
+    for stretch in _stretches(cols, rows):
         if len(stretch) < 3:
             walls.append(stretch)
             continue

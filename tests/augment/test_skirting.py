@@ -200,6 +200,22 @@ def test_board_profiles_measure_in_meters_against_the_floor():
     np.testing.assert_allclose(scalars[0], [np.log(200) / 5, 1.0], atol=1e-6)
 
 
+def _render_untrimmed(seed: int, index: int):
+    """A render of the synthetic photographer, its calibration from the board, and the
+    floor mask from the model and GrabCut before the trim."""
+    from augment.calibrate import calibrate_photo, exif_intrinsics
+    from augment.gl import Renderer
+    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
+    from augment.synth import render_sample
+
+    with Renderer() as renderer:
+        sample = render_sample([seed, index], renderer)
+    w, h = sample.truth["size_px"]
+    calibration = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
+    return sample, calibration, segment_floor(sample.image, FloorModel(DEFAULT_MODEL), calibration,
+                                              skirting=False).mask
+
+
 def test_a_board_whose_strongest_steps_spread_is_trimmed(monkeypatch):
     """A render of the synthetic photographer (seed 905, render 73: a board whose heights,
     measured column by column past deep shadows at each column's strongest step, spread
@@ -208,16 +224,8 @@ def test_a_board_whose_strongest_steps_spread_is_trimmed(monkeypatch):
     sees a board along the walls too, and trims it when the rules doubt both readings.
     The truth is the render's floor mask."""
     import augment.skirting as skirting
-    from augment.calibrate import calibrate_photo, exif_intrinsics
-    from augment.gl import Renderer
-    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
-    from augment.synth import render_sample
 
-    with Renderer() as renderer:
-        sample = render_sample([905, 73], renderer)
-    w, h = sample.truth["size_px"]
-    calibration = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
-    mask = segment_floor(sample.image, FloorModel(DEFAULT_MODEL), calibration, skirting=False).mask
+    sample, calibration, mask = _render_untrimmed(905, 73)
     truth = sample.floor_mask
     extra = mask & ~truth
 
@@ -264,16 +272,8 @@ def test_a_render_with_its_board_in_dashes(monkeypatch):
     quarter of what the untrimmed mask holds beyond the floor (11 % when written); by the
     dashes alone, over 40 % (49 %), and its polygon is 12 % too large."""
     import augment.skirting as skirting
-    from augment.calibrate import calibrate_photo, exif_intrinsics
-    from augment.gl import Renderer
-    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
-    from augment.synth import render_sample
 
-    with Renderer() as renderer:
-        sample = render_sample([907, 34], renderer)
-    w, h = sample.truth["size_px"]
-    calibration = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
-    mask = segment_floor(sample.image, FloorModel(DEFAULT_MODEL), calibration, skirting=False).mask
+    sample, calibration, mask = _render_untrimmed(907, 34)
     extra = mask & ~sample.floor_mask
     left = (trim_skirting(sample.image, mask, calibration)[0] & extra).sum() / extra.sum()
     assert left < 0.25
@@ -305,17 +305,9 @@ def test_a_board_on_one_wall_is_cut_when_the_other_walls_show_none(monkeypatch):
     The polygon's area, 6.5 % over the true mask's untrimmed, comes within 2 % of it
     (1.2 % when written), and next to no floor goes with the board (36 pixels)."""
     import augment.skirting as skirting
-    from augment.calibrate import calibrate_photo, exif_intrinsics
     from augment.floor import floor_polygon
-    from augment.gl import Renderer
-    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
-    from augment.synth import render_sample
 
-    with Renderer() as renderer:
-        sample = render_sample([916, 78], renderer)
-    w, h = sample.truth["size_px"]
-    calibration = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
-    mask = segment_floor(sample.image, FloorModel(DEFAULT_MODEL), calibration, skirting=False).mask
+    sample, calibration, mask = _render_untrimmed(916, 78)
     truth = sample.floor_mask
     true_m2 = floor_polygon(truth, calibration).area_m2
     assert floor_polygon(mask, calibration).area_m2 / true_m2 - 1 > 0.05
