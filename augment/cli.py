@@ -107,6 +107,16 @@ def _paper(text: str) -> str:
     return key
 
 
+def _add_floor_args(p) -> None:
+    """--model or --floor-mask: where the floor comes from."""
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
+                       help="floor model (default: Stager's models/floor_segnet.onnx, with its MODEL.json)")
+    where.add_argument("--floor-mask", type=Path, default=None, metavar="MASK.png",
+                       help="your own floor mask (white = floor), used instead of finding the floor: the "
+                            "floor.png `stage segment` wrote, corrected in an image editor")
+
+
 def _add_board_args(p, square_help=None):
     p.add_argument("--board", type=parse_board, default=DEFAULT_BOARD, metavar="[charuco:]COLSxROWS",
                    help="inner corners per row and column, where four squares meet (default %dx%d: "
@@ -205,8 +215,7 @@ def _parser():
     _add_board_args(m)
     m.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate`")
-    m.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
-                   help="floor model (default: Stager's models/floor_segnet.onnx, with its MODEL.json)")
+    _add_floor_args(m)
     m.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
                    help="output folder (default out/<photo name>; created)")
     m.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
@@ -234,8 +243,7 @@ def _parser():
     f.add_argument("--seed", type=int, default=0, help="seed of suggestion 1; K uses seed + K - 1 (default 0)")
     f.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate`")
-    f.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
-                   help="floor model (default: Stager's models/floor_segnet.onnx, with its MODEL.json)")
+    _add_floor_args(f)
     f.add_argument("--asset", type=_asset, action="append", default=[], metavar="KIND=FILE",
                    help="your own model of a furniture kind (GLB, glTF or OBJ; y up, front toward +z), "
                         "stretched onto each item of that kind; repeat for more kinds "
@@ -417,6 +425,13 @@ def _calibrate_cmd(args):
     return EXIT_OK
 
 
+def _check_floor_mask(path) -> None:
+    """A ``--floor-mask`` that is not there is named before any work is done."""
+    if path is not None and not path.is_file():
+        raise StageError(f"--floor-mask {path}: no such file; give the floor.png `stage segment` wrote "
+                         "(white = floor), corrected by hand")
+
+
 def _check_camera(args) -> None:
     """A ``--camera`` profile that is not there is named before any work is done."""
     if args.camera is not None and args.photo.is_file() and not args.camera.is_file():
@@ -536,19 +551,24 @@ def _measure_cmd(args):
     from .imageio import encode_image
     from .overlay import calibration_overlay
     from .overlay_height import height_overlay
-    from .segment import segment_floor
+    from .segment import read_floor_mask, segment_floor
 
     board = _board(args)
     out = args.out if args.out is not None else Path("out") / args.photo.stem
     _prepare_dir_out(out)
     _check_camera(args)
+    if args.photo.is_file():
+        _check_floor_mask(args.floor_mask)
     timings = {}
     start = time.perf_counter()
     image = read_photo(args.photo)
     calibration = calibrate_file(args.photo, board, profile=args.camera)
     timings["calibrate_s"] = time.perf_counter() - start
     start = time.perf_counter()
-    seg = segment_floor(image, _load_model(args.model), calibration)
+    if args.floor_mask is None:
+        seg = segment_floor(image, _load_model(args.model), calibration)
+    else:
+        seg = read_floor_mask(args.floor_mask, (image.shape[1], image.shape[0]), calibration)
     warnings = list(calibration.warnings) + list(seg.warnings)
     if not seg.mask.any():
         raise StageError(f"photo {args.photo}: no floor found; the floor must show around the board")
@@ -615,7 +635,11 @@ def _furnish_cmd(args):
         for folder in ([out] if out.is_dir() else []) + [next(p for p in out.parents if p.exists())]:
             if not os.access(folder, os.W_OK | os.X_OK):
                 raise StageError(f"--out {out}: cannot write in {folder}; choose a folder you can write to")
+    if batch and args.floor_mask is not None:
+        raise StageError(f"--floor-mask {args.floor_mask}: a mask is of one photo; give one photo with it, "
+                         "or leave --floor-mask out to find each photo's floor")
     if any(p.is_file() for p in photos):
+        _check_floor_mask(args.floor_mask)
         for flag, path, hint in (("--camera", args.camera, "make a camera profile with `stage calibrate`"),
                                  ("--model", args.model, "give an ONNX floor model, or leave --model out"),
                                  ("--spec", args.spec, "write one (see `layout solve --help`)"),
@@ -639,6 +663,7 @@ def _furnish_cmd(args):
             try:
                 result = furnish(photo, board, room=args.room, spec=args.spec, suggestions=args.suggestions,
                                  seed=args.seed, camera=args.camera, model=shared.get("model", args.model),
+                                 floor_mask=args.floor_mask,
                                  assets=dict(args.asset), layers=args.layers, renderer=shared.get("renderer"),
                                  progress=not args.quiet and sys.stderr.isatty())
                 paths = write_outputs(result, out)

@@ -10,7 +10,8 @@ Stages, in order (``FurnishResult.timings_s`` has one entry per stage):
 1. ``calibrate``: the camera from the board (:func:`augment.calibrate.calibrate_file`;
    focal length from ``camera``, else EXIF, else the board). The floor frame is the
    board's: origin at its center, z up, meters.
-2. ``segment``: the floor mask (:func:`augment.segment.segment_floor`).
+2. ``segment``: the floor mask (:func:`augment.segment.segment_floor`), or the user's
+   own (``floor_mask``, :func:`augment.segment.read_floor_mask`).
 3. ``floor``: the visible floor's polygon in meters (:func:`augment.floor.floor_polygon`).
 4. ``height``: the wall height (:func:`augment.height.measure_height`; 2.5 m assumed
    when nothing trustworthy is in view, with a warning).
@@ -876,8 +877,9 @@ def _load_model(model):
 
 
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
-            seed: int = 0, camera=None, model=None, assets: dict | None = None, layers: bool = False,
-            progress: bool = False, reporter=None, renderer=None, tol: Tolerances = TOL) -> FurnishResult:
+            seed: int = 0, camera=None, model=None, floor_mask=None, assets: dict | None = None,
+            layers: bool = False, progress: bool = False, reporter=None, renderer=None,
+            tol: Tolerances = TOL) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
     Parameters
@@ -899,6 +901,10 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         A camera profile from ``stage calibrate``.
     model : path-like or FloorModel, optional
         Floor model (default :data:`augment.segment.DEFAULT_MODEL`).
+    floor_mask : path-like, optional
+        The user's own floor mask (white = floor; :func:`augment.segment.read_floor_mask`),
+        used as it is instead of finding the floor: the mask ``stage segment`` wrote,
+        corrected by hand where it went wrong. No model is loaded.
     assets : dict, optional
         Kind -> the user's model of that kind, rendered and put in the scenes instead of
         Stager's own, stretched onto each item's box: a GLB, glTF or OBJ path (y up,
@@ -929,7 +935,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     from .height import measure_height
     from .overlay import calibration_overlay
     from .overlay_height import height_overlay
-    from .segment import segment_floor
+    from .segment import read_floor_mask, segment_floor
 
     if isinstance(suggestions, bool) or not isinstance(suggestions, (int, np.integer)) or suggestions < 1:
         raise ValueError(f"suggestions = {suggestions!r}: must be a whole number, at least 1")
@@ -937,7 +943,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     t_start = time.perf_counter()
     # Everything that can be checked without the photo is, first.
     source_name, source = _furniture_source(room, spec)
-    floor_model = _load_model(model)
+    floor_model = _load_model(model) if floor_mask is None else None
     user_models = _load_assets(assets)
     steps = 6 + 3 * suggestions
     bar = _Progress(progress, steps) if reporter is None else reporter(steps)
@@ -954,7 +960,10 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             calibration = calibrate_file(photo, board, profile=camera)
         bar.step()
         with clock("segment"):
-            seg = segment_floor(image, floor_model, calibration)
+            if floor_mask is None:
+                seg = segment_floor(image, floor_model, calibration)
+            else:
+                seg = read_floor_mask(floor_mask, (image.shape[1], image.shape[0]), calibration)
         bar.step()
         warnings = list(calibration.warnings) + list(seg.warnings)
         with clock("floor"):

@@ -482,6 +482,72 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     return Segmentation(mask, probability, name, tuple(warnings), skirting_m)
 
 
+# A mask painted on a resized copy of the photo is scaled back when its shape is the
+# photo's to within this (relative, width over height).
+MASK_ASPECT_TOLERANCE = 0.01
+
+
+def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segmentation:
+    """A floor mask the user made or corrected, in place of :func:`segment_floor`.
+
+    White (grey level above 127) is floor, as in the mask ``stage segment`` writes; any
+    format Stager reads photos in, grey or colour. A mask of another size but the
+    photo's shape (one painted on a smaller copy) is scaled to the photo.
+
+    Parameters
+    ----------
+    path : path-like
+        The mask file. Not modified.
+    size_px : (width, height)
+        The photo's size, upright as Stager reads it.
+    calibration : Calibration, optional
+        The photo's. When given, the board must lie on the floor of the mask: a mask
+        with the board outside is more likely inverted or of another photo than meant.
+
+    Returns
+    -------
+    Segmentation
+        ``method`` ``"user mask"``, no probabilities.
+
+    Raises
+    ------
+    SegmentationError
+        The file is missing or unreadable, its size does not fit the photo, it shows no
+        floor, or the board is not on its floor.
+    """
+    from .imageio import PHOTO_FORMATS, decode_image
+
+    path = Path(path)
+    if not path.is_file():
+        raise SegmentationError(f"floor mask {path}: no such file; give the mask `stage segment` wrote "
+                                "(white = floor), corrected in any image editor")
+    image = decode_image(path.read_bytes())
+    if image is None:
+        raise SegmentationError(f"floor mask {path}: not an image Stager can read ({PHOTO_FORMATS}); "
+                                "save it as PNG, white = floor")
+    cols, rows = int(size_px[0]), int(size_px[1])
+    height, width = image.shape[:2]
+    if (width, height) != (cols, rows):
+        if abs((width / height) / (cols / rows) - 1) > MASK_ASPECT_TOLERANCE:
+            turned = (" (turned a quarter: save it upright, as the photo shows)"
+                      if (width, height) == (rows, cols) else "")
+            raise SegmentationError(f"floor mask {path}: size {width} x {height} px does not fit the photo's "
+                                    f"{cols} x {rows}{turned}; paint the mask on the photo or a copy scaled "
+                                    "evenly, e.g. the floor.png of `stage segment`")
+        image = cv2.resize(image, (cols, rows), interpolation=cv2.INTER_LINEAR)
+    mask = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) > 127
+    if not mask.any():
+        raise SegmentationError(f"floor mask {path}: no floor in it (no pixel lighter than grey 127); "
+                                "paint the floor white on black")
+    if calibration is not None:
+        x, y = calibration.pixels_from_floor(np.zeros((1, 2)))[0]
+        col, row = int(round(x)), int(round(y))
+        if 0 <= row < rows and 0 <= col < cols and not mask[row, col]:
+            raise SegmentationError(f"floor mask {path}: the board's center (pixel {col}, {row}) is not floor "
+                                    "in it; white must be floor (is the mask inverted, or of another photo?)")
+    return Segmentation(mask, None, "user mask")
+
+
 def _geometry_trimap(shape_small, scale, calibration) -> np.ndarray:
     """GrabCut's start without a model: floor no farther from the camera than the board
     is probably floor (people lay the board on open floor, in front of what they shoot),

@@ -98,3 +98,67 @@ def test_measure_writes_the_report_and_three_overlays(tmp_path, capsys):
     for name in ("overlay_calibration.png", "overlay_floor.png", "overlay_height.png"):
         assert cv2.imread(str(tmp_path / "m" / name)).shape[0] == 960
     assert set(report["timings"]) == {"calibrate_s", "segment_s", "height_s"}
+
+
+def _painted_rectangle(width_m: float, depth_m: float, scale: float = 1.0) -> np.ndarray:
+    """A floor mask (255 = floor) of a width_m x depth_m rectangle centered on room_4's
+    board, painted through the render's true camera, its image ``scale`` times the photo's."""
+    truth = json.loads((SAMPLES / "room_4.json").read_text())
+    camera_from_board = np.array(truth["camera_from_world"]) @ np.array(truth["board"]["world_from_board"])
+    w, d = width_m / 2, depth_m / 2
+    corners = np.array([[-w, -d, 0, 1], [w, -d, 0, 1], [w, d, 0, 1], [-w, d, 0, 1]], float).T
+    uvw = np.array(truth["K"]) @ (camera_from_board @ corners)[:3]
+    px = (uvw[:2] / uvw[2]).T * scale
+    cols, rows = (round(v * scale) for v in truth["size_px"])
+    assert np.all((px > 0) & (px < [cols, rows]))  # the rectangle is in view
+    mask = np.zeros((rows, cols), np.uint8)
+    cv2.fillPoly(mask, [np.round(px * 16).astype(np.int32)], 255, cv2.LINE_AA, shift=4)
+    return mask
+
+
+def _sides_m(polygon) -> list:
+    p = np.array(polygon)
+    return sorted(np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1).round(3))
+
+
+def test_measure_with_the_users_floor_mask(tmp_path, capsys):
+    # A user paints a 1.2 x 0.8 m rectangle of the floor: the floor measured is that
+    # rectangle, whether the mask is the photo's size or half of it.
+    for name, scale in (("full.png", 1.0), ("half.png", 0.5)):
+        mask = tmp_path / name
+        cv2.imwrite(str(mask), _painted_rectangle(1.2, 0.8, scale))
+        before = hashlib.sha256(mask.read_bytes()).hexdigest()
+        code, out, err = run(["measure", PHOTO, "--floor-mask", mask, "--out", tmp_path / name[:-4]], capsys)
+        assert code == 0, err
+        assert hashlib.sha256(mask.read_bytes()).hexdigest() == before
+        floor = json.loads((tmp_path / name[:-4] / "report.json").read_text())["floor"]
+        assert floor["method"] == "user mask" and "(user mask)" in out
+        assert abs(floor["area_m2"] - 0.96) < 0.03 * 0.96, floor
+        sides = _sides_m(floor["polygon_m"])
+        assert len(sides) == 4 and np.allclose(sides, [0.8, 0.8, 1.2, 1.2], rtol=0.03), sides
+
+
+def test_bad_floor_masks_are_refused(tmp_path, capsys):
+    good = _painted_rectangle(1.2, 0.8)
+    cases = {"missing.png": None,
+             "text.png": b"not a picture",
+             "tall.png": cv2.transpose(good),                    # turned a quarter
+             "wide.png": np.zeros((960, 1500), np.uint8),        # another shape
+             "black.png": np.zeros_like(good),                   # no floor
+             "inverted.png": 255 - good}                         # the board on "not floor"
+    needles = {"missing.png": ["no such file", "stage segment"], "text.png": ["not an image"],
+               "tall.png": ["960 x 1280", "1280 x 960", "turned a quarter"], "wide.png": ["1500 x 960"],
+               "black.png": ["no floor in it"], "inverted.png": ["board's center", "inverted"]}
+    for name, content in cases.items():
+        path = tmp_path / name
+        if isinstance(content, bytes):
+            path.write_bytes(content)
+        elif content is not None:
+            cv2.imwrite(str(path), content)
+        code, _, err = run(["measure", PHOTO, "--floor-mask", path, "--out", tmp_path / "m"], capsys)
+        assert code == 2 and err.startswith("error: ") and err.count("\n") == 1, err
+        assert f"{path}" in err and all(n in err for n in needles[name]), err
+        assert not (tmp_path / "m").exists()
+    code, _, err = run(["measure", PHOTO, "--floor-mask", tmp_path / "tall.png", "--model", tmp_path / "x.onnx"],
+                       capsys)
+    assert code == 2 and "not allowed with" in err

@@ -523,3 +523,27 @@ def test_a_repeated_suggestion_is_solved_again_from_another_seed(monkeypatch):
                                                           seed=1 + 2).position_m)
     first, second = run({1, 3, 5})  # every try for suggestion 2 repeats suggestion 1
     np.testing.assert_array_equal(second.position_m, first.position_m)
+
+
+def test_furniture_keeps_to_the_users_floor_mask(tmp_path, capsys):
+    """A user's own mask replaces the floor found: here the true floor with the photo's
+    left half painted out, and every footprint stays on what is left."""
+    allowed = _truth_mask(ROOMY)
+    allowed[:, : allowed.shape[1] // 2] = False
+    mask = tmp_path / "my_floor.png"
+    cv2.imwrite(str(mask), allowed.astype(np.uint8) * 255)
+    before = _digest(mask)
+    result = furnish(ROOMY, Board(), room="bedroom", suggestions=1, floor_mask=mask)
+    assert _digest(mask) == before
+    assert result.segmentation.method == "user mask" and np.array_equal(result.segmentation.mask, allowed)
+    assert result.report["floor"]["method"] == "user mask"
+    lay = result.layouts[0]
+    assert len(lay.items) >= 2
+    drawn = np.zeros(allowed.shape, np.uint8)
+    for corners in lay.corners_m():
+        cv2.fillPoly(drawn, [np.round(result.calibration.pixels_from_floor(corners)).astype(np.int32)], 1)
+    drawn = drawn.astype(bool)
+    assert (drawn & allowed).sum() / drawn.sum() >= FOOTPRINT_IN_FLOOR
+    # A mask is of one photo: with several, the command refuses before any work.
+    code, _, err = run(["furnish", ROOMY, CRAMPED, "--floor-mask", mask, "--out", tmp_path / "two"], capsys)
+    assert code == 2 and "--floor-mask" in err and "one photo" in err and not (tmp_path / "two").exists()
