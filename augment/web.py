@@ -146,19 +146,21 @@ def _run_job(job_dir: str, options: dict) -> dict:
     photo = job / "input" / options["photo"]
     camera = job / "input" / options["camera"] if options.get("camera") else None
     spec = job / "input" / options["spec"] if options.get("spec") else None
+    floor_mask = job / "input" / options["floor_mask"] if options.get("floor_mask") else None
     try:
         result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
                                   room=None if spec is not None else options["room"], spec=spec,
                                   suggestions=options["suggestions"], seed=options["seed"], camera=camera,
-                                  reporter=_FileProgress, renderer=_renderer)
+                                  floor_mask=floor_mask, reporter=_FileProgress, renderer=_renderer)
         state = json.loads(_progress_path.read_text())
         _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
         paths = pipeline.write_outputs(result, job / "out")
     except (CalibrationError, SegmentationError, LayoutError, pipeline.FurnishError) as error:
         message = str(error).replace(str(photo), "the photo")
-        for path, name in ((camera, "the camera profile"), (spec, "the spec file")):
+        for path, name in ((camera, "the camera profile"), (spec, "the spec file"), (floor_mask, "the floor mask")):
             if path is not None:
-                message = message.replace(str(path), name)
+                # "floor mask PATH: ..." reads "the floor mask: ...", not "floor mask the floor mask".
+                message = message.replace(f"{name[4:]} {path}", name).replace(str(path), name)
         return {"error": {"kind": _USER_ERRORS[type(error).__name__], "message": message},
                 "seconds": time.perf_counter() - start}
     state = json.loads(_progress_path.read_text())
@@ -287,6 +289,7 @@ def _job_state(job: Job) -> dict:
              "progress": 0.0, "error": None, "files": [], "warnings": [],
              "options": {"board": board, "square": job.options["square"], "room": job.options["room"],
                          "spec": job.options.get("spec") is not None,
+                         "floor_mask": job.options.get("floor_mask") is not None,
                          "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
     try:
         progress = json.loads((job.folder / "progress.json").read_text())
@@ -433,6 +436,10 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                                                                            "`stage calibrate`")] = None,
                      spec: Annotated[UploadFile | None, File(description="a layout spec (TOML, see `layout "
                                                                          "solve`) instead of the room preset")]
+                     = None,
+                     floor_mask: Annotated[UploadFile | None, File(description="your own floor mask (white = "
+                                                                               "floor, the photo's shape) instead "
+                                                                               "of the floor Stager finds")]
                      = None):
         """Start furnishing a photo; answers the job's id."""
         board_spec = _check_options(board, square, room, suggestions)
@@ -459,6 +466,16 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                 raise UploadError(413, f"the spec file is larger than {MAX_SPEC_BYTES >> 10} KB; a layout spec "
                                        "is a short TOML text")
             _check_spec(layout_spec)
+        mask, mask_suffix = None, None
+        if floor_mask is not None and floor_mask.filename:
+            mask = await floor_mask.read(max_bytes + 1)
+            if len(mask) > max_bytes:
+                raise UploadError(413, f"the floor mask is larger than {max_bytes / 1e6:g} MB; save it as a "
+                                       "black-and-white PNG (white = floor)")
+            try:
+                mask_suffix = check_photo(mask)
+            except UploadError as error:
+                raise UploadError(error.status, f"the floor mask: {error}") from None
         active = sum(j.result is None for j in jobs.values())
         if active >= workers + max_queued:
             wait = retry_after_s([j.result["seconds"] for j in sorted(jobs.values(), key=lambda j: j.finished or 0)
@@ -473,8 +490,11 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
             (folder / "input" / "camera.json").write_bytes(profile)
         if layout_spec is not None:
             (folder / "input" / "spec.toml").write_bytes(layout_spec)
+        if mask is not None:
+            (folder / "input" / f"floor_mask{mask_suffix}").write_bytes(mask)
         options = {"photo": f"photo{suffix}", "camera": "camera.json" if profile is not None else None,
                    "spec": "spec.toml" if layout_spec is not None else None,
+                   "floor_mask": f"floor_mask{mask_suffix}" if mask is not None else None,
                    "board": (board_spec.cols, board_spec.rows), "kind": board_spec.kind, "square": float(square),
                    "room": None if layout_spec is not None else room, "suggestions": int(suggestions),
                    "seed": int(seed)}

@@ -67,7 +67,7 @@ def test_job_runs_to_completion(finished):
             "report.json", "scene_1.glb"} <= set(state["files"])
     assert any("focal length" in w for w in state["warnings"])
     assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "spec": False,
-                                "suggestions": 1, "seed": 0}
+                                "floor_mask": False, "suggestions": 1, "seed": 0}
 
 
 def test_files_and_zip(finished):
@@ -223,6 +223,34 @@ kind = "floor_lamp"
     report = client.get(f"/api/jobs/{state['id']}/files/report.json").json()
     assert report["furniture"]["items"] == ["reading_chair", "lamp"]
     assert report["furniture"]["kinds"] == ["armchair", "floor_lamp"]
+
+
+def test_a_floor_mask_of_ones_own_replaces_the_floor_found(finished):
+    import cv2
+    import numpy as np
+
+    client = finished[0]
+    floor = cv2.imread(str(PHOTO.with_name("room_4_floor.png")), cv2.IMREAD_GRAYSCALE)
+    floor[:, : floor.shape[1] // 2] = 0
+    mask = cv2.imencode(".png", floor)[1].tobytes()
+    inverted = cv2.imencode(".png", 255 - floor)[1].tobytes()
+    response = client.post("/api/jobs", files={"photo": ("room_4.jpg", PHOTO.read_bytes(), "image/jpeg"),
+                                               "floor_mask": ("mine.png", b"not a picture", "image/png")})
+    assert response.status_code == 415 and "the floor mask: " in response.json()["detail"], response.text
+    states = []
+    for data in (mask, inverted):
+        response = client.post("/api/jobs", files={"photo": ("room_4.jpg", PHOTO.read_bytes(), "image/jpeg"),
+                                                   "floor_mask": ("mine.png", data, "image/png")},
+                               data={"room": "bedroom", "suggestions": "1"})
+        assert response.status_code == 202, response.text
+        states.append(_wait(client, response.json()["id"]))
+    assert states[0]["status"] == "done" and states[0]["options"]["floor_mask"] is True, states[0]
+    report = client.get(f"/api/jobs/{states[0]['id']}/files/report.json").json()
+    assert report["floor"]["method"] == "user mask"
+    assert np.isclose(report["floor"]["floor_fraction"], (floor > 127).mean())
+    assert states[1]["status"] == "failed" and states[1]["error"]["kind"] == "segmentation"
+    message = states[1]["error"]["message"]
+    assert message.startswith("the floor mask: the board's center") and "inverted" in message, message
 
 
 def test_finished_jobs_are_deleted(finished):
