@@ -521,12 +521,13 @@ def _segment_cmd(args):
             polygon = floor_polygon(seg.mask, calibration)
         except ValueError as error:
             warnings.append(f"no floor polygon: {error}")
-    overlay = floor_overlay(image, seg.mask, polygon, calibration)
+    overlay = floor_overlay(image, seg.mask, polygon, calibration, seg.disputed if seg.uncertain else None)
     files = {out: encode_image(seg.mask.astype("uint8") * 255, ".png"),
              out.with_name(out.stem + "_overlay.png"): encode_image(overlay, ".png")}
     if polygon is not None:
         report = {"photo": str(args.photo), "method": seg.method, "floor_fraction": float(seg.mask.mean()),
-                  "skirting_m": seg.skirting_m, "floor": polygon.to_json(), "warnings": warnings}
+                  "skirting_m": seg.skirting_m, "disputed_m2": seg.disputed_m2, "disputed_share": seg.disputed_share,
+                  "floor": polygon.to_json(), "warnings": warnings}
         files[out.with_suffix(".json")] = json.dumps(report, indent=2) + "\n"
     _write_all(files, out.parent)
     if not args.quiet:
@@ -581,13 +582,15 @@ def _measure_cmd(args):
         warnings.append(f"wall height not measured: {height.reason}")
     report = {"photo": str(args.photo), "stager_version": __version__,
               "calibration": calibration.to_json(),
-              "floor": {"method": seg.method, "skirting_m": seg.skirting_m, **polygon.to_json()},
+              "floor": {"method": seg.method, "skirting_m": seg.skirting_m, "disputed_m2": seg.disputed_m2,
+                        "disputed_share": seg.disputed_share, **polygon.to_json()},
               "height": height.to_json(),
               "timings": {k: round(v, 3) for k, v in timings.items()},
               "warnings": warnings}
     files = {out / "report.json": json.dumps(report, indent=2) + "\n",
              out / "overlay_calibration.png": encode_image(calibration_overlay(image, calibration), ".png"),
-             out / "overlay_floor.png": encode_image(floor_overlay(image, seg.mask, polygon, calibration), ".png"),
+             out / "overlay_floor.png": encode_image(floor_overlay(image, seg.mask, polygon, calibration,
+                                                                  seg.disputed if seg.uncertain else None), ".png"),
              out / "overlay_height.png": encode_image(height_overlay(image, calibration, height), ".png")}
     _write_all(files, out)
     if not args.quiet:

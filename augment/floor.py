@@ -278,10 +278,11 @@ def floor_area_m2(mask: np.ndarray, calibration) -> float:
 
 EDGE_COLORS = {"boundary": (255, 210, 0), "image": (0, 200, 255), "far": (170, 170, 170)}
 FLOOR_TINT = np.array([40, 220, 90], np.float32)
+DISPUTED_COLOR = (255, 40, 200)  # magenta: apart from the tint and every edge colour
 
 
 def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | None = None,
-                  calibration=None) -> np.ndarray:
+                  calibration=None, disputed: np.ndarray | None = None) -> np.ndarray:
     """The photo with the floor tinted, its outline, and a plan of the polygon.
 
     Parameters
@@ -293,6 +294,9 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
         When given, the straightened polygon is drawn back onto the photo (edges coloured
         by kind: yellow boundary, blue photo edge, grey far) and a top-down plan with a
         1 m grid, the board, the camera (red) and the area is set beside the photo.
+    disputed : (r, c) bool, optional
+        Where the floor is in doubt (``Segmentation.disputed``, any size of the photo's
+        shape): hatched in magenta, so the eye goes where a correction may be needed.
 
     Returns
     -------
@@ -305,6 +309,10 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
     thick = max(2, round(max(rows, cols) / 500))
     edge = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_GRADIENT, np.ones((3, 3), np.uint8)) > 0
     out[edge] = (20, 120, 40)
+    if disputed is not None:
+        doubt = cv2.resize(np.asarray(disputed, np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
+        y, x = np.mgrid[0:rows, 0:cols]
+        out[doubt & ((x + y) // (2 * thick) % 3 == 0)] = DISPUTED_COLOR
     if polygon is None or calibration is None:
         return out
     n = len(polygon.polygon_m)

@@ -827,7 +827,7 @@ def report_dict(result: FurnishResult) -> dict:
         "calibration": {"source": cal.intrinsics.source, "rms_px": cal.rms_px,
                         "camera_height_m": cal.camera_height_m, **cal.to_json()},
         "floor": {"method": seg.method, "floor_fraction": float(seg.mask.mean()), "skirting_m": seg.skirting_m,
-                  **floor.to_json()},
+                  "disputed_m2": seg.disputed_m2, "disputed_share": seg.disputed_share, **floor.to_json()},
         "height": {**height.to_json(), "used_m": result.room_height_m},
         "furniture": {"source": result.source, "floor_polygon_m": np.round(result.spec.polygon_m, 4),
                       "height_m": result.room_height_m, "items": [i.id for i in result.spec.items],
@@ -1028,7 +1028,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 bar.step()
         with clock("overlays"):
             overlays = {"overlay_calibration.png": calibration_overlay(image, calibration),
-                        "overlay_floor.png": floor_overlay(image, seg.mask, floor, calibration),
+                        "overlay_floor.png": floor_overlay(image, seg.mask, floor, calibration,
+                                                           seg.disputed if seg.uncertain else None),
                         "overlay_height.png": height_overlay(image, calibration, height)}
             sheet = contact_sheet(staged, tol=tol)
         bar.step()

@@ -121,6 +121,11 @@ def test_report_is_complete(roomy):
     assert set(REPORT_KEYS) <= set(report)
     assert report["calibration"]["source"] == "single-view" and report["calibration"]["rms_px"] < 1.0
     assert report["floor"]["area_m2"] > 5 and len(report["floor"]["polygon_m"]) >= 3
+    floor = result.segmentation
+    assert (report["floor"]["disputed_m2"], report["floor"]["disputed_share"]) == (floor.disputed_m2,
+                                                                                  floor.disputed_share)
+    assert 0 <= floor.disputed_share < 0.1  # this floor is found well: no "uncertain" warning
+    assert not any("floor found is uncertain" in w for w in report["warnings"])
     assert {"height_m", "confidence", "fallback", "used_m"} <= set(report["height"])
     assert report["furniture"]["source"] == "preset living_room" and report["furniture"]["items"]
     assert [s["k"] for s in report["suggestions"]] == [1, 2, 3]

@@ -11,11 +11,13 @@ import numpy as np
 import pytest
 from skimage.measure import points_in_poly
 
+from augment import segment
 from augment.board import Board
 from augment.calibrate import calibrate_photo, exif_intrinsics
-from augment.floor import floor_area_m2, floor_overlay, floor_polygon
+from augment.floor import DISPUTED_COLOR, floor_area_m2, floor_overlay, floor_polygon
 from augment.gl import Renderer
-from augment.segment import DEFAULT_MODEL, FloorModel, ModelSpec, SegmentationError, floor_parts, segment_floor
+from augment.segment import (DEFAULT_MODEL, GRABCUT_LONG_PX, FloorModel, ModelSpec, SegmentationError,
+                            disputed_floor, floor_parts, segment_floor)
 from augment.synth import render_sample
 
 
@@ -79,7 +81,6 @@ def test_floor_the_model_nearly_rules_out_is_left_to_grabcut(model, monkeypatch)
     with cartons along the far wall). The model gives the floor behind and between the
     cartons 0.01-0.03; taken as sure "not floor", that floor was lost, 5 % of the floor's
     pixels. GrabCut, left to judge it, keeps it; the truth is the render's floor mask."""
-    import augment.segment as segment
 
     with Renderer() as renderer:
         sample = render_sample([907, 77], renderer)
@@ -326,3 +327,51 @@ def test_grabcut_alone_keeps_only_the_boards_region(held_out):
     assert alone[right].mean() > 0.99 and not alone[left].any() and not alone[island].any()
     with_model = _clean(mask, cal, 1.0, np.where(mask, 0.9, 0.05))
     assert with_model[left].mean() > 0.95 and not with_model[island].any()
+
+
+def test_disputed_floor_is_the_area_the_model_and_the_mask_disagree_on(held_out):
+    """The mask holds a 1 m square of floor beyond the board's center; the model (at the
+    working size) calls a 0.4 x 0.35 m patch of it not floor: 0.14 m² disputed, 14 %."""
+    _, cal = held_out[0]
+    cam = np.linalg.inv(cal.camera_from_floor)[:2, 3]
+    toward = -cam / np.linalg.norm(cam)
+    side = np.array([-toward[1], toward[0]])
+
+    def square(x0, x1, y0, y1):
+        return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]) @ np.array([side, toward])
+
+    floor = square(-0.5, 0.5, 0.0, 1.0)
+    mask = _floor_mask(cal, floor)
+    assert not (mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
+    cols, rows = cal.size_px
+
+    def model_says(floor_mask):  # at GrabCut's working size, as segment_floor has it
+        size = (GRABCUT_LONG_PX, round(rows * GRABCUT_LONG_PX / cols))
+        return cv2.resize(floor_mask.astype(np.float32), size, interpolation=cv2.INTER_AREA)
+
+    patch = _floor_mask(cal, square(0.0, 0.4, 0.4, 0.75))
+    region, disputed_m2, share = disputed_floor(mask, model_says(mask & ~patch), cal)
+    assert abs(disputed_m2 - 0.14) < 0.005, disputed_m2
+    assert abs(share - 0.14) < 0.005, share
+    assert iou(region, model_says(patch) > 0.5) > 0.95
+    # Where they agree nothing is disputed.
+    assert disputed_floor(mask, model_says(mask), cal)[1] < 0.001
+    # The floor overlay hatches the disputed patch, and nothing else.
+    hatched = np.all(floor_overlay(np.zeros((rows, cols, 3), np.uint8), mask, disputed=region) == DISPUTED_COLOR,
+                     axis=2)
+    assert 0.25 < hatched.sum() / patch.sum() < 0.45 and not (hatched & ~cv2.dilate(patch.astype(np.uint8),
+                                                                                     np.ones((5, 5)))).any()
+
+
+def test_an_uncertain_floor_is_said(held_out, model, monkeypatch):
+    sample, cal = held_out[0]
+    seg = segment_floor(sample.image, model, cal)
+    region, m2, share = disputed_floor(seg.mask, seg.probability, cal)
+    assert np.array_equal(seg.disputed, region) and (seg.disputed_m2, seg.disputed_share) == (m2, share)
+    for threshold, said in ((share * 0.9, True), (share * 1.1, False)):
+        monkeypatch.setattr(segment, "DISPUTED_SHARE_WARN", threshold)
+        again = segment_floor(sample.image, model, cal)
+        assert again.uncertain == said
+        assert any("floor found is uncertain" in w and f"{m2:.1f} m²" in w and "--floor-mask" in w
+                   for w in again.warnings) == said, again.warnings
+    assert segment_floor(sample.image, model, None).disputed_m2 is None  # no calibration, no m²
