@@ -660,7 +660,7 @@ def _furnish_cmd(args):
         from .gl import Renderer
 
         shared = {"model": _load_model(args.model), "renderer": Renderer()}
-    refused = 0
+    refused, uncertain = 0, []
     try:
         for photo, out in zip(photos, outs):
             try:
@@ -677,12 +677,17 @@ def _furnish_cmd(args):
                 refused += 1
                 continue
             _print_furnished(result, out, paths, args.quiet, photo if batch else None)
+            if result.segmentation.uncertain:
+                uncertain.append(photo.name)
     finally:
         if "renderer" in shared:
             shared["renderer"].close()
     if batch and not args.quiet:
         print(f"furnished {len(photos) - refused} of {len(photos)} photos into {parent}/"
               + (f"; {refused} refused (errors above)" if refused else ""))
+        if uncertain:
+            print(f"floor uncertain in {len(uncertain)} (check their overlay_floor.png; correct with "
+                  f"--floor-mask): {', '.join(uncertain)}")
     return EXIT_INPUT if refused else EXIT_OK
 
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from augment import cli, pipeline
+from augment import cli, pipeline, segment
 from augment.board import Board
 from augment.calibrate import read_photo
 from augment.floor import FloorPolygon
@@ -262,16 +262,21 @@ def test_bad_asset_flags(tmp_path, capsys):
              "sofa given more than once")
 
 
-def test_several_photos_in_one_command(tmp_path, capsys):
+def test_several_photos_in_one_command(tmp_path, capsys, monkeypatch):
     gray = tmp_path / "gray.png"
     gray.write_bytes(cv2.imencode(".png", np.full((480, 640, 3), 128, np.uint8))[1].tobytes())
     out = tmp_path / "batch"
+    # Every floor called uncertain, to see the photos to check listed at the end.
+    monkeypatch.setattr(segment, "DISPUTED_SHARE_WARN", 0.0)
     code, stdout, err = run(["furnish", CRAMPED, gray, ROOMY, "--room", "bedroom", "--suggestions", "1",
                              "--out", out], capsys)
     # The photo without a board is refused with its own error; the others are furnished.
     assert code == 2
     assert f"error: " in err and str(gray) in err and "no 7x5 checkerboard" in err
     assert "furnished 2 of 3 photos" in stdout and f"== {ROOMY}" in stdout
+    assert "floor uncertain in 2 (check their overlay_floor.png; correct with --floor-mask): room_1.jpg, " \
+           "room_4.jpg" in stdout
+    assert "warning: room_1.jpg: the floor found is uncertain" in err
     assert sorted(p.name for p in out.iterdir()) == ["room_1", "room_4"]
     for name in ("room_1", "room_4"):
         report = json.loads((out / name / "report.json").read_text())
