@@ -39,7 +39,8 @@ from augment.board import Board  # noqa: E402
 from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics  # noqa: E402
 from augment.floor import floor_polygon  # noqa: E402
 from augment.gl import Renderer  # noqa: E402
-from augment.segment import DEFAULT_MODEL, MAX_FLOOR_DISTANCE_M, FloorModel, segment_floor  # noqa: E402
+from augment.segment import (DEFAULT_MODEL, DISPUTED_SHARE_WARN, MAX_FLOOR_DISTANCE_M, FloorModel,  # noqa: E402
+                             segment_floor)
 from augment.synth import render_sample  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
 
@@ -113,6 +114,7 @@ def synthetic(args, model):
                 row[name] = iou(seg.mask, sample.floor_mask)
                 if name == "onnx+grabcut":
                     mask = seg.mask
+                    row["disputed_share"], row["uncertain"] = seg.disputed_share, seg.uncertain
             if cal is not None and mask.any():
                 truth_area = true_visible_area_m2(sample.floor_mask, sample.truth)
                 try:
@@ -202,24 +204,36 @@ def main(argv=None) -> int:
         "truth_mask_within_5pct": f"{sum(abs(e) <= 0.05 for e in col(synth_rows, 'truth_mask_area_error'))}/"
                                   f"{len(col(synth_rows, 'truth_mask_area_error'))}",
         "uncalibrated": sum(not r["calibrated"] for r in synth_rows),
+        # The "floor uncertain" warning against the polygons more than 5 % off.
+        "uncertain": {"warned": sum(bool(r.get("uncertain")) for r in synth_rows
+                                    if r.get("area_error") is not None),
+                      "off_warned": sum(bool(r.get("uncertain")) for r in synth_rows
+                                        if r.get("area_error") is not None and abs(r["area_error"]) > 0.05),
+                      "off": sum(abs(e) > 0.05 for e in col(synth_rows, "area_error"))},
         "real": {k: float(np.mean(col(real_rows, k))) for k in ("onnx", "onnx+grabcut")} if real_rows else None,
         "speed": speed,
     }
     lines = ["# Floor segmentation benchmark", "",
              f"model `{args.model.name}`; {args.count} held-out renders (seed {args.seed}); "
              f"machine: {__import__('os').cpu_count()} cores", "",
-             "| render | size | IoU onnx | IoU onnx+grabcut | IoU grabcut | area error | from true mask | step s |",
-             "|---|---|---|---|---|---|---|---|"]
+             "| render | size | IoU onnx | IoU onnx+grabcut | IoU grabcut | area error | from true mask | disputed | "
+             "step s |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for r in synth_rows:
+        disputed = fmt(r.get("disputed_share"), ".0%") + (" (warned)" if r.get("uncertain") else "")
         lines.append(f"| {r['image']} | {r['size']} | {fmt(r['onnx'])} | {fmt(r['onnx+grabcut'])} | "
                      f"{fmt(r['grabcut'])} | {fmt(r.get('area_error'), '+.1%')} | {fmt(r.get('truth_mask_area_error'), '+.1%')} | "
-                     f"{fmt(r.get('onnx+grabcut_s'), '.2f')} |")
+                     f"{disputed} | {fmt(r.get('onnx+grabcut_s'), '.2f')} |")
     s = summary["synthetic"]
     lines += ["", "| held-out synthetic | mean IoU | worst IoU |", "|---|---|---|"]
     lines += [f"| {k} | {v['mean']:.3f} | {v['min']:.3f} |" for k, v in s.items()]
     lines += ["", f"floor polygon area vs true visible area: median |error| {summary['area_error_median_abs']:.1%}, "
                   f"90th percentile {summary['area_error_p90_abs']:.1%}, within 5 %: {summary['area_within_5pct']} "
                   f"(from the true mask, through the same calibration: {summary['truth_mask_within_5pct']})"]
+    u = summary["uncertain"]
+    lines += ["", f"\"floor uncertain\" warnings (model and GrabCut disagree on more than "
+                  f"{DISPUTED_SHARE_WARN:.0%} of the floor): {u['warned']} of {len(col(synth_rows, 'area_error'))}; "
+                  f"{u['off_warned']} of the {u['off']} polygons more than 5 % off are among them"]
     if real_rows:
         lines += ["", "| real room (furnished; never trained on) | IoU onnx | IoU onnx+grabcut |", "|---|---|---|"]
         lines += [f"| {r['image']} | {r['onnx']:.3f} | {r['onnx+grabcut']:.3f} |" for r in real_rows]
