@@ -555,8 +555,9 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
     """A floor mask the user made or corrected, in place of :func:`segment_floor`.
 
     White (grey level above 127) is floor, as in the mask ``stage segment`` writes; any
-    format Stager reads photos in, grey or colour. A mask of another size but the
-    photo's shape (one painted on a smaller copy) is scaled to the photo.
+    format Stager reads photos in, grey or colour; with an alpha channel, transparent is
+    not floor. A mask of another size but the photo's shape (one painted on a smaller
+    copy) is scaled to the photo.
 
     Parameters
     ----------
@@ -585,10 +586,17 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
     if not path.is_file():
         raise SegmentationError(f"floor mask {path}: no such file; give the mask `stage segment` wrote "
                                 "(white = floor), corrected in any image editor")
-    image = decode_image(path.read_bytes())
+    data = path.read_bytes()
+    image = decode_image(data)
     if image is None:
         raise SegmentationError(f"floor mask {path}: not an image Stager can read ({PHOTO_FORMATS}); "
                                 "save it as PNG, white = floor")
+    lightness = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY).astype(np.float32)
+    # A layer painted on transparency: what is transparent is not floor, whatever colour
+    # it hides (editors often keep white there).
+    raw = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    if raw is not None and raw.ndim == 3 and raw.shape[2] == 4 and raw.shape[:2] == image.shape[:2]:
+        lightness *= raw[..., 3].astype(np.float32) / np.iinfo(raw.dtype).max
     cols, rows = int(size_px[0]), int(size_px[1])
     height, width = image.shape[:2]
     if (width, height) != (cols, rows):
@@ -598,8 +606,8 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
             raise SegmentationError(f"floor mask {path}: size {width} x {height} px does not fit the photo's "
                                     f"{cols} x {rows}{turned}; paint the mask on the photo or a copy scaled "
                                     "evenly, e.g. the floor.png of `stage segment`")
-        image = cv2.resize(image, (cols, rows), interpolation=cv2.INTER_LINEAR)
-    mask = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) > 127
+        lightness = cv2.resize(lightness, (cols, rows), interpolation=cv2.INTER_LINEAR)
+    mask = lightness > 127
     if not mask.any():
         raise SegmentationError(f"floor mask {path}: no floor in it (no pixel lighter than grey 127); "
                                 "paint the floor white on black")

@@ -123,10 +123,14 @@ def _sides_m(polygon) -> list:
 
 def test_measure_with_the_users_floor_mask(tmp_path, capsys):
     # A user paints a 1.2 x 0.8 m rectangle of the floor: the floor measured is that
-    # rectangle, whether the mask is the photo's size or half of it.
-    for name, scale in (("full.png", 1.0), ("half.png", 0.5)):
+    # rectangle, whether the mask is the photo's size, half of it, or a layer of white
+    # painted opaque on transparent white.
+    rectangle = _painted_rectangle(1.2, 0.8)
+    layer = np.dstack([np.full(rectangle.shape + (3,), 255, np.uint8), rectangle])
+    for name, image in (("full.png", rectangle), ("half.png", _painted_rectangle(1.2, 0.8, 0.5)),
+                        ("layer.png", layer)):
         mask = tmp_path / name
-        cv2.imwrite(str(mask), _painted_rectangle(1.2, 0.8, scale))
+        cv2.imwrite(str(mask), image)
         before = hashlib.sha256(mask.read_bytes()).hexdigest()
         code, out, err = run(["measure", PHOTO, "--floor-mask", mask, "--out", tmp_path / name[:-4]], capsys)
         assert code == 0, err
