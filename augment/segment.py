@@ -5,7 +5,9 @@ network is Stager's own (``models/floor_segnet.onnx``, trained on synthetic room
 ``models/train_floor.py``), or any ONNX segmentation model a user points at, described
 by a :class:`ModelSpec`. GrabCut refines the model's edges against the photo's colours;
 the board (it lies on the floor) and the horizon (nothing above it is floor) pin it down.
-Without a model, GrabCut alone starts from the calibration's geometry.
+Without a model, GrabCut alone starts from the calibration's geometry. Where the model
+and the refined mask disagree is measured and, when large, said (:func:`disputed_floor`);
+a user's own mask can stand in for all of it (:func:`read_floor_mask`).
 
 Images are RGB ``(rows, cols, 3)`` uint8; masks are ``(rows, cols)`` bool; points are
 ``(x, y)`` pixels.
@@ -272,6 +274,17 @@ def floor_footprint_m2(points_px: np.ndarray, calibration) -> np.ndarray:
     return np.abs(np.linalg.det(H) / np.where(np.abs(w) > 1e-12, w, np.inf) ** 3)
 
 
+def _believed_footprint_m2(shape: tuple[int, int], calibration, distance_m: np.ndarray | None = None) -> np.ndarray:
+    """Each pixel's floor area (m^2, :func:`floor_footprint_m2`), (rows, cols), zero
+    beyond ``MAX_FLOOR_DISTANCE_M`` (``distance_m``: :func:`floor_distance_m`, when known)."""
+    rows, cols = shape
+    y, x = np.mgrid[0:rows, 0:cols]
+    footprint = floor_footprint_m2(np.column_stack([x.ravel(), y.ravel()]), calibration).reshape(rows, cols)
+    if distance_m is None:
+        distance_m = floor_distance_m(shape, calibration)
+    return footprint * (distance_m <= MAX_FLOOR_DISTANCE_M)
+
+
 def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | None = None,
                 distance_m: np.ndarray | None = None) -> tuple[np.ndarray, int, list[int]]:
     """The floor's connected regions: the main one and the parts cut off from it.
@@ -316,12 +329,7 @@ def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | No
         main = int(labels[y, x])
     if n == 2:
         return labels, main, []
-    rows, cols = labels.shape
-    y, x = np.mgrid[0:rows, 0:cols]
-    footprint = floor_footprint_m2(np.column_stack([x.ravel(), y.ravel()]), calibration)
-    if distance_m is None:
-        distance_m = floor_distance_m(labels.shape, calibration)
-    footprint *= (distance_m <= MAX_FLOOR_DISTANCE_M).ravel()
+    footprint = _believed_footprint_m2(labels.shape, calibration, distance_m).ravel()
     keep = np.bincount(labels.ravel(), footprint, minlength=n) >= MIN_PART_M2
     keep &= stats[:, cv2.CC_STAT_AREA] >= MIN_PART_SHARE * stats[main, cv2.CC_STAT_AREA]
     edge = np.zeros(n, bool)
@@ -536,10 +544,7 @@ def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration) -> tu
     """
     r, c = probability.shape
     small = cv2.resize(np.asarray(mask, np.float32), (c, r), interpolation=cv2.INTER_AREA) > 0.5
-    scaled = calibration.scaled(c / mask.shape[1])
-    y, x = np.mgrid[0:r, 0:c]
-    footprint = floor_footprint_m2(np.column_stack([x.ravel(), y.ravel()]), scaled).reshape(r, c)
-    footprint *= floor_distance_m((r, c), scaled) <= MAX_FLOOR_DISTANCE_M
+    footprint = _believed_footprint_m2((r, c), calibration.scaled(c / mask.shape[1]))
     region = small != (probability > 0.5)
     disputed_m2 = float(footprint[region].sum())
     floor_m2 = float(footprint[small].sum())
