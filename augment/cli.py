@@ -521,7 +521,7 @@ def _segment_cmd(args):
             polygon = floor_polygon(seg.mask, calibration)
         except ValueError as error:
             warnings.append(f"no floor polygon: {error}")
-    overlay = floor_overlay(image, seg.mask, polygon, calibration, seg.disputed if seg.uncertain else None)
+    overlay = floor_overlay(image, seg.mask, polygon, calibration, seg.doubted)
     files = {out: encode_image(seg.mask.astype("uint8") * 255, ".png"),
              out.with_name(out.stem + "_overlay.png"): encode_image(overlay, ".png")}
     if polygon is not None:
@@ -590,7 +590,7 @@ def _measure_cmd(args):
     files = {out / "report.json": json.dumps(report, indent=2) + "\n",
              out / "overlay_calibration.png": encode_image(calibration_overlay(image, calibration), ".png"),
              out / "overlay_floor.png": encode_image(floor_overlay(image, seg.mask, polygon, calibration,
-                                                                  seg.disputed if seg.uncertain else None), ".png"),
+                                                                  seg.doubted), ".png"),
              out / "overlay_height.png": encode_image(height_overlay(image, calibration, height), ".png")}
     _write_all(files, out)
     if not args.quiet:

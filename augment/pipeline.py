@@ -1028,8 +1028,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 bar.step()
         with clock("overlays"):
             overlays = {"overlay_calibration.png": calibration_overlay(image, calibration),
-                        "overlay_floor.png": floor_overlay(image, seg.mask, floor, calibration,
-                                                           seg.disputed if seg.uncertain else None),
+                        "overlay_floor.png": floor_overlay(image, seg.mask, floor, calibration, seg.doubted),
                         "overlay_height.png": height_overlay(image, calibration, height)}
             sheet = contact_sheet(staged, tol=tol)
         bar.step()

@@ -383,6 +383,12 @@ class Segmentation:
         """Whether the disputed share is large enough to warn of (``DISPUTED_SHARE_WARN``)."""
         return self.disputed_share is not None and self.disputed_share > DISPUTED_SHARE_WARN
 
+    @property
+    def doubted(self) -> np.ndarray | None:
+        """The disputed region when the floor is uncertain (what the floor overlay hatches),
+        else None."""
+        return self.disputed if self.uncertain else None
+
 
 def _working_scale(shape, long_px) -> float:
     return min(1.0, long_px / max(shape))

@@ -371,7 +371,7 @@ def test_an_uncertain_floor_is_said(held_out, model, monkeypatch):
     for threshold, said in ((share * 0.9, True), (share * 1.1, False)):
         monkeypatch.setattr(segment, "DISPUTED_SHARE_WARN", threshold)
         again = segment_floor(sample.image, model, cal)
-        assert again.uncertain == said
+        assert again.uncertain == said and (again.doubted is not None) == said
         assert any("floor found is uncertain" in w and f"{m2:.1f} m²" in w and "--floor-mask" in w
                    for w in again.warnings) == said, again.warnings
     assert segment_floor(sample.image, model, None).disputed_m2 is None  # no calibration, no m²
