@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import re
 import sys
@@ -107,14 +108,59 @@ def _paper(text: str) -> str:
     return key
 
 
+def _click(text: str) -> tuple[float, float]:
+    """``X,Y`` of ``--floor-at`` and ``--not-floor-at``."""
+    parts = text.split(",")
+    try:
+        x, y = (float(v) for v in parts)
+    except ValueError:
+        x = y = float("nan")
+    if len(parts) != 2 or not (math.isfinite(x) and math.isfinite(y)):
+        raise argparse.ArgumentTypeError(f"{text!r}: give X,Y, a pixel of the photo (0,0 at its top left), "
+                                         "e.g. 640,900")
+    return x, y
+
+
+class _ClickAction(argparse.Action):
+    """Both click flags add to one list, in the order given: a later click wins."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        clicks = list(getattr(namespace, self.dest) or [])
+        clicks.append((*values, 1.0 if self.const else 0.0))
+        setattr(namespace, self.dest, clicks)
+
+
+def _add_click_args(p) -> None:
+    """--floor-at and --not-floor-at: the user's corrections of the floor found."""
+    p.add_argument("--floor-at", dest="clicks", action=_ClickAction, const=True, type=_click, default=None,
+                   metavar="X,Y", help="a pixel of floor the floor found left out (repeat for more; x,y in the "
+                                       "photo's pixels, as in the floor overlay): its region of that colour "
+                                       "becomes floor")
+    p.add_argument("--not-floor-at", dest="clicks", action=_ClickAction, const=False, type=_click,
+                   metavar="X,Y", help="a pixel of something taken for floor (a carton, a wall's foot): its "
+                                       "region of that colour is not floor. Clicks apply in order, a later "
+                                       "one winning where two overlap")
+
+
 def _add_floor_args(p) -> None:
-    """--model or --floor-mask: where the floor comes from."""
+    """--model or --floor-mask: where the floor comes from; clicks correct the first."""
     where = p.add_mutually_exclusive_group()
     where.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
                        help="floor model (default: Stager's models/floor_segnet.onnx, with its MODEL.json)")
     where.add_argument("--floor-mask", type=Path, default=None, metavar="MASK.png",
                        help="your own floor mask (white = floor), used instead of finding the floor: the "
                             "floor.png `stage segment` wrote, corrected in an image editor")
+    _add_click_args(p)
+
+
+def _check_clicks_with_mask(args) -> None:
+    """Clicks correct the floor Stager finds; a user's mask is taken as it is."""
+    if args.clicks and args.floor_mask is not None:
+        x, y, is_floor = args.clicks[0]
+        flag = "--floor-at" if is_floor else "--not-floor-at"
+        raise StageError(f"{flag} {x:g},{y:g}: clicks correct the floor Stager finds, and --floor-mask "
+                         f"{args.floor_mask} is used as it is; paint the correction into the mask, or leave "
+                         "--floor-mask out")
 
 
 def _add_board_args(p, square_help=None):
@@ -187,6 +233,7 @@ def _parser():
                         "from the board and the horizon (needs the board)")
     g.add_argument("--no-refine", dest="refine", action="store_false",
                    help="take the model's mask as it is, without GrabCut")
+    _add_click_args(g)
     g.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
                    help="an ONNX segmentation model (default: Stager's models/floor_segnet.onnx). Its "
                         "input and classes are read from MODEL.json beside it, else these options:")
@@ -513,7 +560,7 @@ def _segment_cmd(args):
         calibration = None
         warnings.append(f"no calibration ({error}); the floor is found without the board and horizon, "
                         "and no floor polygon is made")
-    seg = segment_floor(image, model, calibration, method=args.method, refine=args.refine)
+    seg = segment_floor(image, model, calibration, method=args.method, refine=args.refine, clicks=args.clicks)
     warnings += seg.warnings
     polygon = None
     if calibration is not None and seg.mask.any():
@@ -521,13 +568,13 @@ def _segment_cmd(args):
             polygon = floor_polygon(seg.mask, calibration)
         except ValueError as error:
             warnings.append(f"no floor polygon: {error}")
-    overlay = floor_overlay(image, seg.mask, polygon, calibration, seg.doubted)
+    overlay = floor_overlay(image, seg.mask, polygon, calibration, seg.doubted, seg.clicks)
     files = {out: encode_image(seg.mask.astype("uint8") * 255, ".png"),
              out.with_name(out.stem + "_overlay.png"): encode_image(overlay, ".png")}
     if polygon is not None:
         report = {"photo": str(args.photo), "method": seg.method, "floor_fraction": float(seg.mask.mean()),
                   "skirting_m": seg.skirting_m, "disputed_m2": seg.disputed_m2, "disputed_share": seg.disputed_share,
-                  "floor": polygon.to_json(), "warnings": warnings}
+                  "clicks": seg.clicks_json(), "floor": polygon.to_json(), "warnings": warnings}
         files[out.with_suffix(".json")] = json.dumps(report, indent=2) + "\n"
     _write_all(files, out.parent)
     if not args.quiet:
@@ -558,6 +605,7 @@ def _measure_cmd(args):
     out = args.out if args.out is not None else Path("out") / args.photo.stem
     _prepare_dir_out(out)
     _check_camera(args)
+    _check_clicks_with_mask(args)
     if args.photo.is_file():
         _check_floor_mask(args.floor_mask)
     timings = {}
@@ -567,7 +615,7 @@ def _measure_cmd(args):
     timings["calibrate_s"] = time.perf_counter() - start
     start = time.perf_counter()
     if args.floor_mask is None:
-        seg = segment_floor(image, _load_model(args.model), calibration)
+        seg = segment_floor(image, _load_model(args.model), calibration, clicks=args.clicks)
     else:
         seg = read_floor_mask(args.floor_mask, (image.shape[1], image.shape[0]), calibration)
     warnings = list(calibration.warnings) + list(seg.warnings)
@@ -583,14 +631,15 @@ def _measure_cmd(args):
     report = {"photo": str(args.photo), "stager_version": __version__,
               "calibration": calibration.to_json(),
               "floor": {"method": seg.method, "skirting_m": seg.skirting_m, "disputed_m2": seg.disputed_m2,
-                        "disputed_share": seg.disputed_share, **polygon.to_json()},
+                        "disputed_share": seg.disputed_share, "clicks": seg.clicks_json(),
+                        **polygon.to_json()},
               "height": height.to_json(),
               "timings": {k: round(v, 3) for k, v in timings.items()},
               "warnings": warnings}
     files = {out / "report.json": json.dumps(report, indent=2) + "\n",
              out / "overlay_calibration.png": encode_image(calibration_overlay(image, calibration), ".png"),
              out / "overlay_floor.png": encode_image(floor_overlay(image, seg.mask, polygon, calibration,
-                                                                  seg.doubted), ".png"),
+                                                                  seg.doubted, seg.clicks), ".png"),
              out / "overlay_height.png": encode_image(height_overlay(image, calibration, height), ".png")}
     _write_all(files, out)
     if not args.quiet:
@@ -641,6 +690,11 @@ def _furnish_cmd(args):
     if batch and args.floor_mask is not None:
         raise StageError(f"--floor-mask {args.floor_mask}: a mask is of one photo; give one photo with it, "
                          "or leave --floor-mask out to find each photo's floor")
+    if batch and args.clicks:
+        x, y, is_floor = args.clicks[0]
+        raise StageError(f"{'--floor-at' if is_floor else '--not-floor-at'} {x:g},{y:g}: a click is on one "
+                         "photo; give one photo with it")
+    _check_clicks_with_mask(args)
     if any(p.is_file() for p in photos):
         _check_floor_mask(args.floor_mask)
         for flag, path, hint in (("--camera", args.camera, "make a camera profile with `stage calibrate`"),
@@ -666,7 +720,7 @@ def _furnish_cmd(args):
             try:
                 result = furnish(photo, board, room=args.room, spec=args.spec, suggestions=args.suggestions,
                                  seed=args.seed, camera=args.camera, model=shared.get("model", args.model),
-                                 floor_mask=args.floor_mask,
+                                 floor_mask=args.floor_mask, clicks=args.clicks,
                                  assets=dict(args.asset), layers=args.layers, renderer=shared.get("renderer"),
                                  progress=not args.quiet and sys.stderr.isatty())
                 paths = write_outputs(result, out)
@@ -686,8 +740,8 @@ def _furnish_cmd(args):
         print(f"furnished {len(photos) - refused} of {len(photos)} photos into {parent}/"
               + (f"; {refused} refused (errors above)" if refused else ""))
         if uncertain:
-            print(f"floor uncertain in {len(uncertain)} (check their overlay_floor.png; correct with "
-                  f"--floor-mask): {', '.join(uncertain)}")
+            print(f"floor uncertain in {len(uncertain)} (check their overlay_floor.png; correct each "
+                  f"with --floor-at / --not-floor-at or --floor-mask): {', '.join(uncertain)}")
     return EXIT_INPUT if refused else EXIT_OK
 
 

@@ -279,10 +279,11 @@ def floor_area_m2(mask: np.ndarray, calibration) -> float:
 EDGE_COLORS = {"boundary": (255, 210, 0), "image": (0, 200, 255), "far": (170, 170, 170)}
 FLOOR_TINT = np.array([40, 220, 90], np.float32)
 DISPUTED_COLOR = (255, 40, 200)  # magenta: apart from the tint and every edge colour
+CLICK_COLORS = {0: (230, 30, 30), 1: (0, 150, 40)}  # the user's "not floor" and "floor" marks
 
 
 def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | None = None,
-                  calibration=None, disputed: np.ndarray | None = None) -> np.ndarray:
+                  calibration=None, disputed: np.ndarray | None = None, clicks=None) -> np.ndarray:
     """The photo with the floor tinted, its outline, and a plan of the polygon.
 
     Parameters
@@ -313,13 +314,25 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
         doubt = cv2.resize(np.asarray(disputed, np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
         y, x = np.mgrid[0:rows, 0:cols]
         out[doubt & ((x + y) // (2 * thick) % 3 == 0)] = DISPUTED_COLOR
+    if polygon is not None and calibration is not None:
+        n = len(polygon.polygon_m)
+        for i in range(n):
+            a, b = polygon.polygon_m[i], polygon.polygon_m[(i + 1) % n]
+            pts = calibration.pixels_from_floor(np.linspace(a, b, 24)).round().astype(np.int32)
+            cv2.polylines(out, [pts], False, EDGE_COLORS[polygon.edge_kind[i]], thick, cv2.LINE_AA)
+    # The user's clicks on top of everything: they are what the user looks for.
+    radius = 4 * thick
+    for x, y, is_floor in np.asarray(clicks if clicks is not None else np.zeros((0, 3)), np.float64).reshape(-1, 3):
+        center = (int(round(x)), int(round(y)))
+        cv2.circle(out, center, radius + thick, (255, 255, 255), -1, cv2.LINE_AA)
+        cv2.circle(out, center, radius, CLICK_COLORS[int(bool(is_floor))], -1, cv2.LINE_AA)
+        if not is_floor:
+            d = round(0.6 * radius)
+            for sign in (1, -1):
+                cv2.line(out, (center[0] - d, center[1] - sign * d), (center[0] + d, center[1] + sign * d),
+                         (255, 255, 255), thick, cv2.LINE_AA)
     if polygon is None or calibration is None:
         return out
-    n = len(polygon.polygon_m)
-    for i in range(n):
-        a, b = polygon.polygon_m[i], polygon.polygon_m[(i + 1) % n]
-        pts = calibration.pixels_from_floor(np.linspace(a, b, 24)).round().astype(np.int32)
-        cv2.polylines(out, [pts], False, EDGE_COLORS[polygon.edge_kind[i]], thick, cv2.LINE_AA)
     return np.hstack([out, _plan(rows, polygon, calibration)])
 
 

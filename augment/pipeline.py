@@ -827,7 +827,8 @@ def report_dict(result: FurnishResult) -> dict:
         "calibration": {"source": cal.intrinsics.source, "rms_px": cal.rms_px,
                         "camera_height_m": cal.camera_height_m, **cal.to_json()},
         "floor": {"method": seg.method, "floor_fraction": float(seg.mask.mean()), "skirting_m": seg.skirting_m,
-                  "disputed_m2": seg.disputed_m2, "disputed_share": seg.disputed_share, **floor.to_json()},
+                  "disputed_m2": seg.disputed_m2, "disputed_share": seg.disputed_share,
+                  "clicks": seg.clicks_json(), **floor.to_json()},
         "height": {**height.to_json(), "used_m": result.room_height_m},
         "furniture": {"source": result.source, "floor_polygon_m": np.round(result.spec.polygon_m, 4),
                       "height_m": result.room_height_m, "items": [i.id for i in result.spec.items],
@@ -877,7 +878,7 @@ def _load_model(model):
 
 
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
-            seed: int = 0, camera=None, model=None, floor_mask=None, assets: dict | None = None,
+            seed: int = 0, camera=None, model=None, floor_mask=None, clicks=None, assets: dict | None = None,
             layers: bool = False, progress: bool = False, reporter=None, renderer=None,
             tol: Tolerances = TOL) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
@@ -905,6 +906,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         The user's own floor mask (white = floor; :func:`augment.segment.read_floor_mask`),
         used as it is instead of finding the floor: the mask ``stage segment`` wrote,
         corrected by hand where it went wrong. No model is loaded.
+    clicks : (n, 3) array_like, optional
+        The user's corrections of the floor found (x, y photo pixels, 1 floor or 0 not
+        floor; :func:`augment.segment.segment_floor`). Not with ``floor_mask``.
     assets : dict, optional
         Kind -> the user's model of that kind, rendered and put in the scenes instead of
         Stager's own, stretched onto each item's box: a GLB, glTF or OBJ path (y up,
@@ -943,6 +947,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     t_start = time.perf_counter()
     # Everything that can be checked without the photo is, first.
     source_name, source = _furniture_source(room, spec)
+    if floor_mask is not None and clicks is not None and np.size(clicks):
+        raise FurnishError("clicks correct the floor Stager finds, and a floor mask is used as it is; paint "
+                           "the correction into the mask, or give no mask")
     floor_model = _load_model(model) if floor_mask is None else None
     user_models = _load_assets(assets)
     steps = 6 + 3 * suggestions
@@ -961,7 +968,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         bar.step()
         with clock("segment"):
             if floor_mask is None:
-                seg = segment_floor(image, floor_model, calibration)
+                seg = segment_floor(image, floor_model, calibration, clicks=clicks)
             else:
                 seg = read_floor_mask(floor_mask, (image.shape[1], image.shape[0]), calibration)
         bar.step()
@@ -1028,7 +1035,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 bar.step()
         with clock("overlays"):
             overlays = {"overlay_calibration.png": calibration_overlay(image, calibration),
-                        "overlay_floor.png": floor_overlay(image, seg.mask, floor, calibration, seg.doubted),
+                        "overlay_floor.png": floor_overlay(image, seg.mask, floor, calibration,
+                                                           seg.doubted, seg.clicks),
                         "overlay_height.png": height_overlay(image, calibration, height)}
             sheet = contact_sheet(staged, tol=tol)
         bar.step()

@@ -48,6 +48,22 @@ MIN_PART_M2, MIN_PART_SHARE = 0.05, 0.005
 DISPUTED_SHARE_WARN = 0.10
 
 
+# A user's click says "floor here" or "not floor here" of the region around it: the
+# pixels of the clicked colour (within this Lab distance, on the working image blurred
+# a little) reached without crossing an edge of the photo, within this share of the
+# image's long side of the click (its reach). Walls of the floor's colour often meet it
+# without an edge; the reach keeps such a leak local. Within reach the model's sure
+# labels become probable, so GrabCut can carry the clicked colour past them (over a
+# plank joint, where the region stops).
+CLICK_TOLERANCE = 12
+CLICK_REACH = 0.15
+# Canny's thresholds for those edges: low, so that the faint line where a wall of the
+# floor's colour meets the floor stops the region (40/100 let it into the wall on two of
+# three renders where a click overshot; simulated clicks on seeds 914-917 fixed 19 of 30
+# misses with one click at 10/30, 16 at 40/100).
+CLICK_CANNY = (10, 30)
+
+
 # Larger photos are shrunk to this long side once, before the smaller working sizes of
 # the model and GrabCut are made from it: shrinking a 12 MP photo costs more than the model.
 PRESHRINK_LONG_PX = 2048
@@ -367,6 +383,9 @@ class Segmentation:
         (:func:`disputed_floor`), when a model ran and the photo is calibrated.
     disputed_m2, disputed_share : float or None
         Its floor area, and its share of the mask's floor area.
+    clicks : (n, 3) float
+        The user's corrections it was made with (x, y px, 1 floor or 0 not floor), in
+        order; none, (0, 3), by default.
     """
 
     mask: np.ndarray
@@ -377,6 +396,11 @@ class Segmentation:
     disputed: np.ndarray | None = None
     disputed_m2: float | None = None
     disputed_share: float | None = None
+    clicks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+
+    def clicks_json(self) -> list[dict]:
+        """The clicks as the reports list them."""
+        return [{"x_px": float(x), "y_px": float(y), "floor": bool(f)} for x, y, f in self.clicks]
 
     @property
     def uncertain(self) -> bool:
@@ -436,8 +460,99 @@ def _hide_board(small, calibration, scale):
     return cv2.inpaint(small, mask, 3, cv2.INPAINT_TELEA)
 
 
+def _check_clicks(clicks, shape: tuple[int, int]) -> np.ndarray:
+    """Clicks as an (n, 3) float array of x, y photo pixels and 1 (floor) or 0, each
+    inside the photo."""
+    if clicks is None or np.size(clicks) == 0:
+        return np.zeros((0, 3))
+    arr = np.asarray(clicks, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise SegmentationError(f"clicks of shape {arr.shape}: give rows of x, y, and 1 for floor or 0 for "
+                                "not floor")
+    rows, cols = shape
+    for x, y, floor in arr:
+        name = "floor at" if floor else "not floor at"
+        if not (np.isfinite(x) and np.isfinite(y) and 0 <= x < cols and 0 <= y < rows):
+            raise SegmentationError(f"{name} {x:g},{y:g}: outside the photo ({cols} x {rows} px); give "
+                                    "x,y in the photo's pixels, 0,0 at its top left, as the floor overlay shows")
+    return arr
+
+
+def _click_region(small: np.ndarray, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
+    """What a click at ``(x, y)`` (working pixels) says: the region of the clicked colour
+    reached from it without crossing an edge (a magic wand), within ``CLICK_REACH`` of
+    it; and that reach."""
+    rows, cols = small.shape[:2]
+    col, row = min(cols - 1, max(0, int(round(x)))), min(rows - 1, max(0, int(round(y))))
+    lab = cv2.cvtColor(cv2.medianBlur(small, 5), cv2.COLOR_RGB2LAB)
+    # Edges stop the fill where a wall of the floor's colour meets it; the click itself
+    # may sit on one (a plank joint), so its neighbourhood is cleared.
+    grey = cv2.cvtColor(cv2.GaussianBlur(small, (3, 3), 0), cv2.COLOR_RGB2GRAY)
+    edges = cv2.dilate(cv2.Canny(grey, *CLICK_CANNY), np.ones((2, 2), np.uint8))
+    edges[max(0, row - 2):row + 3, max(0, col - 2):col + 3] = 0
+    reach = np.zeros((rows, cols), np.uint8)
+    cv2.circle(reach, (col, row), max(2, round(CLICK_REACH * max(rows, cols))), 1, -1)
+    fill = np.ones((rows + 2, cols + 2), np.uint8)
+    fill[1:-1, 1:-1] = (edges > 0) | (reach == 0)
+    tol = (CLICK_TOLERANCE,) * 3
+    cv2.floodFill(lab, fill, (col, row), 0, tol, tol,
+                  4 | cv2.FLOODFILL_FIXED_RANGE | cv2.FLOODFILL_MASK_ONLY | (2 << 8))
+    return fill[1:-1, 1:-1] == 2, reach > 0
+
+
+def _click_regions(small, scale, calibration, clicks):
+    """What the user's clicks say, at the working size: the regions marked floor and not
+    floor (a later click overriding an earlier one where they overlap), and where the
+    model is not to be taken as sure: within each click's reach. Clicks the geometry
+    contradicts are refused: floor above the horizon, the board not floor."""
+    shape = small.shape[:2]
+    floor = np.zeros(shape, bool)
+    other = np.zeros(shape, bool)
+    near = np.zeros(shape, bool)
+    below = board = None
+    if calibration is not None:
+        horizon = calibration.horizon.copy()
+        horizon[2] *= scale
+        below = below_horizon(shape, horizon, 0.0)
+        board = np.zeros(shape, np.uint8)
+        cv2.fillPoly(board, [(board_polygon_px(calibration) * scale).round().astype(np.int32)], 1)
+        board = board > 0
+    for x, y, is_floor in clicks:
+        col, row = min(shape[1] - 1, int(x * scale)), min(shape[0] - 1, int(y * scale))
+        if is_floor and below is not None and not below[row, col]:
+            raise SegmentationError(f"floor at {x:g},{y:g}: above the horizon the board gives, where no "
+                                    "floor can be; click floor below the far walls' feet")
+        if not is_floor and board is not None and board[row, col]:
+            raise SegmentationError(f"not floor at {x:g},{y:g}: on the board, which lies on the floor; "
+                                    "click the thing wrongly taken for floor")
+        region, reach = _click_region(small, x * scale, y * scale)
+        near |= reach
+        if is_floor:
+            floor |= region
+            other &= ~region
+        else:
+            other |= region
+            floor &= ~region
+    # The geometry outranks a click's region: the board is floor, above the horizon is not.
+    if calibration is not None:
+        floor &= below
+        other &= ~board
+        near &= below & ~board
+    return floor, other, near
+
+
+def _apply_clicks(trimap, floor, other, near):
+    """Pin the clicked regions in GrabCut's start; near a click the model's sure labels
+    become probable, so GrabCut can carry the clicked colour past them."""
+    trimap[near & (trimap == cv2.GC_BGD)] = cv2.GC_PR_BGD
+    trimap[near & (trimap == cv2.GC_FGD)] = cv2.GC_PR_FGD
+    trimap[floor] = cv2.GC_FGD
+    trimap[other] = cv2.GC_BGD
+
+
 def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibration=None,
-                  method: str = "onnx", refine: bool = True, skirting: bool = True) -> Segmentation:
+                  method: str = "onnx", refine: bool = True, skirting: bool = True,
+                  clicks=None) -> Segmentation:
     """Find the floor in a photo.
 
     Parameters
@@ -454,15 +569,29 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         Refine the model's mask with GrabCut (``"onnx"`` only).
     skirting : bool
         Trim the skirting boards from the refined mask (needs ``calibration``).
+    clicks : (n, 3) array_like of float, optional
+        The user's corrections, in order: photo pixels ``x, y`` and 1 where the floor
+        is, 0 where something was wrongly taken for floor. Each marks the region of its
+        colour around it (reached without crossing an edge) for GrabCut, a later click
+        winning where two regions overlap, and lets GrabCut overrule the model within
+        ``CLICK_REACH`` of it; a region clicked as floor is kept even when cut off from
+        the rest, and within a floor click's reach the skirting trim cuts nothing.
 
     Returns
     -------
     Segmentation
+
+    Raises
+    ------
+    SegmentationError
+        Bad image, or a click outside the photo, floor above the horizon, or the board
+        marked not floor.
     """
     image = _check_image(image)
     if method not in ("onnx", "grabcut"):
         raise SegmentationError(f"method {method!r}: use onnx or grabcut")
     rows, cols = image.shape[:2]
+    clicks = _check_clicks(clicks, (rows, cols))
     warnings = []
     scale = _working_scale((rows, cols), GRABCUT_LONG_PX)
     size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
@@ -470,6 +599,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     small = _hide_board(cv2.resize(work, size_small, interpolation=cv2.INTER_AREA), calibration, scale)
     shape_small = small.shape[:2]
     probability = None
+    clicked_floor, clicked_other, clicked_near = _click_regions(small, scale, calibration, clicks)
 
     if method == "onnx":
         if model is None:
@@ -484,6 +614,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
             trimap[cv2.erode((p_small > SURE_FLOOR).astype(np.uint8), kernel) > 0] = cv2.GC_FGD
             trimap[cv2.erode((p_small < SURE_OTHER).astype(np.uint8), kernel) > 0] = cv2.GC_BGD
             _seed_geometry(trimap, shape_small, scale, calibration)
+            _apply_clicks(trimap, clicked_floor, clicked_other, clicked_near)
             small_mask = _grabcut(small, trimap, GRABCUT_ITERATIONS)
             name = "onnx+grabcut"
         else:
@@ -492,15 +623,18 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
                 trimap = np.where(small_mask, cv2.GC_FGD, cv2.GC_BGD).astype(np.uint8)
                 _seed_geometry(trimap, shape_small, scale, calibration)
                 small_mask = trimap == cv2.GC_FGD
+            small_mask = (small_mask | clicked_floor) & ~clicked_other
             name = "onnx"
     else:
         if calibration is None:
             raise SegmentationError("method grabcut needs the board's calibration (the board seeds the floor, "
                                     "the horizon bounds it); photograph the board on the floor, or use a model")
-        small_mask = _grabcut(small, _geometry_trimap(shape_small, scale, calibration), 5)
+        trimap = _geometry_trimap(shape_small, scale, calibration)
+        _apply_clicks(trimap, clicked_floor, clicked_other, clicked_near)
+        small_mask = _grabcut(small, trimap, 5)
         name = "grabcut"
 
-    mask_small = _clean(small_mask, calibration, scale, probability)
+    mask_small = _clean(small_mask, calibration, scale, probability, clicked_floor) & ~clicked_other
     if not mask_small.any():
         warnings.append("no floor found")
     # Linear interpolation of the 0/1 mask, cut at one half: edges come out straight
@@ -509,20 +643,31 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     skirting_m = None
     if skirting and calibration is not None and name != "onnx" and mask.any():
         # The refined mask's top edge sits on the skirting boards; the floor ends below.
-        mask, skirting_m = trim_skirting(image, mask, calibration)
+        trimmed, skirting_m = trim_skirting(image, mask, calibration)
+        # A strip the trim took for a board is floor within reach of a floor click there:
+        # the user's word is the last.
+        reach = np.zeros((rows, cols), np.uint8)
+        for x, y, _ in clicks[clicks[:, 2] > 0]:
+            cv2.circle(reach, (int(x), int(y)), round(CLICK_REACH * max(rows, cols)), 1, -1)
+        mask = trimmed | (mask & (reach > 0))
+    if len(clicks):
+        other = cv2.resize(clicked_other.astype(np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
+        mask &= ~other
     disputed = (None, None, None)
     if probability is not None and calibration is not None and mask.any():
-        disputed = disputed_floor(mask, probability, calibration)
-    seg = Segmentation(mask, probability, name, tuple(warnings), skirting_m, *disputed)
+        disputed = disputed_floor(mask, probability, calibration, settled=clicked_near)
+    seg = Segmentation(mask, probability, name, tuple(warnings), skirting_m, *disputed, clicks)
     if seg.uncertain:
         seg = replace(seg, warnings=seg.warnings + (
             f"the floor found is uncertain: the floor model and GrabCut disagree on {seg.disputed_m2:.1f} m\u00b2 "
             f"of it ({100 * seg.disputed_share:.0f} %, hatched magenta in the floor overlay); where it is wrong, "
+            "click it right (--floor-at X,Y on floor left out, --not-floor-at X,Y on what is not floor), or "
             "correct the mask (stage segment's floor.png) and give it with --floor-mask",))
     return seg
 
 
-def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration) -> tuple[np.ndarray, float, float]:
+def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration,
+                   settled: np.ndarray | None = None) -> tuple[np.ndarray, float, float]:
     """Where the final mask and the model (its probability cut at one half) disagree:
     what GrabCut and the skirting trim added or took away, and its floor area.
 
@@ -538,6 +683,8 @@ def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration) -> tu
         The model's floor probability at a smaller working size.
     calibration : Calibration
         At the photo's size.
+    settled : (r, c) bool, optional
+        What the user's clicks decided (at the probability's size): not in dispute.
 
     Returns
     -------
@@ -552,6 +699,8 @@ def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration) -> tu
     small = cv2.resize(np.asarray(mask, np.float32), (c, r), interpolation=cv2.INTER_AREA) > 0.5
     footprint = _believed_footprint_m2((r, c), calibration.scaled(c / mask.shape[1]))
     region = small != (probability > 0.5)
+    if settled is not None:
+        region &= ~settled
     disputed_m2 = float(footprint[region].sum())
     floor_m2 = float(footprint[small].sum())
     return region, disputed_m2, disputed_m2 / max(floor_m2, 1e-9)
@@ -646,9 +795,10 @@ def _geometry_trimap(shape_small, scale, calibration) -> np.ndarray:
     return trimap
 
 
-def _clean(mask: np.ndarray, calibration, scale, probability=None) -> np.ndarray:
-    """Keep the floor's region under the board (else the largest) and the parts cut off
-    from it at the photo's edge (:func:`floor_parts`), close pinholes, drop specks."""
+def _clean(mask: np.ndarray, calibration, scale, probability=None, clicked=None) -> np.ndarray:
+    """Keep the floor's region under the board (else the largest), the parts cut off
+    from it at the photo's edge (:func:`floor_parts`) and the parts the user clicked as
+    floor (``clicked``), close pinholes, drop specks."""
     mask = mask.astype(np.uint8)
     mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     labels, main, parts = floor_parts(mask, None if calibration is None else calibration.scaled(scale),
@@ -656,6 +806,8 @@ def _clean(mask: np.ndarray, calibration, scale, probability=None) -> np.ndarray
     if probability is None:
         # GrabCut alone has only colour to go on: a part it cut off is not trusted.
         parts = []
+    if clicked is not None:
+        parts = [*parts, *np.unique(labels[clicked & (labels > 0)]).tolist()]
     if main == 0:
         return np.zeros(mask.shape, bool)
     out = np.isin(labels, [main, *parts])

@@ -166,3 +166,50 @@ def test_bad_floor_masks_are_refused(tmp_path, capsys):
     code, _, err = run(["measure", PHOTO, "--floor-mask", tmp_path / "tall.png", "--model", tmp_path / "x.onnx"],
                        capsys)
     assert code == 2 and "not allowed with" in err
+
+
+def _inside_point(region):
+    """The pixel farthest from the region's edge, as (x, y)."""
+    depth = cv2.distanceTransform(np.pad(region, 1).astype(np.uint8), cv2.DIST_L2, 5)[1:-1, 1:-1]
+    y, x = np.unravel_index(int(np.argmax(depth)), depth.shape)
+    return int(x), int(y)
+
+
+def test_segment_with_clicks_records_and_marks_them(tmp_path, capsys):
+    from augment.floor import CLICK_COLORS
+
+    truth = truth_mask()
+    fx, fy = _inside_point(truth)
+    col = truth.shape[1] // 2
+    wx, wy = col, int(np.argmax(truth[:, col])) - 40  # the far wall, above the floor's edge
+    code, _, err = run(["segment", PHOTO, "--floor-at", f"{fx},{fy}", "--not-floor-at", f"{wx},{wy}",
+                        "--out", tmp_path / "f.png", "-q"], capsys)
+    assert code == 0, err
+    report = json.loads((tmp_path / "f.json").read_text())
+    assert report["clicks"] == [{"x_px": fx, "y_px": fy, "floor": True}, {"x_px": wx, "y_px": wy, "floor": False}]
+    mask = cv2.imread(str(tmp_path / "f.png"), cv2.IMREAD_GRAYSCALE) > 0
+    assert mask[fy, fx] and not mask[wy, wx]
+    truth_iou = np.logical_and(mask, truth).sum() / np.logical_or(mask, truth).sum()
+    assert truth_iou > 0.95
+    overlay = cv2.imread(str(tmp_path / "f_overlay.png"))[..., ::-1]
+    assert tuple(overlay[fy, fx]) == CLICK_COLORS[1] and tuple(overlay[wy, wx]) != CLICK_COLORS[1]
+    assert tuple(overlay[wy - 8, wx]) == CLICK_COLORS[0]  # the red disc, between the arms of its white cross
+
+
+def test_bad_clicks_are_refused(tmp_path, capsys):
+    cases = [(["segment", PHOTO, "--floor-at", "12"], ["--floor-at", "'12'", "give X,Y"]),
+             (["segment", PHOTO, "--not-floor-at", "a,b"], ["--not-floor-at", "'a,b'"]),
+             (["segment", PHOTO, "--floor-at", "5000,10"], ["floor at 5000,10", "outside the photo (1280 x 960 px)"]),
+             # room_1's horizon crosses its middle column 48 px below the top.
+             (["segment", PHOTO.with_name("room_1.jpg"), "--floor-at", "640,20"],
+              ["floor at 640,20", "above the horizon"]),
+             (["measure", PHOTO, "--floor-mask", PHOTO, "--not-floor-at", "10,900"],
+              ["--not-floor-at 10,900", "--floor-mask", "used as it is"]),
+             (["furnish", PHOTO, PHOTO.with_name("room_1.jpg"), "--floor-at", "10,900"],
+              ["--floor-at 10,900", "one photo"])]
+    for argv, needles in cases:
+        code, _, err = run([*argv, "--out", tmp_path / "x" / "floor.png" if argv[0] == "segment" else tmp_path / "x"],
+                           capsys)
+        assert code == 2 and err.count("\n") <= 2, err
+        assert all(n in err for n in needles), err
+        assert not (tmp_path / "x").exists()

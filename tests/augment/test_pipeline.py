@@ -274,8 +274,8 @@ def test_several_photos_in_one_command(tmp_path, capsys, monkeypatch):
     assert code == 2
     assert f"error: " in err and str(gray) in err and "no 7x5 checkerboard" in err
     assert "furnished 2 of 3 photos" in stdout and f"== {ROOMY}" in stdout
-    assert "floor uncertain in 2 (check their overlay_floor.png; correct with --floor-mask): room_1.jpg, " \
-           "room_4.jpg" in stdout
+    assert ("floor uncertain in 2 (check their overlay_floor.png; correct each with --floor-at / --not-floor-at "
+            "or --floor-mask): room_1.jpg, room_4.jpg") in stdout
     assert "warning: room_1.jpg: the floor found is uncertain" in err
     assert sorted(p.name for p in out.iterdir()) == ["room_1", "room_4"]
     for name in ("room_1", "room_4"):

@@ -17,7 +17,7 @@ from augment.calibrate import calibrate_photo, exif_intrinsics
 from augment.floor import DISPUTED_COLOR, floor_area_m2, floor_overlay, floor_polygon
 from augment.gl import Renderer
 from augment.segment import (DEFAULT_MODEL, GRABCUT_LONG_PX, FloorModel, ModelSpec, SegmentationError,
-                            disputed_floor, floor_parts, segment_floor)
+                            below_horizon, disputed_floor, floor_parts, segment_floor)
 from augment.synth import render_sample
 
 
@@ -375,3 +375,114 @@ def test_an_uncertain_floor_is_said(held_out, model, monkeypatch):
         assert any("floor found is uncertain" in w and f"{m2:.1f} m²" in w and "--floor-mask" in w
                    for w in again.warnings) == said, again.warnings
     assert segment_floor(sample.image, model, None).disputed_m2 is None  # no calibration, no m²
+
+
+class _Blind:
+    """The shipped model made wrong on purpose in one patch of the photo: it says
+    ``p`` there (0: sure not floor; 1: sure floor)."""
+
+    def __init__(self, model, patch, p):
+        self.model, self.patch, self.p, self.spec = model, patch, p, model.spec
+
+    def floor_probability(self, image, size_px=None):
+        prob = self.model.floor_probability(image, size_px)
+        patch = cv2.resize(self.patch.astype(np.float32), prob.shape[::-1], interpolation=cv2.INTER_AREA) > 0.5
+        return np.where(patch, np.float32(self.p), prob)
+
+
+def _centroid(region):
+    y, x = np.nonzero(region)
+    return float(x.mean()), float(y.mean())
+
+
+def test_a_floor_click_brings_back_floor_the_model_missed(held_out, model):
+    """The model calls a 0.8 x 0.8 m square of floor beyond the board sure "not floor";
+    GrabCut cannot bring back what it is told is sure. One click in the square does."""
+    sample, cal = held_out[0]
+    truth = sample.floor_mask
+    cam = np.linalg.inv(cal.camera_from_floor)[:2, 3]
+    toward = -cam / np.linalg.norm(cam)
+    side = np.array([-toward[1], toward[0]])
+    square = np.array([[-0.4, 0.4], [0.4, 0.4], [0.4, 1.2], [-0.4, 1.2]]) @ np.array([side, toward])
+    patch = _floor_mask(cal, square) & truth
+    assert patch.sum() > 2000
+    blind = _Blind(model, patch, 0.0)
+    before = segment_floor(sample.image, blind, cal)
+    assert (patch & ~before.mask).sum() / patch.sum() > 0.5
+    x, y = _centroid(patch)
+    after = segment_floor(sample.image, blind, cal, clicks=[(x, y, 1)])
+    assert (patch & ~after.mask).sum() / patch.sum() < 0.05
+    # Nothing else was taken for floor with it.
+    unblind = segment_floor(sample.image, model, cal).mask
+    assert (after.mask & ~truth).sum() <= (unblind & ~truth).sum() + 0.005 * truth.sum()
+    assert after.clicks.tolist() == [[x, y, 1.0]]
+    assert after.clicks_json() == [{"x_px": x, "y_px": y, "floor": True}]
+    # Within the click's reach the user settled it: no longer in dispute with the model.
+    r, c = after.disputed.shape
+    scale = c / truth.shape[1]
+    yy, xx = np.mgrid[:r, :c]
+    reach = (xx - x * scale) ** 2 + (yy - y * scale) ** 2 < (0.95 * segment.CLICK_REACH * c) ** 2
+    assert before.disputed[reach].sum() > 100 and after.disputed[reach].sum() == 0
+
+
+def test_a_not_floor_click_takes_away_what_was_taken_for_floor(held_out, model):
+    """The model calls a patch of wall at the foot of the far wall sure floor; one click
+    on it takes it away again, and the floor around it stays."""
+    sample, cal = held_out[0]
+    truth = sample.floor_mask
+    rows, cols = truth.shape
+    col = cols // 2
+    top = int(np.argmax(truth[:, col]))  # the floor's far edge in the middle column
+    radius = rows // 12
+    y, x = np.mgrid[:rows, :cols]
+    patch = ((x - col) ** 2 + (y - (top - radius // 2)) ** 2 < radius ** 2) & ~truth
+    blind = _Blind(model, patch, 1.0)
+    before = segment_floor(sample.image, blind, cal)
+    assert (patch & before.mask).sum() / patch.sum() > 0.5
+    click = (float(col), float(top - radius // 2), 0)
+    after = segment_floor(sample.image, blind, cal, clicks=[click])
+    assert (patch & after.mask).sum() / patch.sum() < 0.05
+    unblind = segment_floor(sample.image, model, cal).mask
+    assert (truth & ~after.mask).sum() <= (truth & ~unblind).sum() + 0.005 * truth.sum()
+
+
+def test_clicks_apply_in_order_and_contradictions_are_refused(held_out, model):
+    sample, cal = held_out[0]
+    rows, cols = sample.floor_mask.shape
+    center = cal.pixels_from_floor(np.zeros((1, 2)))[0]
+    floor_pixel = tuple(np.argwhere(sample.floor_mask & ~_floor_mask(cal, Board().outline_m()[:, :2] * 1.5))[0][::-1])
+    x, y = float(floor_pixel[0]), float(floor_pixel[1])
+    # The same floor said to be floor, then not: the later click wins.
+    seg = segment_floor(sample.image, model, cal, clicks=[(x, y, 1), (x, y, 0)])
+    assert not seg.mask[int(y), int(x)]
+    seg = segment_floor(sample.image, model, cal, clicks=[(x, y, 0), (x, y, 1)])
+    assert seg.mask[int(y), int(x)]
+    with pytest.raises(SegmentationError, match=rf"floor at {cols + 5}.*outside the photo \({cols} x {rows} px\)"):
+        segment_floor(sample.image, model, cal, clicks=[(cols + 5, 10, 1)])
+    above = np.argwhere(~below_horizon((rows, cols), cal.horizon))
+    assert len(above)
+    ay, ax = above[0]
+    with pytest.raises(SegmentationError, match="above the horizon"):
+        segment_floor(sample.image, model, cal, clicks=[(ax, ay, 1)])
+    with pytest.raises(SegmentationError, match="on the board"):
+        segment_floor(sample.image, model, cal, clicks=[(*center, 0)])
+    with pytest.raises(SegmentationError, match="rows of x, y"):
+        segment_floor(sample.image, model, cal, clicks=[(1, 2)])
+
+
+def test_a_click_outranks_the_skirting_trim(held_out, model, monkeypatch):
+    """Where the trim cuts floor it took for a board, a floor click there gives it back."""
+    sample, cal = held_out[0]
+    truth = sample.floor_mask
+    board = _floor_mask(cal, Board().outline_m()[:, :2] * 2.0)
+    y, x = np.argwhere(truth & ~board)[len(np.argwhere(truth & ~board)) // 3]
+    cut = np.zeros_like(truth)
+    cut[max(0, y - 20):y + 20, max(0, x - 20):x + 20] = True
+
+    def over_cut(image, mask, calibration):  # a trim gone too deep, around (x, y)
+        return mask & ~cut, 0.2
+
+    monkeypatch.setattr(segment, "trim_skirting", over_cut)
+    assert not segment_floor(sample.image, model, cal).mask[y, x]
+    seg = segment_floor(sample.image, model, cal, clicks=[(float(x), float(y), 1)])
+    assert seg.mask[y, x] and seg.mask[cut & truth].mean() > 0.5
