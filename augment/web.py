@@ -62,6 +62,7 @@ MAX_PIXELS = 50_000_000
 MAX_PROFILE_BYTES = 1 << 20
 MAX_SPEC_BYTES = 256 << 10
 MAX_SUGGESTIONS = 12
+MAX_CLICKS = 100  # corrections per photo; more is a job for a floor mask
 # A busy server says when to come back: about when a worker frees up, from the recent
 # jobs' times (this default until one is done), within these bounds.
 DEFAULT_JOB_S = 20.0
@@ -147,11 +148,13 @@ def _run_job(job_dir: str, options: dict) -> dict:
     camera = job / "input" / options["camera"] if options.get("camera") else None
     spec = job / "input" / options["spec"] if options.get("spec") else None
     floor_mask = job / "input" / options["floor_mask"] if options.get("floor_mask") else None
+    clicks = options.get("clicks") or None
     try:
         result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
                                   room=None if spec is not None else options["room"], spec=spec,
                                   suggestions=options["suggestions"], seed=options["seed"], camera=camera,
-                                  floor_mask=floor_mask, reporter=_FileProgress, renderer=_renderer)
+                                  floor_mask=floor_mask, clicks=clicks, reporter=_FileProgress,
+                                  renderer=_renderer)
         state = json.loads(_progress_path.read_text())
         _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
         paths = pipeline.write_outputs(result, job / "out")
@@ -241,6 +244,29 @@ def _check_spec(data: bytes) -> None:
         raise UploadError(422, str(error)) from None
 
 
+def _check_clicks(text: str) -> list[list[float]]:
+    """The ``clicks`` field: a JSON list of ``[x, y, 1 or 0]`` (photo pixels; 1 floor left
+    out, 0 something taken for floor), at most ``MAX_CLICKS``; 422 otherwise."""
+    if not text.strip():
+        return []
+    try:
+        clicks = json.loads(text)
+    except json.JSONDecodeError:
+        clicks = None
+    ok = isinstance(clicks, list) and all(
+        isinstance(c, list) and len(c) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                    and math.isfinite(v) for v in c) and c[2] in (0, 1)
+        for c in clicks)
+    if not ok:
+        raise UploadError(422, f"clicks {text[:80]!r}: give a JSON list of [x, y, 1] for floor left out and "
+                               "[x, y, 0] for something taken for floor, x and y in the photo's pixels, "
+                               "e.g. [[640, 900, 1]]")
+    if len(clicks) > MAX_CLICKS:
+        raise UploadError(422, f"clicks: {len(clicks)} given, at most {MAX_CLICKS}; for larger corrections "
+                               "upload a floor mask")
+    return [[float(x), float(y), float(f)] for x, y, f in clicks]
+
+
 def _check_options(board: str, square: float, room: str, suggestions: int) -> tuple:
     import argparse
 
@@ -290,6 +316,7 @@ def _job_state(job: Job) -> dict:
              "options": {"board": board, "square": job.options["square"], "room": job.options["room"],
                          "spec": job.options.get("spec") is not None,
                          "floor_mask": job.options.get("floor_mask") is not None,
+                         "clicks": len(job.options.get("clicks") or ()),
                          "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
     try:
         progress = json.loads((job.folder / "progress.json").read_text())
@@ -440,9 +467,13 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                      floor_mask: Annotated[UploadFile | None, File(description="your own floor mask (white = "
                                                                                "floor, the photo's shape) instead "
                                                                                "of the floor Stager finds")]
-                     = None):
+                     = None,
+                     clicks: Annotated[str, Form(description="corrections of the floor found: a JSON list of "
+                                                             "[x, y, 1] (floor left out) and [x, y, 0] (taken "
+                                                             "for floor), photo pixels, in order")] = ""):
         """Start furnishing a photo; answers the job's id."""
         board_spec = _check_options(board, square, room, suggestions)
+        corrections = _check_clicks(clicks)
         data = await photo.read(max_bytes + 1)
         if len(data) > max_bytes:
             raise UploadError(413, _too_large(len(data), max_bytes))
@@ -476,6 +507,9 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                 mask_suffix = check_photo(mask)
             except UploadError as error:
                 raise UploadError(error.status, f"the floor mask: {error}") from None
+            if corrections:
+                raise UploadError(422, "clicks correct the floor Stager finds, and a floor mask is used as it "
+                                       "is: paint the correction into the mask, or leave the mask out")
         active = sum(j.result is None for j in jobs.values())
         if active >= workers + max_queued:
             wait = retry_after_s([j.result["seconds"] for j in sorted(jobs.values(), key=lambda j: j.finished or 0)
@@ -495,6 +529,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
         options = {"photo": f"photo{suffix}", "camera": "camera.json" if profile is not None else None,
                    "spec": "spec.toml" if layout_spec is not None else None,
                    "floor_mask": f"floor_mask{mask_suffix}" if mask is not None else None,
+                   "clicks": corrections,
                    "board": (board_spec.cols, board_spec.rows), "kind": board_spec.kind, "square": float(square),
                    "room": None if layout_spec is not None else room, "suggestions": int(suggestions),
                    "seed": int(seed)}

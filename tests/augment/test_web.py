@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import base64
 import io
+import json
 import struct
 import time
 import warnings
@@ -67,7 +68,7 @@ def test_job_runs_to_completion(finished):
             "report.json", "scene_1.glb"} <= set(state["files"])
     assert any("focal length" in w for w in state["warnings"])
     assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "spec": False,
-                                "floor_mask": False, "suggestions": 1, "seed": 0}
+                                "floor_mask": False, "clicks": 0, "suggestions": 1, "seed": 0}
 
 
 def test_files_and_zip(finished):
@@ -253,6 +254,32 @@ def test_a_floor_mask_of_ones_own_replaces_the_floor_found(finished):
     assert message.startswith("the floor mask: the board's center") and "inverted" in message, message
 
 
+def test_clicks_correct_the_floor_found(finished):
+    client = finished[0]
+    photo = {"photo": ("room_4.jpg", PHOTO.read_bytes(), "image/jpeg")}
+    for bad, needle in (("[[1, 2]]", "give a JSON list of [x, y, 1]"), ("floor here", "'floor here'"),
+                        ("[[1, 2, 7]]", "[x, y, 0]"), (json.dumps([[1, 2, 1]] * 101), "at most 100")):
+        response = client.post("/api/jobs", files=photo, data={"clicks": bad})
+        assert response.status_code == 422 and needle in response.json()["detail"], response.text
+    response = client.post("/api/jobs", files={**photo, "floor_mask": ("m.png", PHOTO.with_name("room_4_floor.png")
+                                                                       .read_bytes(), "image/png")},
+                           data={"clicks": "[[640, 900, 1]]"})
+    assert response.status_code == 422 and "floor mask is used as it is" in response.json()["detail"]
+    # A click on floor, then one outside the photo: the job refuses the second.
+    states = []
+    for clicks in ([[640, 900, 1]], [[640, 900, 1], [5000, 10, 0]]):
+        response = client.post("/api/jobs", files=photo, data={"clicks": json.dumps(clicks), "room": "bedroom",
+                                                               "suggestions": "1"})
+        assert response.status_code == 202, response.text
+        states.append(_wait(client, response.json()["id"]))
+    assert states[0]["status"] == "done" and states[0]["options"]["clicks"] == 1, states[0]
+    report = client.get(f"/api/jobs/{states[0]['id']}/files/report.json").json()
+    assert report["floor"]["clicks"] == [{"x_px": 640.0, "y_px": 900.0, "floor": True}]
+    assert states[1]["status"] == "failed" and states[1]["error"]["kind"] == "segmentation"
+    assert states[1]["error"]["message"].startswith("not floor at 5000,10: outside the photo (1280 x 960 px)"), \
+        states[1]["error"]
+
+
 def test_finished_jobs_are_deleted(finished):
     client, job_id, state, seen, busy, app, jobs = finished
     assert app.state.sweep() == []                   # kept while young
@@ -323,5 +350,26 @@ def test_browser_upload_shows_gallery(server, tmp_path):
                                    timeout=10_000)
             assert page.locator("#error").is_hidden()
             page.screenshot(path=str(tmp_path / "gallery.png"), full_page=True)
+            # A correction clicked on the floor overlay (its photo part, 1280 x 960 px, at a
+            # third of its width and 90 % down: floor), sent with the next job.
+            overlay = page.locator("#details .clickable img")
+            box = overlay.bounding_box()
+            photo_w = box["width"] * 1280 / (1280 + 960)
+            overlay.click(position={"x": photo_w / 3, "y": box["height"] * 0.9})
+            assert page.locator(".mark.floor").count() == 1
+            assert "1 floor correction (1 new" in page.inner_text("#clicks-note")
+            overlay.click(position={"x": box["width"] * 0.9, "y": box["height"] / 2})  # on the plan: ignored
+            assert page.locator(".mark").count() == 1
+            page.fill("input[name=suggestions]", "1")
+            page.click("#go")
+            page.wait_for_selector("#download:not([hidden])", timeout=50_000)
+            assert "(applied)" in page.inner_text("#clicks-note")
+            report = page.request.get(server + page.get_attribute("#zip", "href").replace("download.zip",
+                                                                                   "files/report.json"))
+            clicks = report.json()["floor"]["clicks"]
+            assert len(clicks) == 1 and clicks[0]["floor"] is True
+            # Where it was clicked, to within two screen pixels (the overlay is shown small).
+            within = 2 * (1280 + 960) / box["width"]
+            assert abs(clicks[0]["x_px"] - 1280 / 3) < within and abs(clicks[0]["y_px"] - 0.9 * 960) < within, clicks
         finally:
             browser.close()
