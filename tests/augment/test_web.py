@@ -361,7 +361,7 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             overlay.click(position={"x": box["width"] * 0.9, "y": box["height"] / 2})  # on the plan: ignored
             assert page.locator(".mark").count() == 1
             page.fill("input[name=suggestions]", "1")
-            page.click("#go")
+            page.click("#again")  # beside the corrections, below the overlays
             page.wait_for_selector("#download:not([hidden])", timeout=50_000)
             assert "(applied)" in page.inner_text("#clicks-note")
             report = page.request.get(server + page.get_attribute("#zip", "href").replace("download.zip",
