@@ -658,12 +658,29 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         disputed = disputed_floor(mask, probability, calibration, settled=clicked_near)
     seg = Segmentation(mask, probability, name, tuple(warnings), skirting_m, *disputed, clicks)
     if seg.uncertain:
+        x, y = _largest_patch_px(seg.disputed, calibration, (rows, cols))
+        now = bool(mask[y, x])
         seg = replace(seg, warnings=seg.warnings + (
             f"the floor found is uncertain: the floor model and GrabCut disagree on {seg.disputed_m2:.1f} m\u00b2 "
-            f"of it ({100 * seg.disputed_share:.0f} %, hatched magenta in the floor overlay); where it is wrong, "
-            "click it right (--floor-at X,Y on floor left out, --not-floor-at X,Y on what is not floor), or "
+            f"of it ({100 * seg.disputed_share:.0f} %, hatched magenta in the floor overlay); the largest patch in "
+            f"doubt is around {x},{y}, now {'floor' if now else 'not floor'}. Where it is wrong, click it right "
+            f"({'--not-floor-at' if now else '--floor-at'} {x},{y}, and --floor-at / --not-floor-at elsewhere), or "
             "correct the mask (stage segment's floor.png) and give it with --floor-mask",))
     return seg
+
+
+def _largest_patch_px(region: np.ndarray, calibration, shape: tuple[int, int]) -> tuple[int, int]:
+    """The middle (farthest from its edge) of ``region``'s patch with the most floor area,
+    in photo pixels (``shape`` is the photo's (rows, cols))."""
+    r, c = region.shape
+    n, labels = cv2.connectedComponents(region.astype(np.uint8), connectivity=8)
+    footprint = _believed_footprint_m2((r, c), calibration.scaled(c / shape[1]))
+    area = np.bincount(labels.ravel(), footprint.ravel(), minlength=n)
+    area[0] = -1
+    patch = labels == int(np.argmax(area))
+    depth = cv2.distanceTransform(np.pad(patch, 1).astype(np.uint8), cv2.DIST_L2, 3)[1:-1, 1:-1]
+    y, x = np.unravel_index(int(np.argmax(depth)), depth.shape)
+    return (min(shape[1] - 1, int((x + 0.5) * shape[1] / c)), min(shape[0] - 1, int((y + 0.5) * shape[0] / r)))
 
 
 def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import cv2
 import numpy as np
@@ -374,6 +375,16 @@ def test_an_uncertain_floor_is_said(held_out, model, monkeypatch):
         assert again.uncertain == said and (again.doubted is not None) == said
         assert any("floor found is uncertain" in w and f"{m2:.1f} m²" in w and "--floor-mask" in w
                    for w in again.warnings) == said, again.warnings
+    # The warning names a pixel in the largest patch in doubt, and the click that would
+    # overrule the mask there.
+    monkeypatch.setattr(segment, "DISPUTED_SHARE_WARN", share * 0.9)
+    warning = next(w for w in segment_floor(sample.image, model, cal).warnings if "uncertain" in w)
+    x, y = map(int, re.search(r"around (\d+),(\d+)", warning).groups())
+    r, c = region.shape
+    assert region[int(y * r / seg.mask.shape[0]), int(x * c / seg.mask.shape[1])]
+    flag = "--not-floor-at" if seg.mask[y, x] else "--floor-at"
+    assert f"now {'floor' if seg.mask[y, x] else 'not floor'}. Where it is wrong, click it right ({flag} {x},{y}" \
+        in warning, warning
     assert segment_floor(sample.image, model, None).disputed_m2 is None  # no calibration, no m²
 
 
