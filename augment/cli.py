@@ -153,14 +153,18 @@ def _add_floor_args(p) -> None:
     _add_click_args(p)
 
 
+def _click_flag(click) -> str:
+    """A click as it was given on the command line, e.g. ``--floor-at 640,900``."""
+    x, y, is_floor = click
+    return f"{'--floor-at' if is_floor else '--not-floor-at'} {x:g},{y:g}"
+
+
 def _check_clicks_with_mask(args) -> None:
     """Clicks correct the floor Stager finds; a user's mask is taken as it is."""
     if args.clicks and args.floor_mask is not None:
-        x, y, is_floor = args.clicks[0]
-        flag = "--floor-at" if is_floor else "--not-floor-at"
-        raise StageError(f"{flag} {x:g},{y:g}: clicks correct the floor Stager finds, and --floor-mask "
-                         f"{args.floor_mask} is used as it is; paint the correction into the mask, or leave "
-                         "--floor-mask out")
+        raise StageError(f"{_click_flag(args.clicks[0])}: clicks correct the floor Stager finds, and "
+                         f"--floor-mask {args.floor_mask} is used as it is; paint the correction into the mask, "
+                         "or leave --floor-mask out")
 
 
 def _add_board_args(p, square_help=None):
@@ -691,9 +695,7 @@ def _furnish_cmd(args):
         raise StageError(f"--floor-mask {args.floor_mask}: a mask is of one photo; give one photo with it, "
                          "or leave --floor-mask out to find each photo's floor")
     if batch and args.clicks:
-        x, y, is_floor = args.clicks[0]
-        raise StageError(f"{'--floor-at' if is_floor else '--not-floor-at'} {x:g},{y:g}: a click is on one "
-                         "photo; give one photo with it")
+        raise StageError(f"{_click_flag(args.clicks[0])}: a click is on one photo; give one photo with it")
     _check_clicks_with_mask(args)
     if any(p.is_file() for p in photos):
         _check_floor_mask(args.floor_mask)

@@ -443,9 +443,7 @@ def _seed_geometry(trimap, shape_small, scale, calibration):
     """Pin what the calibration knows: around the board is floor, above the horizon is not."""
     if calibration is None:
         return
-    horizon = calibration.horizon.copy()
-    horizon[2] *= scale  # the line in the scaled image: a x' + b y' + c s = 0
-    trimap[~below_horizon(shape_small, horizon, 0.0)] = cv2.GC_BGD
+    trimap[~below_horizon(shape_small, calibration.scaled(scale).horizon, 0.0)] = cv2.GC_BGD
     board = (board_polygon_px(calibration, grow=BOARD_MARGIN) * scale).round().astype(np.int32)
     cv2.fillPoly(trimap, [board], int(cv2.GC_FGD))
 
@@ -481,18 +479,16 @@ def _check_clicks(clicks, shape: tuple[int, int]) -> np.ndarray:
     return arr
 
 
-def _click_region(small: np.ndarray, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
+def _click_region(lab: np.ndarray, edges: np.ndarray, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
     """What a click at ``(x, y)`` (working pixels) says: the region of the clicked colour
-    reached from it without crossing an edge (a magic wand), within
-    ``CLICK_REGION_REACH`` of it; and the wider reach ``CLICK_REACH`` within which the
-    model is not sure."""
-    rows, cols = small.shape[:2]
+    (``lab``, the working image blurred a little, in Lab) reached from it without crossing
+    ``edges`` (a magic wand), within ``CLICK_REGION_REACH`` of it; and the wider reach
+    ``CLICK_REACH`` within which the model is not sure."""
+    rows, cols = lab.shape[:2]
     col, row = min(cols - 1, max(0, int(round(x)))), min(rows - 1, max(0, int(round(y))))
-    lab = cv2.cvtColor(cv2.medianBlur(small, 5), cv2.COLOR_RGB2LAB)
     # Edges stop the fill where a wall of the floor's colour meets it; the click itself
     # may sit on one (a plank joint), so its neighbourhood is cleared.
-    grey = cv2.cvtColor(cv2.GaussianBlur(small, (3, 3), 0), cv2.COLOR_RGB2GRAY)
-    edges = cv2.dilate(cv2.Canny(grey, *CLICK_CANNY), np.ones((2, 2), np.uint8))
+    edges = edges.copy()
     edges[max(0, row - 2):row + 3, max(0, col - 2):col + 3] = 0
     reach = np.zeros((rows, cols), np.uint8)
     cv2.circle(reach, (col, row), max(2, round(CLICK_REACH * max(rows, cols))), 1, -1)
@@ -515,14 +511,18 @@ def _click_regions(small, scale, calibration, clicks):
     floor = np.zeros(shape, bool)
     other = np.zeros(shape, bool)
     near = np.zeros(shape, bool)
+    if not len(clicks):
+        return floor, other, near
     below = board = None
     if calibration is not None:
-        horizon = calibration.horizon.copy()
-        horizon[2] *= scale
-        below = below_horizon(shape, horizon, 0.0)
+        below = below_horizon(shape, calibration.scaled(scale).horizon, 0.0)
         board = np.zeros(shape, np.uint8)
         cv2.fillPoly(board, [(board_polygon_px(calibration) * scale).round().astype(np.int32)], 1)
         board = board > 0
+    # The colours and edges the clicks' regions are found in, once for all of them.
+    lab = cv2.cvtColor(cv2.medianBlur(small, 5), cv2.COLOR_RGB2LAB)
+    grey = cv2.cvtColor(cv2.GaussianBlur(small, (3, 3), 0), cv2.COLOR_RGB2GRAY)
+    edges = cv2.dilate(cv2.Canny(grey, *CLICK_CANNY), np.ones((2, 2), np.uint8))
     for x, y, is_floor in clicks:
         col, row = min(shape[1] - 1, int(x * scale)), min(shape[0] - 1, int(y * scale))
         if is_floor and below is not None and not below[row, col]:
@@ -531,7 +531,7 @@ def _click_regions(small, scale, calibration, clicks):
         if not is_floor and board is not None and board[row, col]:
             raise SegmentationError(f"not floor at {x:g},{y:g}: on the board, which lies on the floor; "
                                     "click the thing wrongly taken for floor")
-        region, reach = _click_region(small, x * scale, y * scale)
+        region, reach = _click_region(lab, edges, x * scale, y * scale)
         near |= reach
         if is_floor:
             floor |= region
