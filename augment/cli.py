@@ -572,13 +572,14 @@ def _segment_cmd(args):
             polygon = floor_polygon(seg.mask, calibration)
         except ValueError as error:
             warnings.append(f"no floor polygon: {error}")
-    overlay = floor_overlay(image, seg.mask, polygon, calibration, seg.doubted, seg.clicks)
+    overlay = floor_overlay(image, seg.mask, polygon, calibration, seg.doubted, seg.clicks, seg.doubt_px)
     files = {out: encode_image(seg.mask.astype("uint8") * 255, ".png"),
              out.with_name(out.stem + "_overlay.png"): encode_image(overlay, ".png")}
     if polygon is not None:
         report = {"photo": str(args.photo), "method": seg.method, "floor_fraction": float(seg.mask.mean()),
                   "skirting_m": seg.skirting_m, "disputed_m2": seg.disputed_m2, "disputed_share": seg.disputed_share,
-                  "clicks": seg.clicks_json(), "floor": polygon.to_json(), "warnings": warnings}
+                  "clicks": seg.clicks_json(), "doubt": seg.doubt_json(), "floor": polygon.to_json(),
+                  "warnings": warnings}
         files[out.with_suffix(".json")] = json.dumps(report, indent=2) + "\n"
     _write_all(files, out.parent)
     if not args.quiet:
@@ -588,8 +589,7 @@ def _segment_cmd(args):
             if polygon.caveat:
                 print(f"note        {polygon.caveat}")
         print("wrote " + ", ".join(str(p) for p in files))
-    for warning in warnings:
-        print(f"warning: {warning}", file=sys.stderr)
+    _print_warnings(warnings, seg, f"edit {out} and give it to stage measure or furnish with --floor-mask")
     return EXIT_OK
 
 
@@ -636,14 +636,14 @@ def _measure_cmd(args):
               "calibration": calibration.to_json(),
               "floor": {"method": seg.method, "skirting_m": seg.skirting_m, "disputed_m2": seg.disputed_m2,
                         "disputed_share": seg.disputed_share, "clicks": seg.clicks_json(),
-                        **polygon.to_json()},
+                        "doubt": seg.doubt_json(), **polygon.to_json()},
               "height": height.to_json(),
               "timings": {k: round(v, 3) for k, v in timings.items()},
               "warnings": warnings}
     files = {out / "report.json": json.dumps(report, indent=2) + "\n",
              out / "overlay_calibration.png": encode_image(calibration_overlay(image, calibration), ".png"),
              out / "overlay_floor.png": encode_image(floor_overlay(image, seg.mask, polygon, calibration,
-                                                                  seg.doubted, seg.clicks), ".png"),
+                                                                  seg.doubted, seg.clicks, seg.doubt_px), ".png"),
              out / "overlay_height.png": encode_image(height_overlay(image, calibration, height), ".png")}
     _write_all(files, out)
     if not args.quiet:
@@ -656,8 +656,7 @@ def _measure_cmd(args):
         state = "assumed (fallback)" if height.fallback else f"confidence {height.confidence:.2f}"
         print(f"walls       {height.height_m:.2f} m high, {state}")
         print(f"wrote {out}/report.json and overlay_calibration.png, overlay_floor.png, overlay_height.png")
-    for warning in warnings:
-        print(f"warning: {warning}", file=sys.stderr)
+    _print_warnings(warnings, seg, "give a floor mask of your own with --floor-mask (stage segment writes one)")
     return EXIT_OK
 
 
@@ -777,8 +776,21 @@ def _print_furnished(result, out: Path, paths: list, quiet: bool, photo: Path | 
         print(f"staged      {out / 'staged_1.jpg'}" + (f" ... staged_{n}.jpg" if n > 1 else "")
               + f", side by side in {out / 'staged_all.jpg'}")
         print(f"wrote {len(paths)} files to {out}/")
-    for warning in result.warnings:
-        print(f"warning: {'' if photo is None else f'{photo.name}: '}{warning}", file=sys.stderr)
+    _print_warnings(result.warnings, result.segmentation,
+                    "give a floor mask of your own with --floor-mask (stage segment writes one)",
+                    "" if photo is None else f"{photo.name}: ")
+
+
+def _print_warnings(warnings, seg, mask_hint: str, prefix: str = "") -> None:
+    """The warnings, then, when the floor is uncertain, the flags that would correct it
+    where it is in doubt (the web app says "click the overlay" instead)."""
+    for warning in warnings:
+        print(f"warning: {prefix}{warning}", file=sys.stderr)
+    doubt = seg.doubt_json()
+    if doubt is not None:
+        flag = "--not-floor-at" if doubt["floor"] else "--floor-at"
+        print(f"hint: {prefix}where the floor is wrong, run again with {flag} {doubt['x_px']},{doubt['y_px']} "
+              f"(and --floor-at / --not-floor-at X,Y elsewhere), or {mask_hint}", file=sys.stderr)
 
 
 def _serve_cmd(args):

@@ -283,7 +283,8 @@ CLICK_COLORS = {0: (230, 30, 30), 1: (0, 150, 40)}  # the user's "not floor" and
 
 
 def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | None = None,
-                  calibration=None, disputed: np.ndarray | None = None, clicks=None) -> np.ndarray:
+                  calibration=None, disputed: np.ndarray | None = None, clicks=None,
+                  doubt_px: tuple[int, int] | None = None) -> np.ndarray:
     """The photo with the floor tinted, its outline, and a plan of the polygon.
 
     Parameters
@@ -298,6 +299,11 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
     disputed : (r, c) bool, optional
         Where the floor is in doubt (``Segmentation.disputed``, any size of the photo's
         shape): hatched in magenta, so the eye goes where a correction may be needed.
+    clicks : (n, 3), optional
+        The user's corrections (x, y px, 1 floor or 0 not floor): a green dot for floor,
+        a red one with a white cross for not floor.
+    doubt_px : (x, y), optional
+        The patch in doubt to look at first (``Segmentation.doubt_px``): ringed in magenta.
 
     Returns
     -------
@@ -320,8 +326,12 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
             a, b = polygon.polygon_m[i], polygon.polygon_m[(i + 1) % n]
             pts = calibration.pixels_from_floor(np.linspace(a, b, 24)).round().astype(np.int32)
             cv2.polylines(out, [pts], False, EDGE_COLORS[polygon.edge_kind[i]], thick, cv2.LINE_AA)
-    # The user's clicks on top of everything: they are what the user looks for.
     radius = 4 * thick
+    if doubt_px is not None:
+        center = (int(doubt_px[0]), int(doubt_px[1]))
+        cv2.circle(out, center, 3 * radius, (255, 255, 255), 3 * thick, cv2.LINE_AA)
+        cv2.circle(out, center, 3 * radius, DISPUTED_COLOR, thick, cv2.LINE_AA)
+    # The user's clicks on top of everything: they are what the user looks for.
     for x, y, is_floor in np.asarray(clicks if clicks is not None else np.zeros((0, 3)), np.float64).reshape(-1, 3):
         center = (int(round(x)), int(round(y)))
         cv2.circle(out, center, radius + thick, (255, 255, 255), -1, cv2.LINE_AA)

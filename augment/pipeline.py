@@ -828,7 +828,7 @@ def report_dict(result: FurnishResult) -> dict:
                         "camera_height_m": cal.camera_height_m, **cal.to_json()},
         "floor": {"method": seg.method, "floor_fraction": float(seg.mask.mean()), "skirting_m": seg.skirting_m,
                   "disputed_m2": seg.disputed_m2, "disputed_share": seg.disputed_share,
-                  "clicks": seg.clicks_json(), **floor.to_json()},
+                  "clicks": seg.clicks_json(), "doubt": seg.doubt_json(), **floor.to_json()},
         "height": {**height.to_json(), "used_m": result.room_height_m},
         "furniture": {"source": result.source, "floor_polygon_m": np.round(result.spec.polygon_m, 4),
                       "height_m": result.room_height_m, "items": [i.id for i in result.spec.items],
@@ -1036,7 +1036,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         with clock("overlays"):
             overlays = {"overlay_calibration.png": calibration_overlay(image, calibration),
                         "overlay_floor.png": floor_overlay(image, seg.mask, floor, calibration,
-                                                           seg.doubted, seg.clicks),
+                                                           seg.doubted, seg.clicks, seg.doubt_px),
                         "overlay_height.png": height_overlay(image, calibration, height)}
             sheet = contact_sheet(staged, tol=tol)
         bar.step()

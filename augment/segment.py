@@ -389,6 +389,9 @@ class Segmentation:
     clicks : (n, 3) float
         The user's corrections it was made with (x, y px, 1 floor or 0 not floor), in
         order; none, (0, 3), by default.
+    doubt_px : (x, y) int or None
+        When the floor is :attr:`uncertain`: the middle of the disputed patch with the
+        most floor area, in photo pixels, where a look (and maybe a click) is best spent.
     """
 
     mask: np.ndarray
@@ -400,6 +403,7 @@ class Segmentation:
     disputed_m2: float | None = None
     disputed_share: float | None = None
     clicks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    doubt_px: tuple[int, int] | None = None
 
     def clicks_json(self) -> list[dict]:
         """The clicks as the reports list them."""
@@ -409,6 +413,13 @@ class Segmentation:
     def uncertain(self) -> bool:
         """Whether the disputed share is large enough to warn of (``DISPUTED_SHARE_WARN``)."""
         return self.disputed_share is not None and self.disputed_share > DISPUTED_SHARE_WARN
+
+    def doubt_json(self) -> dict | None:
+        """:attr:`doubt_px` as the reports give it, with what the mask says there."""
+        if self.doubt_px is None:
+            return None
+        x, y = self.doubt_px
+        return {"x_px": x, "y_px": y, "floor": bool(self.mask[y, x])}
 
     @property
     def doubted(self) -> np.ndarray | None:
@@ -665,13 +676,11 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     seg = Segmentation(mask, probability, name, tuple(warnings), skirting_m, *disputed, clicks)
     if seg.uncertain:
         x, y = _largest_patch_px(seg.disputed, calibration, (rows, cols))
-        now = bool(mask[y, x])
-        seg = replace(seg, warnings=seg.warnings + (
+        seg = replace(seg, doubt_px=(x, y), warnings=seg.warnings + (
             f"the floor found is uncertain: the floor model and GrabCut disagree on {seg.disputed_m2:.1f} m\u00b2 "
             f"of it ({100 * seg.disputed_share:.0f} %, hatched magenta in the floor overlay); the largest patch in "
-            f"doubt is around {x},{y}, now {'floor' if now else 'not floor'}. Where it is wrong, click it right "
-            f"({'--not-floor-at' if now else '--floor-at'} {x},{y}, and --floor-at / --not-floor-at elsewhere), or "
-            "correct the mask (stage segment's floor.png) and give it with --floor-mask",))
+            f"doubt is around {x},{y} (ringed there), now {'floor' if mask[y, x] else 'not floor'}: check it, and "
+            "correct the floor where it is wrong",))
     return seg
 
 

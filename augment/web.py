@@ -9,10 +9,12 @@ described on the app's OpenAPI page (``/docs``):
                                     furnish`` (``board``, ``square``, ``room``,
                                     ``suggestions``, ``seed``, an optional ``camera``
                                     profile file, an optional ``spec`` file instead of
-                                    the room preset) -> 202 ``{"id": ...}``
+                                    the room preset, an optional ``floor_mask`` file or
+                                    ``clicks`` correcting the floor) -> 202 ``{"id": ...}``
 ``GET /api/jobs/{id}``              ``status`` (queued, running, done, failed), per-stage
                                     progress, ``error`` (what went wrong, in words),
-                                    ``files``, ``warnings``
+                                    ``files``, ``warnings``, ``doubt`` (where an
+                                    uncertain floor is most in doubt)
 ``GET /api/jobs/{id}/files/{name}`` one output file; only names in the job's ``files``
 ``GET /api/jobs/{id}/download.zip`` every output file in one zip
 ``GET /api/board.pdf``              the board to print (``board``, ``square``, ``paper``)
@@ -169,7 +171,7 @@ def _run_job(job_dir: str, options: dict) -> dict:
     state = json.loads(_progress_path.read_text())
     _write_progress(dict(state, stage=None, finished=list(STAGES), done=state["total"]))
     return {"files": [p.name for p in paths], "warnings": list(result.warnings),
-            "seconds": time.perf_counter() - start}
+            "doubt": result.segmentation.doubt_json(), "seconds": time.perf_counter() - start}
 
 
 def retry_after_s(job_seconds, workers: int) -> int:
@@ -312,7 +314,7 @@ def _job_state(job: Job) -> dict:
     if job.options["kind"] != "chessboard":
         board = f"{job.options['kind']}:{board}"
     state = {"id": job.id, "status": "queued", "stage": None, "stages": {s: "pending" for s in STAGES},
-             "progress": 0.0, "error": None, "files": [], "warnings": [],
+             "progress": 0.0, "error": None, "files": [], "warnings": [], "doubt": None,
              "options": {"board": board, "square": job.options["square"], "room": job.options["room"],
                          "spec": job.options.get("spec") is not None,
                          "floor_mask": job.options.get("floor_mask") is not None,
@@ -338,7 +340,8 @@ def _job_state(job: Job) -> dict:
                 state["stages"][state["stage"]] = "failed"
         else:
             state.update(status="done", progress=1.0, stage=None, files=job.result["files"],
-                         warnings=job.result["warnings"], stages={s: "done" for s in STAGES})
+                         warnings=job.result["warnings"], doubt=job.result["doubt"],
+                         stages={s: "done" for s in STAGES})
     return state
 
 
@@ -553,7 +556,9 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
 
     @app.get("/api/jobs/{job_id}")
     async def status(job_id: str):
-        """The job's status, per-stage progress, error, files and warnings."""
+        """The job's status, per-stage progress, error, files and warnings, and where the
+        floor is most in doubt (``doubt``: x_px, y_px and whether it is now floor) when it
+        is uncertain."""
         job = get_job(job_id)
         state = _job_state(job)
         if state["error"] is not None and state["error"]["kind"] == "calibration" \

@@ -125,7 +125,7 @@ def test_report_is_complete(roomy):
     assert (report["floor"]["disputed_m2"], report["floor"]["disputed_share"]) == (floor.disputed_m2,
                                                                                   floor.disputed_share)
     assert 0 <= floor.disputed_share < 0.1  # this floor is found well: no "uncertain" warning
-    assert not any("floor found is uncertain" in w for w in report["warnings"])
+    assert not any("floor found is uncertain" in w for w in report["warnings"]) and report["floor"]["doubt"] is None
     assert {"height_m", "confidence", "fallback", "used_m"} <= set(report["height"])
     assert report["furniture"]["source"] == "preset living_room" and report["furniture"]["items"]
     assert [s["k"] for s in report["suggestions"]] == [1, 2, 3]
@@ -281,6 +281,11 @@ def test_several_photos_in_one_command(tmp_path, capsys, monkeypatch):
     for name in ("room_1", "room_4"):
         report = json.loads((out / name / "report.json").read_text())
         assert report["photo"].endswith(f"{name}.jpg") and len(report["suggestions"]) == 1
+        # The flag that would overrule the mask where it is most in doubt, at that pixel.
+        doubt = report["floor"]["doubt"]
+        flag = "--not-floor-at" if doubt["floor"] else "--floor-at"
+        assert (f"hint: {name}.jpg: where the floor is wrong, run again with {flag} {doubt['x_px']},{doubt['y_px']} "
+                "(and --floor-at / --not-floor-at X,Y elsewhere)") in err
     assert "warning: room_4.jpg: " in err
     twin = tmp_path / "room_4.jpg"
     twin.write_bytes(ROOMY.read_bytes())

@@ -373,18 +373,29 @@ def test_an_uncertain_floor_is_said(held_out, model, monkeypatch):
         monkeypatch.setattr(segment, "DISPUTED_SHARE_WARN", threshold)
         again = segment_floor(sample.image, model, cal)
         assert again.uncertain == said and (again.doubted is not None) == said
-        assert any("floor found is uncertain" in w and f"{m2:.1f} m²" in w and "--floor-mask" in w
-                   for w in again.warnings) == said, again.warnings
-    # The warning names a pixel in the largest patch in doubt, and the click that would
-    # overrule the mask there.
+        assert any("floor found is uncertain" in w and f"{m2:.1f} m²" in w for w in again.warnings) == said
+        assert (again.doubt_px is not None) == said and (again.doubt_json() is not None) == said
+    # The warning names a pixel in the largest patch in doubt and what the mask says
+    # there; the overlay rings it.
     monkeypatch.setattr(segment, "DISPUTED_SHARE_WARN", share * 0.9)
-    warning = next(w for w in segment_floor(sample.image, model, cal).warnings if "uncertain" in w)
+    doubted = segment_floor(sample.image, model, cal)
+    warning = next(w for w in doubted.warnings if "uncertain" in w)
     x, y = map(int, re.search(r"around (\d+),(\d+)", warning).groups())
+    assert doubted.doubt_px == (x, y)
     r, c = region.shape
     assert region[int(y * r / seg.mask.shape[0]), int(x * c / seg.mask.shape[1])]
-    flag = "--not-floor-at" if seg.mask[y, x] else "--floor-at"
-    assert f"now {'floor' if seg.mask[y, x] else 'not floor'}. Where it is wrong, click it right ({flag} {x},{y}" \
-        in warning, warning
+    now = bool(seg.mask[y, x])
+    assert f"now {'floor' if now else 'not floor'}" in warning and doubted.doubt_json() == {
+        "x_px": x, "y_px": y, "floor": now}
+    plain = floor_overlay(sample.image, doubted.mask, disputed=doubted.doubted)
+    ringed = floor_overlay(sample.image, doubted.mask, disputed=doubted.doubted, doubt_px=doubted.doubt_px)
+    changed = np.argwhere(np.any(plain != ringed, axis=2))
+    radius = np.hypot(*(changed - [y, x]).T)
+    # A ring around the pixel (12 thicknesses across, 2-3 px thick here), with the pixel
+    # itself left to see.
+    thick = max(2, round(max(seg.mask.shape) / 500))
+    assert abs(np.median(radius) - 12 * thick) < 1.5 * thick and radius.min() > 9 * thick, radius
+    assert np.array_equal(plain[y, x], ringed[y, x])
     assert segment_floor(sample.image, model, None).disputed_m2 is None  # no calibration, no m²
 
 

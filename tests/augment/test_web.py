@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import io
 import json
+import re
 import struct
 import time
 import warnings
@@ -67,6 +68,7 @@ def test_job_runs_to_completion(finished):
     assert {"staged_1.jpg", "staged_all.jpg", "plan_1.png", "overlay_calibration.png", "overlay_floor.png",
             "report.json", "scene_1.glb"} <= set(state["files"])
     assert any("focal length" in w for w in state["warnings"])
+    assert state["doubt"] is None  # this floor is found well
     assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "spec": False,
                                 "floor_mask": False, "clicks": 0, "suggestions": 1, "seed": 0}
 
@@ -280,6 +282,16 @@ def test_clicks_correct_the_floor_found(finished):
         states[1]["error"]
 
 
+def test_an_uncertain_floor_says_where_to_click(finished, monkeypatch):
+    # The job's answer carries the worker's ``doubt`` (pipeline.furnish's, checked in
+    # test_pipeline) to the page, which draws nothing itself: the overlay has the ring.
+    client, job_id, state, seen, busy, app, jobs = finished
+    job = app.state.jobs[job_id]
+    doubt = {"x_px": 812, "y_px": 430, "floor": False}
+    monkeypatch.setattr(job, "result", dict(job.result, doubt=doubt))
+    assert client.get(f"/api/jobs/{job_id}").json()["doubt"] == doubt
+
+
 def test_finished_jobs_are_deleted(finished):
     client, job_id, state, seen, busy, app, jobs = finished
     assert app.state.sweep() == []                   # kept while young
@@ -361,9 +373,20 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             overlay.click(position={"x": box["width"] * 0.9, "y": box["height"] / 2})  # on the plan: ignored
             assert page.locator(".mark").count() == 1
             page.fill("input[name=suggestions]", "1")
+
+            def doubted(route):  # the job's answer as if its floor were uncertain
+                state = route.fetch().json()
+                if state["status"] == "done":
+                    state["doubt"] = {"x_px": 812, "y_px": 430, "floor": False}
+                route.fulfill(json=state)
+
+            page.route(re.compile(r"/api/jobs/[0-9a-f-]+$"), doubted)
+            assert "magenta ring" not in page.inner_text("#warnings")
             page.click("#again")  # beside the corrections, below the overlays
             page.wait_for_selector("#download:not([hidden])", timeout=50_000)
             assert "(applied)" in page.inner_text("#clicks-note")
+            assert ("click it right on the floor overlay below: the magenta ring marks the patch most in doubt "
+                    "(now not floor)") in page.inner_text("#warnings")
             report = page.request.get(server + page.get_attribute("#zip", "href").replace("download.zip",
                                                                                    "files/report.json"))
             clicks = report.json()["floor"]["clicks"]
