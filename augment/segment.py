@@ -50,15 +50,21 @@ DISPUTED_SHARE_WARN = 0.10
 
 # A user's click says "floor here" or "not floor here" of the region around it: the
 # pixels of the clicked colour (within this Lab distance, on the working image blurred
-# a little) reached without crossing an edge of the photo, within the first share of the
-# image's long side of the click. Walls of the floor's colour often meet it without an
-# edge, and a click on a thin strip of floor lands on that line; the small reach keeps
-# such a leak small (simulated clicks on the 30 misses of seeds 914-917: 0.05 mends 15
-# with one click and 28 with up to three, none left worse; 0.15 mends 19 and 25, and a
-# click on a corner of samples/photos/room_3 took half a wall, +96 %). Within the second,
-# larger reach the model's sure labels become probable, so GrabCut can carry the clicked
-# colour past them (over a plank joint, where the region stops).
+# a little) reached without crossing an edge of the photo, and within reach of the click.
+# Walls of the floor's colour often meet it without an edge, and a click on a thin strip
+# of floor lands on that line: the reach keeps such a leak small. Below the horizon it is
+# measured on the floor, CLICK_REGION_REACH_M around the clicked floor point, and within
+# CLICK_REGION_MAX_REACH of the long side: far away a wide, flat ellipse, along a far wall
+# rather than up it. Simulated clicks on the 30 misses of seeds 914-917 mend 19 with one
+# click and 28 with up to three, none left worse (0.5 m within 0.15 of the long side: 19
+# and 27; 0.7 m: 20 and 26, two worse; 1 m: 19 and 26, two worse), where a disc of
+# CLICK_REGION_REACH of the long side (still used above the horizon and without a
+# calibration) mends 15 and 28, and one of 0.15 19 and 25 and took half a wall of
+# samples/photos/room_3 (+96 %). Within CLICK_REACH the model's sure labels become
+# probable, so GrabCut can carry the clicked colour past them (over a plank joint, where
+# the region stops).
 CLICK_TOLERANCE = 12
+CLICK_REGION_REACH_M, CLICK_REGION_MAX_REACH = 0.5, 0.10
 CLICK_REGION_REACH, CLICK_REACH = 0.05, 0.15
 # Canny's thresholds for those edges: low, so that the faint line where a wall of the
 # floor's colour meets the floor stops the region (40/100 let it into the wall on two of
@@ -490,27 +496,38 @@ def _check_clicks(clicks, shape: tuple[int, int]) -> np.ndarray:
     return arr
 
 
-def _click_region(lab: np.ndarray, edges: np.ndarray, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
+def _click_region(lab: np.ndarray, edges: np.ndarray, x: float, y: float,
+                  floor_m: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """What a click at ``(x, y)`` (working pixels) says: the region of the clicked colour
     (``lab``, the working image blurred a little, in Lab) reached from it without crossing
-    ``edges`` (a magic wand), within ``CLICK_REGION_REACH`` of it; and the wider reach
-    ``CLICK_REACH`` within which the model is not sure."""
+    ``edges`` (a magic wand) and within reach of it; and the wider reach ``CLICK_REACH``
+    within which the model is not sure. ``floor_m`` (rows, cols, 2), the floor point of
+    each pixel (NaN above the horizon), measures the reach on the floor when the click is
+    below the horizon."""
     rows, cols = lab.shape[:2]
     col, row = min(cols - 1, max(0, int(round(x)))), min(rows - 1, max(0, int(round(y))))
     # Edges stop the fill where a wall of the floor's colour meets it; the click itself
     # may sit on one (a plank joint), so its neighbourhood is cleared.
     edges = edges.copy()
     edges[max(0, row - 2):row + 3, max(0, col - 2):col + 3] = 0
-    reach = np.zeros((rows, cols), np.uint8)
-    cv2.circle(reach, (col, row), max(2, round(CLICK_REACH * max(rows, cols))), 1, -1)
-    near = np.zeros((rows, cols), np.uint8)
-    cv2.circle(near, (col, row), max(2, round(CLICK_REGION_REACH * max(rows, cols))), 1, -1)
+
+    def disc(share):
+        out = np.zeros((rows, cols), np.uint8)
+        cv2.circle(out, (col, row), max(2, round(share * max(rows, cols))), 1, -1)
+        return out > 0
+
+    if floor_m is not None and not np.isnan(floor_m[row, col, 0]):
+        with np.errstate(invalid="ignore"):
+            on_floor = np.hypot(*(floor_m - floor_m[row, col]).transpose(2, 0, 1)) < CLICK_REGION_REACH_M
+        near = disc(CLICK_REGION_MAX_REACH) & on_floor
+    else:
+        near = disc(CLICK_REGION_REACH)
     fill = np.ones((rows + 2, cols + 2), np.uint8)
-    fill[1:-1, 1:-1] = (edges > 0) | (near == 0)
+    fill[1:-1, 1:-1] = (edges > 0) | ~near
     tol = (CLICK_TOLERANCE,) * 3
     cv2.floodFill(lab, fill, (col, row), 0, tol, tol,
                   4 | cv2.FLOODFILL_FIXED_RANGE | cv2.FLOODFILL_MASK_ONLY | (2 << 8))
-    return fill[1:-1, 1:-1] == 2, reach > 0
+    return fill[1:-1, 1:-1] == 2, disc(CLICK_REACH)
 
 
 def _click_regions(small, scale, calibration, clicks):
@@ -524,12 +541,16 @@ def _click_regions(small, scale, calibration, clicks):
     near = np.zeros(shape, bool)
     if not len(clicks):
         return floor, other, near
-    below = board = None
+    below = board = floor_m = None
     if calibration is not None:
-        below = below_horizon(shape, calibration.scaled(scale).horizon, 0.0)
+        working = calibration.scaled(scale)
+        below = below_horizon(shape, working.horizon, 0.0)
         board = np.zeros(shape, np.uint8)
         cv2.fillPoly(board, [(board_polygon_px(calibration) * scale).round().astype(np.int32)], 1)
         board = board > 0
+        ys, xs = np.nonzero(below)
+        floor_m = np.full((*shape, 2), np.nan)
+        floor_m[ys, xs] = working.floor_from_pixels(np.column_stack([xs + 0.5, ys + 0.5]).astype(np.float64))
     # The colours and edges the clicks' regions are found in, once for all of them.
     lab = cv2.cvtColor(cv2.medianBlur(small, 5), cv2.COLOR_RGB2LAB)
     grey = cv2.cvtColor(cv2.GaussianBlur(small, (3, 3), 0), cv2.COLOR_RGB2GRAY)
@@ -542,7 +563,7 @@ def _click_regions(small, scale, calibration, clicks):
         if not is_floor and board is not None and board[row, col]:
             raise SegmentationError(f"not floor at {x:g},{y:g}: on the board, which lies on the floor; "
                                     "click the thing wrongly taken for floor")
-        region, reach = _click_region(lab, edges, x * scale, y * scale)
+        region, reach = _click_region(lab, edges, x * scale, y * scale, floor_m)
         near |= reach
         if is_floor:
             floor |= region

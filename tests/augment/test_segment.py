@@ -447,6 +447,38 @@ def test_a_floor_click_brings_back_floor_the_model_missed(held_out, model):
     assert before.disputed[reach].sum() > 100 and after.disputed[reach].sum() == 0
 
 
+def test_a_clicks_region_reaches_half_a_meter_over_the_floor(held_out):
+    """On a photo of one flat grey (no edges, so only the reach bounds the region), a
+    floor click's region is every pixel that sees the floor within CLICK_REGION_REACH_M
+    of the clicked one and lies within CLICK_REGION_MAX_REACH of the long side: far away
+    a wide, flat ellipse, running along a far wall rather than up it as a disc of
+    CLICK_REGION_REACH of the long side would; near, the disc of the larger share."""
+    sample, cal = held_out[0]
+    rows, cols = sample.floor_mask.shape
+    scale = GRABCUT_LONG_PX / cols
+    small = np.full((round(rows * scale), GRABCUT_LONG_PX, 3), 128, np.uint8)
+    working = cal.scaled(scale)
+    cam = np.linalg.inv(cal.camera_from_floor)[:2, 3]
+    old_disc_px = 2 * round(segment.CLICK_REGION_REACH * GRABCUT_LONG_PX) + 1
+    max_px = segment.CLICK_REGION_MAX_REACH * GRABCUT_LONG_PX
+    for distance_m in (2.0, 6.0):
+        x, y = cal.pixels_from_floor((cam - distance_m * cam / np.linalg.norm(cam))[None])[0]
+        floor, other, _ = segment._click_regions(small, scale, cal, np.array([[x, y, 1.0]]))
+        assert not other.any()
+        ys, xs = np.nonzero(floor)
+        col, row = round(x * scale), round(y * scale)
+        at = working.floor_from_pixels(np.array([[col + 0.5, row + 0.5]]))[0]
+        reach_m = np.linalg.norm(working.floor_from_pixels(np.column_stack([xs + 0.5, ys + 0.5])) - at, axis=1)
+        reach_px = np.hypot(xs - col, ys - row)
+        assert reach_m.max() < segment.CLICK_REGION_REACH_M and reach_px.max() <= max_px + 0.5
+        width, height = np.ptp(xs) + 1, np.ptp(ys) + 1
+        assert width > old_disc_px and height < width, (distance_m, width, height)
+        if distance_m == 2.0:  # near: the disc binds, and is filled
+            assert reach_px.max() > max_px - 1.5 and floor.sum() > 0.9 * np.pi * max_px ** 2
+        else:  # far: the half meter binds, most of all upward
+            assert reach_m.max() > 0.45 and height < old_disc_px, (reach_m.max(), height)
+
+
 def test_a_not_floor_click_takes_away_what_was_taken_for_floor(held_out, model):
     """The model calls a patch of wall at the foot of the far wall sure floor; one click
     on it takes it away again, and the floor around it stays."""
