@@ -788,8 +788,9 @@ def _print_warnings(warnings, seg, mask_hint: str, prefix: str = "") -> None:
         print(f"warning: {prefix}{warning}", file=sys.stderr)
     doubt = seg.doubt_json()
     if doubt is not None:
-        flag = "--not-floor-at" if doubt["floor"] else "--floor-at"
-        print(f"hint: {prefix}where the floor is wrong, run again with {flag} {doubt['x_px']},{doubt['y_px']} "
+        # The click that would overrule the mask there.
+        flag = _click_flag((doubt["x_px"], doubt["y_px"], not doubt["floor"]))
+        print(f"hint: {prefix}where the floor is wrong, run again with {flag} "
               f"(and --floor-at / --not-floor-at X,Y elsewhere), or {mask_hint}", file=sys.stderr)
 
 

@@ -550,7 +550,7 @@ def _click_regions(small, scale, calibration, clicks):
         board = board > 0
         ys, xs = np.nonzero(below)
         floor_m = np.full((*shape, 2), np.nan)
-        floor_m[ys, xs] = working.floor_from_pixels(np.column_stack([xs + 0.5, ys + 0.5]).astype(np.float64))
+        floor_m[ys, xs] = working.floor_from_pixels(np.column_stack([xs + 0.5, ys + 0.5]))
     # The colours and edges the clicks' regions are found in, once for all of them.
     lab = cv2.cvtColor(cv2.medianBlur(small, 5), cv2.COLOR_RGB2LAB)
     grey = cv2.cvtColor(cv2.GaussianBlur(small, (3, 3), 0), cv2.COLOR_RGB2GRAY)

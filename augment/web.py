@@ -128,7 +128,8 @@ def _write_progress(state: dict) -> None:
 def _run_job(job_dir: str, options: dict) -> dict:
     """Furnish one job's photo into ``job_dir/out`` (in a worker process).
 
-    Returns ``{"files": [...], "warnings": [...]}``, or ``{"error": {"kind", "message"}}``
+    Returns ``{"files": [...], "warnings": [...], "doubt": ...}`` (``doubt``:
+    ``Segmentation.doubt_json``), or ``{"error": {"kind", "message"}}``
     for bad input (the errors of :func:`augment.pipeline.furnish`). A bug raises.
     """
     global _renderer, _progress_path
