@@ -496,16 +496,15 @@ def _check_clicks(clicks, shape: tuple[int, int]) -> np.ndarray:
     return arr
 
 
-def _click_region(lab: np.ndarray, edges: np.ndarray, x: float, y: float,
+def _click_region(lab: np.ndarray, edges: np.ndarray, col: int, row: int,
                   floor_m: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """What a click at ``(x, y)`` (working pixels) says: the region of the clicked colour
+    """What a click on the working pixel ``(col, row)`` says: the region of the clicked colour
     (``lab``, the working image blurred a little, in Lab) reached from it without crossing
     ``edges`` (a magic wand) and within reach of it; and the wider reach ``CLICK_REACH``
     within which the model is not sure. ``floor_m`` (rows, cols, 2), the floor point of
     each pixel (NaN above the horizon), measures the reach on the floor when the click is
     below the horizon."""
     rows, cols = lab.shape[:2]
-    col, row = min(cols - 1, max(0, int(round(x)))), min(rows - 1, max(0, int(round(y))))
     # Edges stop the fill where a wall of the floor's colour meets it; the click itself
     # may sit on one (a plank joint), so its neighbourhood is cleared.
     edges = edges.copy()
@@ -556,14 +555,15 @@ def _click_regions(small, scale, calibration, clicks):
     grey = cv2.cvtColor(cv2.GaussianBlur(small, (3, 3), 0), cv2.COLOR_RGB2GRAY)
     edges = cv2.dilate(cv2.Canny(grey, *CLICK_CANNY), np.ones((2, 2), np.uint8))
     for x, y, is_floor in clicks:
-        col, row = min(shape[1] - 1, int(x * scale)), min(shape[0] - 1, int(y * scale))
+        # One working pixel for the click, both for its refusal and its region.
+        col, row = min(shape[1] - 1, round(x * scale)), min(shape[0] - 1, round(y * scale))
         if is_floor and below is not None and not below[row, col]:
             raise SegmentationError(f"floor at {x:g},{y:g}: above the horizon the board gives, where no "
                                     "floor can be; click floor below the far walls' feet")
         if not is_floor and board is not None and board[row, col]:
             raise SegmentationError(f"not floor at {x:g},{y:g}: on the board, which lies on the floor; "
                                     "click the thing wrongly taken for floor")
-        region, reach = _click_region(lab, edges, x * scale, y * scale, floor_m)
+        region, reach = _click_region(lab, edges, col, row, floor_m)
         near |= reach
         if is_floor:
             floor |= region
