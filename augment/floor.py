@@ -1,8 +1,9 @@
 """The floor polygon in meters, from a floor mask and the board's calibration.
 
-The outline of the floor region under the board, with any part a carton or a wall corner
-cut off from it at the photo's edge joined on along that edge
-(:func:`augment.segment.floor_parts`), is taken back through the floor homography into
+The outline of the floor region under the board, with the other parts of the mask joined
+on (:func:`augment.segment.floor_parts`: a part a carton or a wall corner cut off at the
+photo's edge along that edge, a part kept inside the photo, such as floor clicked behind
+a carton, by a seam across what stands between), is taken back through the floor homography into
 the floor frame (the board's: origin at its center, z up), simplified so walls come out
 straight, and each edge is labelled with what bounds it: a wall or an object standing on
 the floor (``"boundary"``), the photo's edge (``"image"``: the floor goes on beyond
@@ -168,14 +169,30 @@ def _join_along_edge(region: np.ndarray, part: np.ndarray) -> None:
     region[y, x] = 1
 
 
+def _join_nearest(region: np.ndarray, part: np.ndarray) -> None:
+    """Add ``part`` to ``region`` (uint8, in place), joined by a one-pixel seam where the
+    two come nearest: a part cut off inside the photo lies behind what stands between
+    them (a carton at a far wall), so the seam crosses that thing, an object boundary
+    both ways, and its area is a pixel's width."""
+    gap = cv2.distanceTransform((region == 0).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    py, px = np.nonzero(part)
+    k = int(np.argmin(gap[py, px]))
+    ry, rx = np.nonzero(region)
+    j = int(np.argmin((rx - px[k]) ** 2 + (ry - py[k]) ** 2))
+    region[part] = 1
+    cv2.line(region, (int(rx[j]), int(ry[j])), (int(px[k]), int(py[k])), 1, 1, lineType=8)
+
+
 def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     """Simplified floor polygon (meters) of the floor region of ``mask`` under the board
-    (else the largest) and the parts cut off from it at the photo's edge.
+    (else the largest) and the mask's other substantial parts, joined on.
 
     Parameters
     ----------
     mask : (rows, cols) bool
-        Floor mask at the calibrated photo's size. Not modified.
+        Floor mask at the calibrated photo's size, cleaned up (as
+        :func:`augment.segment.segment_floor` leaves it): every part of it large enough
+        to hold something counts. Not modified.
     calibration : Calibration
         The photo's calibration (:func:`augment.calibrate.calibrate_photo`).
 
@@ -208,12 +225,17 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     cv2.drawContours(region, outer, -1, 1, -1)
     # Opening removes hair-thin spurs (a skirting board's shadow) before tracing.
     region = cv2.morphologyEx(region, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    labels, main, parts = floor_parts(region, small_cal, distance_m=distance)
+    # The mask is cleaned up already: a part cut off inside the photo is there because
+    # someone kept it (a click on floor behind a carton, a painted mask).
+    labels, main, parts = floor_parts(region, small_cal, distance_m=distance, reach_edge=False)
     if main == 0:
         raise ValueError("no floor below the horizon in the mask")
     region = (labels == main).astype(np.uint8)
+    border = np.zeros(labels.shape, bool)
+    border[[0, -1], :] = border[:, [0, -1]] = True
     for k in parts:
-        _join_along_edge(region, labels == k)
+        part = labels == k
+        (_join_along_edge if (part & border).any() else _join_nearest)(region, part)
     contours, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea)[:, 0, :].astype(np.float64)
     if len(contour) < 3 or cv2.contourArea(contour.astype(np.float32)) < 16:

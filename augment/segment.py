@@ -311,7 +311,8 @@ def _believed_footprint_m2(shape: tuple[int, int], calibration, distance_m: np.n
 
 
 def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | None = None,
-                distance_m: np.ndarray | None = None) -> tuple[np.ndarray, int, list[int]]:
+                distance_m: np.ndarray | None = None,
+                reach_edge: bool = True) -> tuple[np.ndarray, int, list[int]]:
     """The floor's connected regions: the main one and the parts cut off from it.
 
     A carton or a wall corner standing at the photo's edge cuts the visible floor in two;
@@ -333,6 +334,10 @@ def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | No
         The model's floor probability at the mask's size.
     distance_m : (rows, cols) float or None
         :func:`floor_distance_m` of the mask's size, when the caller has it already.
+    reach_edge : bool
+        Keep only parts that reach the photo's edge (default). False keeps substantial
+        parts anywhere: for a mask already cleaned up, where a part cut off inside the
+        photo is floor someone kept on purpose (a click behind a carton, a painted mask).
 
     Returns
     -------
@@ -359,7 +364,8 @@ def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | No
     keep &= stats[:, cv2.CC_STAT_AREA] >= MIN_PART_SHARE * stats[main, cv2.CC_STAT_AREA]
     edge = np.zeros(n, bool)
     edge[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = True
-    keep &= edge
+    if reach_edge:
+        keep &= edge
     if probability is not None:
         count = np.maximum(stats[:, cv2.CC_STAT_AREA], 1)
         keep &= np.bincount(labels.ravel(), np.asarray(probability, np.float64).ravel(), minlength=n) / count >= 0.5

@@ -289,17 +289,36 @@ def _split_floor(cal):
 def test_floor_cut_in_two_at_the_photo_edge_is_one_polygon(held_out):
     """Both parts of a floor split by a wall corner at the photo's edge are in the polygon
     (area within 1 % of theirs, where the board's part alone is over 10 % short), joined
-    along the photo's edge; a patch touching neither the edge nor the floor is left out."""
+    along the photo's edge; the clean-up's rule leaves out a patch touching neither the
+    edge nor the floor."""
     _, cal = held_out[0]
     mask, left, right, island = _split_floor(cal)
     both = floor_area_m2(left | right, cal)
     assert floor_area_m2(left, cal) > 0.1 * both
-    poly = floor_polygon(mask, cal)
+    poly = floor_polygon(left | right, cal)
     assert abs(poly.area_m2 - both) / both < 0.01
     # The seam runs along the photo's edge, where the floor goes on.
     assert "image" in poly.edge_kind
     labels, main, parts = floor_parts(mask, cal)
     assert np.all(labels[right] == main) and [np.unique(labels[left])[-1]] == parts
+
+
+def test_a_part_kept_inside_the_photo_is_in_the_polygon(held_out):
+    """A part of the mask cut off inside the photo (floor behind a carton the user clicked,
+    or painted in a mask) is kept by the clean-up only when clicked, and then counts in
+    the polygon: joined by a seam a pixel wide, labelled a boundary (the seam crosses the
+    thing between), the area within 1 % of the three parts'."""
+    from augment.segment import _clean
+
+    _, cal = held_out[0]
+    mask, left, right, island = _split_floor(cal)
+    kept = _clean(mask, cal, 1.0, np.where(mask, 0.9, 0.05), clicked=island)
+    assert kept[island].mean() > 0.95
+    all_three = floor_area_m2(mask, cal)
+    assert floor_area_m2(island, cal) > 0.05 * all_three
+    poly = floor_polygon(kept, cal)
+    assert abs(poly.area_m2 - all_three) / all_three < 0.01
+    assert poly.edge_kind.count("boundary") > floor_polygon(left | right, cal).edge_kind.count("boundary")
 
 
 def test_a_part_the_model_calls_no_floor_is_left_out(held_out):
