@@ -143,14 +143,20 @@ def _perimeter_position(x: np.ndarray, y: np.ndarray, shape) -> np.ndarray:
                      2 * (w - 1) + 2 * (h - 1) - y).astype(np.int64)
 
 
+def _border(shape: tuple[int, int]) -> np.ndarray:
+    """The photo's edge pixels, True, of an image of ``shape``."""
+    border = np.zeros(shape, bool)
+    border[[0, -1], :] = border[:, [0, -1]] = True
+    return border
+
+
 def _join_along_edge(region: np.ndarray, part: np.ndarray) -> None:
     """Add ``part`` to ``region`` (uint8, in place), joined by a one-pixel seam along the
     photo's edge where the two come nearest: beyond the edge the floor goes on, so that
     is where they meet. The seam's outline is an ``"image"`` edge, and its area is a
     pixel's width."""
     h, w = region.shape
-    border = np.zeros(region.shape, bool)
-    border[[0, -1], :] = border[:, [0, -1]] = True
+    border = _border(region.shape)
     ry, rx = np.nonzero(border & (region > 0))
     py, px = np.nonzero(border & part)
     region[part] = 1
@@ -231,8 +237,7 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     if main == 0:
         raise ValueError("no floor below the horizon in the mask")
     region = (labels == main).astype(np.uint8)
-    border = np.zeros(labels.shape, bool)
-    border[[0, -1], :] = border[:, [0, -1]] = True
+    border = _border(labels.shape)
     for k in parts:
         part = labels == k
         (_join_along_edge if (part & border).any() else _join_nearest)(region, part)
