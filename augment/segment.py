@@ -619,7 +619,9 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         colour around it (reached without crossing an edge) for GrabCut, a later click
         winning where two regions overlap, and lets GrabCut overrule the model within
         ``CLICK_REACH`` of it; a region clicked as floor is kept even when cut off from
-        the rest, and within a floor click's reach the skirting trim cuts nothing.
+        the rest, and within a floor click's reach the skirting trim cuts nothing; a "not
+        floor" click on the strip at a wall's foot makes that wall's strip a skirting
+        board for the trim.
 
     Returns
     -------
@@ -687,7 +689,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     skirting_m = None
     if skirting and calibration is not None and name != "onnx" and mask.any():
         # The refined mask's top edge sits on the skirting boards; the floor ends below.
-        trimmed, skirting_m = trim_skirting(image, mask, calibration)
+        trimmed, skirting_m = trim_skirting(image, mask, calibration, board_at=clicks[clicks[:, 2] == 0])
         # A strip the trim took for a board is floor within reach of a floor click there:
         # the user's word is the last.
         reach = np.zeros((rows, cols), np.uint8)

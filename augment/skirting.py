@@ -83,6 +83,9 @@ PROFILE_CONTEXT = 8
 # the mask (it already ends at the floor line); above the second, it shows one, whatever
 # the rules above say; in between, the rules decide.
 NO_BOARD_P, BOARD_P = 0.15, 0.5
+# A "not floor" click this far across (a share of the long side) from a wall's column,
+# on its strip, is a click on that wall's board.
+BOARD_CLICK_REACH = 0.10
 # A column where the board model's probability reaches this shows the board.
 SEEN_P = 0.5
 # The mask's top edge bends at a wall's corner by more than this (pixels at the working
@@ -343,7 +346,27 @@ def _rules_see_a_board(known, shown, height_m, brightness, hue_deg) -> bool:
     return MIN_HEIGHT_M <= median <= MAX_HEIGHT_M and q3 - q1 <= MAX_SPREAD * median
 
 
-def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.ndarray, float | None]:
+def _clicked_walls(cols, rows, px_per_m, known, shown, height_m, points, reach_px) -> np.ndarray:
+    """(k,) bool: the columns of each wall whose board the user clicked as not floor: a
+    point within ``reach_px`` across of one of the wall's columns and on its strip (from
+    the mask's top edge down by a board's greatest height), where the wall's columns show
+    a strip of one height (the rules' test, less the shade test: the user has seen it)."""
+    clicked = np.zeros(len(cols), bool)
+    for wall in _walls(cols, rows):
+        if len(wall) < MIN_WALL_COLUMNS:
+            continue
+        on_strip = np.zeros(len(wall), bool)
+        for x, y in points:
+            on_strip |= ((np.abs(cols[wall] - x) <= reach_px) & (y >= rows[wall] - 2)
+                         & (y <= rows[wall] + MAX_HEIGHT_M * px_per_m[wall] + 2))
+        if on_strip.any() and _rules_see_a_board(known[wall], shown[wall], height_m[wall],
+                                                 np.ones(len(wall)), np.full(len(wall), 90.0)):
+            clicked[wall] = True
+    return clicked
+
+
+def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
+                  board_at=None) -> tuple[np.ndarray, float | None]:
     """Remove the skirting board from the top of a floor mask.
 
     Parameters
@@ -354,6 +377,10 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
         Floor mask at the photo's size. Not modified.
     calibration : Calibration
         The photo's calibration, to know how tall a board looks at each wall.
+    board_at : (n, 2) array_like of float, optional
+        Photo pixels ``x, y`` the user marked not floor. One on the strip at the top of
+        a wall's floor makes that wall's strip a board, whatever the board model and the
+        shade rule say (a board darker than the floor and of its hue looks like shade).
 
     Returns
     -------
@@ -393,6 +420,10 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration) -> tuple[np.
             t_mode = None
     if t_mode is None:
         judged = _walls_with_a_board(cols, rows, p_board, whole)
+        if board_at is not None and len(board_at):
+            points = np.asarray(board_at, np.float64)[:, :2] * scale
+            judged |= _clicked_walls(cols, rows, px_per_m, known, shown, height_m, points,
+                                     BOARD_CLICK_REACH * max(small_mask.shape))
         if not (shown & judged).any():
             return mask.copy(), None
         t_mode, _, _ = _board_rows(small_image, small_mask, cols, rows, px_per_m, _mode(height_m[shown & judged]))

@@ -552,10 +552,27 @@ def test_a_click_outranks_the_skirting_trim(held_out, model, monkeypatch):
     cut = np.zeros_like(truth)
     cut[max(0, y - 20):y + 20, max(0, x - 20):x + 20] = True
 
-    def over_cut(image, mask, calibration):  # a trim gone too deep, around (x, y)
+    def over_cut(image, mask, calibration, board_at=None):  # a trim gone too deep, around (x, y)
         return mask & ~cut, 0.2
 
     monkeypatch.setattr(segment, "trim_skirting", over_cut)
     assert not segment_floor(sample.image, model, cal).mask[y, x]
     seg = segment_floor(sample.image, model, cal, clicks=[(float(x), float(y), 1)])
     assert seg.mask[y, x] and seg.mask[cut & truth].mean() > 0.5
+
+
+def test_not_floor_clicks_are_handed_to_the_skirting_trim(held_out, model, monkeypatch):
+    """The trim hears where the user said "not floor" (a click on a board it left makes
+    that wall's strip a board), and not the floor clicks."""
+    sample, cal = held_out[0]
+    heard = []
+
+    def trim(image, mask, calibration, board_at=None):
+        heard.append(np.asarray(board_at, float))
+        return mask.copy(), None
+
+    monkeypatch.setattr(segment, "trim_skirting", trim)
+    rows, cols = sample.floor_mask.shape
+    floor_y, floor_x = np.argwhere(sample.floor_mask)[len(np.argwhere(sample.floor_mask)) // 2]
+    segment_floor(sample.image, model, cal, clicks=[(float(floor_x), float(floor_y), 1), (5.0, rows - 6.0, 0)])
+    assert len(heard) == 1 and heard[0].shape == (1, 3) and tuple(heard[0][0, :2]) == (5.0, rows - 6.0)

@@ -317,3 +317,24 @@ def test_a_board_on_one_wall_is_cut_when_the_other_walls_show_none(monkeypatch):
     assert (truth & mask & ~trimmed).sum() < 0.01 * (mask & ~truth).sum()
     monkeypatch.setattr(skirting, "MIN_WALL_COLUMNS", 10 ** 6)  # no wall judged on its own
     assert trim_skirting(sample.image, mask, calibration)[1] is None
+
+
+def test_a_click_on_a_board_the_rules_take_for_shade_trims_its_wall():
+    """A board darker than the floor and of its hue looks like the floor in shade and is
+    left; a "not floor" click on its strip makes it the wall's board, cut all along. A
+    click on the floor in front of the wall changes nothing."""
+    board_rgb = (90, 66, 42)  # the floor's colour at 0.6 of its brightness
+    image, truth, mask, calibration = _room(0.10, board_rgb=board_rgb)
+    band = mask & ~truth
+    trimmed, height_m = trim_skirting(image, mask, calibration)
+    assert height_m is None and (trimmed & band).sum() == band.sum()
+    rows, cols = np.nonzero(band)
+    on_strip = (cols.min() + 40, int(np.median(rows[cols == cols.min() + 40])))
+    trimmed, height_m = trim_skirting(image, mask, calibration, board_at=[on_strip])
+    assert height_m == pytest.approx(0.10, abs=0.01)
+    assert (trimmed & band).sum() < 0.05 * band.sum()
+    assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
+    in_front = (on_strip[0], on_strip[1] + 120)
+    assert truth[in_front[1], in_front[0]]
+    trimmed, height_m = trim_skirting(image, mask, calibration, board_at=[in_front])
+    assert height_m is None and (trimmed & band).sum() == band.sum()
