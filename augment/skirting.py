@@ -30,7 +30,9 @@ rules decide.
 Whether the mask holds the board can differ from wall to wall: GrabCut may stop at the
 floor line along one wall and at the board's top along another. When the photo as a
 whole does not show a board, each wall is judged on its own (its columns between corners
-of the mask's top edge), and the walls where the board model is sure of one are cut.
+of the mask's top edge), and the walls where the board model is sure of one are cut,
+and the walls whose strip the user clicked as not floor (a board darker than the floor
+and of its hue looks like shade to both the rules and the model).
 """
 from __future__ import annotations
 
