@@ -362,9 +362,9 @@ def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | No
     footprint = _believed_footprint_m2(labels.shape, calibration, distance_m).ravel()
     keep = np.bincount(labels.ravel(), footprint, minlength=n) >= MIN_PART_M2
     keep &= stats[:, cv2.CC_STAT_AREA] >= MIN_PART_SHARE * stats[main, cv2.CC_STAT_AREA]
-    edge = np.zeros(n, bool)
-    edge[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = True
     if reach_edge:
+        edge = np.zeros(n, bool)
+        edge[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = True
         keep &= edge
     if probability is not None:
         count = np.maximum(stats[:, cv2.CC_STAT_AREA], 1)

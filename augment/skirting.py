@@ -221,12 +221,12 @@ def _walls(cols: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
     return walls
 
 
-def _walls_with_a_board(cols: np.ndarray, rows: np.ndarray, p_board: np.ndarray, whole: np.ndarray) -> np.ndarray:
-    """(k,) bool: the columns of each wall of ``MIN_WALL_COLUMNS`` or more where the board
-    model's mean probability (over the columns whose window lies in the photo, if any)
-    reaches ``BOARD_P``."""
-    judged = np.zeros(len(cols), bool)
-    for wall in _walls(cols, rows):
+def _walls_with_a_board(walls, p_board: np.ndarray, whole: np.ndarray) -> np.ndarray:
+    """(k,) bool: the columns of each of ``walls`` (:func:`_walls`) of ``MIN_WALL_COLUMNS``
+    or more where the board model's mean probability (over the columns whose window lies
+    in the photo, if any) reaches ``BOARD_P``."""
+    judged = np.zeros(len(p_board), bool)
+    for wall in walls:
         if len(wall) < MIN_WALL_COLUMNS:
             continue
         inside = wall[whole[wall]]
@@ -337,32 +337,35 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
     return scale, small_image, small_mask, small_cal, cols, rows, px_per_m
 
 
-def _rules_see_a_board(known, shown, height_m, brightness, hue_deg) -> bool:
-    """Whether enough wall columns show a strip of one height that is not shade."""
+def _strip_of_one_height(known, shown, height_m) -> bool:
+    """Whether enough wall columns show a strip, of one height a board can have."""
     if known.sum() < 0.3 * len(known) or shown.sum() < MIN_AGREEING * known.sum():
-        return False
-    if np.median(brightness[shown]) < SHADOW_RATIO and np.median(hue_deg[shown]) < SHADOW_DEG:
         return False
     median = float(np.median(height_m[shown]))
     q1, q3 = np.percentile(height_m[shown], [25, 75])
     return MIN_HEIGHT_M <= median <= MAX_HEIGHT_M and q3 - q1 <= MAX_SPREAD * median
 
 
-def _clicked_walls(cols, rows, px_per_m, known, shown, height_m, points, reach_px) -> np.ndarray:
-    """(k,) bool: the columns of each wall whose board the user clicked as not floor: a
-    point within ``reach_px`` across of one of the wall's columns and on its strip (from
-    the mask's top edge down by a board's greatest height), where the wall's columns show
-    a strip of one height (the rules' test, less the shade test: the user has seen it)."""
+def _rules_see_a_board(known, shown, height_m, brightness, hue_deg) -> bool:
+    """Whether enough wall columns show a strip of one height that is not shade."""
+    return _strip_of_one_height(known, shown, height_m) and not (
+        np.median(brightness[shown]) < SHADOW_RATIO and np.median(hue_deg[shown]) < SHADOW_DEG)
+
+
+def _clicked_walls(walls, cols, rows, px_per_m, known, shown, height_m, points, reach_px) -> np.ndarray:
+    """(k,) bool: the columns of each of ``walls`` whose board the user clicked as not
+    floor: a point within ``reach_px`` across of one of the wall's columns and on its strip
+    (from the mask's top edge down by a board's greatest height), where the wall's columns
+    show a strip of one height (no shade test: the user has seen it)."""
     clicked = np.zeros(len(cols), bool)
-    for wall in _walls(cols, rows):
+    for wall in walls:
         if len(wall) < MIN_WALL_COLUMNS:
             continue
         on_strip = np.zeros(len(wall), bool)
         for x, y in points:
             on_strip |= ((np.abs(cols[wall] - x) <= reach_px) & (y >= rows[wall] - 2)
                          & (y <= rows[wall] + MAX_HEIGHT_M * px_per_m[wall] + 2))
-        if on_strip.any() and _rules_see_a_board(known[wall], shown[wall], height_m[wall],
-                                                 np.ones(len(wall)), np.full(len(wall), 90.0)):
+        if on_strip.any() and _strip_of_one_height(known[wall], shown[wall], height_m[wall]):
             clicked[wall] = True
     return clicked
 
@@ -421,10 +424,11 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
                 or _rules_see_a_board(~np.isnan(t_mode), shown_mode, t_mode / px_per_m, brightness_mode, hue_mode)):
             t_mode = None
     if t_mode is None:
-        judged = _walls_with_a_board(cols, rows, p_board, whole)
+        walls = _walls(cols, rows)
+        judged = _walls_with_a_board(walls, p_board, whole)
         if board_at is not None and len(board_at):
             points = np.asarray(board_at, np.float64)[:, :2] * scale
-            judged |= _clicked_walls(cols, rows, px_per_m, known, shown, height_m, points,
+            judged |= _clicked_walls(walls, cols, rows, px_per_m, known, shown, height_m, points,
                                      BOARD_CLICK_REACH * max(small_mask.shape))
         if not (shown & judged).any():
             return mask.copy(), None
