@@ -477,7 +477,7 @@ def test_open_edges_of_the_shrunk_floor_follow_the_measured_ones():
     """The photo cut the floor off on the right (x = 4) and the distance on the left
     (x = 0): the shrunk floor's edges along those sides are open, the others walls."""
     square = np.array([[0, 0], [4, 0], [4, 3], [0, 3]], float)
-    floor = FloorPolygon(square, ("boundary", "image", "boundary", "far"), 12.0, np.zeros((0, 2)), "")
+    floor = FloorPolygon(square, ("boundary", "image", "boundary", "far"), 12.0, "")
     inner = inset_polygon(square, 0.05)
     found = open_edges(inner, floor)
     mid = 0.5 * (inner + np.roll(inner, -1, axis=0))

@@ -15,11 +15,13 @@ from skimage.measure import points_in_poly
 from augment import segment
 from augment.board import Board
 from augment.calibrate import calibrate_photo, exif_intrinsics
-from augment.floor import DISPUTED_COLOR, floor_area_m2, floor_overlay, floor_polygon
+from augment.floor import (BRIDGE_M, DISPUTED_COLOR, _bridge, _signed_area, floor_area_m2, floor_overlay,
+                           floor_polygon)
 from augment.gl import Renderer
 from augment.segment import (DEFAULT_MODEL, GRABCUT_LONG_PX, FloorModel, ModelSpec, SegmentationError,
                             below_horizon, disputed_floor, floor_parts, segment_floor)
 from augment.synth import render_sample
+from layout.geometry import self_intersection
 
 
 def iou(a, b):
@@ -289,16 +291,17 @@ def _split_floor(cal):
 def test_floor_cut_in_two_at_the_photo_edge_is_one_polygon(held_out):
     """Both parts of a floor split by a wall corner at the photo's edge are in the polygon
     (area within 1 % of theirs, where the board's part alone is over 10 % short), joined
-    along the photo's edge; the clean-up's rule leaves out a patch touching neither the
-    edge nor the floor."""
+    by a corridor that counts as the photo's edge, the polygon simple; the clean-up's rule
+    leaves out a patch touching neither the edge nor the floor."""
     _, cal = held_out[0]
     mask, left, right, island = _split_floor(cal)
     both = floor_area_m2(left | right, cal)
     assert floor_area_m2(left, cal) > 0.1 * both
     poly = floor_polygon(left | right, cal)
     assert abs(poly.area_m2 - both) / both < 0.01
-    # The seam runs along the photo's edge, where the floor goes on.
+    # The parts meet beyond the photo's edge, where the floor goes on.
     assert "image" in poly.edge_kind
+    assert self_intersection(poly.polygon_m) is None
     labels, main, parts = floor_parts(mask, cal)
     assert np.all(labels[right] == main) and [np.unique(labels[left])[-1]] == parts
 
@@ -306,8 +309,8 @@ def test_floor_cut_in_two_at_the_photo_edge_is_one_polygon(held_out):
 def test_a_part_kept_inside_the_photo_is_in_the_polygon(held_out):
     """A part of the mask cut off inside the photo (floor behind a carton the user clicked,
     or painted in a mask) is kept by the clean-up only when clicked, and then counts in
-    the polygon: joined by a seam a pixel wide, labelled a boundary (the seam crosses the
-    thing between), the area within 1 % of the three parts'."""
+    the polygon: bridged on by a narrow corridor labelled a boundary (it crosses the thing
+    between), the polygon still simple, the area within 1 % of the three parts'."""
     from augment.segment import _clean
 
     _, cal = held_out[0]
@@ -319,6 +322,24 @@ def test_a_part_kept_inside_the_photo_is_in_the_polygon(held_out):
     poly = floor_polygon(kept, cal)
     assert abs(poly.area_m2 - all_three) / all_three < 0.01
     assert poly.edge_kind.count("boundary") > floor_polygon(left | right, cal).edge_kind.count("boundary")
+    assert self_intersection(poly.polygon_m) is None
+
+
+def test_a_corridor_joins_two_polygons_into_one_simple_polygon():
+    """Two unit squares 1 m apart: the corridor (``BRIDGE_M`` wide, centered on the
+    line between the nearest corners) adds its own area and two half-width triangles
+    where it leaves the corners, 2 + 0.01 + 2 * 0.0025 m^2 by hand; the squares' edge
+    kinds are kept and the corridor's two sides are boundaries. A part that overlaps the
+    polygon cannot be joined without crossing."""
+    assert BRIDGE_M == 0.01
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    kinds = ["boundary", "image", "far", "boundary"]
+    poly, out_kinds = _bridge(square, kinds, square + [2.0, 0.0], ["far"] * 4)
+    assert self_intersection(poly) is None
+    assert abs(abs(_signed_area(poly)) - 2.015) < 1e-12 and _signed_area(poly) > 0
+    assert len(out_kinds) == len(poly) == 10
+    assert out_kinds.count("boundary") == 4 and out_kinds.count("far") == 5 and out_kinds.count("image") == 1
+    assert _bridge(square, kinds, square + [0.5, 0.5], ["far"] * 4) is None
 
 
 def test_a_part_the_model_calls_no_floor_is_left_out(held_out):
