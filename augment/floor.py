@@ -8,7 +8,7 @@ it), or the distance beyond which the floor is not believed (``"far"``). Only th
 kind is a real limit of the room; the others are the *visible-extent caveat*. The mask's
 other parts (:func:`augment.segment.floor_parts`: one a carton or a wall corner cut off
 at the photo's edge, floor clicked behind a carton) are outlined the same way and joined
-on by corridors a centimeter wide.
+on by corridors a millimeter wide.
 """
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ SIMPLIFY_M = 0.05        # how far the straightened outline may stray from the m
 NOTCH_AREA_M2 = 0.02     # vertices cutting off less than this are noise, not corners
 CORNER_MIN_DEG = 10.0    # edges meeting at less than this are one wall, not a corner
 BORDER_PX = 2            # a contour point this near the photo's edge is the photo's edge
-BRIDGE_M = 0.01          # width of the corridor joining a part of the floor on
+BRIDGE_M = 0.001         # width of the corridor joining a part of the floor on
 BRIDGE_TRIES = 50        # nearest corner pairs tried for a corridor
 EDGE_KINDS = ("boundary", "image", "far")
 

@@ -694,7 +694,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         # the user's word is the last.
         reach = np.zeros((rows, cols), np.uint8)
         for x, y, _ in clicks[clicks[:, 2] > 0]:
-            cv2.circle(reach, (int(x), int(y)), round(CLICK_REACH * max(rows, cols)), 1, -1)
+            cv2.circle(reach, (round(x), round(y)), round(CLICK_REACH * max(rows, cols)), 1, -1)
         mask = trimmed | (mask & (reach > 0))
     if len(clicks):
         other = cv2.resize(clicked_other.astype(np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5

@@ -325,18 +325,49 @@ def test_a_part_kept_inside_the_photo_is_in_the_polygon(held_out):
     assert self_intersection(poly.polygon_m) is None
 
 
+def test_floors_in_many_parts_give_simple_polygons_of_their_area(held_out):
+    """Thirty floors made of a patch round the board and two to six other patches
+    scattered around it, seen through a real calibration (most come out in several
+    parts, some reaching the photo's edge, some not): every polygon is simple, the floor
+    mesh triangulated from it covers exactly its area, and the area is the mask's
+    within 6 % (the median within 0.2 %). Traced with the parts as one outline joined by
+    pixel seams, 2 of these 30 polygons crossed themselves, one mesh 43 % over, and the
+    median was 0.3 %."""
+    from augment.pipeline import _floor_mesh
+
+    _, cal = held_out[0]
+    errors, several = [], 0
+    for seed in range(30):
+        rng = np.random.default_rng(seed)
+        mask = _floor_mask(cal, np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+                           * rng.uniform(0.4, 1.2, 2) + rng.uniform(-0.2, 0.2, 2))
+        for _ in range(rng.integers(2, 7)):
+            half = rng.uniform(0.15, 1.25, 2)
+            a = rng.uniform(0, np.pi)
+            turn = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+            corners = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]) * half
+            mask |= _floor_mask(cal, corners @ turn.T + rng.uniform(-4, 4, 2))
+        several += len(floor_parts(mask, cal, reach_edge=False)[2]) > 0
+        poly = floor_polygon(mask, cal)
+        assert self_intersection(poly.polygon_m) is None, seed
+        assert abs(_floor_mesh(poly.polygon_m).area - poly.area_m2) < 1e-9 * poly.area_m2, seed
+        errors.append(poly.area_m2 / floor_area_m2(mask, cal) - 1)
+    assert several >= 15
+    assert np.max(np.abs(errors)) < 0.06 and np.median(np.abs(errors)) < 0.002
+
+
 def test_a_corridor_joins_two_polygons_into_one_simple_polygon():
     """Two unit squares 1 m apart: the corridor (``BRIDGE_M`` wide, centered on the
     line between the nearest corners) adds its own area and two half-width triangles
-    where it leaves the corners, 2 + 0.01 + 2 * 0.0025 m^2 by hand; the squares' edge
+    where it leaves the corners, 2 + 0.001 + 2 * 0.00025 m^2 by hand; the squares' edge
     kinds are kept and the corridor's two sides are boundaries. A part that overlaps the
     polygon cannot be joined without crossing."""
-    assert BRIDGE_M == 0.01
+    assert BRIDGE_M == 0.001
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     kinds = ["boundary", "image", "far", "boundary"]
     poly, out_kinds = _bridge(square, kinds, square + [2.0, 0.0], ["far"] * 4)
     assert self_intersection(poly) is None
-    assert abs(abs(_signed_area(poly)) - 2.015) < 1e-12 and _signed_area(poly) > 0
+    assert abs(abs(_signed_area(poly)) - 2.0015) < 1e-12 and _signed_area(poly) > 0
     assert len(out_kinds) == len(poly) == 10
     assert out_kinds.count("boundary") == 4 and out_kinds.count("far") == 5 and out_kinds.count("image") == 1
     assert _bridge(square, kinds, square + [0.5, 0.5], ["far"] * 4) is None
