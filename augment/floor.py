@@ -220,7 +220,7 @@ def _join_parts(region: np.ndarray, parts: list[np.ndarray], near: np.ndarray, s
     while True:
         outlined = _outline_polygon(region, near, scale, calibration)
         if outlined is None:
-            raise ValueError("the floor region is too small to outline")
+            raise ValueError("the floor region is too small or too thin to outline")
         poly, kinds = outlined
         for k, part in enumerate(parts):
             outlined = _outline_polygon(part, near, scale, calibration)
@@ -241,7 +241,7 @@ def _outline_polygon(region: np.ndarray, near: np.ndarray, scale: float,
                      calibration) -> tuple[np.ndarray, list[str]] | None:
     """The simplified polygon (meters, counter-clockwise) of the largest outline of
     ``region`` (the photo scaled by ``scale``) and the kind of each edge; None when the
-    region is too small to outline."""
+    region is too small or too thin to outline."""
     contours, _ = cv2.findContours(region.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea)[:, 0, :].astype(np.float64)
     if len(contour) < 3 or cv2.contourArea(contour.astype(np.float32)) < 16:
@@ -268,6 +268,16 @@ def _outline_polygon(region: np.ndarray, near: np.ndarray, scale: float,
     keep = _drop_notches(floor_m[vertex_idx], pinned)
     vertex_idx = vertex_idx[keep]
     poly = _fit_corners(floor_m, vertex_idx)
+    # At a neck of the floor a few pixels wide the refitted corners on its two sides can
+    # pass each other: those of crossing edges go back to the outline's own points.
+    while (pair := self_intersection(poly)) is not None:
+        ends = [i % len(poly) for i in (pair[0], pair[0] + 1, pair[1], pair[1] + 1)]
+        moved = [i for i in ends if not np.array_equal(poly[i], floor_m[vertex_idx[i]])]
+        if not moved:
+            break
+        poly[moved] = floor_m[vertex_idx[moved]]
+    if len(poly) < 3 or abs(_signed_area(poly)) < NOTCH_AREA_M2:
+        return None  # a strip too thin to hold anything straightens to a line
 
     edge_kind = []
     for a, b in zip(vertex_idx, np.roll(vertex_idx, -1)):
