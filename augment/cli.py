@@ -625,7 +625,14 @@ def _measure_cmd(args):
     warnings = list(calibration.warnings) + list(seg.warnings)
     if not seg.mask.any():
         raise StageError(f"photo {args.photo}: no floor found; the floor must show around the board")
-    polygon = floor_polygon(seg.mask, calibration)
+    try:
+        polygon = floor_polygon(seg.mask, calibration)
+    except ValueError as error:
+        if args.floor_mask is None:
+            raise StageError(f"photo {args.photo}: no floor outline ({error}); the floor must show around "
+                             "the board") from None
+        raise StageError(f"--floor-mask {args.floor_mask}: no floor outline ({error}); paint the floor "
+                         "around the board white, in a patch, not a line") from None
     timings["segment_s"] = time.perf_counter() - start
     start = time.perf_counter()
     height = measure_height(image, calibration, floor_mask=seg.mask)

@@ -193,7 +193,8 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     # someone kept it (a click on floor behind a carton, a painted mask).
     labels, main, parts = floor_parts(region, small_cal, distance_m=distance, reach_edge=False)
     if main == 0:
-        raise ValueError("no floor below the horizon in the mask")
+        raise ValueError(f"no floor in the mask below the horizon and within {MAX_FLOOR_DISTANCE_M:g} m "
+                         "once strips a pixel or two wide are dropped")
     region = (labels == main).astype(np.uint8)
     poly, edge_kind = _join_parts(region, [labels == k for k in parts], near, scale, calibration)
     area = abs(_signed_area(poly))

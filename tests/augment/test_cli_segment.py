@@ -149,10 +149,12 @@ def test_bad_floor_masks_are_refused(tmp_path, capsys):
              "tall.png": cv2.transpose(good),                    # turned a quarter
              "wide.png": np.zeros((960, 1500), np.uint8),        # another shape
              "black.png": np.zeros_like(good),                   # no floor
-             "inverted.png": 255 - good}                         # the board on "not floor"
+             "inverted.png": 255 - good,                         # the board on "not floor"
+             "line.png": _painted_rectangle(1.2, 0.004)}         # a line, no floor to outline
     needles = {"missing.png": ["no such file", "stage segment"], "text.png": ["not an image"],
                "tall.png": ["960 x 1280", "1280 x 960", "turned a quarter"], "wide.png": ["1500 x 960"],
-               "black.png": ["no floor in it"], "inverted.png": ["board's center", "inverted"]}
+               "black.png": ["no floor in it"], "inverted.png": ["board's center", "inverted"],
+               "line.png": ["no floor outline", "a pixel or two wide", "not a line"]}
     for name, content in cases.items():
         path = tmp_path / name
         if isinstance(content, bytes):
