@@ -569,7 +569,7 @@ def _segment_cmd(args):
     polygon = None
     if calibration is not None and seg.mask.any():
         try:
-            polygon = floor_polygon(seg.mask, calibration)
+            polygon = floor_polygon(seg.mask, calibration, seg.floor_clicks_px)
         except ValueError as error:
             warnings.append(f"no floor polygon: {error}")
     overlay = floor_overlay(image, seg.mask, polygon, calibration, seg.doubted, seg.clicks, seg.doubt_px)
@@ -626,7 +626,7 @@ def _measure_cmd(args):
     if not seg.mask.any():
         raise StageError(f"photo {args.photo}: no floor found; the floor must show around the board")
     try:
-        polygon = floor_polygon(seg.mask, calibration)
+        polygon = floor_polygon(seg.mask, calibration, seg.floor_clicks_px)
     except ValueError as error:
         if args.floor_mask is None:
             raise StageError(f"photo {args.photo}: no floor outline ({error}); the floor must show around "

@@ -147,7 +147,7 @@ def _join_nearest(region: np.ndarray, part: np.ndarray) -> None:
     cv2.line(region, (int(rx[j]), int(ry[j])), (int(px[k]), int(py[k])), 1, 1, lineType=8)
 
 
-def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
+def floor_polygon(mask: np.ndarray, calibration, keep_px: np.ndarray | None = None) -> FloorPolygon:
     """Simplified floor polygon (meters) of the floor region of ``mask`` under the board
     (else the largest) and the mask's other substantial parts, joined on.
 
@@ -159,6 +159,9 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
         to hold something counts. Not modified.
     calibration : Calibration
         The photo's calibration (:func:`augment.calibrate.calibrate_photo`).
+    keep_px : (k, 2) float, optional
+        Photo pixels (x, y) the user clicked as floor: the parts of the mask under them
+        count however few pixels they cover (a far patch behind a carton). Not modified.
 
     Returns
     -------
@@ -195,6 +198,11 @@ def floor_polygon(mask: np.ndarray, calibration) -> FloorPolygon:
     if main == 0:
         raise ValueError(f"no floor in the mask below the horizon and within {MAX_FLOOR_DISTANCE_M:g} m "
                          "once strips a pixel or two wide are dropped")
+    if keep_px is not None and len(keep_px):
+        x, y = np.round(np.asarray(keep_px, dtype=np.float64).reshape(-1, 2) * scale).astype(int).T
+        inside = (x >= 0) & (x < labels.shape[1]) & (y >= 0) & (y < labels.shape[0])
+        clicked = set(labels[y[inside], x[inside]].tolist()) - {0, main, *parts}
+        parts = [*parts, *sorted(clicked)]
     region = (labels == main).astype(np.uint8)
     poly, edge_kind = _join_parts(region, [labels == k for k in parts], near, scale, calibration)
     area = abs(_signed_area(poly))

@@ -977,7 +977,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             if not seg.mask.any():
                 raise FurnishError(f"photo {photo}: no floor found; the floor must show around the board")
             try:
-                floor = floor_polygon(seg.mask, calibration)
+                floor = floor_polygon(seg.mask, calibration, seg.floor_clicks_px)
             except ValueError as error:
                 raise FurnishError(f"photo {photo}: no floor outline ({error}); the floor must show around "
                                    "the board") from None

@@ -422,6 +422,12 @@ class Segmentation:
         return [{"x_px": float(x), "y_px": float(y), "floor": bool(f)} for x, y, f in self.clicks]
 
     @property
+    def floor_clicks_px(self) -> np.ndarray:
+        """(k, 2) float: the clicks that said floor, (x, y) px, for
+        :func:`augment.floor.floor_polygon`'s ``keep_px``."""
+        return self.clicks[self.clicks[:, 2] > 0, :2]
+
+    @property
     def uncertain(self) -> bool:
         """Whether the disputed share is large enough to warn of (``DISPUTED_SHARE_WARN``)."""
         return self.disputed_share is not None and self.disputed_share > DISPUTED_SHARE_WARN

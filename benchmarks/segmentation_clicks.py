@@ -94,7 +94,7 @@ def main(argv=None) -> int:
             for k in range(args.clicks + 1):
                 try:
                     seg = segment_floor(sample.image, model, cal, clicks=clicks or None)
-                    error = floor_polygon(seg.mask, cal).area_m2 / truth_area - 1
+                    error = floor_polygon(seg.mask, cal, seg.floor_clicks_px).area_m2 / truth_area - 1
                 except (SegmentationError, ValueError) as exc:
                     errors.append(str(exc))
                     break

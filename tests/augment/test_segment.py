@@ -408,6 +408,34 @@ def test_a_corridor_joins_two_polygons_into_one_simple_polygon():
     assert _bridge(square, kinds, square + [0.5, 0.5], ["far"] * 4) is None
 
 
+def test_a_small_far_part_clicked_as_floor_is_in_the_polygon(held_out):
+    """A far patch of floor behind a carton covers too few pixels to count in the
+    polygon on its own (under ``MIN_PART_SHARE`` of the main region's), but the user who
+    clicks it sees it green in the overlay: with the click's pixel given, it counts, the
+    area within 1 % of both parts'; a click on the main region changes nothing."""
+    _, cal = held_out[0]
+    cam = np.linalg.inv(cal.camera_from_floor)[:2, 3]
+    toward = -cam / np.linalg.norm(cam)
+    side = np.array([-toward[1], toward[0]])
+    near, far = cam + 0.3 * toward, toward
+
+    def patch(s0, s1, a, b):
+        return _floor_mask(cal, np.array([a + s0 * side, a + s1 * side, b + s1 * side, b + s0 * side]))
+
+    main = patch(-1.0, 1.0, near, far)
+    island = patch(-0.25, 0.25, far + 5.0 * toward, far + 5.6 * toward)
+    assert 0 < island.sum() < segment.MIN_PART_SHARE * main.sum()
+    mask = main | island
+    both = floor_area_m2(mask, cal)
+    alone = floor_polygon(mask, cal).area_m2
+    assert alone < 0.9 * both
+    ys, xs = np.nonzero(island)
+    click = [[xs.mean(), ys.mean()]]
+    assert abs(floor_polygon(mask, cal, np.array(click)).area_m2 - both) < 0.01 * both
+    ys, xs = np.nonzero(main)
+    assert floor_polygon(mask, cal, np.array([[xs.mean(), ys.mean()]])).area_m2 == alone
+
+
 def test_a_part_the_model_calls_no_floor_is_left_out(held_out):
     """A part cut off at the photo's edge stays only where the model calls it floor on
     average; GrabCut's colour alone does not keep it."""
