@@ -2,13 +2,13 @@
 
 The outline of the floor region under the board is taken back through the floor
 homography into the floor frame (the board's: origin at its center, z up), simplified so
-walls come out straight, and each edge is labelled with what bounds it: a wall or an object standing on
-the floor (``"boundary"``), the photo's edge (``"image"``: the floor goes on beyond
-it), or the distance beyond which the floor is not believed (``"far"``). Only the first
-kind is a real limit of the room; the others are the *visible-extent caveat*. The mask's
-other parts (:func:`augment.segment.floor_parts`: one a carton or a wall corner cut off
-at the photo's edge, floor clicked behind a carton) are outlined the same way and joined
-on by corridors a millimeter wide.
+walls come out straight, and each edge is labelled with what bounds it: a wall or an
+object standing on the floor (``"boundary"``), the photo's edge (``"image"``: the floor
+goes on beyond it), or the distance beyond which the floor is not believed (``"far"``).
+Only the first kind is a real limit of the room; the others are the *visible-extent
+caveat*. The mask's other parts (:func:`augment.segment.floor_parts`: one a carton or a
+wall corner cut off at the photo's edge, floor clicked behind a carton) are outlined the
+same way and joined on by corridors a millimeter wide.
 """
 from __future__ import annotations
 
@@ -221,7 +221,7 @@ def _join_parts(region: np.ndarray, parts: list[np.ndarray], near: np.ndarray, s
     pixel-wide corridor within the simplification's reach of each other, and the
     straightened polygon could cross itself there (from the true masks of seeds 901-917,
     3 of 1146 polygons did; seed 926 render 70 after a click: -5.1 % and crossing,
-    -0.5 % bridged). A part so near that, simplified, it touches the region cannot be
+    -0.9 % bridged). A part so near that, simplified, it touches the region cannot be
     bridged: it is joined to the region by a one-pixel seam where the two come nearest
     and outlined with it, as one.
     """
@@ -303,7 +303,7 @@ def _outline_polygon(region: np.ndarray, near: np.ndarray, scale: float,
 
 
 def _bridge(poly: np.ndarray, kinds: list[str], part: np.ndarray,
-            part_kinds: list[str], corridor: str = "boundary") -> tuple[np.ndarray, list[str]]:
+            part_kinds: list[str], corridor: str = "boundary") -> tuple[np.ndarray, list[str]] | None:
     """One simple polygon of two disjoint counter-clockwise ones, ``poly`` and ``part``
     (each with the kinds of its edges), or None.
 
