@@ -204,12 +204,14 @@ def floor_polygon(mask: np.ndarray, calibration, keep_px: np.ndarray | None = No
         clicked = set(labels[y[inside], x[inside]].tolist()) - {0, main, *parts}
         parts = [*parts, *sorted(clicked)]
     region = (labels == main).astype(np.uint8)
-    poly, edge_kind = _join_parts(region, [labels == k for k in parts], near, scale, calibration)
+    # Outline points next to floor beyond MAX_FLOOR_DISTANCE_M are "far" edges.
+    far_ring = cv2.dilate((~near).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    poly, edge_kind = _join_parts(region, [labels == k for k in parts], far_ring, scale, calibration)
     area = abs(_signed_area(poly))
     return FloorPolygon(poly, tuple(edge_kind), area, _caveat(poly, edge_kind))
 
 
-def _join_parts(region: np.ndarray, parts: list[np.ndarray], near: np.ndarray, scale: float,
+def _join_parts(region: np.ndarray, parts: list[np.ndarray], far_ring: np.ndarray, scale: float,
                 calibration) -> tuple[np.ndarray, list[str]]:
     """The polygon and edge kinds (:func:`_outline_polygon`) of ``region`` (uint8,
     modified) with ``parts`` joined on.
@@ -227,12 +229,12 @@ def _join_parts(region: np.ndarray, parts: list[np.ndarray], near: np.ndarray, s
     """
     parts = list(parts)
     while True:
-        outlined = _outline_polygon(region, near, scale, calibration)
+        outlined = _outline_polygon(region, far_ring, scale, calibration)
         if outlined is None:
             raise ValueError("the floor region is too small or too thin to outline")
         poly, kinds = outlined
         for k, part in enumerate(parts):
-            outlined = _outline_polygon(part, near, scale, calibration)
+            outlined = _outline_polygon(part, far_ring, scale, calibration)
             if outlined is None:
                 continue
             at_edge = bool(part[[0, -1]].any() or part[:, [0, -1]].any())
@@ -246,11 +248,12 @@ def _join_parts(region: np.ndarray, parts: list[np.ndarray], near: np.ndarray, s
             return poly, kinds
 
 
-def _outline_polygon(region: np.ndarray, near: np.ndarray, scale: float,
+def _outline_polygon(region: np.ndarray, far_ring: np.ndarray, scale: float,
                      calibration) -> tuple[np.ndarray, list[str]] | None:
     """The simplified polygon (meters, counter-clockwise) of the largest outline of
-    ``region`` (the photo scaled by ``scale``) and the kind of each edge; None when the
-    region is too small or too thin to outline."""
+    ``region`` (the photo scaled by ``scale``) and the kind of each edge, ``"far"`` where
+    the outline runs through ``far_ring``; None when the region is too small or too thin
+    to outline."""
     contours, _ = cv2.findContours(region.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     contour = max(contours, key=cv2.contourArea)[:, 0, :].astype(np.float64)
     if len(contour) < 3 or cv2.contourArea(contour.astype(np.float32)) < 16:
@@ -260,8 +263,7 @@ def _outline_polygon(region: np.ndarray, near: np.ndarray, scale: float,
     on_border = ((contour[:, 0] <= BORDER_PX - 1) | (contour[:, 0] >= w - BORDER_PX)
                  | (contour[:, 1] <= BORDER_PX - 1) | (contour[:, 1] >= h - BORDER_PX))
     ci, cj = contour[:, 1].astype(int), contour[:, 0].astype(int)
-    ring = cv2.dilate((~near).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
-    at_far = ring[ci, cj] & ~on_border
+    at_far = far_ring[ci, cj] & ~on_border
     kind = np.where(on_border, 1, np.where(at_far, 2, 0))
 
     # Pixel centers of the scaled image map back to full-size pixel coordinates.
