@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from layout.geometry import self_intersection
+from layout.geometry import polygon_area, self_intersection
 
 from .segment import MAX_FLOOR_DISTANCE_M, floor_distance_m, floor_footprint_m2, floor_parts
 
@@ -60,11 +60,6 @@ class FloorPolygon:
                 "area_m2": round(self.area_m2, 4), "caveat": self.caveat}
 
 
-def _signed_area(p: np.ndarray) -> float:
-    x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-
-
 def _drop_notches(poly: np.ndarray, keep: np.ndarray) -> np.ndarray:
     """Indices of ``poly`` left after removing vertices whose triangle with their
     neighbours is smaller than ``NOTCH_AREA_M2`` (smallest first, repeatedly)."""
@@ -96,7 +91,7 @@ def _pixel_edge(contour: np.ndarray) -> np.ndarray:
         return contour
     tangent = np.roll(contour, -2, axis=0) - np.roll(contour, 2, axis=0)
     # Outward is to the right of travel for a positively oriented outline, left otherwise.
-    normal = np.column_stack([tangent[:, 1], -tangent[:, 0]]) * np.sign(_signed_area(contour))
+    normal = np.column_stack([tangent[:, 1], -tangent[:, 0]]) * np.sign(polygon_area(contour))
     length = np.linalg.norm(normal, axis=1, keepdims=True)
     normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
     reach = 0.5 * np.abs(normal).max(axis=1, keepdims=True)
@@ -207,7 +202,7 @@ def floor_polygon(mask: np.ndarray, calibration, keep_px: np.ndarray | None = No
     # Outline points next to floor beyond MAX_FLOOR_DISTANCE_M are "far" edges.
     far_ring = cv2.dilate((~near).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
     poly, edge_kind = _join_parts(region, [labels == k for k in parts], far_ring, scale, calibration)
-    area = abs(_signed_area(poly))
+    area = abs(polygon_area(poly))
     return FloorPolygon(poly, tuple(edge_kind), area, _caveat(poly, edge_kind))
 
 
@@ -287,7 +282,7 @@ def _outline_polygon(region: np.ndarray, far_ring: np.ndarray, scale: float,
         if not moved:
             break
         poly[moved] = floor_m[vertex_idx[moved]]
-    if len(poly) < 3 or abs(_signed_area(poly)) < NOTCH_AREA_M2:
+    if len(poly) < 3 or abs(polygon_area(poly)) < NOTCH_AREA_M2:
         return None  # a strip too thin to hold anything straightens to a line
 
     edge_kind = []
@@ -295,7 +290,7 @@ def _outline_polygon(region: np.ndarray, far_ring: np.ndarray, scale: float,
         span = _span(a, b, len(kind))
         votes = np.bincount(kind[span[1:-1]] if len(span) > 2 else kind[span], minlength=3)
         edge_kind.append(EDGE_KINDS[int(np.argmax(votes))])
-    if _signed_area(poly) < 0:
+    if polygon_area(poly) < 0:
         # Reverse vertices; edge i (i -> i+1) becomes the edge between the same two
         # vertices, which now sits at a shifted index.
         poly = poly[::-1].copy()

@@ -75,7 +75,7 @@ from layout import report as layout_report
 from layout.builder import LayoutBuilder
 from layout.errors import LayoutError
 from layout.fileio import staged_folder
-from layout.geometry import edge_distances
+from layout.geometry import edge_distances, polygon_area, triangulate_polygon
 from layout.presets import DEFAULT_ROOM, PRESETS
 
 from . import __version__
@@ -291,7 +291,7 @@ def inset_polygon(polygon_m, margin_m: float, cell_m: float = 0.01) -> np.ndarra
     if len(approx) < 3:
         return None
     out = approx * cell_m + lo
-    return out if _signed_area(out) > 0 else out[::-1].copy()
+    return out if polygon_area(out) > 0 else out[::-1].copy()
 
 
 def _rigid_root(item, groups: dict) -> str | None:
@@ -427,7 +427,7 @@ def fit_spec(spec, polygon_m, height_m: float, tol: Tolerances = TOL):
         ``{"id", "kind", "reason"}`` per dropped item, in the order they were dropped.
     """
     poly = np.ascontiguousarray(polygon_m, dtype=np.float64)
-    area = abs(_signed_area(poly))
+    area = abs(polygon_area(poly))
     kinds = {i.id: i.kind.name for i in spec.items}
     spec = dataclasses.replace(spec, polygon_m=poly, height_m=float(height_m), preset=None, doors=(), windows=())
     reasons = {}
@@ -460,11 +460,6 @@ def fit_spec(spec, polygon_m, height_m: float, tol: Tolerances = TOL):
         else:
             used += fp
     return spec, [{"id": i, "kind": kinds[i], "reason": r} for i, r in reasons.items()]
-
-
-def _signed_area(p: np.ndarray) -> float:
-    x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
 def _furniture_source(room: str | None, spec):
@@ -619,43 +614,12 @@ def _solve(spec, suggestions: int, seed: int, area_m2: float, dropped: list, pro
 # The glTF scene
 # --------------------------------------------------------------------------------------
 
-def _triangulate(poly: np.ndarray) -> np.ndarray:
-    """(n - 2, 3) vertex indices of an ear-clipping triangulation of a simple
-    counter-clockwise polygon (n, 2)."""
-
-    def cross(o, a, b):
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-    idx, tris = list(range(len(poly))), []
-    while len(idx) > 3:
-        m = len(idx)
-        for k in range(m):
-            a, b, c = idx[k - 1], idx[k], idx[(k + 1) % m]
-            if cross(poly[a], poly[b], poly[c]) < 0:
-                continue  # reflex corner
-            inside = any(cross(poly[a], poly[b], poly[j]) > 0 and cross(poly[b], poly[c], poly[j]) > 0
-                         and cross(poly[c], poly[a], poly[j]) > 0 for j in idx if j not in (a, b, c))
-            if inside:
-                continue
-            tris.append((a, b, c))
-            del idx[k]
-            break
-        else:  # numerically stuck (near-collinear corners): a fan closes the rest
-            tris += [(idx[0], idx[k], idx[k + 1]) for k in range(1, len(idx) - 1)]
-            idx = []
-    if len(idx) == 3:
-        tris.append(tuple(idx))
-    return np.array(tris, dtype=np.int64).reshape(-1, 3)
-
-
 def _floor_mesh(polygon_m: np.ndarray):
     import trimesh
 
     poly = np.asarray(polygon_m, dtype=np.float64)
-    if _signed_area(poly) < 0:
-        poly = poly[::-1]
     vertices = np.column_stack([poly, np.zeros(len(poly))])
-    return trimesh.Trimesh(vertices, _triangulate(poly), face_colors=FLOOR_RGBA, process=False)
+    return trimesh.Trimesh(vertices, triangulate_polygon(poly), face_colors=FLOOR_RGBA, process=False)
 
 
 def _wall_mesh(walls_m: np.ndarray, height_m: float):

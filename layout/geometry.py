@@ -13,6 +13,7 @@ Conventions (used everywhere in :mod:`layout`):
 """
 from __future__ import annotations
 
+import mapbox_earcut
 import numpy as np
 
 SIDE_NAMES = ("back", "left", "front", "right")
@@ -117,6 +118,29 @@ def polygon_area(polygon_m):
     p = np.asarray(polygon_m, dtype=np.float64)
     x, y = p[:, 0], p[:, 1]
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def triangulate_polygon(polygon_m):
+    """Triangles covering a simple polygon exactly.
+
+    Parameters
+    ----------
+    polygon_m : (n, 2) array
+        Vertices in either winding, not closed.
+
+    Returns
+    -------
+    (k, 3) int64 array
+        Vertex indices of each triangle, counter-clockwise; ``k = n - 2`` unless
+        collinear or repeated vertices are skipped.
+    """
+    p = np.ascontiguousarray(polygon_m, dtype=np.float64)
+    tris = mapbox_earcut.triangulate_float64(p, np.array([len(p)], dtype=np.uint32))
+    tris = tris.reshape(-1, 3).astype(np.int64)
+    a, b, c = p[tris[:, 0]], p[tris[:, 1]], p[tris[:, 2]]
+    cw = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) < 0
+    tris[cw] = tris[cw][:, ::-1]
+    return tris
 
 
 def point_segment_distances(points, starts, ends):

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from layout.geometry import triangulate_polygon
+
 from ..board import Board
 from ..furniture import PlacedItem, item_mesh
 from ..gl import Scene as GLScene
@@ -112,13 +114,10 @@ class _Batch:
 
     def polygon(self, polygon_m, z_m, up: bool, uv_from_xy):
         """A horizontal polygon at height ``z_m`` facing up or down."""
-        triangles = _triangulate(polygon_m)
         normal = np.array([0.0, 0.0, 1.0 if up else -1.0])
-        for tri in triangles:
+        for tri in triangulate_polygon(polygon_m):
+            tri = tri if up else tri[::-1]
             p = np.column_stack([polygon_m[tri], np.full(3, z_m)])
-            if ((p[1, 0] - p[0, 0]) * (p[2, 1] - p[0, 1]) - (p[1, 1] - p[0, 1]) * (p[2, 0] - p[0, 0])) * normal[2] < 0:
-                tri = tri[::-1]
-                p = p[::-1]
             self._append(p, np.broadcast_to(normal, (3, 3)), uv_from_xy(polygon_m[tri]), _TRI_FACES)
 
     def mesh(self, material) -> "pyrender.Mesh":
@@ -130,36 +129,6 @@ class _Batch:
             material=material, mode=pyrender.GLTF.TRIANGLES,
         )
         return pyrender.Mesh([primitive])
-
-
-def _triangulate(polygon_m: np.ndarray) -> list[np.ndarray]:
-    """Ear clipping for a small simple counter-clockwise polygon: (n - 2) index triples."""
-    idx = list(range(len(polygon_m)))
-    out = []
-    while len(idx) > 3:
-        for k in range(len(idx)):
-            i0, i1, i2 = idx[k - 1], idx[k], idx[(k + 1) % len(idx)]
-            a, b, c = polygon_m[i0], polygon_m[i1], polygon_m[i2]
-            cross = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-            if cross <= 1e-12:
-                continue  # reflex or flat corner: not an ear
-            others = [polygon_m[j] for j in idx if j not in (i0, i1, i2)]
-            if any(_in_triangle(p, a, b, c) for p in others):
-                continue
-            out.append(np.array([i0, i1, i2]))
-            del idx[k]
-            break
-        else:
-            raise ValueError("floor polygon is not simple and counter-clockwise")
-    out.append(np.array(idx))
-    return out
-
-
-def _in_triangle(p, a, b, c) -> bool:
-    def side(p1, p2, p3):
-        return (p1[0] - p3[0]) * (p2[1] - p3[1]) - (p2[0] - p3[0]) * (p1[1] - p3[1])
-    d1, d2, d3 = side(p, a, b), side(p, b, c), side(p, c, a)
-    return (d1 >= 0) and (d2 >= 0) and (d3 >= 0)
 
 
 class _SharpTexture(pyrender.Texture):

@@ -20,7 +20,7 @@ from augment.calibrate import read_photo
 from augment.floor import FloorPolygon
 from augment.pipeline import (REPORT_KEYS, FurnishError, contact_sheet, fit_spec, furnish, inset_polygon,
                               open_edges, scene_glb, write_outputs)
-from layout.geometry import edge_distances
+from layout.geometry import edge_distances, polygon_area
 from layout.spec import load_spec
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -99,7 +99,7 @@ def test_no_overlaps_and_nothing_off_the_floor(roomy):
                     assert area < 1e-4
     # The layouts' floor is the measured one, a little inside.
     poly = result.spec.polygon_m
-    assert 0.8 * result.floor.area_m2 < abs(pipeline._signed_area(poly)) < result.floor.area_m2
+    assert 0.8 * result.floor.area_m2 < abs(polygon_area(poly)) < result.floor.area_m2
 
 
 def test_staged_images_show_furniture_and_keep_the_photo(roomy):
@@ -468,7 +468,7 @@ def test_rect_fits_diagonally():
 def test_inset_polygon():
     square = np.array([[0, 0], [4, 0], [4, 3], [0, 3]], float)
     inner = inset_polygon(square, 0.1)
-    assert pipeline._signed_area(inner) == pytest.approx(3.8 * 2.8, rel=0.02)
+    assert polygon_area(inner) == pytest.approx(3.8 * 2.8, rel=0.02)
     assert inner.min() >= 0.09 and inner[:, 0].max() <= 3.91
     assert inset_polygon(square / 8, 0.2) is None
 
@@ -499,15 +499,6 @@ def test_furniture_goes_against_walls_not_the_photos_edge(roomy):
                 continue
             dist = edge_distances(lay.position_m[i, None, :2], m.floor_polygon_m)[0]
             assert dist[m.floor_edge_wall].min() < dist[~m.floor_edge_wall].min(), m.kinds[i]
-
-
-def test_triangulate_an_l_shape():
-    ell = np.array([[0, 0], [4, 0], [4, 1], [1, 1], [1, 3], [0, 3]], float)
-    tris = pipeline._triangulate(ell)
-    assert len(tris) == 4
-    u, v = ell[tris[:, 1]] - ell[tris[:, 0]], ell[tris[:, 2]] - ell[tris[:, 0]]
-    area = np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]).sum() / 2
-    assert area == pytest.approx(6.0)
 
 
 def test_contact_sheet_layout(rng):

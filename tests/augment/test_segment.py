@@ -15,13 +15,13 @@ from skimage.measure import points_in_poly
 from augment import segment
 from augment.board import Board
 from augment.calibrate import calibrate_photo, exif_intrinsics
-from augment.floor import (BRIDGE_M, DISPUTED_COLOR, _bridge, _signed_area, floor_area_m2, floor_overlay,
+from augment.floor import (BRIDGE_M, DISPUTED_COLOR, _bridge, floor_area_m2, floor_overlay,
                            floor_polygon)
 from augment.gl import Renderer
 from augment.segment import (DEFAULT_MODEL, GRABCUT_LONG_PX, FloorModel, ModelSpec, SegmentationError,
                             below_horizon, disputed_floor, floor_parts, segment_floor)
 from augment.synth import render_sample
-from layout.geometry import self_intersection
+from layout.geometry import polygon_area, self_intersection
 
 
 def iou(a, b):
@@ -402,7 +402,7 @@ def test_a_corridor_joins_two_polygons_into_one_simple_polygon():
     kinds = ["boundary", "image", "far", "boundary"]
     poly, out_kinds = _bridge(square, kinds, square + [2.0, 0.0], ["far"] * 4)
     assert self_intersection(poly) is None
-    assert abs(abs(_signed_area(poly)) - 2.0015) < 1e-12 and _signed_area(poly) > 0
+    assert abs(abs(polygon_area(poly)) - 2.0015) < 1e-12 and polygon_area(poly) > 0
     assert len(out_kinds) == len(poly) == 10
     assert out_kinds.count("boundary") == 4 and out_kinds.count("far") == 5 and out_kinds.count("image") == 1
     assert _bridge(square, kinds, square + [0.5, 0.5], ["far"] * 4) is None

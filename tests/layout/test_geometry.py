@@ -1,7 +1,8 @@
 """Floor-plane geometry helpers against hand-computed answers."""
 import numpy as np
+import pytest
 
-from layout.geometry import edge_distances, point_segment_distances
+from layout.geometry import edge_distances, point_segment_distances, polygon_area, triangulate_polygon
 
 
 def test_point_segment_distances_by_hand():
@@ -25,3 +26,16 @@ def test_access_zones_by_hand():
     # Behind (x -1.4..-1, y -0.5..0.5) and left (x -1..1, y 0.5..0.8): box x -1.4..1, y -0.5..0.8.
     np.testing.assert_allclose(zones[1], [-0.2, 0.15, 0.5 * np.hypot(2.4, 1.3)])
     np.testing.assert_array_equal(zones[2], [0, 0, -1])
+
+
+def test_triangulate_an_l_shape_in_either_winding():
+    ell = np.array([[0, 0], [4, 0], [4, 1], [1, 1], [1, 3], [0, 3]], float)
+    for poly in (ell, ell[::-1]):
+        tris = triangulate_polygon(poly)
+        assert tris.shape == (4, 3)
+        areas = [polygon_area(poly[t]) for t in tris]
+        assert min(areas) > 0  # every triangle counter-clockwise
+        assert sum(areas) == pytest.approx(6.0, abs=1e-12)
+        # the reflex corner (1, 1) must not be cut off: no triangle covers the missing square
+        centroids = poly[tris].mean(axis=1)
+        assert not np.any((centroids[:, 0] > 1) & (centroids[:, 1] > 1))
