@@ -19,7 +19,7 @@ import numpy as np
 
 from layout.geometry import polygon_area, self_intersection
 
-from .segment import MAX_FLOOR_DISTANCE_M, floor_distance_m, floor_footprint_m2, floor_parts
+from .segment import MAX_FLOOR_DISTANCE_M, border_pixels, floor_distance_m, floor_footprint_m2, floor_parts
 
 # Contour work happens at this size at most: enough to place a wall line within a
 # couple of centimeters at room distances, and fast for 12 MP photos.
@@ -232,7 +232,7 @@ def _join_parts(region: np.ndarray, parts: list[np.ndarray], far_ring: np.ndarra
             outlined = _outline_polygon(part, far_ring, scale, calibration)
             if outlined is None:
                 continue
-            at_edge = bool(part[[0, -1]].any() or part[:, [0, -1]].any())
+            at_edge = bool(border_pixels(part).any())
             joined = _bridge(poly, kinds, *outlined, corridor="image" if at_edge else "boundary")
             if joined is None:
                 _join_nearest(region, part)

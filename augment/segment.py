@@ -310,6 +310,11 @@ def _believed_footprint_m2(shape: tuple[int, int], calibration, distance_m: np.n
     return footprint * (distance_m <= MAX_FLOOR_DISTANCE_M)
 
 
+def border_pixels(image: np.ndarray) -> np.ndarray:
+    """The values of ``image`` (rows, cols) along the photo's four edges, (2 rows + 2 cols,)."""
+    return np.concatenate([image[0], image[-1], image[:, 0], image[:, -1]])
+
+
 def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | None = None,
                 distance_m: np.ndarray | None = None,
                 reach_edge: bool = True) -> tuple[np.ndarray, int, list[int]]:
@@ -364,7 +369,7 @@ def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | No
     keep &= stats[:, cv2.CC_STAT_AREA] >= MIN_PART_SHARE * stats[main, cv2.CC_STAT_AREA]
     if reach_edge:
         edge = np.zeros(n, bool)
-        edge[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = True
+        edge[border_pixels(labels)] = True
         keep &= edge
     if probability is not None:
         count = np.maximum(stats[:, cv2.CC_STAT_AREA], 1)
