@@ -103,6 +103,18 @@ def _span(a: int, b: int, n: int) -> np.ndarray:
     return np.arange(a, b + 1) if b > a else np.concatenate([np.arange(a, n), np.arange(0, b + 1)])
 
 
+def _farthest_between(outline: np.ndarray, a: int, b: int) -> int | None:
+    """Index of the outline point between ``a`` and ``b`` farthest from their chord, or
+    None when they are neighbours."""
+    span = _span(a, b, len(outline))[1:-1]
+    if len(span) == 0:
+        return None
+    chord = outline[b] - outline[a]
+    offset = outline[span] - outline[a]
+    distance = np.abs(chord[0] * offset[:, 1] - chord[1] * offset[:, 0])
+    return int(span[np.argmax(distance)])
+
+
 def _fit_corners(outline: np.ndarray, vertex_idx: np.ndarray) -> np.ndarray:
     """Polygon corners where the straight lines fitted to neighbouring edges meet.
 
@@ -275,13 +287,23 @@ def _outline_polygon(region: np.ndarray, far_ring: np.ndarray, scale: float,
     vertex_idx = vertex_idx[keep]
     poly = _fit_corners(floor_m, vertex_idx)
     # At a neck of the floor a few pixels wide the refitted corners on its two sides can
-    # pass each other: those of crossing edges go back to the outline's own points.
+    # pass each other: those of crossing edges go back to the outline's own points. Where
+    # the outline's points cross too (a corner dropped as a notch, or Douglas-Peucker's
+    # own chords across a long thin strip), each crossing edge takes back the outline
+    # point farthest from it, until the polygon is simple.
     while (pair := self_intersection(poly)) is not None:
-        ends = [i % len(poly) for i in (pair[0], pair[0] + 1, pair[1], pair[1] + 1)]
+        edges = [i % len(poly) for i in pair]
+        ends = sorted({i for e in edges for i in (e, (e + 1) % len(poly))})
         moved = [i for i in ends if not np.array_equal(poly[i], floor_m[vertex_idx[i]])]
-        if not moved:
+        if moved:
+            poly[moved] = floor_m[vertex_idx[moved]]
+            continue
+        split = [k for k in (_farthest_between(floor_m, vertex_idx[e], vertex_idx[(e + 1) % len(poly)])
+                             for e in edges) if k is not None]
+        if not split:
             break
-        poly[moved] = floor_m[vertex_idx[moved]]
+        poly = np.vstack([poly, floor_m[split]])[np.argsort(np.concatenate([vertex_idx, split]), kind="stable")]
+        vertex_idx = np.sort(np.concatenate([vertex_idx, split]))
     if len(poly) < 3 or abs(polygon_area(poly)) < NOTCH_AREA_M2:
         return None  # a strip too thin to hold anything straightens to a line
 

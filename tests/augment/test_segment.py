@@ -357,26 +357,29 @@ def test_floors_in_many_parts_give_simple_polygons_of_their_area(held_out):
 
 
 def test_a_floor_with_narrow_necks_gives_simple_polygons(held_out):
-    """A hundred floors of two or three blobs joined by strips 2-4 px wide below the
+    """Two hundred floors of two or three blobs joined by strips 2-4 px wide below the
     horizon: every polygon is simple and its mesh covers exactly its area, or, where the
-    floor is only a strip that straightens to a line, it is refused. Before, the refitted
-    corners on the two sides of a neck passed each other in 2 of them (seeds 72 and 82),
-    and the strip of seed 56 came out a polygon of two corners and no area."""
+    floor is only a strip that straightens to a line, it is refused. Three things made
+    such polygons cross themselves: the refitted corners on the two sides of a neck
+    passing each other, a corner dropped as a notch, and Douglas-Peucker's own chords
+    across a long strip (seeds 83 and 178 here, after the first was mended)."""
     from augment.pipeline import _floor_mesh
 
     _, cal = held_out[0]
     cols, rows = cal.size_px
     below = segment.below_horizon((rows, cols), cal.horizon, 1.0)
     refused = 0
-    for seed in range(100):
+    for seed in range(200):
         rng = np.random.default_rng(seed)
         drawn = np.zeros((rows, cols), np.uint8)
-        centers = rng.uniform([0, 0.45 * rows], [cols, rows], (rng.integers(2, 4), 2))
-        for center in centers:
-            angle = np.sort(rng.uniform(0, 2 * np.pi, rng.integers(3, 7)))
+        centers = []
+        for _ in range(rng.integers(2, 4)):
+            center = rng.uniform([0, 0.45 * rows], [cols, rows])
             radius = rng.uniform(30, 140)
+            angle = np.sort(rng.uniform(0, 2 * np.pi, rng.integers(3, 7)))
             blob = center + radius * np.column_stack([np.cos(angle), 0.6 * np.sin(angle)])
             cv2.fillPoly(drawn, [blob.astype(np.int32)], 1)
+            centers.append(center)
         for a, b in zip(centers, centers[1:]):
             cv2.line(drawn, tuple(a.astype(int).tolist()), tuple(b.astype(int).tolist()), 1,
                      int(rng.integers(2, 5)))
@@ -388,7 +391,7 @@ def test_a_floor_with_narrow_necks_gives_simple_polygons(held_out):
             continue
         assert len(poly.polygon_m) >= 3 and self_intersection(poly.polygon_m) is None, seed
         assert abs(_floor_mesh(poly.polygon_m).area - poly.area_m2) < 1e-9 * poly.area_m2, seed
-    assert refused < 5
+    assert refused < 10
 
 
 def test_a_corridor_joins_two_polygons_into_one_simple_polygon():
