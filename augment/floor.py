@@ -16,9 +16,11 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from PIL import Image, ImageDraw
 
 from layout.geometry import polygon_area, self_intersection
 
+from .overlay import overlay_font
 from .segment import MAX_FLOOR_DISTANCE_M, border_pixels, floor_distance_m, floor_footprint_m2, floor_parts
 
 # Contour work happens at this size at most: enough to place a wall line within a
@@ -471,10 +473,11 @@ def _plan(side: int, polygon: FloorPolygon, calibration) -> np.ndarray:
     cv2.fillPoly(panel, [to_px(calibration.board.outline_m()[:, :2])], (60, 60, 60))
     c = to_px(cam)[0]
     cv2.circle(panel, (int(c[0]), int(c[1])), 3 + 2 * weight, (200, 30, 30), -1, cv2.LINE_AA)
-    font = max(0.35, side / 700)
-    cv2.putText(panel, "plan (camera red, looking up), grid 1 m", (band // 3, int(band * 0.6)),
-                cv2.FONT_HERSHEY_SIMPLEX, font * 0.7, (90, 90, 90), weight, cv2.LINE_AA)
-    cv2.putText(panel, f"{polygon.area_m2:.1f} m2 visible floor", (band // 3, side - band // 3),
-                cv2.FONT_HERSHEY_SIMPLEX, font, (30, 30, 30), weight, cv2.LINE_AA)
     cv2.rectangle(panel, (0, 0), (side - 1, side - 1), (80, 80, 80), 1)
-    return panel
+    canvas = Image.fromarray(panel)
+    draw = ImageDraw.Draw(canvas)
+    draw.text((band // 3, band // 3), "plan (camera red, looking up), grid 1 m",
+              font=overlay_font(max(10, round(band * 0.3))), fill=(90, 90, 90))
+    draw.text((band // 3, side - band // 3), f"{polygon.area_m2:.1f} m\u00b2 visible floor",
+              font=overlay_font(max(12, round(band * 0.45))), fill=(30, 30, 30), anchor="ls")
+    return np.asarray(canvas).copy()

@@ -709,7 +709,9 @@ def contact_sheet(images: list, labels: list | None = None, tol: Tolerances = TO
     -------
     (H, W, 3) uint8
     """
-    from PIL import Image, ImageDraw, ImageFont
+    from PIL import Image, ImageDraw
+
+    from .overlay import overlay_font
 
     n = len(images)
     if n == 0:
@@ -722,7 +724,7 @@ def contact_sheet(images: list, labels: list | None = None, tol: Tolerances = TO
     gap = tol.sheet_gap_px
     sheet = Image.new("RGB", (cols * tw + (cols + 1) * gap, rows * th + (rows + 1) * gap), (255, 255, 255))
     draw = ImageDraw.Draw(sheet, "RGBA")
-    font = ImageFont.load_default(size=max(12, th // 14))
+    font = overlay_font(max(12, th // 14))
     for k, img in enumerate(images):
         x, y = gap + (k % cols) * (tw + gap), gap + (k // cols) * (th + gap)
         sheet.paste(Image.fromarray(cv2.resize(img, (tw, th), interpolation=cv2.INTER_AREA)), (x, y))
