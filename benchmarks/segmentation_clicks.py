@@ -34,7 +34,7 @@ from augment.board import Board  # noqa: E402
 from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics  # noqa: E402
 from augment.floor import floor_overlay, floor_polygon  # noqa: E402
 from augment.gl import Renderer  # noqa: E402
-from augment.segment import DEFAULT_MODEL, FloorModel, SegmentationError, segment_floor  # noqa: E402
+from augment.segment import DEFAULT_MODEL, FloorModel, SegmentationError, patch_middle, segment_floor  # noqa: E402
 from augment.synth import render_sample  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
 from segmentation import true_visible_area_m2  # noqa: E402
@@ -53,9 +53,7 @@ def simulated_click(mask: np.ndarray, truth: np.ndarray) -> tuple[float, float, 
             k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
             if best is None or stats[k, cv2.CC_STAT_AREA] > best[0]:
                 best = (stats[k, cv2.CC_STAT_AREA], labels == k, is_floor)
-    # Padded, so a patch at the photo's edge has its middle inside.
-    depth = cv2.distanceTransform(np.pad(best[1], 1).astype(np.uint8), cv2.DIST_L2, 5)[1:-1, 1:-1]
-    y, x = np.unravel_index(int(np.argmax(depth)), depth.shape)
+    x, y = patch_middle(best[1])
     return float(x), float(y), best[2]
 
 

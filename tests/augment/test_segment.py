@@ -694,3 +694,17 @@ def test_not_floor_clicks_are_handed_to_the_skirting_trim(held_out, model, monke
     floor_y, floor_x = np.argwhere(sample.floor_mask)[len(np.argwhere(sample.floor_mask)) // 2]
     segment_floor(sample.image, model, cal, clicks=[(float(floor_x), float(floor_y), 1), (5.0, rows - 6.0, 0)])
     assert len(heard) == 1 and heard[0].shape == (1, 3) and tuple(heard[0][0, :2]) == (5.0, rows - 6.0)
+
+
+def test_the_middle_of_a_patch_by_hand():
+    """A 9 x 9 square's middle is its center pixel, the one pixel 5 px from its edge; cut
+    off at the photo's top-left corner it is still the center (the photo's edge counts as
+    the patch's); with a long thin arm attached, the middle stays in the square."""
+    image = np.zeros((20, 40), bool)
+    image[6:15, 10:19] = True
+    assert segment.patch_middle(image) == (14, 10)
+    corner = np.zeros((20, 40), bool)
+    corner[:9, :9] = True
+    assert segment.patch_middle(corner) == (4, 4)
+    image[10:12, 19:40] = True
+    assert segment.patch_middle(image) == (14, 10)
