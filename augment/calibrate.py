@@ -962,9 +962,9 @@ def read_photo(path) -> np.ndarray:
     Raises
     ------
     CalibrationError
-        When the file is missing or not an image Stager can decode.
+        When the file is missing, not an image Stager can decode, or too small.
     """
-    from .imageio import PHOTO_FORMATS, decode_image
+    from .imageio import PHOTO_FORMATS, decode_image, too_small
 
     path = Path(path)
     if not path.is_file():
@@ -972,6 +972,8 @@ def read_photo(path) -> np.ndarray:
     image = decode_image(path.read_bytes())
     if image is None:
         raise CalibrationError(f"photo {path} is not an image Stager can read ({PHOTO_FORMATS})")
+    if (problem := too_small(image.shape[1], image.shape[0])) is not None:
+        raise CalibrationError(f"photo {path} {problem}")
     return image
 
 

@@ -16,6 +16,16 @@ _HEIF_BRANDS = (b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"mif1", b
 # What decode_image reads, as error messages name it.
 PHOTO_FORMATS = "JPEG, PNG, HEIC, TIFF, WebP or BMP"
 JPEG_QUALITY = 92  # staged photos: no visible loss, about a third of the PNG's size
+MIN_PHOTO_PX = 64  # a side: a thumbnail; a board in it would be a few pixels across
+
+
+def too_small(width: int, height: int) -> str | None:
+    """What is wrong with a photo of ``width`` x ``height`` px for Stager, said for an
+    error message ("... is 30 x 20 px: ..."), or None when it is large enough."""
+    if min(width, height) >= MIN_PHOTO_PX:
+        return None
+    return (f"is {width} x {height} px: too small, Stager needs at least {MIN_PHOTO_PX} px a side "
+            "(give the photo as the camera took it)")
 
 
 def encode_image(image: np.ndarray, ext: str, quality: int = JPEG_QUALITY) -> bytes:

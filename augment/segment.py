@@ -21,6 +21,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from .imageio import too_small
 from .skirting import trim_skirting
 
 DEFAULT_MODEL = Path(__file__).resolve().parent.parent / "models" / "floor_segnet.onnx"
@@ -33,7 +34,6 @@ GRABCUT_ITERATIONS = 3
 # that floor is lost and it teaches GrabCut's background colours the floor's. Much
 # below 0.01 GrabCut leaks into walls of the floor's colour instead.
 SURE_FLOOR, SURE_OTHER = 0.97, 0.01
-MIN_IMAGE_PX = 64
 # Floor farther than this from the camera is not believed: a room photo rarely shows
 # more, and near the horizon one pixel spans meters.
 MAX_FLOOR_DISTANCE_M = 15.0
@@ -254,9 +254,8 @@ def _check_image(image: np.ndarray) -> np.ndarray:
         raise SegmentationError(f"image of shape {image.shape}: expected (rows, cols, 3) RGB")
     if image.dtype != np.uint8:
         raise SegmentationError(f"image dtype {image.dtype}: expected uint8")
-    if min(image.shape[:2]) < MIN_IMAGE_PX:
-        raise SegmentationError(f"image of {image.shape[1]} x {image.shape[0]} px is too small; "
-                                f"need at least {MIN_IMAGE_PX} px a side")
+    if (problem := too_small(image.shape[1], image.shape[0])) is not None:
+        raise SegmentationError(f"the image {problem}")
     return np.ascontiguousarray(image[..., :3])
 
 

@@ -197,27 +197,27 @@ def test_exif_orientation(tmp_path):
 
     exif = Image.Exif()
     exif[0x0112] = 6
-    Image.new("RGB", (40, 20)).save(tmp_path / "turned.jpg", exif=exif.tobytes())
-    Image.new("RGB", (40, 20)).save(tmp_path / "plain.png")
+    Image.new("RGB", (160, 80)).save(tmp_path / "turned.jpg", exif=exif.tobytes())
+    Image.new("RGB", (160, 80)).save(tmp_path / "plain.png")
     assert exif_orientation(tmp_path / "turned.jpg") == 6
     assert exif_orientation(tmp_path / "plain.png") is None
     assert exif_orientation(tmp_path / "missing.jpg") is None
     # OpenCV applies it when it reads the photo: the pixels are the turned frame.
-    assert read_photo(tmp_path / "turned.jpg").shape == (40, 20, 3)
+    assert read_photo(tmp_path / "turned.jpg").shape == (160, 80, 3)
 
 
 def test_heic_photo_is_read_upright_with_its_exif(tmp_path):
     """iPhones save HEIC: it is decoded turned as the file says, and its EXIF focal
-    length is found (26 mm equivalent on a 100 px diagonal: 100 * 26 / 43.27 px)."""
+    length is found (26 mm equivalent on a 200 px diagonal: 200 * 26 / 43.27 px)."""
     import io
 
     import pillow_heif
     from PIL import Image
 
     pillow_heif.register_heif_opener()
-    image = np.zeros((60, 80, 3), np.uint8)
-    image[:, :40] = (220, 30, 30)   # red left half
-    image[:, 40:] = (30, 30, 220)
+    image = np.zeros((120, 160, 3), np.uint8)
+    image[:, :80] = (220, 30, 30)   # red left half
+    image[:, 80:] = (30, 30, 220)
     exif = Image.Exif()
     exif[0x0112] = 6                # shown turned clockwise: the red half on top
     exif.get_ifd(0x8769)[0xA405] = 26
@@ -226,9 +226,9 @@ def test_heic_photo_is_read_upright_with_its_exif(tmp_path):
     path = tmp_path / "IMG_0001.HEIC"
     path.write_bytes(buffer.getvalue())
     photo = read_photo(path)
-    assert photo.shape == (80, 60, 3)
-    assert photo[:30, :, 0].mean() > 200 and photo[50:, :, 2].mean() > 200
-    assert exif_focal_px(path, (60, 80)) == pytest.approx(100 * 26 / 43.2666, rel=1e-3)
+    assert photo.shape == (160, 120, 3)
+    assert photo[:60, :, 0].mean() > 200 and photo[100:, :, 2].mean() > 200
+    assert exif_focal_px(path, (120, 160)) == pytest.approx(200 * 26 / 43.2666, rel=1e-3)
     broken = tmp_path / "broken.heic"
     broken.write_bytes(buffer.getvalue()[:200])
     with pytest.raises(CalibrationError, match="HEIC"):

@@ -73,8 +73,11 @@ def test_segment_refusals_name_the_problem(tmp_path, capsys):
     assert code == 2 and "none.onnx" in err and "grabcut" in err
     tiny = tmp_path / "tiny.png"
     cv2.imwrite(str(tiny), np.zeros((20, 30, 3), np.uint8))
-    code, _, err = run(["segment", tiny, "--out", tmp_path / "b.png"], capsys)
-    assert code == 2 and "too small" in err
+    # Every command that reads the photo refuses it alike, naming it (not "no board found").
+    for argv in (["segment", tiny, "--out", tmp_path / "b.png"], ["measure", tiny, "--out", tmp_path / "m"],
+                 ["furnish", tiny, "--out", tmp_path / "f"]):
+        code, _, err = run(argv, capsys)
+        assert code == 2 and f"photo {tiny} is 30 x 20 px: too small" in err and "64 px" in err, argv
     code, _, err = run(["segment", PHOTO, "--mean", "1,2", "--out", tmp_path / "c.png"], capsys)
     assert code == 2 and "R,G,B" in err
     # A profile that is not there is an error, not a photo "without calibration".

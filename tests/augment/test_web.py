@@ -127,6 +127,7 @@ def test_bad_uploads(finished):
         (b"plain text, no photo", {}, 415, "not an image"),
         (PHOTO.read_bytes()[:2000], {}, 415, "cannot be decoded"),
         (_png_header(8000, 7000), {}, 413, "56 megapixels"),
+        (_png_header(40, 30), {}, 422, "40 x 30 px: too small"),
         (PHOTO.read_bytes(), {"board": "8"}, 422, "not COLSxROWS"),
         (PHOTO.read_bytes(), {"board": "charuco:60x60"}, 422, "has 50"),
         (PHOTO.read_bytes(), {"square": "0"}, 422, "millimeters"),
