@@ -453,6 +453,7 @@ def _calibrate_cmd(args):
     _prepare_file_out(args.out, DEFAULT_PROFILE)
     shots = _expand_shots(args.shots)
     profile = camera_profile(shots, board)
+    _keep_inputs([args.out], shots)
     _mkdir(args.out.parent, "--out", args.out)
     _write(args.out, json.dumps(profile, indent=2) + "\n", "--out", args.out)
     if args.quiet:
@@ -504,7 +505,8 @@ def _check_cmd(args):
     report = {"photo": str(args.photo), **calibration.to_json()}
     # Everything is computed: only now is anything written, the pair or nothing.
     paths = (out / "calibration.json", out / "overlay_calibration.png")
-    _write_all({paths[0]: json.dumps(report, indent=2) + "\n", paths[1]: encode_image(overlay, ".png")}, out)
+    _write_all({paths[0]: json.dumps(report, indent=2) + "\n", paths[1]: encode_image(overlay, ".png")}, out,
+               [args.photo, args.camera])
     if args.quiet:
         return EXIT_OK
     i = calibration.intrinsics
@@ -581,7 +583,7 @@ def _segment_cmd(args):
                   "clicks": seg.clicks_json(), "doubt": seg.doubt_json(), "floor": polygon.to_json(),
                   "warnings": warnings}
         files[out.with_suffix(".json")] = json.dumps(report, indent=2) + "\n"
-    _write_all(files, out.parent)
+    _write_all(files, out.parent, [args.photo, args.camera, args.model])
     if not args.quiet:
         print(f"floor       {100 * seg.mask.mean():.1f} % of the photo ({seg.method})")
         if polygon is not None:
@@ -652,7 +654,7 @@ def _measure_cmd(args):
              out / "overlay_floor.png": encode_image(floor_overlay(image, seg.mask, polygon, calibration,
                                                                   seg.doubted, seg.clicks, seg.doubt_px), ".png"),
              out / "overlay_height.png": encode_image(height_overlay(image, calibration, height), ".png")}
-    _write_all(files, out)
+    _write_all(files, out, [args.photo, args.camera, args.model, args.floor_mask])
     if not args.quiet:
         i = calibration.intrinsics
         print(f"focal       {i.K[0, 0]:.1f} px \u00b1 {100 * i.focal_uncertainty:.1f} % from {i.source}")
@@ -731,7 +733,8 @@ def _furnish_cmd(args):
                                  floor_mask=args.floor_mask, clicks=args.clicks,
                                  assets=dict(args.asset), layers=args.layers, renderer=shared.get("renderer"),
                                  progress=not args.quiet and sys.stderr.isatty())
-                paths = write_outputs(result, out)
+                paths = write_outputs(result, out, inputs=[photo, args.floor_mask, args.spec, args.camera,
+                                                            args.model, *dict(args.asset).values()])
             except _input_errors() as error:
                 if not batch:
                     raise
@@ -811,11 +814,22 @@ def _serve_cmd(args):
     return EXIT_OK
 
 
-def _write_all(files: dict, folder: Path) -> None:
+def _keep_inputs(outputs, inputs) -> None:
+    """Refuse ``outputs`` (paths) of which one is one of the command's ``inputs``."""
+    from layout.fileio import replaced_input
+
+    if (clash := replaced_input(outputs, inputs)) is not None:
+        raise StageError(f"--out {clash[0]}: is the input {clash[1]}, which Stager never overwrites; "
+                         "write the outputs to another file or folder")
+
+
+def _write_all(files: dict, folder: Path, inputs) -> None:
     """Write ``files`` ({path in ``folder``: bytes or text}) all or none: made beside
-    ``folder``, then moved in (:func:`layout.fileio.staged_folder`)."""
+    ``folder``, then moved in (:func:`layout.fileio.staged_folder`); none of them may be
+    one of the command's ``inputs`` (paths or None)."""
     from layout.fileio import staged_folder
 
+    _keep_inputs(files, inputs)
     try:
         with staged_folder(folder) as staging:
             for path, data in files.items():

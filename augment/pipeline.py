@@ -74,7 +74,7 @@ import numpy as np
 from layout import report as layout_report
 from layout.builder import LayoutBuilder
 from layout.errors import LayoutError
-from layout.fileio import staged_folder
+from layout.fileio import replaced_input, staged_folder
 from layout.geometry import edge_distances, polygon_area, triangulate_polygon
 from layout.presets import DEFAULT_ROOM, PRESETS
 
@@ -1051,12 +1051,13 @@ def _write_files(result: FurnishResult, folder: Path) -> list[str]:
     return names
 
 
-def write_outputs(result: FurnishResult, out_dir) -> list[Path]:
+def write_outputs(result: FurnishResult, out_dir, inputs=()) -> list[Path]:
     """Write every output file of ``result`` into ``out_dir``, all or none.
 
     The files are made in a temporary folder beside ``out_dir`` and then moved in (a new
     ``out_dir`` is renamed into place whole), so a failure leaves ``out_dir`` as it was.
-    Files there that this run does not write are left alone.
+    Files there that this run does not write are left alone, and so are ``inputs`` (the
+    run's input files, paths or None): none of the outputs may replace one.
 
     Returns
     -------
@@ -1066,7 +1067,8 @@ def write_outputs(result: FurnishResult, out_dir) -> list[Path]:
     Raises
     ------
     FurnishError
-        When ``out_dir`` is not a folder or cannot be written.
+        When ``out_dir`` is not a folder or cannot be written, or an output would replace
+        one of ``inputs``.
     """
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
@@ -1074,6 +1076,10 @@ def write_outputs(result: FurnishResult, out_dir) -> list[Path]:
     try:
         with staged_folder(out) as staging:
             names = _write_files(result, staging)
+            if (clash := replaced_input([out / name for name in names], inputs)) is not None:
+                raise FurnishError(f"output folder {out}: {clash[0].name} there is the input {clash[1]}, which "
+                                   "Stager never overwrites; nothing was changed in it; write the outputs to "
+                                   "another folder")
     except OSError as error:
         raise FurnishError(f"output folder {out}: cannot write there ({error.strerror or error}); "
                            "nothing was changed in it; choose a folder you can write to") from None

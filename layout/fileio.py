@@ -10,6 +10,18 @@ from contextlib import contextmanager
 from pathlib import Path
 
 
+def replaced_input(outputs, inputs) -> tuple[Path, Path] | None:
+    """The first of ``outputs`` (paths) that is one of the files ``inputs`` (paths or None),
+    by any name, and that input; None when writing the outputs leaves every input alone."""
+    existing = [Path(p) for p in inputs if p is not None and Path(p).is_file()]
+    for out in map(Path, outputs):
+        if out.is_file():
+            for given in existing:
+                if os.path.samefile(out, given):
+                    return out, given
+    return None
+
+
 @contextmanager
 def atomic_path(path):
     """Yield a temporary path beside ``path``; on success it is renamed onto ``path``.

@@ -78,6 +78,12 @@ def test_segment_refusals_name_the_problem(tmp_path, capsys):
                  ["furnish", tiny, "--out", tmp_path / "f"]):
         code, _, err = run(argv, capsys)
         assert code == 2 and f"photo {tiny} is 30 x 20 px: too small" in err and "64 px" in err, argv
+    # The mask written over the photo it was found in: refused, the photo intact.
+    own = tmp_path / "own.png"
+    cv2.imwrite(str(own), cv2.imread(str(PHOTO)))
+    before = own.read_bytes()
+    code, _, err = run(["segment", own, "--out", own], capsys)
+    assert code == 2 and f"--out {own}: is the input {own}" in err and own.read_bytes() == before
     code, _, err = run(["segment", PHOTO, "--mean", "1,2", "--out", tmp_path / "c.png"], capsys)
     assert code == 2 and "R,G,B" in err
     # A profile that is not there is an error, not a photo "without calibration".

@@ -182,6 +182,25 @@ def test_rewrite_replaces_files_and_failure_leaves_the_folder_alone(roomy, tmp_p
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # the staging folder is gone
 
 
+def test_outputs_never_replace_an_input(roomy, tmp_path):
+    """A photo furnished again into the folder it came from, under a name the outputs use
+    (a staged photo staged again): refused, the folder as it was, the input intact, whatever
+    path names the input."""
+    result, _ = roomy
+    out = tmp_path / "out"
+    out.mkdir()
+    photo = out / "staged_1.jpg"
+    photo.write_bytes(ROOMY.read_bytes())
+    before = _listing(out)
+    for given in (photo, tmp_path / "out" / ".." / "out" / "staged_1.jpg"):
+        with pytest.raises(FurnishError, match="staged_1.jpg there is the input .* never overwrites"):
+            write_outputs(result, out, inputs=[None, given])
+        assert _listing(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging folder left
+    write_outputs(result, out, inputs=[ROOMY])  # an input elsewhere is no obstacle
+    assert _digest(photo) != before["staged_1.jpg"]
+
+
 def test_glb_scene_is_y_up_with_walls_of_the_room_height(roomy):
     result, _ = roomy
     scene = trimesh.load(io.BytesIO(scene_glb(result.floor, 2.7, result.layouts[0])), file_type="glb")
