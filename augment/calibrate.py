@@ -967,8 +967,10 @@ def read_photo(path) -> np.ndarray:
     from .imageio import PHOTO_FORMATS, decode_image, too_small
 
     path = Path(path)
+    if path.is_dir():
+        raise CalibrationError(f"photo {path} is a folder; give a photo file, e.g. {path / 'room.jpg'}")
     if not path.is_file():
-        raise CalibrationError(f"photo {path} does not exist or is not a file")
+        raise CalibrationError(f"photo {path} does not exist; check the path")
     image = decode_image(path.read_bytes())
     if image is None:
         raise CalibrationError(f"photo {path} is not an image Stager can read ({PHOTO_FORMATS})")

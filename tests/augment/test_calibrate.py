@@ -242,6 +242,8 @@ def test_unreadable_photo(tmp_path):
         read_photo(bad)
     with pytest.raises(CalibrationError, match="does not exist"):
         read_photo(tmp_path / "missing.jpg")
+    with pytest.raises(CalibrationError, match="is a folder; give a photo file"):
+        read_photo(tmp_path)
 
 
 def test_exif_focal_length_is_used_before_the_board(tmp_path, renders):
