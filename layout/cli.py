@@ -73,7 +73,7 @@ def _solve(args):
         layouts.append(lay)
         reports.append(report.evaluate(lay))
     try:
-        paths = report.write_outputs(layouts, out, reports, title=f"{args.spec.stem}: ")
+        paths = report.write_outputs(layouts, out, reports, title=f"{args.spec.stem}: ", inputs=[args.spec])
     except OSError as e:
         raise LayoutError(f"--out {out}: cannot write there ({e.strerror or e})") from None
     if args.quiet:

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from . import metrics, plot
-from .fileio import write_atomic
+from .errors import LayoutError
+from .fileio import replaced_input, write_atomic
 from .geometry import SIDE_NAMES, access_box_corners, box_corners
 
 # Overlaps smaller than this (m²) are contacts of touching boxes, not collisions.
@@ -205,15 +206,24 @@ def output_files(layouts, reports=None, title=""):
     return files
 
 
-def write_outputs(layouts, out_dir, reports=None, title=""):
+def write_outputs(layouts, out_dir, reports=None, title="", inputs=()):
     """Write :func:`output_files` into ``out_dir`` (created if missing), each file
-    atomically.
+    atomically; none may replace one of ``inputs`` (the run's input files, paths).
 
     Returns
     -------
     paths : list of Path
         ``layout_K.json`` and ``plan_K.png`` for each K, then ``energy.png``.
+
+    Raises
+    ------
+    LayoutError
+        When an output would replace one of ``inputs``; nothing is written then.
     """
     out = Path(out_dir)
+    files = output_files(layouts, reports, title)
+    if (clash := replaced_input([out / name for name in files], inputs)) is not None:
+        raise LayoutError(f"--out {out}: {clash[0].name} there is the input {clash[1]}, which is never "
+                          "overwritten; write the outputs to another folder")
     out.mkdir(parents=True, exist_ok=True)
-    return [write_atomic(out / name, data) for name, data in output_files(layouts, reports, title).items()]
+    return [write_atomic(out / name, data) for name, data in files.items()]

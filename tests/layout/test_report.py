@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from layout import LayoutBuilder, Solver, report
+from layout.errors import LayoutError
 
 
 def placed(builder, poses):
@@ -128,3 +129,9 @@ def test_write_outputs(tmp_path):
     # Writing again replaces the files in place.
     report.write_outputs(layouts[:1], out)
     assert json.loads((out / "layout_1.json").read_text())["seed"] == 0
+    # ... but never one of the run's inputs, however its path is written: nothing is written.
+    spec = out / "energy.png"
+    before = spec.read_bytes()
+    with pytest.raises(LayoutError, match="energy.png there is the input"):
+        report.write_outputs(layouts[:1], out, inputs=[tmp_path / "out" / ".." / "out" / "deeper" / "energy.png"])
+    assert spec.read_bytes() == before
