@@ -46,14 +46,9 @@ def _progress(iterable, total, quiet):
     return tqdm(iterable, total=total, desc="solving", unit="layout", file=sys.stderr)
 
 
-def _check_out_dir(spec_path, out):
+def _check_out_dir(out):
     if out.exists() and not out.is_dir():
         raise LayoutError(f"--out {out}: exists and is not a folder")
-    try:
-        if out.resolve() == spec_path.resolve():
-            raise LayoutError(f"--out {out}: is the spec file itself")
-    except OSError:
-        pass
 
 
 def _solve(args):
@@ -63,7 +58,7 @@ def _solve(args):
     if args.suggestions < 1:
         raise LayoutError(f"--suggestions {args.suggestions}: must be at least 1")
     out = args.out if args.out is not None else Path("out") / args.spec.stem
-    _check_out_dir(args.spec, out)
+    _check_out_dir(out)
     sp = spec.load_spec(args.spec)
     model, solver = spec.build(sp)
     layouts, reports = [], []
