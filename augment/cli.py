@@ -452,8 +452,8 @@ def _calibrate_cmd(args):
     board = _board(args)
     _prepare_file_out(args.out, DEFAULT_PROFILE)
     shots = _expand_shots(args.shots)
-    profile = camera_profile(shots, board)
     _keep_inputs([args.out], shots)
+    profile = camera_profile(shots, board)
     _mkdir(args.out.parent, "--out", args.out)
     _write(args.out, json.dumps(profile, indent=2) + "\n", "--out", args.out)
     if args.quiet:
