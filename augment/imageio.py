@@ -54,6 +54,35 @@ def register_heif() -> None:
     pillow_heif.register_heif_opener()
 
 
+def decode_grey(data: bytes) -> np.ndarray | None:
+    """An encoded image as grey levels ``(h, w)`` float32 in [0, 255], upright as its EXIF
+    says (as :func:`decode_image` turns photos), with what is transparent taken as black;
+    None when it cannot be decoded.
+
+    For masks: a layer painted on transparency says "not here" where it is transparent,
+    whatever colour it hides there (editors often keep white). 16-bit grey is scaled to
+    255. Pillow decodes it once, alpha and all; OpenCV turns only its colour decode
+    upright, not the one that keeps the alpha.
+    """
+    from PIL import Image, ImageOps
+
+    if is_heif(data):
+        register_heif()
+    try:
+        with Image.open(io.BytesIO(bytes(data))) as opened:
+            image = ImageOps.exif_transpose(opened)
+            if image.mode.startswith("I;16") or image.mode == "I":
+                return np.asarray(image, np.float32) * np.float32(255 / 65535)
+            if image.mode == "P" and "transparency" in image.info:
+                image = image.convert("RGBA")
+            grey = np.asarray(image.convert("L"), np.float32)
+            if "A" in image.getbands():
+                grey *= np.asarray(image.getchannel("A"), np.float32) / np.float32(255)
+            return grey
+    except (OSError, ValueError, SyntaxError, Image.DecompressionBombError):
+        return None
+
+
 def decode_image(data: bytes) -> np.ndarray | None:
     """An encoded photo as RGB ``(h, w, 3)`` uint8, turned upright as it says, or None
     when it cannot be decoded.

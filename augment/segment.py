@@ -821,25 +821,18 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
         The file is missing or unreadable, its size does not fit the photo, it shows no
         floor, or the board is not on its floor.
     """
-    from .imageio import PHOTO_FORMATS, decode_image
+    from .imageio import PHOTO_FORMATS, decode_grey
 
     path = Path(path)
     if not path.is_file():
         raise SegmentationError(f"floor mask {path}: no such file; give the mask `stage segment` wrote "
                                 "(white = floor), corrected in any image editor")
-    data = path.read_bytes()
-    image = decode_image(data)
-    if image is None:
+    lightness = decode_grey(path.read_bytes())
+    if lightness is None:
         raise SegmentationError(f"floor mask {path}: not an image Stager can read ({PHOTO_FORMATS}); "
                                 "save it as PNG, white = floor")
-    lightness = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY).astype(np.float32)
-    # A layer painted on transparency: what is transparent is not floor, whatever colour
-    # it hides (editors often keep white there).
-    raw = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
-    if raw is not None and raw.ndim == 3 and raw.shape[2] == 4 and raw.shape[:2] == image.shape[:2]:
-        lightness *= raw[..., 3].astype(np.float32) / np.iinfo(raw.dtype).max
     cols, rows = int(size_px[0]), int(size_px[1])
-    height, width = image.shape[:2]
+    height, width = lightness.shape
     if (width, height) != (cols, rows):
         if abs((width / height) / (cols / rows) - 1) > MASK_ASPECT_TOLERANCE:
             turned = (" (turned a quarter: save it upright, as the photo shows)"

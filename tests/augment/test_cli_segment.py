@@ -151,6 +151,32 @@ def test_measure_with_the_users_floor_mask(tmp_path, capsys):
         assert len(sides) == 4 and np.allclose(sides, [0.8, 0.8, 1.2, 1.2], rtol=0.03), sides
 
 
+def test_a_floor_mask_is_read_upright_alpha_and_all(tmp_path):
+    # An editor's layer: white everywhere, opaque (floor) on the stored image's left
+    # quarter only, saved with an EXIF turn. The alpha turns with the colour; so does a
+    # 16-bit grey mask's floor, whose mid greys count at half of 65535, not of 255.
+    from PIL import Image
+
+    from augment.segment import read_floor_mask
+
+    stored = np.zeros((60, 80), np.uint8)
+    stored[:, :20] = 255
+    stored[10:20, 40:50] = 140  # a stroke at 55 % grey: floor
+    stored[30:40, 40:50] = 110  # at 43 %: not floor
+    layer = np.dstack([np.full((60, 80, 3), 255, np.uint8), stored])
+    turns = {1: lambda a: a, 3: lambda a: np.rot90(a, 2), 6: lambda a: np.rot90(a, -1), 8: lambda a: np.rot90(a, 1)}
+    for orientation, upright in turns.items():
+        truth = upright(stored) > 127
+        for name, image in (("layer", Image.fromarray(layer, "RGBA")),
+                            ("grey16", Image.fromarray(stored.astype(np.uint16) * 257))):
+            exif = Image.Exif()
+            exif[0x0112] = orientation
+            path = tmp_path / f"{name}_{orientation}.png"
+            image.save(path, exif=exif.tobytes())
+            seg = read_floor_mask(path, truth.shape[::-1])
+            assert np.array_equal(seg.mask, truth), (name, orientation)
+
+
 def test_bad_floor_masks_are_refused(tmp_path, capsys):
     good = _painted_rectangle(1.2, 0.8)
     cases = {"missing.png": None,
