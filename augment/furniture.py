@@ -354,10 +354,6 @@ class _Shop:
         """Axis-aligned box from corner ``lo`` to ``hi``, edges rounded by ``round_m``."""
         return self._add(*_rounded_box_mesh(lo, hi, round_m, segments), mat, True, shadow, matrix)
 
-    def cbox(self, center, size, mat, round_m=0.0, segments=1, shadow=True, matrix=None) -> Part:
-        c, h = np.asarray(center, dtype=np.float64), np.asarray(size, dtype=np.float64) / 2
-        return self.box(c - h, c + h, mat, round_m, segments, shadow, matrix)
-
     def lathe(self, x, y, profile, mat, sections=24, arc=(0.0, 2 * np.pi), convex=True, shadow=True,
               matrix=None) -> Part:
         """A turned part: ``profile`` (radius, z) pairs revolved about the vertical through (x, y)."""
@@ -1778,10 +1774,6 @@ class Furniture:
         """(2, 3) lower and upper corner of all parts, item frame."""
         v = np.concatenate([p.vertices for p in self.parts])
         return np.stack([v.min(axis=0), v.max(axis=0)])
-
-    @property
-    def triangle_count(self) -> int:
-        return int(sum(len(p.faces) for p in self.parts))
 
     def to_trimesh(self, matrix=None) -> trimesh.Trimesh:
         """All parts as one ``trimesh.Trimesh`` with per-face colours (sRGB), optionally

@@ -94,7 +94,6 @@ class LayoutBuilder:
         self.edge_wall = wall if area > 0 else wall[(m - 2 - np.arange(m)) % m]
         self.wall_height_m = float(_finite("room.height", wall_height_m, positive=True))
         self._p = []  # particle records (dicts)
-        self._groups = {}
         self._c = {k: [] for k in DEFAULT_STIFFNESS}
         self._doors = []
         self._windows = []

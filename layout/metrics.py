@@ -160,31 +160,6 @@ def _ccw_list(polygon):
     return pts[::-1] if polygon_area(polygon) < 0 else pts
 
 
-def clip_polygon_by_convex(subject_m, clip_m):
-    """Part of a polygon inside a convex polygon.
-
-    Parameters
-    ----------
-    subject_m : (m, 2) array_like
-        Simple polygon in meters, any orientation, may be non-convex (an L-shaped floor).
-    clip_m : (k, 2) array_like
-        Convex polygon in meters, any orientation.
-
-    Returns
-    -------
-    clipped_m : (p, 2) float64
-        The intersection, in the subject's orientation; ``(0, 2)`` when empty. When the
-        subject is non-convex and the intersection has several pieces, they are joined by
-        zero-area bridge edges along the clip boundary, so its signed area is still exact.
-    """
-    s = _as_polygon(subject_m, "subject_m")
-    c = _as_polygon(clip_m, "clip_m")
-    out = _clip_one([tuple(v) for v in s.tolist()], _ccw_list(c))
-    if len(out) < 3:
-        return np.zeros((0, 2))
-    return np.array(out, dtype=np.float64)
-
-
 def convex_intersection_area(a_m, b_m):
     """Area of the intersection of two convex polygons.
 

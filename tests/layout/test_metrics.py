@@ -51,17 +51,6 @@ def test_intersection_ignores_orientation_and_touching():
     assert metrics.convex_intersection_area(square(0, 0), square(3, 3)) == 0.0
 
 
-def test_clip_non_convex_subject_into_two_pieces():
-    # U shape: [0, 3]² minus the notch [1, 2] x [1, 3]. The strip y in [2, 2.5] crosses
-    # both arms, leaving [0, 1] x [2, 2.5] and [2, 3] x [2, 2.5]: 0.5 + 0.5 m².
-    u_shape = np.array([[0, 0], [3, 0], [3, 3], [2, 3], [2, 1], [1, 1], [1, 3], [0, 3]], float)
-    subject, strip = readonly(u_shape, aabb(-1, 2, 4, 2.5))
-    clipped = metrics.clip_polygon_by_convex(subject, strip)
-    assert geometry.polygon_area(clipped) == pytest.approx(1.0, abs=1e-12)
-    assert np.all(clipped[:, 1] >= 2 - 1e-12) and np.all(clipped[:, 1] <= 2.5 + 1e-12)
-    assert metrics.clip_polygon_by_convex(subject, aabb(5, 5, 6, 6)).shape == (0, 2)
-
-
 def test_box_overlaps_filters():
     corners = np.stack(
         [
