@@ -858,7 +858,7 @@ def _input_errors() -> tuple:
     from layout.errors import LayoutError
 
     from .calibrate import CalibrationError
-    from .pipeline import FurnishError
+    from .errors import FurnishError
     from .segment import SegmentationError
 
     return StageError, CalibrationError, SegmentationError, LayoutError, FurnishError

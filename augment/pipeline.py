@@ -79,6 +79,7 @@ from layout.geometry import edge_distances, polygon_area, triangulate_polygon
 from layout.presets import DEFAULT_ROOM, PRESETS
 
 from . import __version__
+from .errors import FurnishError
 from .imageio import encode_image
 
 DEFAULT_SUGGESTIONS = 4
@@ -105,11 +106,6 @@ FLOOR_RGBA = (196, 170, 132, 255)    # the glTF scene's floor and walls
 WALL_RGBA = (232, 229, 222, 255)
 # glTF is y up; the floor frame is z up: (x, y, z) -> (x, z, -y).
 GLTF_FROM_FLOOR = np.array([[1.0, 0, 0, 0], [0, 0, 1, 0], [0, -1, 0, 0], [0, 0, 0, 1]])
-
-
-class FurnishError(ValueError):
-    """Bad input that no single stage reports: no floor, a floor too small for any
-    furniture, an output folder that cannot be written. The message says what and why."""
 
 
 @dataclass

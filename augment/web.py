@@ -140,6 +140,7 @@ def _run_job(job_dir: str, options: dict) -> dict:
     from . import pipeline
     from .board import Board
     from .calibrate import CalibrationError
+    from .errors import FurnishError
     from .gl import Renderer
     from .segment import SegmentationError
 
@@ -161,7 +162,7 @@ def _run_job(job_dir: str, options: dict) -> dict:
         state = json.loads(_progress_path.read_text())
         _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
         paths = pipeline.write_outputs(result, job / "out")
-    except (CalibrationError, SegmentationError, LayoutError, pipeline.FurnishError) as error:
+    except (CalibrationError, SegmentationError, LayoutError, FurnishError) as error:
         message = str(error).replace(str(photo), "the photo")
         for path, name in ((camera, "the camera profile"), (spec, "the spec file"), (floor_mask, "the floor mask")):
             if path is not None:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import hashlib
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import cv2
@@ -90,6 +92,19 @@ def test_segment_refusals_name_the_problem(tmp_path, capsys):
     code, _, err = run(["segment", PHOTO, "--camera", tmp_path / "none.json", "--out", tmp_path / "c.png"], capsys)
     assert code == 2 and "--camera" in err and "stage calibrate" in err
     assert not any(tmp_path.glob("[abc]*.png"))
+
+
+def test_segment_loads_neither_the_solver_nor_matplotlib(tmp_path):
+    # Finding the floor needs no layout solver (numba kernels) and no plots: importing
+    # them cost `stage segment` about a second of its 2.5 s.
+    code = ("import sys; from augment import cli; "
+            f"assert cli.main(['segment', {str(PHOTO)!r}, '--out', {str(tmp_path / 'f.png')!r}, '-q']) == 0; "
+            "print(sorted(m for m in ('numba', 'matplotlib', 'layout.builder', 'augment.pipeline') "
+            "if m in sys.modules))")
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]" and (tmp_path / "f.png").is_file()
 
 
 def test_measure_writes_the_report_and_three_overlays(tmp_path, capsys):
