@@ -962,19 +962,25 @@ def read_photo(path) -> np.ndarray:
     Raises
     ------
     CalibrationError
-        When the file is missing, not an image Stager can decode, or too small.
+        When the file is missing, not an image Stager can decode, or of a size that will not
+        do (too small, or a panorama).
     """
-    from .imageio import PHOTO_FORMATS, decode_image, too_small
+    from .imageio import PHOTO_FORMATS, decode_image, size_problem
 
     path = Path(path)
     if path.is_dir():
         raise CalibrationError(f"photo {path} is a folder; give a photo file, e.g. {path / 'room.jpg'}")
     if not path.is_file():
         raise CalibrationError(f"photo {path} does not exist; check the path")
-    image = decode_image(path.read_bytes())
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise CalibrationError(f"photo {path} cannot be read ({error.strerror or error}); check that you may "
+                               "read it") from None
+    image = decode_image(data)
     if image is None:
         raise CalibrationError(f"photo {path} is not an image Stager can read ({PHOTO_FORMATS})")
-    if (problem := too_small(image.shape[1], image.shape[0])) is not None:
+    if (problem := size_problem(image.shape[1], image.shape[0])) is not None:
         raise CalibrationError(f"photo {path} {problem}")
     return image
 

@@ -17,15 +17,24 @@ _HEIF_BRANDS = (b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"mif1", b
 PHOTO_FORMATS = "JPEG, PNG, HEIC, TIFF, WebP or BMP"
 JPEG_QUALITY = 92  # staged photos: no visible loss, about a third of the PNG's size
 MIN_PHOTO_PX = 64  # a side: a thumbnail; a board in it would be a few pixels across
+# Long side over short. Phones take 4:3 to 21:9; wider is a panorama (not one pinhole
+# view, which the calibration assumes) or a strip, whose board search copy would be a few
+# pixels high.
+MAX_ASPECT = 4.0
 
 
-def too_small(width: int, height: int) -> str | None:
-    """What is wrong with a photo of ``width`` x ``height`` px for Stager, said for an
-    error message ("... is 30 x 20 px: ..."), or None when it is large enough."""
-    if min(width, height) >= MIN_PHOTO_PX:
-        return None
-    return (f"is {width} x {height} px: too small, Stager needs at least {MIN_PHOTO_PX} px a side "
-            "(give the photo as the camera took it)")
+def size_problem(width: int, height: int) -> str | None:
+    """What is wrong with a photo of ``width`` x ``height`` for Stager, said for an
+    error message ("... is 30 x 20 px: ..."), or None when its size will do."""
+    short, long = sorted((width, height))
+    if short < MIN_PHOTO_PX:
+        return (f"is {width} x {height} px: too small, Stager needs at least {MIN_PHOTO_PX} px a side "
+                "(give the photo as the camera took it)")
+    if long > MAX_ASPECT * short:
+        return (f"is {width} x {height} px, {long / short:.0f} times as {'wide' if width > height else 'tall'} "
+                f"as it is {'high' if width > height else 'wide'}: Stager needs one ordinary photo, at most "
+                f"{MAX_ASPECT:g} to 1 (not a panorama or a strip cut from one)")
+    return None
 
 
 def encode_image(image: np.ndarray, ext: str, quality: int = JPEG_QUALITY) -> bytes:
@@ -91,6 +100,8 @@ def decode_image(data: bytes) -> np.ndarray | None:
     orientation); HEIC/HEIF, what iPhones save, through pillow-heif (which applies the
     file's rotation).
     """
+    if len(data) == 0:
+        return None
     image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
     if image is not None:
         return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)

@@ -21,7 +21,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .imageio import too_small
+from .imageio import size_problem
 from .skirting import trim_skirting
 
 DEFAULT_MODEL = Path(__file__).resolve().parent.parent / "models" / "floor_segnet.onnx"
@@ -254,7 +254,7 @@ def _check_image(image: np.ndarray) -> np.ndarray:
         raise SegmentationError(f"image of shape {image.shape}: expected (rows, cols, 3) RGB")
     if image.dtype != np.uint8:
         raise SegmentationError(f"image dtype {image.dtype}: expected uint8")
-    if (problem := too_small(image.shape[1], image.shape[0])) is not None:
+    if (problem := size_problem(image.shape[1], image.shape[0])) is not None:
         raise SegmentationError(f"the image {problem}")
     return np.ascontiguousarray(image[..., :3])
 
@@ -827,7 +827,12 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
     if not path.is_file():
         raise SegmentationError(f"floor mask {path}: no such file; give the mask `stage segment` wrote "
                                 "(white = floor), corrected in any image editor")
-    lightness = decode_grey(path.read_bytes())
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise SegmentationError(f"floor mask {path}: cannot be read ({error.strerror or error}); check that you "
+                                "may read it") from None
+    lightness = decode_grey(data)
     if lightness is None:
         raise SegmentationError(f"floor mask {path}: not an image Stager can read ({PHOTO_FORMATS}); "
                                 "save it as PNG, white = floor")

@@ -208,11 +208,11 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
     ------
     UploadError
         415 when it is not an image Stager can decode, 413 when it has more than
-        ``max_pixels`` pixels, 422 when a side is under ``MIN_PHOTO_PX``.
+        ``max_pixels`` pixels, 422 when its size will not do (:func:`augment.imageio.size_problem`).
     """
     from PIL import Image, UnidentifiedImageError
 
-    from .imageio import PHOTO_FORMATS, decode_image, register_heif, too_small
+    from .imageio import PHOTO_FORMATS, decode_image, register_heif, size_problem
 
     register_heif()
 
@@ -228,7 +228,7 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
         except (UnidentifiedImageError, OSError, ValueError):
             raise UploadError(415, f"the file is not an image this app can read; send a {PHOTO_FORMATS} "
                                    "photo") from None
-    if (problem := too_small(width, height)) is not None:
+    if (problem := size_problem(width, height)) is not None:
         raise UploadError(422, f"the photo {problem}")
     if width * height > max_pixels:
         raise UploadError(413, f"the photo is {width} x {height} = {width * height / 1e6:.0f} megapixels; at "

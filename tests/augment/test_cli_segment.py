@@ -76,10 +76,20 @@ def test_segment_refusals_name_the_problem(tmp_path, capsys):
     tiny = tmp_path / "tiny.png"
     cv2.imwrite(str(tiny), np.zeros((20, 30, 3), np.uint8))
     # Every command that reads the photo refuses it alike, naming it (not "no board found").
-    for argv in (["segment", tiny, "--out", tmp_path / "b.png"], ["measure", tiny, "--out", tmp_path / "m"],
-                 ["furnish", tiny, "--out", tmp_path / "f"]):
-        code, _, err = run(argv, capsys)
-        assert code == 2 and f"photo {tiny} is 30 x 20 px: too small" in err and "64 px" in err, argv
+    # So is a strip cut from a panorama (its board search copy would be 10 px high) and
+    # an empty file.
+    strip, empty = tmp_path / "strip.png", tmp_path / "empty.jpg"
+    cv2.imwrite(str(strip), np.zeros((64, 8000, 3), np.uint8))
+    empty.write_bytes(b"")
+    refusals = {tiny: ["is 30 x 20 px: too small", "64 px"],
+                strip: ["is 8000 x 64 px, 125 times as wide as it is high", "at most 4 to 1", "panorama"],
+                empty: ["is not an image Stager can read", "JPEG"]}
+    for photo, needles in refusals.items():
+        for argv in (["segment", photo, "--out", tmp_path / "b.png"], ["measure", photo, "--out", tmp_path / "m"],
+                     ["furnish", photo, "--out", tmp_path / "f"]):
+            code, _, err = run(argv, capsys)
+            assert code == 2 and err.startswith(f"error: photo {photo} ") and err.count("\n") == 1, (argv, err)
+            assert all(n in err for n in needles), (argv, err)
     # The mask written over the photo it was found in: refused, the photo intact.
     own = tmp_path / "own.png"
     cv2.imwrite(str(own), cv2.imread(str(PHOTO)))
@@ -164,6 +174,27 @@ def test_measure_with_the_users_floor_mask(tmp_path, capsys):
         assert abs(floor["area_m2"] - 0.96) < 0.03 * 0.96, floor
         sides = _sides_m(floor["polygon_m"])
         assert len(sides) == 4 and np.allclose(sides, [0.8, 0.8, 1.2, 1.2], rtol=0.03), sides
+
+
+def test_a_photo_or_mask_that_cannot_be_read_is_named(tmp_path, capsys, monkeypatch):
+    # As a user without read permission sees it (root, running the tests, may read all).
+    mask = tmp_path / "mask.png"
+    cv2.imwrite(str(mask), _painted_rectangle(1.2, 0.8))
+    real_read = Path.read_bytes
+
+    def read_bytes(path):
+        if path.name in ("room_4.jpg", "mask.png") and locked[0] == path.name:
+            raise PermissionError(13, "Permission denied")
+        return real_read(path)
+
+    monkeypatch.setattr(Path, "read_bytes", read_bytes)
+    locked = ["room_4.jpg"]
+    code, _, err = run(["segment", PHOTO, "--out", tmp_path / "a.png"], capsys)
+    assert code == 2 and err == f"error: photo {PHOTO} cannot be read (Permission denied); check that you may read it\n"
+    locked = ["mask.png"]
+    code, _, err = run(["measure", PHOTO, "--floor-mask", mask, "--out", tmp_path / "m"], capsys)
+    assert code == 2 and f"floor mask {mask}: cannot be read (Permission denied)" in err and err.count("\n") == 1
+    assert not any(tmp_path.glob("a*.png")) and not (tmp_path / "m").exists()
 
 
 def test_a_floor_mask_is_read_upright_alpha_and_all(tmp_path):

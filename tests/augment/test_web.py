@@ -128,6 +128,8 @@ def test_bad_uploads(finished):
         (PHOTO.read_bytes()[:2000], {}, 415, "cannot be decoded"),
         (_png_header(8000, 7000), {}, 413, "56 megapixels"),
         (_png_header(40, 30), {}, 422, "40 x 30 px: too small"),
+        (_png_header(3000, 500), {}, 422, "6 times as wide as it is high"),
+        (b"", {}, 422, "no photo: choose a photo"),
         (PHOTO.read_bytes(), {"board": "8"}, 422, "not COLSxROWS"),
         (PHOTO.read_bytes(), {"board": "charuco:60x60"}, 422, "has 50"),
         (PHOTO.read_bytes(), {"square": "0"}, 422, "millimeters"),
