@@ -17,6 +17,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from .board import CHARUCO_DICTIONARY, Board, charuco_board
 from .height import LINE_SIDE_PX, detect_segments, floor_colored, is_vertical, toward_vanishing_point
@@ -349,20 +352,21 @@ def _board_candidates(gray: np.ndarray, board: Board) -> list[tuple[np.ndarray, 
     columns even when foreshortened 3:1, while stray saddles stay apart."""
     n = board.corner_count
     points, strength = _saddle_points(gray, 4 * n)
-    if len(points) < n // 2:
+    if len(points) < max(n // 2, 2):
         return []
-    d = np.linalg.norm(points[:, None] - points[None], axis=-1)
-    np.fill_diagonal(d, np.inf)
-    nearest = d.min(axis=1)
-    linked = d <= 3 * np.minimum(nearest[:, None], nearest[None])
-    label = np.arange(len(points))
-    for _ in range(len(points)):  # label propagation: each point takes its group's smallest label
-        new = np.minimum(label, np.where(linked, label[None], len(points)).min(axis=1))
-        if np.array_equal(new, label):
-            break
-        label = new
+    # Neighbours from a k-d tree, groups as the linked graph's components: a board of
+    # many corners gives thousands of points, too many for a dense distance matrix.
+    tree = cKDTree(points)
+    nearest = tree.query(points, k=2)[0][:, 1]
+    balls = tree.query_ball_point(points, 3 * nearest)
+    i = np.repeat(np.arange(len(points)), [len(b) for b in balls])
+    j = np.concatenate(balls).astype(np.intp)
+    keep = (i != j) & (np.linalg.norm(points[i] - points[j], axis=1) <= 3 * np.minimum(nearest[i], nearest[j]))
+    links = coo_matrix((np.ones(int(keep.sum())), (i[keep], j[keep])), shape=(len(points), len(points)))
+    label = connected_components(links, directed=False)[1]
     groups = []
-    for value in np.unique(label):
+    # Components in the order of their strongest point, as before (ties in total strength).
+    for value in label[np.sort(np.unique(label, return_index=True)[1])]:
         # The group's strongest n: the board's corners, without the paper's edge and the
         # floor's grain that join it (points are sorted by strength).
         members = np.flatnonzero(label == value)[:n]
@@ -672,6 +676,16 @@ def load_profile(path, size_px: tuple[int, int], orientation: int | None = None)
         raise CalibrationError(
             f"camera profile {path}: cannot read it ({type(error).__name__}: {error}); expected the JSON "
             "written by `stage calibrate` with fields K, distortion, size_px") from None
+    if not (np.isfinite(K).all() and np.isfinite(dist).all()):
+        problem = "K and distortion hold a number that is not finite"
+    elif not (K[0, 0] > 0 and K[1, 1] > 0):
+        problem = f"focal lengths K[0][0] = {K[0, 0]:g} and K[1][1] = {K[1, 1]:g} must be positive"
+    elif not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in (w0, h0)):
+        problem = f"size_px {data['size_px']!r} must be the photos' width and height, whole pixels"
+    else:
+        problem = None
+    if problem is not None:
+        raise CalibrationError(f"camera profile {path}: {problem}; make it again with `stage calibrate`")
     rms = float(data.get("rms_px", 0.0))
     note = f"camera profile {path.name} (RMS {rms:.2f} px)"
     width, height = size_px

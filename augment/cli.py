@@ -44,7 +44,7 @@ import sys
 from pathlib import Path
 from typing import NamedTuple
 
-from layout.command import EXIT_INPUT, EXIT_OK, Parser, dispatch, parse, run as run_command
+from layout.command import EXIT_INPUT, EXIT_OK, Parser, dispatch, parse, run as run_command, seed_arg
 from layout.presets import PRESETS
 
 from .board import BOARD_KINDS, CHARUCO_DICTIONARY, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM, PAPER_MM
@@ -291,7 +291,7 @@ def _parser():
                            "measured floor (its own room, doors and windows are not used)")
     f.add_argument("--suggestions", "-n", type=_count, default=4, metavar="N",
                    help="number of layout suggestions (default 4)")
-    f.add_argument("--seed", type=int, default=0, help="seed of suggestion 1; K uses seed + K - 1 (default 0)")
+    f.add_argument("--seed", type=seed_arg, default=0, help="seed of suggestion 1; K uses seed + K - 1 (default 0)")
     f.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate`")
     _add_floor_args(f)
@@ -332,9 +332,12 @@ def _count(text: str) -> int:
 
 
 def _size_px(text: str) -> tuple[int, int]:
+    from .segment import MAX_INPUT_PX
+
     match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
-    if match is None or min(int(match[1]), int(match[2])) < 16:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected WIDTHxHEIGHT in pixels, e.g. 320x240")
+    if match is None or not all(16 <= int(v) <= MAX_INPUT_PX for v in match.groups()):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected WIDTHxHEIGHT in pixels, each from 16 to "
+                                         f"{MAX_INPUT_PX}, e.g. 320x240")
     return int(match[2]), int(match[1])  # (rows, cols)
 
 
@@ -343,7 +346,7 @@ def _triple(text: str) -> tuple[float, float, float]:
         values = tuple(float(v) for v in text.split(","))
     except ValueError:
         values = ()
-    if len(values) != 3:
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
         raise argparse.ArgumentTypeError(f"{text!r}: expected three numbers R,G,B, e.g. 0.485,0.456,0.406")
     return values
 

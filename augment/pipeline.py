@@ -905,6 +905,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
 
     if isinstance(suggestions, bool) or not isinstance(suggestions, (int, np.integer)) or suggestions < 1:
         raise ValueError(f"suggestions = {suggestions!r}: must be a whole number, at least 1")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed = {seed!r}: must be a whole number, at least 0")
     photo = Path(photo)
     t_start = time.perf_counter()
     # Everything that can be checked without the photo is, first.

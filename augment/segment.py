@@ -76,6 +76,7 @@ CLICK_CANNY = (10, 30)
 # Larger photos are shrunk to this long side once, before the smaller working sizes of
 # the model and GrabCut are made from it: shrinking a 12 MP photo costs more than the model.
 PRESHRINK_LONG_PX = 2048
+MAX_INPUT_PX = 4096  # a model input side: larger would take seconds and gigabytes on a CPU
 
 
 class SegmentationError(ValueError):
@@ -123,20 +124,34 @@ class ModelSpec:
             longs = tuple(int(v) for v in longs)
         except (TypeError, ValueError):
             longs = ()
-        if not longs or min(longs) < self.multiple_px:
+        if not longs or min(longs) < self.multiple_px or max(longs) > MAX_INPUT_PX:
             raise SegmentationError(f"model input_long_px {self.input_long_px!r}: need one or more whole "
-                                    f"sizes >= multiple_px ({self.multiple_px}), e.g. 256 or [256, 320]")
+                                    f"sizes from multiple_px ({self.multiple_px}) to {MAX_INPUT_PX}, e.g. 256 "
+                                    "or [256, 320]")
         object.__setattr__(self, "input_long_px", longs)
+        if self.input_size is not None:
+            try:
+                size = tuple(int(v) for v in self.input_size)
+            except (TypeError, ValueError):
+                size = ()
+            if len(size) != 2 or not all(16 <= v <= MAX_INPUT_PX for v in size):
+                raise SegmentationError(f"model input_size {self.input_size!r}: need (rows, cols), each from 16 "
+                                        f"to {MAX_INPUT_PX} px")
+            object.__setattr__(self, "input_size", size)
         if self.channel_order not in ("RGB", "BGR"):
             raise SegmentationError(f"model channel_order {self.channel_order!r}: use RGB or BGR")
         if self.output not in ("logits", "probabilities"):
             raise SegmentationError(f"model output {self.output!r}: use logits or probabilities")
         if self.layout not in ("NCHW", "NHWC"):
             raise SegmentationError(f"model layout {self.layout!r}: use NCHW or NHWC")
-        if len(self.mean) != 3 or len(self.std) != 3 or min(self.std) <= 0:
-            raise SegmentationError(f"model mean {self.mean} / std {self.std}: need 3 values each, std > 0")
+        if (len(self.mean) != 3 or len(self.std) != 3 or not np.isfinite([self.scale, *self.mean, *self.std]).all()
+                or min(self.std) <= 0 or self.scale <= 0):
+            raise SegmentationError(f"model scale {self.scale} / mean {self.mean} / std {self.std}: need finite "
+                                    "numbers, 3 each for mean and std, scale and std > 0")
         if not self.floor_class or min(self.floor_class) < 0:
             raise SegmentationError(f"model floor_class {self.floor_class}: need class indices >= 0")
+        # A class named twice would count its probability twice.
+        object.__setattr__(self, "floor_class", tuple(dict.fromkeys(self.floor_class)))
 
     @classmethod
     def from_json(cls, path) -> "ModelSpec":

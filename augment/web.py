@@ -273,7 +273,7 @@ def _check_clicks(text: str) -> list[list[float]]:
     return [[float(x), float(y), float(f)] for x, y, f in clicks]
 
 
-def _check_options(board: str, square: float, room: str, suggestions: int) -> tuple:
+def _check_options(board: str, square: float, room: str, suggestions: int, seed: int = 0) -> tuple:
     import argparse
 
     from layout.presets import PRESETS
@@ -295,6 +295,8 @@ def _check_options(board: str, square: float, room: str, suggestions: int) -> tu
         raise UploadError(422, f"room {room!r}: choose one of {', '.join(PRESETS)}")
     if not 1 <= suggestions <= MAX_SUGGESTIONS:
         raise UploadError(422, f"suggestions {suggestions}: choose from 1 to {MAX_SUGGESTIONS}")
+    if seed < 0:
+        raise UploadError(422, f"seed {seed}: a whole number from 0 (the same seed gives the same layouts)")
     return spec
 
 
@@ -479,7 +481,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                                                              "[x, y, 1] (floor left out) and [x, y, 0] (taken "
                                                              "for floor), photo pixels, in order")] = ""):
         """Start furnishing a photo; answers the job's id."""
-        board_spec = _check_options(board, square, room, suggestions)
+        board_spec = _check_options(board, square, room, suggestions, seed)
         corrections = _check_clicks(clicks)
         data = await photo.read(max_bytes + 1)
         if len(data) > max_bytes:

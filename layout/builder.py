@@ -31,6 +31,8 @@ DEFAULT_STIFFNESS = {
     "curve": (0.5, codes.DECAY),
 }
 DOOR_HEIGHT_M = 2.1
+# Across the room's bounding box: walkability is checked on a 5 cm grid, 16 M cells at this.
+MAX_ROOM_M = 200.0
 
 
 def _finite(name, value, *, positive=False, nonnegative=False, shape=None):
@@ -72,6 +74,15 @@ class LayoutBuilder:
             raise LayoutError(f"room.polygon: needs at least 3 vertices, got {len(poly)}")
         if not np.all(np.isfinite(poly)):
             raise LayoutError("room.polygon: contains a value that is not a finite number")
+        same = np.flatnonzero(np.all(poly == np.roll(poly, -1, axis=0), axis=1))
+        if len(same):
+            k = int(same[0])
+            raise LayoutError(f"room.polygon: corners {k} and {(k + 1) % len(poly)} are the same point "
+                              f"{poly[k].tolist()}; list each corner once")
+        extent = float((poly.max(axis=0) - poly.min(axis=0)).max())
+        if extent > MAX_ROOM_M:
+            raise LayoutError(f"room.polygon: {extent:.4g} m across; a room, hall or yard is at most {MAX_ROOM_M:g} m "
+                              "(corners are in meters, not millimeters)")
         hit = self_intersection(poly)
         if hit is not None:
             a, b = hit

@@ -15,7 +15,7 @@ import sys
 import tomllib
 from pathlib import Path
 
-from .command import EXIT_OK, Parser, dispatch, parse, run as run_command
+from .command import EXIT_OK, Parser, dispatch, parse, run as run_command, seed_arg
 from .errors import LayoutError
 
 
@@ -28,7 +28,7 @@ def _parser():
     s.add_argument("spec", type=Path, metavar="SPEC.toml")
     s.add_argument("--suggestions", "-n", type=int, default=5, metavar="N",
                    help="number of suggestions (default 5)")
-    s.add_argument("--seed", type=int, default=0, help="seed of suggestion 1; K uses seed + K - 1")
+    s.add_argument("--seed", type=seed_arg, default=0, help="seed of suggestion 1; K uses seed + K - 1")
     s.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
                    help="output folder (default out/<spec name>)")
     s.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")

@@ -28,6 +28,17 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message}")
 
 
+def seed_arg(text: str) -> int:
+    """``--seed``: a whole number from 0 (numpy's generators take no negative seeds)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number from 0, e.g. 7")
+    return value
+
+
 def parse(parser: argparse.ArgumentParser, argv) -> argparse.Namespace | int:
     """Parsed arguments, or the exit status when parsing ends the run (a usage error,
     reported on stderr, or ``--help``)."""

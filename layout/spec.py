@@ -14,7 +14,7 @@ Only the fields listed here are allowed: a misspelt field is an error, not ignor
 
 ``[room]`` (required)
     ``polygon``  list of ``[x, y]`` floor corners, any orientation, a simple polygon
-    with at least 3 vertices. May be left out when the floor is passed to
+    with at least 3 vertices, each listed once, at most 200 m across. May be left out when the floor is passed to
     :func:`build` (``polygon_m``, e.g. measured from a photo).
     ``height``   ceiling height (default 2.5); taller items are refused.
     ``preset``   furnish automatically (``layout presets`` lists them: living_room,

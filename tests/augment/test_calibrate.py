@@ -3,6 +3,7 @@ calibration, synthetic renders with exact ground truth, and hand-made projection
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import cv2
@@ -165,6 +166,16 @@ def test_profile_scales_to_another_resolution_and_refuses_another_aspect(tmp_pat
     (tmp_path / "bad.json").write_text("{")
     with pytest.raises(CalibrationError, match="cannot read"):
         load_profile(tmp_path / "bad.json", (640, 480))
+    # Profiles that parse but cannot be a camera (size_px 0 divided by zero; NaN ran on).
+    good = {"K": [[500, 0, 319.5], [0, 500, 239.5], [0, 0, 1]], "distortion": [0.1, 0, 0, 0, 0],
+            "size_px": [640, 480]}
+    for change, words in (({"size_px": [0, 0]}, "size_px [0, 0] must be"), ({"size_px": [640.5, 480]}, "whole"),
+                          ({"distortion": [float("nan"), 0, 0, 0, 0]}, "not finite"),
+                          ({"K": [[-500, 0, 319.5], [0, 500, 239.5], [0, 0, 1]]}, "K[0][0] = -500")):
+        (tmp_path / "odd.json").write_text(json.dumps({**good, **change}))
+        with pytest.raises(CalibrationError, match=re.escape(words)) as refusal:
+            load_profile(tmp_path / "odd.json", (640, 480))
+        assert f"camera profile {tmp_path / 'odd.json'}: " in str(refusal.value)
 
 
 @pytest.mark.parametrize("orientation", [6, 8, None])
@@ -449,3 +460,25 @@ def test_steep_view_levels_with_the_wall_edges_below_its_horizon(monkeypatch):
     assert _normal_error_deg(calibrate_photo(sample.image, Board(), intrinsics=intrinsics), sample.truth) < 0.2
     monkeypatch.setattr(calibrate, "floor_colored", lambda image, points, K, pose: np.ones(len(points), bool))
     assert _normal_error_deg(calibrate_photo(sample.image, Board(), intrinsics=intrinsics), sample.truth) > 1.0
+
+
+def test_a_board_of_many_corners_is_looked_for_in_bounded_memory():
+    # --board 100x100: 40,000 saddle points to group into candidate boards. As a dense
+    # distance matrix that took 15 GB (the run was killed); within 3 GB of address space
+    # the search must end as any search that finds nothing does, pointing at the board
+    # the photo does show.
+    import resource
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[2]
+    code = ("from augment.board import Board; from augment.calibrate import calibrate_file, CalibrationError\n"
+            "try:\n    calibrate_file('samples/photos/room_4.jpg', Board(100, 100, 45))\n"
+            "except CalibrationError as error:\n    print(error)")
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root, preexec_fn=limit)
+    assert done.returncode == 0, done.stderr[-500:]
+    assert "no 100x100 checkerboard found" in done.stdout and "use --board 7x5" in done.stdout, done.stdout

@@ -98,6 +98,9 @@ def test_segment_refusals_name_the_problem(tmp_path, capsys):
     assert code == 2 and f"--out {own}: is the input {own}" in err and own.read_bytes() == before
     code, _, err = run(["segment", PHOTO, "--mean", "1,2", "--out", tmp_path / "c.png"], capsys)
     assert code == 2 and "R,G,B" in err
+    for option, value, words in (("--mean", "nan,0,0", "R,G,B"), ("--input-size", "100000x100000", "to 4096")):
+        code, _, err = run(["segment", PHOTO, option, value, "--out", tmp_path / "c.png"], capsys)
+        assert code == 2 and f"argument {option}: '{value}'" in err and words in err, err
     # A profile that is not there is an error, not a photo "without calibration".
     code, _, err = run(["segment", PHOTO, "--camera", tmp_path / "none.json", "--out", tmp_path / "c.png"], capsys)
     assert code == 2 and "--camera" in err and "stage calibrate" in err

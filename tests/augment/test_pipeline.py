@@ -366,6 +366,14 @@ def test_unknown_room(out_with_a_file, capsys):
              "ballroom", "bedroom")
 
 
+def test_negative_seed(out_with_a_file, capsys):
+    # numpy takes no negative seed; it used to end in a traceback after the photo's work.
+    _refused(["furnish", ROOMY, "--seed", "-5", "--out", out_with_a_file], out_with_a_file, capsys,
+             "--seed", "'-5'", "from 0")
+    with pytest.raises(ValueError, match="seed = -5"):
+        furnish(ROOMY, Board(7, 5, 45), seed=-5)
+
+
 def test_floor_too_small_for_any_furniture(tmp_path, out_with_a_file, capsys):
     spec = write_spec(tmp_path, """
         [room]

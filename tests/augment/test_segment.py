@@ -172,6 +172,14 @@ def test_bad_models_and_images_get_clear_errors(tmp_path):
         FloorModel(tmp_path / "junk.onnx")
     with pytest.raises(SegmentationError, match="channel_order"):
         ModelSpec(channel_order="RGBA")
+    # Options that used to pass: a NaN mean fed the model NaNs (every pixel "disputed"),
+    # and a 100000 px input asked OpenCV for 30 GB.
+    for bad, words in ((dict(mean=(float("nan"), 0, 0)), "finite"), (dict(std=(1, float("inf"), 1)), "finite"),
+                       (dict(scale=0.0), "scale and std > 0"), (dict(input_size=(100_000, 100_000)), "to 4096"),
+                       (dict(input_size=(8, 8)), "from 16"), (dict(input_long_px=(256, 9000)), "to 4096")):
+        with pytest.raises(SegmentationError, match=words):
+            ModelSpec(**bad)
+    assert ModelSpec(floor_class=(3, 28, 3)).floor_class == (3, 28)  # counted once
     with pytest.raises(SegmentationError, match="too small"):
         segment_floor(np.zeros((20, 30, 3), np.uint8), method="grabcut")
     with pytest.raises(SegmentationError, match="uint8"):

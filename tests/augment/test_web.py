@@ -135,6 +135,7 @@ def test_bad_uploads(finished):
         (PHOTO.read_bytes(), {"square": "0"}, 422, "millimeters"),
         (PHOTO.read_bytes(), {"room": "garage"}, 422, "choose one of"),
         (PHOTO.read_bytes(), {"suggestions": "50"}, 422, "from 1 to"),
+        (PHOTO.read_bytes(), {"seed": "-5"}, 422, "seed -5: a whole number from 0"),
     ]
     for data, options, status, words in cases:
         response = client.post("/api/jobs", files={"photo": ("x.jpg", data, "image/jpeg")}, data=options)

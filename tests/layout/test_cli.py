@@ -115,6 +115,10 @@ def test_bad_input_exits_2_with_one_line(spec_file, tmp_path, capsys):
     err = _error(capsys, ["solve", str(spec_file), "--suggestions", "0"])
     assert "--suggestions" in err
 
+    # numpy takes no negative seed: refused as a usage error, not a traceback.
+    err = _error(capsys, ["solve", str(spec_file), "--seed", "-5"])
+    assert "argument --seed: '-5': expected a whole number from 0" in err
+
 
 def test_usage_errors_exit_2(capsys):
     _error(capsys, [])

@@ -137,6 +137,9 @@ def test_builder_never_modifies_inputs():
         (lambda: LayoutBuilder([[0, 0], [1, 1]]), "at least 3 vertices"),
         (lambda: LayoutBuilder([[0, 0], [2, 2], [2, 0], [0, 2]]), "intersect"),
         (lambda: LayoutBuilder([[0, 0], [1, 0], [np.nan, 1]]), "finite"),
+        (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 0], [4, 3], [0, 3]]), r"corners 1 and 2 are the same point \[4"),
+        # Millimeters typed as meters: 4 km across (a 1e12 m room ended in a 1e26-cell grid).
+        (lambda: LayoutBuilder([[0, 0], [4000, 0], [4000, 3000], [0, 3000]]), "4000 m across.*not millimeters"),
         (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]]).add_item("a", (1, -1, 1)), "greater than 0"),
         (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]]).add_item("a", (1, np.nan, 1)), "not a finite"),
         (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]]).distance(0, 1, 1.0), "no item or group"),
