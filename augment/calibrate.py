@@ -11,6 +11,7 @@ OpenCV (x right, y down, z forward). Poses are 4x4 arrays named ``camera_from_fl
 """
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -1020,7 +1021,8 @@ def camera_profile(paths, board: Board) -> dict:
     -------
     profile : dict
         JSON-ready: ``K``, ``distortion``, ``size_px``, ``rms_px``, ``focal_uncertainty``,
-        ``per_view_rms_px``, ``images`` and ``board``.
+        ``per_view_rms_px``, ``images`` (used), ``skipped`` (no board found), ``repeated``
+        (the same picture as an earlier shot, counted once) and ``board``.
 
     Raises
     ------
@@ -1029,9 +1031,16 @@ def camera_profile(paths, board: Board) -> dict:
     """
     paths = [Path(p) for p in paths]
     obj, img, used, size = [], [], [], None
-    skipped = []
+    skipped, repeated, seen = [], [], {}
     for path in paths:
         image = read_photo(path)
+        # The same view twice (a shot named twice, or copied) would weigh double and can
+        # make three shots out of one: it counts once.
+        digest = hashlib.sha256(image.tobytes()).digest()
+        if digest in seen:
+            repeated.append(f"{path.name} again" if path.name == seen[digest] else f"{path.name} (= {seen[digest]})")
+            continue
+        seen[digest] = path.name
         s = (image.shape[1], image.shape[0])
         if size is None:
             size = s
@@ -1046,9 +1055,10 @@ def camera_profile(paths, board: Board) -> dict:
         img.append(found.corners_px.reshape(-1, 1, 2).astype(np.float32))
         used.append(path.name)
     if len(used) < 3:
+        again = f", {len(repeated)} more repeated one: {', '.join(repeated)}" if repeated else ""
         raise CalibrationError(
-            f"a {board.describe()} was found in {len(used)} of {len(paths)} photos; at least 3 are "
-            "needed (10-20 from different angles is better). Check --board (inner corners).")
+            f"a {board.describe()} was found in {len(used)} of {len(seen)} different photos{again}; at least 3 "
+            "are needed (10-20 from different angles is better). Check --board (inner corners).")
     flags = cv2.CALIB_FIX_ASPECT_RATIO
     K0 = np.eye(3)
     rms, K, dist, _, _, std_intr, _, per_view = cv2.calibrateCameraExtended(
@@ -1058,6 +1068,6 @@ def camera_profile(paths, board: Board) -> dict:
         # With a fixed aspect ratio OpenCV reports the deviation on fx or fy, by version.
         "focal_uncertainty": float(np.nanmax(std_intr[:2, 0]) / K[0, 0]),
         "per_view_rms_px": per_view.ravel().round(4).tolist(),
-        "images": used, "skipped": skipped,
+        "images": used, "skipped": skipped, "repeated": repeated,
         "board": _board_json(board),
     }

@@ -468,7 +468,8 @@ def _calibrate_cmd(args):
     worst = max(range(len(per_view)), key=per_view.__getitem__)
     k1, k2, p1, p2, k3 = (profile["distortion"] + [0.0] * 5)[:5]
     print(f"images      {len(used)} used, {len(skipped)} skipped"
-          + (f" (no {board.describe()} found): {', '.join(skipped)}" if skipped else ""))
+          + (f" (no {board.describe()} found): {', '.join(skipped)}" if skipped else "")
+          + (f"; counted once: {', '.join(profile['repeated'])}" if profile["repeated"] else ""))
     print(f"size        {w} x {h} px")
     sigma = profile.get("focal_uncertainty") or 0.0
     print(f"focal       fx {K[0][0]:.2f}  fy {K[1][1]:.2f} px"

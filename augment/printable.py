@@ -36,6 +36,9 @@ from layout.fileio import atomic_path
 DEFAULT_SQUARE_BY_PAPER_MM = {"A3": 45.0, "A4": 30.0}
 
 PRINTER_MARGIN_MM = 8.0
+# Smaller squares are a few pixels in a room photo, and a ChArUco marker's bits in them
+# are a few printer dots.
+MIN_SQUARE_MM = 5.0
 """Nothing, squares included, is drawn closer than this to the paper edge: most office
 printers leave 3-6 mm blank, 8 mm covers them with room to spare."""
 
@@ -94,10 +97,10 @@ def board_for_paper(paper: str, cols: int | None = None, rows: int | None = None
     Raises
     ------
     ValueError
-        When the paper is unknown, or the squares do not fit inside the
-        :data:`PRINTER_MARGIN_MM` margins with room left for the ruler and caption; the
-        message names the paper, the board and the sizes, and suggests the largest square
-        in whole millimeters that fits.
+        When the paper is unknown, the squares are under :data:`MIN_SQUARE_MM`, or they
+        do not fit inside the :data:`PRINTER_MARGIN_MM` margins with room left for the
+        ruler and caption; the message names the paper, the board and the sizes, and
+        suggests the largest square in whole millimeters that fits.
     """
     paper, sheet_mm = _paper_mm(paper)
     cols = DEFAULT_INNER_CORNERS[0] if cols is None else int(cols)
@@ -106,6 +109,10 @@ def board_for_paper(paper: str, cols: int | None = None, rows: int | None = None
     # A board on its own default sheet always fits, so this checks only the counts and
     # the square size, leaving the paper to the message below.
     _check_fits(Board(cols, rows, square_mm, kind=kind), paper)
+    if not square_mm >= MIN_SQUARE_MM:
+        raise ValueError(f"squares of {square_mm:g} mm are too small to print and to see across a room; use "
+                         f"{MIN_SQUARE_MM:g} mm or more (the default on {paper} is "
+                         f"{DEFAULT_SQUARE_BY_PAPER_MM[paper]:g})")
     return Board(cols, rows, square_mm, sheet_mm, kind)
 
 

@@ -120,6 +120,24 @@ def test_calibrate_quiet_prints_nothing(tmp_path, capsys):
     assert (code, stdout, err) == (0, "", "")
 
 
+def test_calibrate_counts_a_repeated_shot_once(tmp_path, capsys):
+    # The same view twice would weigh double, and three copies of one shot made a
+    # "profile" of one view (focal +-13 %).
+    four = sorted(OPENCV_DATA.glob("left*.jpg"))[:4]
+    copy = tmp_path / "copy.jpg"
+    copy.write_bytes(four[0].read_bytes())
+    code, stdout, err = run(["calibrate", *four, copy, four[1], "--board", "9x6", "--square", "25",
+                             "--out", tmp_path / "p.json"], capsys)
+    assert code == 0, err
+    profile = json.loads((tmp_path / "p.json").read_text())
+    assert profile["images"] == [p.name for p in four]
+    assert profile["repeated"] == [f"copy.jpg (= {four[0].name})", f"{four[1].name} again"]
+    assert f"counted once: copy.jpg (= {four[0].name}), {four[1].name} again" in stdout
+    code, _, err = run(["calibrate", "-q", "--board", "9x6", "--square", "25", "--out", tmp_path / "q.json",
+                        four[0], copy, four[0]], capsys)
+    assert code == 2 and "found in 1 of 1 different photos, 2 more repeated one" in err, err
+
+
 # --------------------------------------------------------------------------- stage check
 
 

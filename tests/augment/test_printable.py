@@ -182,6 +182,10 @@ def test_refuses_unknown_paper_and_bad_board():
         board_for_paper("A3", cols=1)
     with pytest.raises(ValueError, match="positive"):
         board_for_paper("A3", square_mm=0)
+    # 0.01 mm squares made a PDF no printer can print and no photo can show.
+    with pytest.raises(ValueError, match="squares of 0.01 mm are too small .* 5 mm or more"):
+        board_for_paper("A4", square_mm=0.01)
+    assert board_for_paper("A4", square_mm=5).square_mm == 5
 
 
 def test_write_refuses_board_that_does_not_fit(tmp_path):
