@@ -33,14 +33,19 @@ DEFAULT_STIFFNESS = {
 DOOR_HEIGHT_M = 2.1
 # Across the room's bounding box: walkability is checked on a 5 cm grid, 16 M cells at this.
 MAX_ROOM_M = 200.0
+# Any length or position: a few room sizes.
+MAX_LENGTH_M = 1000.0
 
 
-def _finite(name, value, *, positive=False, nonnegative=False, shape=None):
+def _finite(name, value, *, positive=False, nonnegative=False, shape=None, meters=True):
     arr = np.asarray(value, dtype=np.float64)
     if shape is not None and arr.shape != shape:
         raise LayoutError(f"{name}: expected {len(shape) and shape[0]} numbers, got {value!r}")
     if not np.all(np.isfinite(arr)):
         raise LayoutError(f"{name}: {value!r} is not a finite number")
+    # Lengths past any room only overflow the energies (a lane 1e300 m long made them inf).
+    if meters and np.any(np.abs(arr) > MAX_LENGTH_M):
+        raise LayoutError(f"{name}: {value!r} is beyond any room; lengths are meters, at most {MAX_LENGTH_M:g}")
     if positive and np.any(arr <= 0):
         raise LayoutError(f"{name}: {value!r} must be greater than 0")
     if nonnegative and np.any(arr < 0):
@@ -179,7 +184,7 @@ class LayoutBuilder:
 
     def _attach(self, rec, group, offset_m, yaw_rad, position_m):
         if yaw_rad is not None:
-            rec["yaw"] = float(_finite(f"{rec['name']} yaw", yaw_rad))
+            rec["yaw"] = float(_finite(f"{rec['name']} yaw", yaw_rad, meters=False))
         if position_m is not None:
             xy = _finite(f"{rec['name']} position", position_m, shape=(2,))
             rec["pos"][:2] = xy
@@ -247,7 +252,7 @@ class LayoutBuilder:
 
     def _stiff(self, kind, k0, schedule):
         dk, ds = DEFAULT_STIFFNESS[kind]
-        k = dk if k0 is None else float(_finite(f"{kind} stiffness", k0))
+        k = dk if k0 is None else float(_finite(f"{kind} stiffness", k0, meters=False))
         if not 0.0 <= k <= 1.0:
             raise LayoutError(f"{kind}: stiffness {k0!r} must lie in [0, 1]")
         if schedule is None:
@@ -285,7 +290,7 @@ class LayoutBuilder:
         length = float(_finite("lane length", length_m, positive=True))
         hw = float(_finite("lane half width", half_width_m, nonnegative=True))
         start = _finite("lane start", start_m, shape=(2,))
-        ang = float(_finite("lane angle", angle_rad))
+        ang = float(_finite("lane angle", angle_rad, meters=False))
         k, s = self._stiff("lane", k0, schedule)
         for m in items:
             m = self._index("lane", m)
@@ -307,8 +312,9 @@ class LayoutBuilder:
         members = [self._index("symmetry", m) for m in members]
         if not members:
             raise LayoutError("symmetry: needs at least one member")
-        self._c["symmetry"].append((members, self._index("symmetry focal", focal),
-                                    float(_finite("symmetry angle", angle_rad)), *self._stiff("symmetry", k0, schedule)))
+        angle = float(_finite("symmetry angle", angle_rad, meters=False))
+        self._c["symmetry"].append((members, self._index("symmetry focal", focal), angle,
+                                    *self._stiff("symmetry", k0, schedule)))
 
     def balance(self, members=None, *, k0=None, schedule=None):
         """Visual balance (Eq. 12): footprint-weighted center to the room centroid."""
@@ -327,7 +333,7 @@ class LayoutBuilder:
     def wall_orientation(self, i, angle_rad=0.0, *, k0=None, schedule=None):
         """Orientation to the nearest wall (Eq. 17): 0 faces into the room."""
         i = self._index("wall orientation", i)
-        self._c["wall_orientation"].append((i, float(_finite("wall angle", angle_rad)),
+        self._c["wall_orientation"].append((i, float(_finite("wall angle", angle_rad, meters=False)),
                                             *self._stiff("wall_orientation", k0, schedule)))
 
     def against_wall(self, i, gap_m=0.0):
@@ -354,6 +360,17 @@ class LayoutBuilder:
         b, t = self._index("stack", base), self._index("stack", top)
         if b == t:
             raise LayoutError(f"stack: item {self._p[b]['name']!r} stacked on itself")
+        # What the base rests on, all the way down: the top must not be among it.
+        below, todo = set(), [b]
+        while todo:
+            x = todo.pop()
+            for base_x, top_x, *_ in self._c["stack"]:
+                if top_x == x and base_x not in below:
+                    below.add(base_x)
+                    todo.append(base_x)
+        if t in below:
+            raise LayoutError(f"stack: {self._p[t]['name']!r} on {self._p[b]['name']!r}, which already rests on "
+                              f"{self._p[t]['name']!r}: stacks cannot go round in a loop")
         self._c["stack"].append((b, t, *self._stiff("stack", k0, schedule)))
 
     def curve(self, group, members, *, segment_m=None, arc=None, spacing_m=0.0, anchor_fixed=False,
@@ -378,7 +395,8 @@ class LayoutBuilder:
             center, radius, a0, a1 = arc
             c = _finite("arc center", center, shape=(2,))
             r = float(_finite("arc radius", radius, positive=True))
-            params = [c[0], c[1], r, float(_finite("arc start", a0)), float(_finite("arc end", a1))]
+            params = [c[0], c[1], r, float(_finite("arc start", a0, meters=False)),
+                      float(_finite("arc end", a1, meters=False))]
             kind = codes.ARC
         spacing = float(_finite("curve spacing", spacing_m, nonnegative=True))
         self._c["curve"].append((g, kind, params, members, spacing, bool(anchor_fixed), *self._stiff("curve", k0, schedule)))

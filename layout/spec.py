@@ -9,7 +9,8 @@ counted from 0 in the order they appear in the file.
 
 Format
 ------
-Lengths are meters, angles degrees (fields ending in ``_deg``; converted to radians).
+Lengths are meters (at most 1000; a room at most 200 across), angles degrees (fields
+ending in ``_deg``; converted to radians).
 Only the fields listed here are allowed: a misspelt field is an error, not ignored.
 
 ``[room]`` (required)

@@ -131,6 +131,21 @@ def test_builder_never_modifies_inputs():
     assert polygon_area(model.floor_polygon_m) > 0  # stored counter-clockwise
 
 
+def _two_items():
+    b = LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]])
+    b.add_item("a", (0.5, 0.5, 0.5))
+    b.add_item("b", (0.5, 0.5, 0.5))
+    return b
+
+
+def _stacked_in_a_loop():
+    b = _two_items()
+    b.add_item("c", (0.3, 0.3, 0.3))
+    b.stack(1, 2)  # c on b
+    b.stack(0, 1)  # b on a
+    b.stack(2, 0)  # a on c: round in a loop
+
+
 @pytest.mark.parametrize(
     "make,message",
     [
@@ -145,6 +160,12 @@ def test_builder_never_modifies_inputs():
         (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]]).distance(0, 1, 1.0), "no item or group"),
         (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]], 2.5).add_item("tall", (1, 1, 3)), "exceeds the room"),
         (lambda: Solver(method="newton"), "gauss-seidel"),
+        # A lane 1e300 m long overflowed the energies (an empty trace crashed the plot).
+        (lambda: _two_items().lane(0, [1], angle_rad=0.0, length_m=1e300, half_width_m=1.0), "lane length: 1e\\+300 is beyond any room"),
+        (lambda: _two_items().distance(0, 1, 5000.0), "at most 1000"),
+        (lambda: LayoutBuilder([[0, 0], [4, 0], [4, 4], [0, 4]]).add_item("a", (1, 1, 1), position_m=(1e9, 0)),
+         "position.*beyond any room"),
+        (lambda: _stacked_in_a_loop(), "'a' on 'c', which already rests on 'a'.*loop"),
         (lambda: Solver(restarts=-1), "restarts"),
     ],
 )
