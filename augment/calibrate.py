@@ -980,18 +980,16 @@ def read_photo(path) -> np.ndarray:
         When the file is missing, not an image Stager can decode, or of a size that will not
         do (too small, or a panorama).
     """
-    from .imageio import PHOTO_FORMATS, decode_image, size_problem
+    from .imageio import PHOTO_FORMATS, decode_image, read_user_file, size_problem
 
     path = Path(path)
     if path.is_dir():
         raise CalibrationError(f"photo {path} is a folder; give a photo file, e.g. {path / 'room.jpg'}")
     if not path.is_file():
         raise CalibrationError(f"photo {path} does not exist; check the path")
-    try:
-        data = path.read_bytes()
-    except OSError as error:
-        raise CalibrationError(f"photo {path} cannot be read ({error.strerror or error}); check that you may "
-                               "read it") from None
+    data, problem = read_user_file(path)
+    if problem is not None:
+        raise CalibrationError(f"photo {path} {problem}")
     image = decode_image(data)
     if image is None:
         raise CalibrationError(f"photo {path} is not an image Stager can read ({PHOTO_FORMATS})")

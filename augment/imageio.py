@@ -6,6 +6,7 @@ Images are RGB ``(h, w, 3)``, RGBA ``(h, w, 4)`` or grey ``(h, w)`` uint8 arrays
 from __future__ import annotations
 
 import io
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -35,6 +36,16 @@ def size_problem(width: int, height: int) -> str | None:
                 f"as it is {'high' if width > height else 'wide'}: Stager needs one ordinary photo, at most "
                 f"{MAX_ASPECT:g} to 1 (not a panorama or a strip cut from one)")
     return None
+
+
+def read_user_file(path) -> tuple[bytes | None, str | None]:
+    """The bytes of a file the user named and None, or None and why it cannot be read,
+    worded to follow the file's name in an error ("... cannot be read (Permission
+    denied); check that you may read it")."""
+    try:
+        return Path(path).read_bytes(), None
+    except OSError as error:
+        return None, f"cannot be read ({error.strerror or error}); check that you may read it"
 
 
 def encode_image(image: np.ndarray, ext: str, quality: int = JPEG_QUALITY) -> bytes:

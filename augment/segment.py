@@ -836,17 +836,15 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
         The file is missing or unreadable, its size does not fit the photo, it shows no
         floor, or the board is not on its floor.
     """
-    from .imageio import PHOTO_FORMATS, decode_grey
+    from .imageio import PHOTO_FORMATS, decode_grey, read_user_file
 
     path = Path(path)
     if not path.is_file():
         raise SegmentationError(f"floor mask {path}: no such file; give the mask `stage segment` wrote "
                                 "(white = floor), corrected in any image editor")
-    try:
-        data = path.read_bytes()
-    except OSError as error:
-        raise SegmentationError(f"floor mask {path}: cannot be read ({error.strerror or error}); check that you "
-                                "may read it") from None
+    data, problem = read_user_file(path)
+    if problem is not None:
+        raise SegmentationError(f"floor mask {path}: {problem}")
     lightness = decode_grey(data)
     if lightness is None:
         raise SegmentationError(f"floor mask {path}: not an image Stager can read ({PHOTO_FORMATS}); "
