@@ -313,7 +313,7 @@ def _parser():
                                    "their files are deleted after an hour.")
     s.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1: this machine only; 0.0.0.0 for all)")
-    s.add_argument("--port", type=int, default=8000, help="port (default 8000)")
+    s.add_argument("--port", type=_port, default=8000, help="port (default 8000)")
     s.add_argument("--workers", type=_count, default=None, metavar="N",
                    help="worker processes, each furnishing one photo at a time (default one per core)")
     s.add_argument("--jobs", type=Path, default=Path("out") / "jobs", metavar="DIR",
@@ -328,6 +328,16 @@ def _count(text: str) -> int:
         value = 0
     if not 1 <= value <= 100:
         raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number from 1 to 100")
+    return value
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a port number from 1 to 65535, e.g. 8000")
     return value
 
 
@@ -383,13 +393,13 @@ def _prepare_file_out(out: Path, example: str) -> None:
             break
 
 
-def _prepare_dir_out(out: Path) -> None:
+def _prepare_dir_out(out: Path, flag: str = "--out") -> None:
     if out.exists() and not out.is_dir():
-        raise StageError(f"--out {out}: exists and is not a folder; give a folder for the outputs")
+        raise StageError(f"{flag} {out}: exists and is not a folder; give a folder for the outputs")
     for parent in out.parents:
         if parent.exists():
             if not parent.is_dir():
-                raise StageError(f"--out {out}: {parent} is a file, not a folder")
+                raise StageError(f"{flag} {out}: {parent} is a file, not a folder")
             break
 
 
@@ -813,9 +823,26 @@ def _serve_cmd(args):
         from .web import serve
     except ImportError as error:
         raise StageError(f"the web app needs {error.name}: pip install fastapi uvicorn python-multipart") from None
-    _prepare_dir_out(args.jobs)
+    _prepare_dir_out(args.jobs, "--jobs")
+    _check_listen(args.host, args.port)
+    _mkdir(args.jobs, "--jobs", args.jobs)
     serve(args.host, args.port, workers=args.workers, jobs_dir=args.jobs)
     return EXIT_OK
+
+
+def _check_listen(host: str, port: int) -> None:
+    """Bind where the app will listen, and let go: an address in use, or not of this
+    machine, is one error line here rather than uvicorn's log and exit status 3."""
+    import socket
+
+    try:
+        family, kind, proto, _, address = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0]
+        with socket.socket(family, kind, proto) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as uvicorn binds
+            probe.bind(address)
+    except OSError as error:
+        raise StageError(f"--host {host} --port {port}: cannot listen there ({error.strerror or error}); choose "
+                         "another port (e.g. --port 8001) or an address of this machine") from None
 
 
 def _keep_inputs(outputs, inputs) -> None:

@@ -296,3 +296,28 @@ def test_overlay_marks_the_corners_seen_on_a_partial_board(charuco_photo):
         # A ring of the corner's row color around it (radius about a quarter of the spacing).
         patch = np.abs(overlay[y - 6:y + 7, x - 6:x + 7].astype(int) - photo[y - 6:y + 7, x - 6:x + 7]).max(axis=2)
         assert (patch > 60).mean() > 0.1
+
+
+# --------------------------------------------------------------------------- stage serve
+
+
+def test_serve_refuses_where_it_cannot_listen(tmp_path, capsys):
+    # uvicorn logged these and exited 3 (or OverflowError's traceback for --port 99999);
+    # now one line each, before anything is created.
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        code, _, err = run(["serve", "--port", str(port), "--jobs", tmp_path / "jobs"], capsys)
+    assert code == 2 and f"--port {port}: cannot listen there (Address already in use)" in err, err
+    assert not (tmp_path / "jobs").exists()
+    code, _, err = run(["serve", "--port", "99999"], capsys)
+    assert code == 2 and "argument --port: '99999': expected a port number from 1 to 65535" in err
+    # An address of no interface here (TEST-NET-1; no name lookup needed).
+    code, _, err = run(["serve", "--host", "192.0.2.1", "--jobs", tmp_path / "jobs"], capsys)
+    assert code == 2 and "--host 192.0.2.1 --port 8000: cannot listen there" in err, err
+    (tmp_path / "file").write_text("")
+    code, _, err = run(["serve", "--jobs", tmp_path / "file" / "jobs"], capsys)
+    assert code == 2 and f"--jobs {tmp_path / 'file' / 'jobs'}: {tmp_path / 'file'} is a file" in err, err
