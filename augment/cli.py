@@ -321,24 +321,22 @@ def _parser():
     return p
 
 
-def _count(text: str) -> int:
+def _whole(text: str, lo: int, hi: int, example: str = "") -> int:
     try:
         value = int(text)
     except ValueError:
-        value = 0
-    if not 1 <= value <= 100:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number from 1 to 100")
+        value = lo - 1
+    if not lo <= value <= hi:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number from {lo} to {hi}{example}")
     return value
+
+
+def _count(text: str) -> int:
+    return _whole(text, 1, 100)
 
 
 def _port(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not 1 <= value <= 65535:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a port number from 1 to 65535, e.g. 8000")
-    return value
+    return _whole(text, 1, 65535, ", e.g. 8000")
 
 
 def _size_px(text: str) -> tuple[int, int]:

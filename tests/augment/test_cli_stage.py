@@ -314,7 +314,7 @@ def test_serve_refuses_where_it_cannot_listen(tmp_path, capsys):
     assert code == 2 and f"--port {port}: cannot listen there (Address already in use)" in err, err
     assert not (tmp_path / "jobs").exists()
     code, _, err = run(["serve", "--port", "99999"], capsys)
-    assert code == 2 and "argument --port: '99999': expected a port number from 1 to 65535" in err
+    assert code == 2 and "argument --port: '99999': expected a whole number from 1 to 65535" in err
     # An address of no interface here (TEST-NET-1; no name lookup needed).
     code, _, err = run(["serve", "--host", "192.0.2.1", "--jobs", tmp_path / "jobs"], capsys)
     assert code == 2 and "--host 192.0.2.1 --port 8000: cannot listen there" in err, err
