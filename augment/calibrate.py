@@ -666,27 +666,43 @@ def load_profile(path, size_px: tuple[int, int], orientation: int | None = None)
         When the file is unreadable, lacks a field, or was made for another aspect ratio.
     """
     path = Path(path)
+    remake = "make it again with `stage calibrate`"
     try:
         data = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise CalibrationError(f"camera profile {path} does not exist; make one with `stage calibrate`") from None
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as error:
+        # RecursionError: JSON nested thousands deep is no profile either.
+        raise CalibrationError(f"camera profile {path}: cannot read it as JSON ({type(error).__name__}: "
+                               f"{str(error)[:120]}); expected the JSON written by `stage calibrate`") from None
+    if not isinstance(data, dict):
+        raise CalibrationError(f"camera profile {path}: holds a JSON {type(data).__name__}, not the object with "
+                               f"fields K, distortion, size_px that `stage calibrate` writes; {remake}")
+    missing = [field for field in ("K", "distortion", "size_px") if field not in data]
+    if missing:
+        raise CalibrationError(f"camera profile {path}: lacks the field{'s' * (len(missing) > 1)} "
+                               f"{', '.join(missing)}; {remake}")
+    try:
         K = np.array(data["K"], dtype=np.float64).reshape(3, 3)
         dist = np.array(data["distortion"], dtype=np.float64).ravel()
         w0, h0 = data["size_px"]
-    except FileNotFoundError:
-        raise CalibrationError(f"camera profile {path} does not exist; make one with `stage calibrate`") from None
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        raise CalibrationError(
-            f"camera profile {path}: cannot read it ({type(error).__name__}: {error}); expected the JSON "
-            "written by `stage calibrate` with fields K, distortion, size_px") from None
+    except (ValueError, TypeError):
+        raise CalibrationError(f"camera profile {path}: K must be 3 rows of 3 numbers, distortion a list of "
+                               f"numbers and size_px [width, height] (K = {str(data['K'])[:60]}, distortion = "
+                               f"{str(data['distortion'])[:60]}, size_px = {str(data['size_px'])[:30]}); "
+                               f"{remake}") from None
     if not (np.isfinite(K).all() and np.isfinite(dist).all()):
         problem = "K and distortion hold a number that is not finite"
     elif not (K[0, 0] > 0 and K[1, 1] > 0):
         problem = f"focal lengths K[0][0] = {K[0, 0]:g} and K[1][1] = {K[1, 1]:g} must be positive"
     elif not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in (w0, h0)):
         problem = f"size_px {data['size_px']!r} must be the photos' width and height, whole pixels"
+    elif type(data.get("rms_px", 0.0)) not in (int, float):
+        problem = f"rms_px {str(data['rms_px'])[:30]} must be a number (the calibration's error in pixels)"
     else:
         problem = None
     if problem is not None:
-        raise CalibrationError(f"camera profile {path}: {problem}; make it again with `stage calibrate`")
+        raise CalibrationError(f"camera profile {path}: {problem}; {remake}")
     rms = float(data.get("rms_px", 0.0))
     note = f"camera profile {path.name} (RMS {rms:.2f} px)"
     width, height = size_px
@@ -980,7 +996,7 @@ def read_photo(path) -> np.ndarray:
         When the file is missing, not an image Stager can decode, or of a size that will not
         do (too small, or a panorama).
     """
-    from .imageio import PHOTO_FORMATS, decode_image, read_user_file, size_problem
+    from .imageio import decode_image, decode_problem, read_user_file, size_problem
 
     path = Path(path)
     if path.is_dir():
@@ -992,7 +1008,7 @@ def read_photo(path) -> np.ndarray:
         raise CalibrationError(f"photo {path} {problem}")
     image = decode_image(data)
     if image is None:
-        raise CalibrationError(f"photo {path} is not an image Stager can read ({PHOTO_FORMATS})")
+        raise CalibrationError(f"photo {path} {decode_problem(data)}")
     if (problem := size_problem(image.shape[1], image.shape[0])) is not None:
         raise CalibrationError(f"photo {path} {problem}")
     return image

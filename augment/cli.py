@@ -870,6 +870,9 @@ def _write_all(files: dict, folder: Path, inputs) -> None:
 
 def main(argv=None) -> int:
     """Run the command line; returns the exit status."""
+    # OpenCV's own warnings (a TIFF it cannot handle, a PNG cut short) would come before
+    # Stager's one error line that says the same; a user's OPENCV_LOG_LEVEL still wins.
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
     parser = _parser()
     args = parse(parser, argv)
     if isinstance(args, int):

@@ -103,6 +103,35 @@ def decode_grey(data: bytes) -> np.ndarray | None:
         return None
 
 
+def decode_problem(data: bytes) -> str:
+    """Why an image did not decode, worded to follow its name ("photo room.jpg is cut
+    short: ..."): empty, cut short (a copy or upload that stopped), samples of 32 bits
+    or floats, or not an image at all."""
+    from PIL import Image
+
+    if len(data) == 0:
+        return "is empty (0 bytes); copy it again from the camera"
+    if is_heif(data):
+        register_heif()
+    try:
+        with Image.open(io.BytesIO(bytes(data))) as image:
+            kind, mode = image.format, image.mode
+            try:
+                image.load()
+            except (OSError, ValueError, SyntaxError) as error:
+                said = " ".join(str(error).split())
+                if any(w in said.lower() for w in ("truncated", "incomplete", "broken", "end of file")):
+                    return (f"is cut short: a {kind} file that ends before its picture does (a copy or upload "
+                            "that stopped?); copy it again from the camera")
+                return f"is a {kind} file that cannot be decoded ({said[:120]}); save it again as JPEG or PNG"
+    except (OSError, ValueError, SyntaxError, Image.DecompressionBombError):
+        return f"is not an image Stager can read ({PHOTO_FORMATS})"
+    if mode in ("I", "F") or mode.startswith(("I;32", "F;")):
+        return f"is a {kind} of {'floating-point' if mode.startswith('F') else '32-bit'} samples; save it as an " \
+               "8- or 16-bit image (JPEG, PNG or TIFF)"
+    return f"is a {kind} image ({mode}) Stager cannot decode; save it again as JPEG or PNG"
+
+
 def decode_image(data: bytes) -> np.ndarray | None:
     """An encoded photo as RGB ``(h, w, 3)`` uint8, turned upright as it says, or None
     when it cannot be decoded.

@@ -15,6 +15,8 @@ Images are RGB ``(rows, cols, 3)`` uint8; masks are ``(rows, cols)`` bool; point
 from __future__ import annotations
 
 import json
+import math
+import numbers
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -83,6 +85,14 @@ class SegmentationError(ValueError):
     """Bad input or no floor: the message says what and what would work."""
 
 
+def _numbers(value) -> tuple[float, ...] | None:
+    """``value`` (a number or a list of them) as finite floats; None when it is not that."""
+    items = tuple(value) if isinstance(value, (list, tuple, np.ndarray)) else (value,)
+    if not all(isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) for v in items):
+        return None
+    return tuple(float(v) for v in items)
+
+
 @dataclass(frozen=True)
 class ModelSpec:
     """How to feed an ONNX segmentation model and read its floor class.
@@ -119,39 +129,37 @@ class ModelSpec:
     layout: str = "NCHW"
 
     def __post_init__(self):
-        longs = self.input_long_px if isinstance(self.input_long_px, (list, tuple)) else (self.input_long_px,)
-        try:
-            longs = tuple(int(v) for v in longs)
-        except (TypeError, ValueError):
-            longs = ()
-        if not longs or min(longs) < self.multiple_px or max(longs) > MAX_INPUT_PX:
-            raise SegmentationError(f"model input_long_px {self.input_long_px!r}: need one or more whole "
-                                    f"sizes from multiple_px ({self.multiple_px}) to {MAX_INPUT_PX}, e.g. 256 "
-                                    "or [256, 320]")
-        object.__setattr__(self, "input_long_px", longs)
+        # Fields come from a sidecar JSON or the command line: check each by name, so a
+        # wrong one is one clear error rather than a TypeError deep in inference.
+        def wholes(name, lo, hi, count=None, example=""):
+            values = _numbers(getattr(self, name))
+            if (values is None or not values or (count is not None and len(values) != count)
+                    or any(v != int(v) or not lo <= v <= hi for v in values)):
+                raise SegmentationError(f"model {name} {getattr(self, name)!r}: need "
+                                        f"{'one or more' if count is None else count} whole number"
+                                        f"{'s' * (count != 1)} from {lo} to {hi}{example}")
+            object.__setattr__(self, name, tuple(int(v) for v in values))
+
+        wholes("multiple_px", 1, 1024, 1)
+        object.__setattr__(self, "multiple_px", self.multiple_px[0])
+        wholes("input_long_px", self.multiple_px, MAX_INPUT_PX, example=", e.g. 256 or [256, 320]")
         if self.input_size is not None:
-            try:
-                size = tuple(int(v) for v in self.input_size)
-            except (TypeError, ValueError):
-                size = ()
-            if len(size) != 2 or not all(16 <= v <= MAX_INPUT_PX for v in size):
-                raise SegmentationError(f"model input_size {self.input_size!r}: need (rows, cols), each from 16 "
-                                        f"to {MAX_INPUT_PX} px")
-            object.__setattr__(self, "input_size", size)
-        if self.channel_order not in ("RGB", "BGR"):
-            raise SegmentationError(f"model channel_order {self.channel_order!r}: use RGB or BGR")
-        if self.output not in ("logits", "probabilities"):
-            raise SegmentationError(f"model output {self.output!r}: use logits or probabilities")
-        if self.layout not in ("NCHW", "NHWC"):
-            raise SegmentationError(f"model layout {self.layout!r}: use NCHW or NHWC")
-        if (len(self.mean) != 3 or len(self.std) != 3 or not np.isfinite([self.scale, *self.mean, *self.std]).all()
-                or min(self.std) <= 0 or self.scale <= 0):
-            raise SegmentationError(f"model scale {self.scale} / mean {self.mean} / std {self.std}: need finite "
-                                    "numbers, 3 each for mean and std, scale and std > 0")
-        if not self.floor_class or min(self.floor_class) < 0:
-            raise SegmentationError(f"model floor_class {self.floor_class}: need class indices >= 0")
+            wholes("input_size", 16, MAX_INPUT_PX, 2, example=" (rows, cols)")
+        wholes("floor_class", 0, 100_000, example=", the output channels that are floor, e.g. [1] or [3, 28]")
         # A class named twice would count its probability twice.
         object.__setattr__(self, "floor_class", tuple(dict.fromkeys(self.floor_class)))
+        for name, count in (("scale", 1), ("mean", 3), ("std", 3)):
+            values = _numbers(getattr(self, name))
+            if values is None or len(values) != count or (name != "mean" and min(values) <= 0):
+                raise SegmentationError(f"model {name} {getattr(self, name)!r}: need {count} finite number"
+                                        f"{'s' * (count > 1)}{'' if name == 'mean' else ' > 0'}; the input is "
+                                        "(pixel * scale - mean) / std, e.g. scale 1/255 with ImageNet's mean "
+                                        "and std")
+            object.__setattr__(self, name, values[0] if count == 1 else values)
+        for name, choices in (("channel_order", ("RGB", "BGR")), ("output", ("logits", "probabilities")),
+                              ("layout", ("NCHW", "NHWC"))):
+            if getattr(self, name) not in choices:
+                raise SegmentationError(f"model {name} {getattr(self, name)!r}: use {' or '.join(choices)}")
 
     @classmethod
     def from_json(cls, path) -> "ModelSpec":
@@ -159,19 +167,15 @@ class ModelSpec:
         path = Path(path)
         try:
             data = json.loads(path.read_text())
-        except (OSError, ValueError) as error:
+        except (OSError, ValueError, RecursionError) as error:
             raise SegmentationError(f"model spec {path}: cannot read it as JSON ({error})") from None
-        known = {f: data[f] for f in cls.__dataclass_fields__ if f in data}
-        for key in ("mean", "std", "input_size"):
-            if known.get(key) is not None:
-                known[key] = tuple(known[key])
-        if "floor_class" in known:
-            fc = known["floor_class"]
-            known["floor_class"] = tuple(fc) if isinstance(fc, (list, tuple)) else (int(fc),)
+        if not isinstance(data, dict):
+            raise SegmentationError(f"model spec {path}: holds a JSON {type(data).__name__}, not an object of "
+                                    "fields (input_size, mean, std, floor_class, ...)")
         try:
-            return cls(**known)
-        except TypeError as error:
-            raise SegmentationError(f"model spec {path}: {error}") from None
+            return cls(**{f: data[f] for f in cls.__dataclass_fields__ if f in data})
+        except SegmentationError as error:
+            raise SegmentationError(f"model spec {path}: {str(error).removeprefix('model ')}") from None
 
 
 class FloorModel:
@@ -836,7 +840,7 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
         The file is missing or unreadable, its size does not fit the photo, it shows no
         floor, or the board is not on its floor.
     """
-    from .imageio import PHOTO_FORMATS, decode_grey, read_user_file
+    from .imageio import decode_grey, decode_problem, read_user_file
 
     path = Path(path)
     if not path.is_file():
@@ -847,8 +851,7 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
         raise SegmentationError(f"floor mask {path}: {problem}")
     lightness = decode_grey(data)
     if lightness is None:
-        raise SegmentationError(f"floor mask {path}: not an image Stager can read ({PHOTO_FORMATS}); "
-                                "save it as PNG, white = floor")
+        raise SegmentationError(f"floor mask {path} {decode_problem(data)} (a mask: PNG, white = floor)")
     cols, rows = int(size_px[0]), int(size_px[1])
     height, width = lightness.shape
     if (width, height) != (cols, rows):

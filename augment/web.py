@@ -212,7 +212,7 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
     """
     from PIL import Image, UnidentifiedImageError
 
-    from .imageio import PHOTO_FORMATS, decode_image, register_heif, size_problem
+    from .imageio import PHOTO_FORMATS, decode_image, decode_problem, register_heif, size_problem
 
     register_heif()
 
@@ -226,16 +226,16 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
             raise UploadError(413, f"the photo has too many pixels (at most {max_pixels / 1e6:g} megapixels)") \
                 from None
         except (UnidentifiedImageError, OSError, ValueError):
-            raise UploadError(415, f"the file is not an image this app can read; send a {PHOTO_FORMATS} "
-                                   "photo") from None
+            raise UploadError(415, f"the file {decode_problem(data)}; send a {PHOTO_FORMATS} photo") from None
     if (problem := size_problem(width, height)) is not None:
         raise UploadError(422, f"the photo {problem}")
     if width * height > max_pixels:
         raise UploadError(413, f"the photo is {width} x {height} = {width * height / 1e6:.0f} megapixels; at "
                                f"most {max_pixels / 1e6:g} megapixels are accepted: send a smaller photo")
-    if kind not in _SUFFIXES or decode_image(data) is None:
-        raise UploadError(415, f"the photo ({kind or 'unknown'} format) cannot be decoded; send a {PHOTO_FORMATS} "
-                               "photo")
+    if kind not in _SUFFIXES:
+        raise UploadError(415, f"the photo is a {kind or 'unknown'} file; send a {PHOTO_FORMATS} photo")
+    if decode_image(data) is None:
+        raise UploadError(415, f"the photo {decode_problem(data)}")
     return _SUFFIXES[kind]
 
 
@@ -257,7 +257,7 @@ def _check_clicks(text: str) -> list[list[float]]:
         return []
     try:
         clicks = json.loads(text)
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, RecursionError):
         clicks = None
     ok = isinstance(clicks, list) and all(
         isinstance(c, list) and len(c) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
@@ -497,7 +497,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                                        "`stage calibrate`")
             try:
                 json.loads(profile)
-            except (UnicodeDecodeError, json.JSONDecodeError):
+            except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
                 raise UploadError(422, "the camera profile is not JSON; make one with `stage calibrate`") from None
         layout_spec = None
         if spec is not None and spec.filename:

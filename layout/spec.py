@@ -861,6 +861,9 @@ def spec_from_bytes(data: bytes, where) -> Spec:
         raise LayoutError(f"{where}: not UTF-8 text ({e.reason} at byte {e.start})") from None
     except tomllib.TOMLDecodeError as e:
         raise LayoutError(f"{where}: invalid TOML: {e}") from None
+    except RecursionError:
+        raise LayoutError(f"{where}: invalid TOML: arrays or tables nested thousands deep; a spec nests "
+                          "three deep at most (a polygon's points)") from None
     return _parse(_Reader(where), Path(where), doc)
 
 

@@ -163,15 +163,22 @@ def test_profile_scales_to_another_resolution_and_refuses_another_aspect(tmp_pat
         load_profile(path, (1280, 720))
     with pytest.raises(CalibrationError, match="does not exist"):
         load_profile(tmp_path / "missing.json", (640, 480))
-    (tmp_path / "bad.json").write_text("{")
-    with pytest.raises(CalibrationError, match="cannot read"):
-        load_profile(tmp_path / "bad.json", (640, 480))
+    # Not JSON, JSON nested too deep to parse (RecursionError), JSON of the wrong shape.
+    for text, words in (("{", "cannot read it as JSON"), ("[" * 100_000 + "]" * 100_000, "cannot read it as JSON"),
+                        ("[]", "holds a JSON list, not the object"), ('{"K": 1}', "lacks the fields distortion, "
+                                                                                   "size_px")):
+        (tmp_path / "bad.json").write_text(text)
+        with pytest.raises(CalibrationError, match=re.escape(words)):
+            load_profile(tmp_path / "bad.json", (640, 480))
     # Profiles that parse but cannot be a camera (size_px 0 divided by zero; NaN ran on).
     good = {"K": [[500, 0, 319.5], [0, 500, 239.5], [0, 0, 1]], "distortion": [0.1, 0, 0, 0, 0],
             "size_px": [640, 480]}
     for change, words in (({"size_px": [0, 0]}, "size_px [0, 0] must be"), ({"size_px": [640.5, 480]}, "whole"),
                           ({"distortion": [float("nan"), 0, 0, 0, 0]}, "not finite"),
-                          ({"K": [[-500, 0, 319.5], [0, 500, 239.5], [0, 0, 1]]}, "K[0][0] = -500")):
+                          ({"K": [[-500, 0, 319.5], [0, 500, 239.5], [0, 0, 1]]}, "K[0][0] = -500"),
+                          ({"K": [[500, 0], [0, 500]]}, "K must be 3 rows of 3 numbers"),
+                          ({"distortion": "none"}, "distortion a list of numbers"),
+                          ({"rms_px": "low"}, "rms_px low must be a number")):
         (tmp_path / "odd.json").write_text(json.dumps({**good, **change}))
         with pytest.raises(CalibrationError, match=re.escape(words)) as refusal:
             load_profile(tmp_path / "odd.json", (640, 480))

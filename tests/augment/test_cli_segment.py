@@ -10,6 +10,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from PIL import Image
 
 from augment import cli
 
@@ -78,12 +79,20 @@ def test_segment_refusals_name_the_problem(tmp_path, capsys):
     # Every command that reads the photo refuses it alike, naming it (not "no board found").
     # So is a strip cut from a panorama (its board search copy would be 10 px high) and
     # an empty file.
-    strip, empty = tmp_path / "strip.png", tmp_path / "empty.jpg"
+    # A photo cut short (a copy that stopped) and a TIFF of floats are said to be so, not
+    # "not an image".
+    strip, empty, text = tmp_path / "strip.png", tmp_path / "empty.jpg", tmp_path / "text.jpg"
+    cut, floats = tmp_path / "cut.jpg", tmp_path / "floats.tif"
     cv2.imwrite(str(strip), np.zeros((64, 8000, 3), np.uint8))
     empty.write_bytes(b"")
+    text.write_text("not a photo")
+    cut.write_bytes(Path(PHOTO).read_bytes()[:-5000])
+    Image.fromarray(np.zeros((480, 640), np.float32)).save(floats)
     refusals = {tiny: ["is 30 x 20 px: too small", "64 px"],
                 strip: ["is 8000 x 64 px, 125 times as wide as it is high", "at most 4 to 1", "panorama"],
-                empty: ["is not an image Stager can read", "JPEG"]}
+                empty: ["is empty (0 bytes)"], text: ["is not an image Stager can read", "JPEG"],
+                cut: ["is cut short: a JPEG file that ends before its picture does", "copy it again"],
+                floats: ["is a TIFF of floating-point samples", "8- or 16-bit"]}
     for photo, needles in refusals.items():
         for argv in (["segment", photo, "--out", tmp_path / "b.png"], ["measure", photo, "--out", tmp_path / "m"],
                      ["furnish", photo, "--out", tmp_path / "f"]):

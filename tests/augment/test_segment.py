@@ -174,12 +174,28 @@ def test_bad_models_and_images_get_clear_errors(tmp_path):
         ModelSpec(channel_order="RGBA")
     # Options that used to pass: a NaN mean fed the model NaNs (every pixel "disputed"),
     # and a 100000 px input asked OpenCV for 30 GB.
-    for bad, words in ((dict(mean=(float("nan"), 0, 0)), "finite"), (dict(std=(1, float("inf"), 1)), "finite"),
-                       (dict(scale=0.0), "scale and std > 0"), (dict(input_size=(100_000, 100_000)), "to 4096"),
+    for bad, words in ((dict(mean=(float("nan"), 0, 0)), "mean (nan, 0, 0): need 3 finite numbers"),
+                       (dict(std=(1, float("inf"), 1)), "std (1, inf, 1): need 3 finite numbers > 0"),
+                       (dict(scale=0.0), "scale 0.0: need 1 finite number > 0"),
+                       (dict(input_size=(100_000, 100_000)), "to 4096"),
                        (dict(input_size=(8, 8)), "from 16"), (dict(input_long_px=(256, 9000)), "to 4096")):
-        with pytest.raises(SegmentationError, match=words):
+        with pytest.raises(SegmentationError, match=re.escape(words)):
             ModelSpec(**bad)
     assert ModelSpec(floor_class=(3, 28, 3)).floor_class == (3, 28)  # counted once
+    # A user's sidecar JSON: each wrong field named (these were TypeErrors and
+    # ValueErrors, or a class 1.5 or true taken as is).
+    sidecar = tmp_path / "user.json"
+    for text, words in (("[]", "holds a JSON list, not an object"), ('{"mean": 5}', "mean 5: need 3 finite"),
+                        ('{"floor_class": "abc"}', "floor_class 'abc': need one or more whole numbers"),
+                        ('{"floor_class": [1.5]}', "floor_class [1.5]"), ('{"floor_class": [true]}', "floor_class [True]"),
+                        ('{"scale": "x"}', "scale 'x': need 1 finite number"), ('{"multiple_px": 0}', "multiple_px 0"),
+                        ("[" * 100_000 + "]" * 100_000, "cannot read it as JSON")):
+        sidecar.write_text(text)
+        with pytest.raises(SegmentationError, match=re.escape(f"model spec {sidecar}: {words}")):
+            ModelSpec.from_json(sidecar)
+    sidecar.write_text('{"floor_class": 3, "input_long_px": [256, 320], "std": [1, 1, 1], "notes": "ignored"}')
+    read = ModelSpec.from_json(sidecar)
+    assert (read.floor_class, read.input_long_px, read.std) == ((3,), (256, 320), (1.0, 1.0, 1.0))
     with pytest.raises(SegmentationError, match="too small"):
         segment_floor(np.zeros((20, 30, 3), np.uint8), method="grabcut")
     with pytest.raises(SegmentationError, match="uint8"):

@@ -426,6 +426,12 @@ def test_toml_syntax_error_has_line_and_column(tmp_path):
     assert "invalid TOML" in message and "line 6" in message and "column" in message
 
 
+def test_toml_nested_too_deep_is_a_syntax_error(tmp_path):
+    # tomllib recurses per level: this was a RecursionError traceback.
+    message = error_of(tmp_path, ROOM + "x = " + "[" * 100_000 + "]" * 100_000 + "\n")
+    assert "invalid TOML" in message and "nested thousands deep" in message
+
+
 def test_missing_file_and_directory(tmp_path):
     with pytest.raises(LayoutError, match="no such file"):
         spec.load_spec(tmp_path / "nope.toml")
