@@ -19,6 +19,9 @@ from .command import EXIT_OK, Parser, dispatch, parse, run as run_command, seed_
 from .errors import LayoutError
 
 
+MAX_SUGGESTIONS = 100
+
+
 def _parser():
     p = Parser(prog="layout", description="Furniture layout synthesis (Weiss et al. 2018).")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=Parser)
@@ -55,8 +58,9 @@ def _solve(args):
     from . import report, spec
     from .solver import diversity
 
-    if args.suggestions < 1:
-        raise LayoutError(f"--suggestions {args.suggestions}: must be at least 1")
+    if not 1 <= args.suggestions <= MAX_SUGGESTIONS:
+        raise LayoutError(f"--suggestions {args.suggestions}: choose from 1 to {MAX_SUGGESTIONS} (each is a "
+                          "solve of its own and a plan)")
     out = args.out if args.out is not None else Path("out") / args.spec.stem
     _check_out_dir(out)
     sp = spec.load_spec(args.spec)
@@ -82,7 +86,33 @@ def _solve(args):
     if len(layouts) > 1:
         print(f"diversity: {diversity(layouts):.3f} m (mean chamfer distance between suggestions)")
     print(f"wrote {len(paths)} files to {out}/ (layout_K.json, plan_K.png, energy.png)")
+    for line in _warnings(reports):
+        print(f"warning: {line}", file=sys.stderr)
     return EXIT_OK
+
+
+def _warnings(reports) -> list[str]:
+    """Suggestions a user should not take as they are: colliding, off the floor or not
+    walkable. (Suggestions alike are no warning: a theater's seats or a desk corner may
+    allow one arrangement; the diversity line shows it.)"""
+    lines = []
+    for k, rep in enumerate(reports, start=1):
+        problems = []
+        if rep["overlaps"]["count"]:
+            pairs = ", ".join(f"{a} with {b}" for a, b, _ in rep["overlaps"]["pairs"][:3])
+            problems.append(f"{rep['overlaps']['count']} overlapping pair(s) ({pairs})")
+        if rep["outside_m2"] > 0:
+            problems.append(f"{rep['outside_m2']:.2f} m² of {', '.join(rep['outside_items'])} off the floor")
+        if not rep["traversable"]:
+            where = ", ".join(f"the {side} of {item}" for item, side in rep["unreachable"][:3])
+            doors = ", ".join(str(d) for d in rep["blocked_doors"])
+            problems.append("not walkable (" + "; ".join(
+                [f"cannot reach {where}"] * bool(where) + [f"door {doors} blocked"] * bool(doors)
+                or [f"the free floor falls into {rep['components']} parts"]) + ")")
+        if problems:
+            lines.append(f"suggestion {k}: {'; '.join(problems)}; the room may be too small or narrow for "
+                         "these items: remove some, or make them smaller in the spec")
+    return lines
 
 
 def _kinds(args):

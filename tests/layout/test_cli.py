@@ -60,6 +60,20 @@ def test_solve_writes_outputs_and_prints_a_summary(spec_file, tmp_path, capsys):
     assert str(out) in lines[5]
 
 
+def test_layouts_that_are_not_clean_or_repeat_are_warned(tmp_path, capsys):
+    """A living room's sofa, TV stand and coffee table in an L of 1 m wide arms: they
+    cannot face each other on that floor. The table's columns were the only sign."""
+    path = tmp_path / "narrow.toml"
+    path.write_text('[room]\npolygon = [[0, 0], [6, 0], [6, 1], [1, 1], [1, 6], [0, 6]]\nheight = 2.6\n'
+                    'preset = "living_room"\n')
+    assert cli.main(["solve", str(path), "-n", "2", "--out", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2, err
+    for k in (1, 2):
+        assert err[k - 1].startswith(f"warning: suggestion {k}: ") and "m² of sofa" in err[k - 1], err
+        assert "off the floor" in err[k - 1] and "too small or narrow" in err[k - 1]
+
+
 def test_quiet_prints_nothing(spec_file, tmp_path, capsys):
     assert cli.main(["solve", str(spec_file), "-n", "1", "--out", str(tmp_path / "o"), "--quiet"]) == 0
     captured = capsys.readouterr()
@@ -112,8 +126,9 @@ def test_bad_input_exits_2_with_one_line(spec_file, tmp_path, capsys):
     err = _error(capsys, ["solve", str(spec_file), "--out", str(clash)])
     assert "not a folder" in err and clash.read_text() == "a file, not a folder"
 
-    err = _error(capsys, ["solve", str(spec_file), "--suggestions", "0"])
-    assert "--suggestions" in err
+    for n in ("0", "101"):  # 10**6 suggestions ran for hours, writing a plan each
+        err = _error(capsys, ["solve", str(spec_file), "--suggestions", n])
+        assert f"--suggestions {n}: choose from 1 to 100" in err
 
     # numpy takes no negative seed: refused as a usage error, not a traceback.
     err = _error(capsys, ["solve", str(spec_file), "--seed", "-5"])
