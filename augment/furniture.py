@@ -1922,13 +1922,28 @@ def load_asset(path, up: str = "y", yaw_deg: float = 0.0) -> tuple[Part, ...]:
         parts += _visual_parts(mesh, f"{path.name}:{name}")
     if not parts:
         raise ValueError(f"furniture model {path} holds no triangles")
+    if not sum(trimesh.triangles.area(p.vertices[p.faces]).sum() for p in parts) > 0:
+        raise ValueError(f"furniture model {path} has no surface: its triangles are points or lines")
     turn = _rot_z(math.radians(yaw_deg)) @ _ASSET_TO_BUILDER[up]
     return tuple(p.transformed(turn) for p in parts)
 
 
 def furniture_from_asset(kind: str, size_m, parts) -> Furniture:
-    """A user's model (parts from :func:`load_asset`) stretched onto the item's box."""
+    """A user's model (parts from :func:`load_asset`) stretched onto the item's box.
+
+    Raises
+    ------
+    ValueError
+        When the model is flat along a side the box has (2 cm or more): a sheet cannot be
+        stretched into a sofa; a flat model does for a rug.
+    """
     size = _check_size(kind, size_m)
+    v = np.concatenate([p.vertices for p in parts])
+    extent = v.max(axis=0) - v.min(axis=0)
+    for axis, name in enumerate(("wide", "deep", "tall")):
+        if extent[axis] <= 1e-6 * extent.max() and size[axis] >= 0.02:
+            raise ValueError(f"the model for {kind} is flat (0 m {name}) and cannot be stretched to the "
+                             f"{size[axis]:.2f} m {name} a {kind} is: give a model with volume")
     fitted, raw = _fit(list(parts), size)
     return Furniture(kind, "asset", size, fitted, raw)
 

@@ -812,7 +812,9 @@ def _load_assets(assets) -> dict:
     """Kind -> parts of each of the user's models (see ``assets`` of :func:`furnish`)."""
     if not assets:
         return {}
-    from .furniture import load_asset
+    from layout.catalog import CATALOG
+
+    from .furniture import furniture_from_asset, load_asset
 
     loaded = {}
     for kind, source in dict(assets).items():
@@ -826,6 +828,8 @@ def _load_assets(assets) -> dict:
             raise FurnishError(f"asset for {kind}: {path} is not a GLB, glTF or OBJ file")
         try:
             loaded[kind] = load_asset(path)
+            if kind in CATALOG:  # refused now, not after the layouts are solved
+                furniture_from_asset(kind, CATALOG[kind].size_m, loaded[kind])
         except ValueError as error:
             raise FurnishError(f"asset for {kind}: {error}") from None
     return loaded

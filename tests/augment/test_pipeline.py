@@ -271,9 +271,16 @@ def test_bad_asset_flags(tmp_path, capsys):
     garbage.write_bytes(b"glTF but not really")
     text = tmp_path / "notes.txt"
     text.write_text("a sofa")
+    # A model of one triangle standing upright (y up: no height) and one of a line: they
+    # rendered as a sheet on the floor and as nothing, silently.
+    sheet, line = tmp_path / "sheet.obj", tmp_path / "line.obj"
+    sheet.write_text("v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\n")
+    line.write_text("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n")
     for value, needle in (("sofa", "give KIND=FILE"), (f"sofa={tmp_path / 'none.glb'}", "no such file"),
                           (f"sofa={garbage}", "could not be read as a 3-D model"),
-                          (f"sofa={text}", "is not a GLB, glTF or OBJ file")):
+                          (f"sofa={text}", "is not a GLB, glTF or OBJ file"),
+                          (f"sofa={sheet}", "is flat (0 m tall) and cannot be stretched to the 0.85 m tall"),
+                          (f"sofa={line}", "has no surface: its triangles are points or lines")):
         err = _refused(["furnish", ROOMY, "--asset", value, "--out", out], out, capsys, needle)
         assert "--asset" in err or "asset for sofa" in err, err
     red = _red_box(tmp_path / "red.obj")

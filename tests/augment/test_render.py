@@ -302,6 +302,13 @@ def test_user_model_is_scaled_to_the_item(tmp_path):
     lo, hi = f.bounds_m
     assert np.allclose(lo, [-0.475, -1.05, 0], atol=1e-6) and np.allclose(hi, [0.475, 1.05, 0.85], atol=1e-6)
     assert f.parts[0].material.color_rgb[0] > 0.5 > f.parts[0].material.color_rgb[1]
+    # A flat model does for a rug (1 cm tall), not for a sofa.
+    sheet = tmp_path / "sheet.obj"
+    sheet.write_text("v 0 0 0\nv 2 0 0\nv 0 0 1.4\nf 1 2 3\n")
+    lo, hi = furniture_from_asset("rug", (2.0, 1.4, 0.01), load_asset(sheet)).bounds_m
+    assert np.allclose(hi - lo, [1.4, 2.0, 0.0], atol=1e-6)
+    with pytest.raises(ValueError, match="flat"):
+        furniture_from_asset("sofa", (2.1, 0.95, 0.85), load_asset(sheet))
 
 
 def test_layout_dict_gives_placed_items():
