@@ -29,6 +29,9 @@ PAPER_MM = {"A4": (297.0, 210.0), "A3": (420.0, 297.0)}
 DEFAULT_INNER_CORNERS = (7, 5)
 DEFAULT_PAPER = "A3"
 DEFAULT_SQUARE_MM = {"A3": 45.0, "A4": 30.0}[DEFAULT_PAPER]
+# Smaller squares are a few pixels in a room photo, and a ChArUco marker's bits in them
+# are a few printer dots.
+MIN_SQUARE_MM = 5.0
 BOARD_KINDS = ("chessboard", "charuco")
 # ChArUco: 4x4-bit markers are the easiest to read when small; 50 of them cover boards up
 # to 100 squares (the default 8 x 6 squares use 24). The marker, its black border

@@ -47,7 +47,8 @@ from typing import NamedTuple
 from layout.command import EXIT_INPUT, EXIT_OK, Parser, dispatch, parse, run as run_command, seed_arg
 from layout.presets import PRESETS
 
-from .board import BOARD_KINDS, CHARUCO_DICTIONARY, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM, PAPER_MM
+from .board import (BOARD_KINDS, CHARUCO_DICTIONARY, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM,
+                    MIN_SQUARE_MM, PAPER_MM)
 
 PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".webp", ".bmp")
 DEFAULT_PROFILE = "profile.json"
@@ -95,9 +96,11 @@ def _square_mm(text: str) -> float:
         value = float(text)
     except ValueError:
         value = float("nan")
-    if not 0 < value < 1000:
+    if not MIN_SQUARE_MM <= value < 1000:
+        # 1e-300 mm ran on, to "the board is seen almost face-on".
         raise argparse.ArgumentTypeError(
-            f"{text!r}: expected the side of one printed square in millimeters, e.g. {DEFAULT_SQUARE_MM:g}")
+            f"{text!r}: expected the side of one printed square in millimeters, {MIN_SQUARE_MM:g} to 1000, e.g. "
+            f"{DEFAULT_SQUARE_MM:g}")
     return value
 
 
@@ -381,9 +384,15 @@ def _board(args, square_default=DEFAULT_SQUARE_MM):
 
 
 def _prepare_file_out(out: Path, example: str) -> None:
-    """Refuse an output file path that cannot be one, before any work is done."""
+    """Refuse an output file path that cannot be one (a folder, a name whose suffix is not
+    ``example``'s), before any work is done."""
     if out.is_dir():
         raise StageError(f"--out {out}: is a folder; give a file name, e.g. {out / example}")
+    suffix = Path(example).suffix
+    if out.suffix.lower() != suffix:
+        # A PDF written to board.txt opens as text; a mask named floor.jpg would be a PNG.
+        raise StageError(f"--out {out}: it is written as {suffix[1:].upper()}; give a name ending in {suffix}, "
+                         f"e.g. {out.with_suffix(suffix) if out.name else example}")
     for parent in out.parents:
         if parent.exists():
             if not parent.is_dir():
@@ -498,9 +507,19 @@ def _check_floor_mask(path) -> None:
 
 def _check_camera(args) -> None:
     """A ``--camera`` profile that is not there is named before any work is done."""
-    if args.camera is not None and args.photo.is_file() and not args.camera.is_file():
-        raise StageError(f"--camera {args.camera}: no such file; make a camera profile with "
-                         f"`stage calibrate SHOT... --out {args.camera}`")
+    if args.photo.is_file():
+        _check_input_file("--camera", args.camera, CAMERA_HINT)
+
+
+CAMERA_HINT = "make a camera profile with `stage calibrate`"
+
+
+def _check_input_file(flag: str, path: Path | None, hint: str) -> None:
+    """Refuse an input file named by ``flag`` (``"--asset sofa="`` joins its path) that is
+    not one, saying what it is instead."""
+    if path is not None and not path.is_file():
+        what = "is a folder" if path.is_dir() else "is not a file" if path.exists() else "no such file"
+        raise StageError(f"{flag}{'' if flag.endswith('=') else ' '}{path}: {what}; {hint}")
 
 
 def _check_cmd(args):
@@ -561,13 +580,15 @@ def _segment_cmd(args):
 
     board = _board(args)
     out = args.out if args.out is not None else Path("out") / args.photo.stem / "floor.png"
-    if out.suffix.lower() != ".png":
-        raise StageError(f"--out {out}: the mask is written as PNG; give a name ending in .png, e.g. floor.png")
     _prepare_file_out(out, "floor.png")
     _check_camera(args)
     image = read_photo(args.photo)
     overrides = {k: getattr(args, k) for k in ("input_size", "mean", "std", "channel_order", "floor_class", "output")
                  if getattr(args, k) is not None}
+    if args.method == "grabcut" and (args.model is not None or overrides):
+        flag = "--model" if args.model is not None else "--" + next(iter(overrides)).replace("_", "-")
+        raise StageError(f"{flag}: no model is used with --method grabcut (GrabCut alone, seeded by the board); "
+                         f"leave out one of the two")
     model = _load_model(args.model, **overrides) if args.method == "onnx" else None
     warnings = []
     try:
@@ -719,13 +740,12 @@ def _furnish_cmd(args):
     _check_clicks_with_mask(args)
     if any(p.is_file() for p in photos):
         _check_floor_mask(args.floor_mask)
-        for flag, path, hint in (("--camera", args.camera, "make a camera profile with `stage calibrate`"),
+        for flag, path, hint in (("--camera", args.camera, CAMERA_HINT),
                                  ("--model", args.model, "give an ONNX floor model, or leave --model out"),
                                  ("--spec", args.spec, "write one (see `layout solve --help`)"),
                                  *((f"--asset {kind}=", path, "give a GLB, glTF or OBJ file")
                                    for kind, path in args.asset)):
-            if path is not None and not path.is_file():
-                raise StageError(f"{flag}{'' if flag.endswith('=') else ' '}{path}: no such file; {hint}")
+            _check_input_file(flag, path, hint)
     kinds = [kind for kind, _ in args.asset]
     if len(set(kinds)) < len(kinds):
         twice = sorted({k for k in kinds if kinds.count(k) > 1})

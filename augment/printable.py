@@ -30,15 +30,12 @@ from matplotlib.path import Path as MplPath
 from matplotlib.textpath import TextToPath
 
 from augment.board import (CHARUCO_BITS_PER_SQUARE, CHARUCO_DICTIONARY, CHARUCO_MARKER_BITS, DEFAULT_INNER_CORNERS,
-                           PAPER_MM, Board)
+                           MIN_SQUARE_MM, PAPER_MM, Board)
 from layout.fileio import atomic_path
 
 DEFAULT_SQUARE_BY_PAPER_MM = {"A3": 45.0, "A4": 30.0}
 
 PRINTER_MARGIN_MM = 8.0
-# Smaller squares are a few pixels in a room photo, and a ChArUco marker's bits in them
-# are a few printer dots.
-MIN_SQUARE_MM = 5.0
 """Nothing, squares included, is drawn closer than this to the paper edge: most office
 printers leave 3-6 mm blank, 8 mm covers them with room to spare."""
 

@@ -811,6 +811,11 @@ def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration,
 MASK_ASPECT_TOLERANCE = 0.01
 
 
+# Share of a floor mask's pixels that may be mid-grey (32-223): a soft brush's or a
+# scaled mask's edges are a few percent; a photo's is most of it.
+MAX_MASK_GREY = 0.25
+
+
 def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segmentation:
     """A floor mask the user made or corrected, in place of :func:`segment_floor`.
 
@@ -852,6 +857,14 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
     lightness = decode_grey(data)
     if lightness is None:
         raise SegmentationError(f"floor mask {path} {decode_problem(data)} (a mask: PNG, white = floor)")
+    sample = lightness[::4, ::4]  # plenty to tell a mask from a photo
+    grey = float(((sample > 32) & (sample < 223)).mean())
+    if grey > MAX_MASK_GREY:
+        # Thresholded at 127, a photo (the room's own, given by mistake, or one with the
+        # floor painted over) would make its bright parts floor.
+        raise SegmentationError(f"floor mask {path}: {grey:.0%} of its pixels are neither near black nor near "
+                                "white, so it looks like a photo, not a mask; give a black-and-white mask "
+                                "(white = floor), e.g. the floor.png of `stage segment` corrected")
     cols, rows = int(size_px[0]), int(size_px[1])
     height, width = lightness.shape
     if (width, height) != (cols, rows):

@@ -278,15 +278,16 @@ def _check_options(board: str, square: float, room: str, suggestions: int, seed:
 
     from layout.presets import PRESETS
 
-    from .board import Board
+    from .board import MIN_SQUARE_MM, Board
     from .cli import parse_board
 
     try:
         spec = parse_board(board)
     except argparse.ArgumentTypeError as error:
         raise UploadError(422, f"board {error}") from None
-    if not 0 < square < 1000:
-        raise UploadError(422, f"square {square:g}: the side of one printed square in millimeters, e.g. 45")
+    if not MIN_SQUARE_MM <= square < 1000:
+        raise UploadError(422, f"square {square:g}: the side of one printed square in millimeters, "
+                               f"{MIN_SQUARE_MM:g} to 1000, e.g. 45")
     try:
         Board(spec.cols, spec.rows, square, kind=spec.kind)
     except ValueError as error:

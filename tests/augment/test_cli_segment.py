@@ -107,6 +107,10 @@ def test_segment_refusals_name_the_problem(tmp_path, capsys):
     assert code == 2 and f"--out {own}: is the input {own}" in err and own.read_bytes() == before
     code, _, err = run(["segment", PHOTO, "--mean", "1,2", "--out", tmp_path / "c.png"], capsys)
     assert code == 2 and "R,G,B" in err
+    # A model given with --method grabcut was ignored silently.
+    for extra, flag in ((["--model", PHOTO], "--model"), (["--floor-class", "2"], "--floor-class")):
+        code, _, err = run(["segment", PHOTO, "--method", "grabcut", *extra, "--out", tmp_path / "d.png"], capsys)
+        assert code == 2 and err.startswith(f"error: {flag}: no model is used with --method grabcut"), err
     for option, value, words in (("--mean", "nan,0,0", "R,G,B"), ("--input-size", "100000x100000", "to 4096")):
         code, _, err = run(["segment", PHOTO, option, value, "--out", tmp_path / "c.png"], capsys)
         assert code == 2 and f"argument {option}: '{value}'" in err and words in err, err
@@ -243,11 +247,13 @@ def test_bad_floor_masks_are_refused(tmp_path, capsys):
              "wide.png": np.zeros((960, 1500), np.uint8),        # another shape
              "black.png": np.zeros_like(good),                   # no floor
              "inverted.png": 255 - good,                         # the board on "not floor"
-             "line.png": _painted_rectangle(1.2, 0.004)}         # a line, no floor to outline
+             "line.png": _painted_rectangle(1.2, 0.004),         # a line, no floor to outline
+             "photo.png": cv2.imread(str(PHOTO))}                # the photo itself, by mistake
     needles = {"missing.png": ["no such file", "stage segment"], "text.png": ["not an image"],
                "tall.png": ["960 x 1280", "1280 x 960", "turned a quarter"], "wide.png": ["1500 x 960"],
                "black.png": ["no floor in it"], "inverted.png": ["board's center", "inverted"],
-               "line.png": ["no floor outline", "a pixel or two wide", "not a line"]}
+               "line.png": ["no floor outline", "a pixel or two wide", "not a line"],
+               "photo.png": ["of its pixels are neither near black nor near white", "looks like a photo"]}
     for name, content in cases.items():
         path = tmp_path / name
         if isinstance(content, bytes):

@@ -78,6 +78,20 @@ def test_console_script_exits_with_the_command_status(tmp_path):
     assert bad.returncode == 2 and bad.stderr.startswith("error:")
 
 
+def test_outputs_and_inputs_that_cannot_be_are_refused(tmp_path, capsys):
+    """A PDF written to board.txt, squares of 1e-300 mm (they ran on, to "the board is
+    seen almost face-on"), a folder as the camera profile (it was "no such file")."""
+    code, _, err = run(["board", "--out", tmp_path / "board.txt"], capsys)
+    assert code == 2 and f"--out {tmp_path / 'board.txt'}: it is written as PDF" in err
+    assert f"e.g. {tmp_path / 'board.pdf'}" in err and list(tmp_path.iterdir()) == []
+    photo = OPENCV_DATA / "left01.jpg"
+    code, _, err = run(["check", photo, "--square", "1e-300"], capsys)
+    assert code == 2 and "--square: '1e-300': expected the side of one printed square in millimeters, 5 to 1000" \
+        in err
+    code, _, err = run(["check", photo, "--board", "9x6", "--square", "25", "--camera", tmp_path], capsys)
+    assert code == 2 and f"--camera {tmp_path}: is a folder; make a camera profile" in err
+
+
 def test_board_that_does_not_fit_is_refused(tmp_path, capsys):
     code, _, err = run(["board", "--paper", "A4", "--square", "60", "--out", tmp_path / "b.pdf"], capsys)
     assert code == 2
