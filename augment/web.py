@@ -17,6 +17,7 @@ described on the app's OpenAPI page (``/docs``):
                                     uncertain floor is most in doubt)
 ``GET /api/jobs/{id}/files/{name}`` one output file; only names in the job's ``files``
 ``GET /api/jobs/{id}/download.zip`` every output file in one zip
+``DELETE /api/jobs/{id}``           delete the job and its files now (a running job's as it ends)
 ``GET /api/board.pdf``              the board to print (``board``, ``square``, ``paper``)
 =================================== ==================================================
 
@@ -314,6 +315,7 @@ class Job:
     future: Future | None = None
     finished: float | None = None
     result: dict | None = None
+    delete_when_done: bool = False
 
 
 def _job_state(job: Job) -> dict:
@@ -551,13 +553,24 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
             pool["executor"].shutdown(wait=False)
             pool["executor"] = new_pool()
             job.future = pool["executor"].submit(_run_job, str(folder), options)
-        job.future.add_done_callback(lambda future: _finish(job, future))
+        loop = asyncio.get_running_loop()
+        job.future.add_done_callback(lambda future: finished(job, future, loop))
         return {"id": job_id}
+
+    def finished(job: Job, future: Future, loop) -> None:
+        _finish(job, future)
+        if job.delete_when_done:
+            # A pool thread: the jobs dict is the event loop's to change.
+            loop.call_soon_threadsafe(forget, job)
+
+    def forget(job: Job) -> None:
+        jobs.pop(job.id, None)
+        shutil.rmtree(job.folder, ignore_errors=True)
 
     def get_job(job_id: str) -> Job:
         job = jobs.get(job_id)
         if job is None:
-            raise HTTPException(404, f"no job {job_id!r}: it never existed or was deleted (finished jobs are "
+            raise HTTPException(404, f"no job {job_id[:60]!r}: it never existed or was deleted (finished jobs are "
                                      f"kept {keep_minutes:g} minutes)")
         return job
 
@@ -572,6 +585,19 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                 and state["error"]["message"].startswith("no "):
             state["error"]["board"] = _board_hint(job)
         return state
+
+    @app.delete("/api/jobs/{job_id}")
+    async def delete(job_id: str):
+        """Delete the job and every file of it (the photo too) now, rather than
+        ``keep_minutes`` after it finishes; a running job's are deleted as it finishes."""
+        job = get_job(job_id)
+        if job.result is None and not job.future.cancel() and not job.future.done():
+            job.delete_when_done = True
+            return JSONResponse({"id": job_id, "deleted": False,
+                                 "detail": "the photo is being furnished; it and its files are deleted as soon "
+                                           "as that is done"}, status_code=202)
+        forget(job)
+        return {"id": job_id, "deleted": True}
 
     @app.get("/api/jobs/{job_id}/files/{name}")
     async def file(job_id: str, name: str):

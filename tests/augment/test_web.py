@@ -73,6 +73,24 @@ def test_job_runs_to_completion(finished):
                                 "floor_mask": False, "clicks": 0, "suggestions": 1, "seed": 0}
 
 
+def test_a_job_is_deleted_on_request(finished):
+    """DELETE removes a job's folder (the photo too) now: a running one's as it ends, a
+    finished one's at once; then the job is gone (404) and a second DELETE says so."""
+    client, _, _, _, _, _, jobs = finished
+    response = client.post("/api/jobs", files={"photo": ("room_4.jpg", PHOTO.read_bytes(), "image/jpeg")},
+                           data={"suggestions": "1"})
+    job_id = response.json()["id"]
+    assert (jobs / job_id / "input").is_dir()
+    answer = client.delete(f"/api/jobs/{job_id}")
+    # Queued jobs are cancelled and deleted at once; this one is usually already running.
+    assert (answer.status_code, answer.json()["deleted"]) in ((202, False), (200, True)), answer.text
+    deadline = time.monotonic() + 50
+    while client.get(f"/api/jobs/{job_id}").status_code != 404 and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert client.get(f"/api/jobs/{job_id}").status_code == 404 and not (jobs / job_id).exists()
+    assert client.delete(f"/api/jobs/{job_id}").status_code == 404
+
+
 def test_files_and_zip(finished):
     client, job_id, state, *_ = finished
     image = client.get(f"/api/jobs/{job_id}/files/staged_1.jpg")
@@ -388,7 +406,8 @@ def test_browser_upload_shows_gallery(server, tmp_path):
                     state["doubt"] = {"x_px": 812, "y_px": 430, "floor": False}
                 route.fulfill(json=state)
 
-            page.route(re.compile(r"/api/jobs/[0-9a-f-]+$"), doubted)
+            jobs_route = re.compile(r"/api/jobs/[0-9a-f-]+$")
+            page.route(jobs_route, doubted)
             assert "magenta ring" not in page.inner_text("#warnings")
             page.click("#again")  # beside the corrections, below the overlays
             page.wait_for_selector("#download:not([hidden])", timeout=50_000)
@@ -402,5 +421,12 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             # Where it was clicked, to within two screen pixels (the overlay is shown small).
             within = 2 * (1280 + 960) / box["width"]
             assert abs(clicks[0]["x_px"] - 1280 / 3) < within and abs(clicks[0]["y_px"] - 0.9 * 960) < within, clicks
+            # Deleted from the server by its button: the page says so, the job is gone.
+            job_url = server + page.get_attribute("#zip", "href").removesuffix("/download.zip")
+            page.unroute(jobs_route, doubted)
+            page.click("#delete")
+            page.wait_for_function("document.getElementById('status').textContent.startsWith('Deleted')",
+                                   timeout=5_000)
+            assert page.locator("#staged img").count() == 0 and page.request.get(job_url).status == 404
         finally:
             browser.close()
