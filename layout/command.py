@@ -10,7 +10,9 @@ from __future__ import annotations
 import argparse
 import gc
 import os
+import signal
 import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable, Sequence
@@ -60,6 +62,18 @@ def dispatch(command: Callable[[argparse.Namespace], int], args: argparse.Namesp
     in ``program``: its traceback is printed (status 1).
     """
     t0 = time.perf_counter()
+    interrupted = []
+
+    def on_interrupt(signum, frame):
+        interrupted.append(True)
+        raise KeyboardInterrupt
+
+    # Ctrl-C raises where the program happens to be; inside PyOpenGL's wrappers it comes
+    # out as another exception (a TypeError), which must still read as an interruption.
+    watch = threading.current_thread() is threading.main_thread() and \
+        signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if watch:
+        signal.signal(signal.SIGINT, on_interrupt)
     try:
         return command(args)
     except BrokenPipeError:
@@ -70,6 +84,9 @@ def dispatch(command: Callable[[argparse.Namespace], int], args: argparse.Namesp
         print(f"error: interrupted after {time.perf_counter() - t0:.1f} s", file=sys.stderr)
         return 130
     except Exception as e:  # noqa: BLE001 - sorted into bad input and bugs below
+        if interrupted:
+            print(f"error: interrupted after {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+            return 130
         for types, describe in input_errors:
             if isinstance(e, types):
                 print(f"error: {describe(e)}", file=sys.stderr)
@@ -78,6 +95,9 @@ def dispatch(command: Callable[[argparse.Namespace], int], args: argparse.Namesp
         print(f"error: unexpected failure (a bug in {program}); please report the traceback above",
               file=sys.stderr)
         return EXIT_BUG
+    finally:
+        if watch:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def run(main: Callable[[], int]) -> NoReturn:
