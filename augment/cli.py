@@ -124,6 +124,19 @@ def _click(text: str) -> tuple[float, float]:
     return x, y
 
 
+def _door(text: str) -> tuple[float, float, float, float]:
+    """``X1,Y1,X2,Y2`` of ``--door``."""
+    parts = text.split(",")
+    try:
+        values = tuple(float(v) for v in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 4 or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"{text!r}: give X1,Y1,X2,Y2, the photo pixels of the feet of the door's "
+                                         "two sides (where they meet the floor), e.g. 980,220,1190,280")
+    return values
+
+
 class _ClickAction(argparse.Action):
     """Both click flags add to one list, in the order given: a later click wins."""
 
@@ -298,6 +311,10 @@ def _parser():
     f.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate`")
     _add_floor_args(f)
+    f.add_argument("--door", type=_door, action="append", default=[], metavar="X1,Y1,X2,Y2",
+                   help="a door to keep clear: the photo pixels of the feet of its two sides, where they "
+                        "meet the floor (as in the floor overlay); its swing zone, as deep as the door is "
+                        "wide, stays free of furniture. Repeat for more doors")
     f.add_argument("--asset", type=_asset, action="append", default=[], metavar="KIND=FILE",
                    help="your own model of a furniture kind (GLB, glTF or OBJ; y up, front toward +z), "
                         "stretched onto each item of that kind; repeat for more kinds "
@@ -737,6 +754,9 @@ def _furnish_cmd(args):
                          "or leave --floor-mask out to find each photo's floor")
     if batch and args.clicks:
         raise StageError(f"{_click_flag(args.clicks[0])}: a click is on one photo; give one photo with it")
+    if batch and args.door:
+        raise StageError(f"--door {','.join(f'{v:g}' for v in args.door[0])}: a door is in one photo; give one "
+                         "photo with it")
     _check_clicks_with_mask(args)
     if any(p.is_file() for p in photos):
         _check_floor_mask(args.floor_mask)
@@ -762,7 +782,7 @@ def _furnish_cmd(args):
             try:
                 result = furnish(photo, board, room=args.room, spec=args.spec, suggestions=args.suggestions,
                                  seed=args.seed, camera=args.camera, model=shared.get("model", args.model),
-                                 floor_mask=args.floor_mask, clicks=args.clicks,
+                                 floor_mask=args.floor_mask, clicks=args.clicks, doors=args.door,
                                  assets=dict(args.asset), layers=args.layers, renderer=shared.get("renderer"),
                                  progress=not args.quiet and sys.stderr.isatty())
                 paths = write_outputs(result, out, inputs=[photo, args.floor_mask, args.spec, args.camera,

@@ -497,6 +497,78 @@ def open_edges(polygon_m: np.ndarray, floor) -> list[int]:
     return [k for k, e in enumerate(nearest) if floor.edge_kind[e] != "boundary"]
 
 
+DOOR_GRAZE_M2 = 0.005
+# A door's feet this far apart: a narrow cupboard door to a wide double door.
+DOOR_WIDTH_M = (0.5, 2.5)
+# The middle of a door's feet this near a wall of the layout's floor (which lies the wall
+# margin inside the measured one, itself a few centimeters off at worst).
+DOOR_FROM_WALL_M = 0.5
+
+
+def doors_on_floor(doors_px, calibration, polygon_m: np.ndarray, open_edges_=()) -> tuple:
+    """The doors the user marked in the photo, as the layout's doors: their swing zones,
+    as deep as the door is wide, are kept free of furniture.
+
+    Parameters
+    ----------
+    doors_px : (n, 4) array_like
+        Per door the photo pixels x1, y1, x2, y2 of the feet of its two sides, where
+        they meet the floor (upright, as the floor overlay shows the photo).
+    calibration : Calibration
+    polygon_m : (m, 2) float64
+        The layout's floor, counter-clockwise.
+    open_edges_ : iterable of int
+        Its edges that are not walls (:func:`open_edges`).
+
+    Returns
+    -------
+    tuple of layout.spec.Opening
+        Each at the middle of its feet moved onto the nearest wall, as wide as they are
+        apart.
+
+    Raises
+    ------
+    FurnishError
+        A door outside the photo, above the horizon, of an unlikely width or not at a
+        wall of the floor found; the message says what to give instead.
+    """
+    from layout.spec import Opening
+
+    poly = np.asarray(polygon_m, dtype=np.float64)
+    walls = sorted(set(range(len(poly))) - {int(k) for k in open_edges_})
+    cols, rows = calibration.size_px
+    doors = []
+    for d in np.asarray(doors_px, dtype=np.float64).reshape(-1, 4):
+        name = "door " + ",".join(f"{v:g}" for v in d)
+        feet_px = d.reshape(2, 2)
+        if not ((feet_px >= 0).all() and (feet_px[:, 0] < cols).all() and (feet_px[:, 1] < rows).all()):
+            raise FurnishError(f"{name}: outside the photo ({cols} x {rows} px); give the photo pixels X1,Y1,X2,Y2 "
+                               "of the feet of the door's two sides, as the floor overlay shows the photo")
+        feet = calibration.floor_from_pixels(feet_px)
+        depth = (calibration.camera_from_floor @ np.column_stack([feet, np.zeros(2), np.ones(2)]).T)[2]
+        if not (np.isfinite(feet).all() and (depth > 0).all()):
+            raise FurnishError(f"{name}: above the horizon, so not on the floor; give the feet of the door's two "
+                               "sides, where they meet the floor")
+        width = float(np.linalg.norm(feet[1] - feet[0]))
+        lo, hi = DOOR_WIDTH_M
+        if not lo <= width <= hi:
+            raise FurnishError(f"{name}: its two feet are {width:.2f} m apart on the floor, and a door is {lo:g}-"
+                               f"{hi:g} m wide; give the feet of its two sides, where they meet the floor")
+        middle = feet.mean(axis=0)
+        distance = edge_distances(middle[None], poly)[0]
+        k = min(walls, key=lambda e: distance[e]) if walls else None
+        if k is None or distance[k] > DOOR_FROM_WALL_M:
+            where = "the floor found has no wall in view" if k is None else \
+                f"it is {distance[k]:.2f} m from the nearest wall of the floor found"
+            raise FurnishError(f"{name}: {where}; a door is marked at a wall, by the feet of its two sides "
+                               "(the floor overlay shows the walls found)")
+        a, b = poly[k], poly[(k + 1) % len(poly)]
+        t = float(np.clip(np.dot(middle - a, b - a) / np.dot(b - a, b - a), 0.0, 1.0))
+        doors.append(Opening(at_m=tuple(float(v) for v in a + t * (b - a)), width_m=round(width, 4),
+                             clearance_m=None, height_m=2.1, where=name))
+    return tuple(doors)
+
+
 def _spec_for_floor(source, polygon_m: np.ndarray, height_m: float, warnings: list, open_edges=()):
     """The furniture spec on the measured floor: a preset furnished for its area, or a
     spec file's items (its room, doors, windows and item positions are in its own frame,
@@ -556,7 +628,10 @@ def _layout_floor(floor, height_m: float, photo: Path, tol: Tolerances) -> np.nd
 
 
 def _clean(rep: dict) -> bool:
-    return rep["overlaps"]["count"] == 0 and rep["outside_m2"] == 0.0
+    # A door the user marked is kept clear like a wall is kept (a few cm² of a corner
+    # grazing the swing zone is no blocked door).
+    return (rep["overlaps"]["count"] == 0 and rep["outside_m2"] == 0.0
+            and all(a <= DOOR_GRAZE_M2 for a in rep["door_clearance_m2"]))
 
 
 def _solve(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress: _Progress,
@@ -795,6 +870,8 @@ def report_dict(result: FurnishResult) -> dict:
         "furniture": {"source": result.source, "floor_polygon_m": np.round(result.spec.polygon_m, 4),
                       "height_m": result.room_height_m, "items": [i.id for i in result.spec.items],
                       "kinds": [i.kind.name for i in result.spec.items], "dropped": result.dropped,
+                      "doors": [{"at_m": list(o.at_m), "width_m": o.width_m, "marked": o.where}
+                                for o in result.spec.doors],
                       "assets": dict(result.assets)},
         "suggestions": suggestions,
         "files": {"contact_sheet": "staged_all.jpg", "energy": "energy.png", "report": "report.json",
@@ -844,9 +921,9 @@ def _load_model(model):
 
 
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
-            seed: int = 0, camera=None, model=None, floor_mask=None, clicks=None, assets: dict | None = None,
-            layers: bool = False, progress: bool = False, reporter=None, renderer=None,
-            tol: Tolerances = TOL) -> FurnishResult:
+            seed: int = 0, camera=None, model=None, floor_mask=None, clicks=None, doors=None,
+            assets: dict | None = None, layers: bool = False, progress: bool = False, reporter=None,
+            renderer=None, tol: Tolerances = TOL) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
     Parameters
@@ -875,6 +952,10 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     clicks : (n, 3) array_like, optional
         The user's corrections of the floor found (x, y photo pixels, 1 floor or 0 not
         floor; :func:`augment.segment.segment_floor`). Not with ``floor_mask``.
+    doors : (n, 4) array_like, optional
+        Doors to keep clear: per door the photo pixels x1, y1, x2, y2 of the feet of its
+        two sides (:func:`doors_on_floor`). Each swing zone, as deep as the door is
+        wide, stays free of furniture.
     assets : dict, optional
         Kind -> the user's model of that kind, rendered and put in the scenes instead of
         Stager's own, stretched onto each item's box: a GLB, glTF or OBJ path (y up,
@@ -960,8 +1041,11 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         room_height = float(height.height_m)
         with clock("furniture"):
             poly = _layout_floor(floor, room_height, photo, tol)
-            spec = _spec_for_floor(source, poly, room_height, warnings, open_edges(poly, floor))
+            edges = open_edges(poly, floor)
+            spec = _spec_for_floor(source, poly, room_height, warnings, edges)
             fitted, dropped = fit_spec(spec, poly, room_height, tol)
+            if doors is not None and len(doors):
+                fitted = dataclasses.replace(fitted, doors=doors_on_floor(doors, calibration, poly, edges))
             if not fitted.items:
                 raise _too_small(floor.area_m2, dropped)
             kinds = {i.kind.name for i in fitted.items}

@@ -10,7 +10,8 @@ described on the app's OpenAPI page (``/docs``):
                                     ``suggestions``, ``seed``, an optional ``camera``
                                     profile file, an optional ``spec`` file instead of
                                     the room preset, an optional ``floor_mask`` file or
-                                    ``clicks`` correcting the floor) -> 202 ``{"id": ...}``
+                                    ``clicks`` correcting the floor, ``doors`` to keep
+                                    clear) -> 202 ``{"id": ...}``
 ``GET /api/jobs/{id}``              ``status`` (queued, running, done, failed), per-stage
                                     progress, ``error`` (what went wrong, in words),
                                     ``files``, ``warnings``, ``doubt`` (where an
@@ -66,6 +67,7 @@ MAX_PROFILE_BYTES = 1 << 20
 MAX_SPEC_BYTES = 256 << 10
 MAX_SUGGESTIONS = 12
 MAX_CLICKS = 100  # corrections per photo; more is a job for a floor mask
+MAX_DOORS = 10
 # A busy server says when to come back: about when a worker frees up, from the recent
 # jobs' times (this default until one is done), within these bounds.
 DEFAULT_JOB_S = 20.0
@@ -154,11 +156,12 @@ def _run_job(job_dir: str, options: dict) -> dict:
     spec = job / "input" / options["spec"] if options.get("spec") else None
     floor_mask = job / "input" / options["floor_mask"] if options.get("floor_mask") else None
     clicks = options.get("clicks") or None
+    doors = options.get("doors") or None
     try:
         result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
                                   room=None if spec is not None else options["room"], spec=spec,
                                   suggestions=options["suggestions"], seed=options["seed"], camera=camera,
-                                  floor_mask=floor_mask, clicks=clicks, reporter=_FileProgress,
+                                  floor_mask=floor_mask, clicks=clicks, doors=doors, reporter=_FileProgress,
                                   renderer=_renderer)
         state = json.loads(_progress_path.read_text())
         _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
@@ -274,6 +277,24 @@ def _check_clicks(text: str) -> list[list[float]]:
     return [[float(x), float(y), float(f)] for x, y, f in clicks]
 
 
+def _check_doors(text: str) -> list[list[float]]:
+    """The ``doors`` field: a JSON list of ``[x1, y1, x2, y2]`` (photo pixels of the feet
+    of a door's two sides), at most ``MAX_DOORS``; 422 otherwise."""
+    if not text.strip():
+        return []
+    try:
+        doors = json.loads(text)
+    except (json.JSONDecodeError, RecursionError):
+        doors = None
+    ok = isinstance(doors, list) and len(doors) <= MAX_DOORS and all(
+        isinstance(d, list) and len(d) == 4 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                    and math.isfinite(v) for v in d) for d in doors)
+    if not ok:
+        raise UploadError(422, f"doors {text[:80]!r}: give a JSON list of at most {MAX_DOORS} [x1, y1, x2, y2], "
+                               "the photo pixels of the feet of each door's two sides, e.g. [[980, 220, 1190, 280]]")
+    return [[float(v) for v in d] for d in doors]
+
+
 def _check_options(board: str, square: float, room: str, suggestions: int, seed: int = 0) -> tuple:
     import argparse
 
@@ -328,6 +349,7 @@ def _job_state(job: Job) -> dict:
                          "spec": job.options.get("spec") is not None,
                          "floor_mask": job.options.get("floor_mask") is not None,
                          "clicks": len(job.options.get("clicks") or ()),
+                         "doors": len(job.options.get("doors") or ()),
                          "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
     try:
         progress = json.loads((job.folder / "progress.json").read_text())
@@ -482,10 +504,14 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                      = None,
                      clicks: Annotated[str, Form(description="corrections of the floor found: a JSON list of "
                                                              "[x, y, 1] (floor left out) and [x, y, 0] (taken "
-                                                             "for floor), photo pixels, in order")] = ""):
+                                                             "for floor), photo pixels, in order")] = "",
+                     doors: Annotated[str, Form(description="doors to keep clear: a JSON list of [x1, y1, x2, "
+                                                            "y2], the photo pixels of the feet of each door's "
+                                                            "two sides")] = ""):
         """Start furnishing a photo; answers the job's id."""
         board_spec = _check_options(board, square, room, suggestions, seed)
         corrections = _check_clicks(clicks)
+        door_feet = _check_doors(doors)
         data = await photo.read(max_bytes + 1)
         if len(data) > max_bytes:
             raise UploadError(413, _too_large(len(data), max_bytes))
@@ -541,7 +567,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
         options = {"photo": f"photo{suffix}", "camera": "camera.json" if profile is not None else None,
                    "spec": "spec.toml" if layout_spec is not None else None,
                    "floor_mask": f"floor_mask{mask_suffix}" if mask is not None else None,
-                   "clicks": corrections,
+                   "clicks": corrections, "doors": door_feet,
                    "board": (board_spec.cols, board_spec.rows), "kind": board_spec.kind, "square": float(square),
                    "room": None if layout_spec is not None else room, "suggestions": int(suggestions),
                    "seed": int(seed)}

@@ -16,7 +16,7 @@ import trimesh
 
 from augment import cli, pipeline, segment
 from augment.board import Board
-from augment.calibrate import read_photo
+from augment.calibrate import calibrate_file, read_photo
 from augment.floor import FloorPolygon
 from augment.pipeline import (REPORT_KEYS, FurnishError, contact_sheet, fit_spec, furnish, inset_polygon,
                               open_edges, scene_glb, write_outputs)
@@ -587,3 +587,45 @@ def test_furniture_keeps_to_the_users_floor_mask(tmp_path, capsys):
     # A mask is of one photo: with several, the command refuses before any work.
     code, _, err = run(["furnish", ROOMY, CRAMPED, "--floor-mask", mask, "--out", tmp_path / "two"], capsys)
     assert code == 2 and "--floor-mask" in err and "one photo" in err and not (tmp_path / "two").exists()
+
+
+def _true_door_feet_px(photo: Path) -> tuple[np.ndarray, float]:
+    """The feet of the render's first door's two sides in the photo, and its width (m),
+    from the render's own truth (camera and room)."""
+    truth = json.loads(photo.with_suffix(".json").read_text())
+    T = np.array(truth["camera_from_world"])
+    feet = np.array([[x, y, 0.0] for x, y in truth["room"]["doors"][0]["segment_m"]])
+    px, _ = cv2.projectPoints(feet.reshape(-1, 1, 3), cv2.Rodrigues(T[:3, :3])[0], T[:3, 3], np.array(truth["K"]),
+                              np.array(truth["distortion"]))
+    return px.reshape(2, 2), float(np.linalg.norm(feet[1] - feet[0]))
+
+
+def test_a_marked_door_is_kept_clear(tmp_path, capsys):
+    """room_4's door at the far wall, marked by the feet of its two sides: it is as wide
+    as the render's door, on a wall of the floor, and no suggestion has furniture in its
+    swing zone; doors that cannot be are refused, saying why."""
+    feet_px, width_m = _true_door_feet_px(ROOMY)
+    door = ",".join(f"{v:.1f}" for v in feet_px.ravel())
+    out = tmp_path / "out"
+    code, _, err = run(["furnish", ROOMY, "--door", door, "--suggestions", "2", "--out", out], capsys)
+    assert code == 0, err
+    report = json.loads((out / "report.json").read_text())
+    (marked,) = report["furniture"]["doors"]
+    assert abs(marked["width_m"] - width_m) < 0.02 * width_m, (marked, width_m)
+    floor = np.array(report["furniture"]["floor_polygon_m"])
+    assert edge_distances(np.array([marked["at_m"]]), floor).min() < 1e-3
+    for k in (1, 2):
+        layout = json.loads((out / f"layout_{k}.json").read_text())
+        assert len(layout["room"]["doors_m"]) == 1
+        assert layout["metrics"]["door_clearance_m2"][0] <= pipeline.DOOR_GRAZE_M2
+    out.mkdir(exist_ok=True)
+    for value, words in (("1193,280,1196,281", "apart on the floor, and a door is 0.5-2.5 m wide"),
+                         ("1193,280,99999,219", "outside the photo (1280 x 960 px)"),
+                         ("520,650,800,650", "m from the nearest wall of the floor found")):
+        _refused(["furnish", ROOMY, "--door", value, "--out", out], out, capsys, f"error: door {value}: ", words)
+    _refused(["furnish", ROOMY, ROOMY.with_name("room_1.jpg"), "--door", door, "--out", out], out, capsys,
+             "a door is in one photo")
+    # Above room_1's horizon (about 48 px from its top) there is no floor to stand a door on.
+    cal = calibrate_file(ROOMY.with_name("room_1.jpg"), Board())
+    with pytest.raises(FurnishError, match="above the horizon"):
+        pipeline.doors_on_floor([[600, 10, 700, 10]], cal, np.array([[0, 0], [4, 0], [4, 4], [0, 4.0]]))

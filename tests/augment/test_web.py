@@ -70,7 +70,7 @@ def test_job_runs_to_completion(finished):
     assert any("focal length" in w for w in state["warnings"])
     assert state["doubt"] is None  # this floor is found well
     assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "spec": False,
-                                "floor_mask": False, "clicks": 0, "suggestions": 1, "seed": 0}
+                                "floor_mask": False, "clicks": 0, "doors": 0, "suggestions": 1, "seed": 0}
 
 
 def test_a_job_is_deleted_on_request(finished):
@@ -154,6 +154,7 @@ def test_bad_uploads(finished):
         (PHOTO.read_bytes(), {"room": "garage"}, 422, "choose one of"),
         (PHOTO.read_bytes(), {"suggestions": "50"}, 422, "from 1 to"),
         (PHOTO.read_bytes(), {"seed": "-5"}, 422, "seed -5: a whole number from 0"),
+        (PHOTO.read_bytes(), {"doors": "[[980, 220]]"}, 422, "give a JSON list of at most 10 [x1, y1, x2, y2]"),
     ]
     for data, options, status, words in cases:
         response = client.post("/api/jobs", files={"photo": ("x.jpg", data, "image/jpeg")}, data=options)
@@ -296,13 +297,16 @@ def test_clicks_correct_the_floor_found(finished):
     # A click on floor, then one outside the photo: the job refuses the second.
     states = []
     for clicks in ([[640, 900, 1]], [[640, 900, 1], [5000, 10, 0]]):
+        # With room_4's door (the feet of its sides, read off the render's truth) kept clear.
         response = client.post("/api/jobs", files=photo, data={"clicks": json.dumps(clicks), "room": "bedroom",
-                                                               "suggestions": "1"})
+                                                               "suggestions": "1",
+                                                               "doors": "[[1193.6, 280.5, 983.1, 219.6]]"})
         assert response.status_code == 202, response.text
         states.append(_wait(client, response.json()["id"]))
     assert states[0]["status"] == "done" and states[0]["options"]["clicks"] == 1, states[0]
     report = client.get(f"/api/jobs/{states[0]['id']}/files/report.json").json()
     assert report["floor"]["clicks"] == [{"x_px": 640.0, "y_px": 900.0, "floor": True}]
+    assert states[0]["options"]["doors"] == 1 and abs(report["furniture"]["doors"][0]["width_m"] - 0.85) < 0.02
     assert states[1]["status"] == "failed" and states[1]["error"]["kind"] == "segmentation"
     assert states[1]["error"]["message"].startswith("not floor at 5000,10: outside the photo (1280 x 960 px)"), \
         states[1]["error"]
@@ -398,6 +402,13 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             assert "1 floor correction (1 new" in page.inner_text("#clicks-note")
             overlay.click(position={"x": box["width"] * 0.9, "y": box["height"] / 2})  # on the plan: ignored
             assert page.locator(".mark").count() == 1
+            # room_4's door (the feet of its sides, from the render's truth) marked to keep clear.
+            scale = photo_w / 1280
+            page.click("#details .door-mode")
+            for x, y in ((1193.6, 280.5), (983.1, 219.6)):
+                overlay.click(position={"x": x * scale, "y": y * scale})
+            assert page.locator(".mark.door").count() == 2 and page.locator(".mark.floor").count() == 1
+            assert "1 floor correction, 1 door kept clear (2 new" in page.inner_text("#clicks-note")
             page.fill("input[name=suggestions]", "1")
 
             def doubted(route):  # the job's answer as if its floor were uncertain
@@ -418,6 +429,8 @@ def test_browser_upload_shows_gallery(server, tmp_path):
                                                                                    "files/report.json"))
             clicks = report.json()["floor"]["clicks"]
             assert len(clicks) == 1 and clicks[0]["floor"] is True
+            (door,) = report.json()["furniture"]["doors"]
+            assert abs(door["width_m"] - 0.85) < 0.05, door  # clicked on a shrunken overlay: a few px off
             # Where it was clicked, to within two screen pixels (the overlay is shown small).
             within = 2 * (1280 + 960) / box["width"]
             assert abs(clicks[0]["x_px"] - 1280 / 3) < within and abs(clicks[0]["y_px"] - 0.9 * 960) < within, clicks
