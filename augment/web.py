@@ -254,45 +254,43 @@ def _check_spec(data: bytes) -> None:
         raise UploadError(422, str(error)) from None
 
 
-def _check_clicks(text: str) -> list[list[float]]:
-    """The ``clicks`` field: a JSON list of ``[x, y, 1 or 0]`` (photo pixels; 1 floor left
-    out, 0 something taken for floor), at most ``MAX_CLICKS``; 422 otherwise."""
+def _number_rows(text: str, width: int) -> list[list[float]] | None:
+    """``text`` as a JSON list of lists of ``width`` finite numbers each (``[]`` for
+    blank text), or None when it is not that."""
     if not text.strip():
         return []
     try:
-        clicks = json.loads(text)
+        rows = json.loads(text)
     except (json.JSONDecodeError, RecursionError):
-        clicks = None
-    ok = isinstance(clicks, list) and all(
-        isinstance(c, list) and len(c) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                                    and math.isfinite(v) for v in c) and c[2] in (0, 1)
-        for c in clicks)
-    if not ok:
+        return None
+    ok = isinstance(rows, list) and all(
+        isinstance(r, list) and len(r) == width and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                        and math.isfinite(v) for v in r) for r in rows)
+    return [[float(v) for v in r] for r in rows] if ok else None
+
+
+def _check_clicks(text: str) -> list[list[float]]:
+    """The ``clicks`` field: a JSON list of ``[x, y, 1 or 0]`` (photo pixels; 1 floor left
+    out, 0 something taken for floor), at most ``MAX_CLICKS``; 422 otherwise."""
+    clicks = _number_rows(text, 3)
+    if clicks is None or any(c[2] not in (0, 1) for c in clicks):
         raise UploadError(422, f"clicks {text[:80]!r}: give a JSON list of [x, y, 1] for floor left out and "
                                "[x, y, 0] for something taken for floor, x and y in the photo's pixels, "
                                "e.g. [[640, 900, 1]]")
     if len(clicks) > MAX_CLICKS:
         raise UploadError(422, f"clicks: {len(clicks)} given, at most {MAX_CLICKS}; for larger corrections "
                                "upload a floor mask")
-    return [[float(x), float(y), float(f)] for x, y, f in clicks]
+    return clicks
 
 
 def _check_doors(text: str) -> list[list[float]]:
     """The ``doors`` field: a JSON list of ``[x1, y1, x2, y2]`` (photo pixels of the feet
     of a door's two sides), at most ``MAX_DOORS``; 422 otherwise."""
-    if not text.strip():
-        return []
-    try:
-        doors = json.loads(text)
-    except (json.JSONDecodeError, RecursionError):
-        doors = None
-    ok = isinstance(doors, list) and len(doors) <= MAX_DOORS and all(
-        isinstance(d, list) and len(d) == 4 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                                    and math.isfinite(v) for v in d) for d in doors)
-    if not ok:
+    doors = _number_rows(text, 4)
+    if doors is None or len(doors) > MAX_DOORS:
         raise UploadError(422, f"doors {text[:80]!r}: give a JSON list of at most {MAX_DOORS} [x1, y1, x2, y2], "
                                "the photo pixels of the feet of each door's two sides, e.g. [[980, 220, 1190, 280]]")
-    return [[float(v) for v in d] for d in doors]
+    return doors
 
 
 def _check_options(board: str, square: float, room: str, suggestions: int, seed: int = 0) -> tuple:
