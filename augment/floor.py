@@ -374,11 +374,12 @@ EDGE_COLORS = {"boundary": (255, 210, 0), "image": (0, 200, 255), "far": (170, 1
 FLOOR_TINT = np.array([40, 220, 90], np.float32)
 DISPUTED_COLOR = (255, 40, 200)  # magenta: apart from the tint and every edge colour
 CLICK_COLORS = {0: (230, 30, 30), 1: (0, 150, 40)}  # the user's "not floor" and "floor" marks
+DOOR_COLOR = (30, 90, 230)  # doors the user marked, as the web page marks them
 
 
 def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | None = None,
                   calibration=None, disputed: np.ndarray | None = None, clicks=None,
-                  doubt_px: tuple[int, int] | None = None) -> np.ndarray:
+                  doubt_px: tuple[int, int] | None = None, doors_px=None) -> np.ndarray:
     """The photo with the floor tinted, its outline, and a plan of the polygon.
 
     Parameters
@@ -398,6 +399,9 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
         a red one with a white cross for not floor.
     doubt_px : (x, y), optional
         The patch in doubt to look at first (``Segmentation.doubt_px``): ringed in magenta.
+    doors_px : (n, 4), optional
+        Doors the user marked to keep clear (x1, y1, x2, y2: the feet of each door's two
+        sides): a blue bar between the feet.
 
     Returns
     -------
@@ -425,7 +429,14 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
         center = (int(doubt_px[0]), int(doubt_px[1]))
         cv2.circle(out, center, 3 * radius, (255, 255, 255), 3 * thick, cv2.LINE_AA)
         cv2.circle(out, center, 3 * radius, DISPUTED_COLOR, thick, cv2.LINE_AA)
-    # The user's clicks on top of everything: they are what the user looks for.
+    # The user's clicks and doors on top of everything: they are what the user looks for.
+    for x1, y1, x2, y2 in np.asarray(doors_px if doors_px is not None else np.zeros((0, 4)), np.float64).reshape(-1, 4):
+        feet = (int(round(x1)), int(round(y1))), (int(round(x2)), int(round(y2)))
+        cv2.line(out, *feet, (255, 255, 255), 3 * thick, cv2.LINE_AA)
+        cv2.line(out, *feet, DOOR_COLOR, thick, cv2.LINE_AA)
+        for foot in feet:
+            cv2.circle(out, foot, radius // 2 + thick, (255, 255, 255), -1, cv2.LINE_AA)
+            cv2.circle(out, foot, radius // 2, DOOR_COLOR, -1, cv2.LINE_AA)
     for x, y, is_floor in np.asarray(clicks if clicks is not None else np.zeros((0, 3)), np.float64).reshape(-1, 3):
         center = (int(round(x)), int(round(y)))
         cv2.circle(out, center, radius + thick, (255, 255, 255), -1, cv2.LINE_AA)

@@ -1088,7 +1088,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         with clock("overlays"):
             overlays = {"overlay_calibration.png": calibration_overlay(image, calibration),
                         "overlay_floor.png": floor_overlay(image, seg.mask, floor, calibration,
-                                                           seg.doubted, seg.clicks, seg.doubt_px),
+                                                           seg.doubted, seg.clicks, seg.doubt_px, doors),
                         "overlay_height.png": height_overlay(image, calibration, height)}
             sheet = contact_sheet(staged, tol=tol)
         bar.step()

@@ -17,7 +17,7 @@ import trimesh
 from augment import cli, pipeline, segment
 from augment.board import Board
 from augment.calibrate import calibrate_file, read_photo
-from augment.floor import FloorPolygon
+from augment.floor import DOOR_COLOR, FloorPolygon
 from augment.pipeline import (REPORT_KEYS, FurnishError, contact_sheet, fit_spec, furnish, inset_polygon,
                               open_edges, scene_glb, write_outputs)
 from layout.geometry import edge_distances, polygon_area
@@ -614,6 +614,10 @@ def test_a_marked_door_is_kept_clear(tmp_path, capsys):
     assert abs(marked["width_m"] - width_m) < 0.02 * width_m, (marked, width_m)
     floor = np.array(report["furniture"]["floor_polygon_m"])
     assert edge_distances(np.array([marked["at_m"]]), floor).min() < 1e-3
+    # The overlay shows the door as marked: a blue bar between its feet.
+    overlay = cv2.cvtColor(cv2.imread(str(out / "overlay_floor.png")), cv2.COLOR_BGR2RGB)
+    x, y = feet_px.mean(axis=0).round().astype(int)
+    assert np.abs(overlay[y, x].astype(int) - DOOR_COLOR).max() < 40, overlay[y, x]
     for k in (1, 2):
         layout = json.loads((out / f"layout_{k}.json").read_text())
         assert len(layout["room"]["doors_m"]) == 1
