@@ -212,6 +212,24 @@ class FloorModel:
         if len(inputs) != 1:
             raise SegmentationError(f"model {self.path}: expected one input, found {len(inputs)}")
         self.input_name = inputs[0].name
+        shape = list(inputs[0].shape)
+        if len(shape) != 4:
+            raise SegmentationError(f"model {self.path}: its input {self.input_name} is {shape}; expected an image "
+                                    "batch (1, 3, rows, cols), or (1, rows, cols, 3) with layout NHWC")
+        spatial = shape[2:4] if self.spec.layout == "NCHW" else shape[1:3]
+        channels = shape[1] if self.spec.layout == "NCHW" else shape[3]
+        if isinstance(channels, int) and channels != 3:
+            raise SegmentationError(f"model {self.path}: its input is {shape}, {channels} channels where Stager "
+                                    f"feeds 3 (RGB or BGR); is its layout not {self.spec.layout}? (the layout "
+                                    "field of its JSON)")
+        if all(isinstance(v, int) and v > 0 for v in spatial):
+            # A model exported for one size says so; fed another, onnxruntime refuses it.
+            if self.spec.input_size is None:
+                self.spec = replace(self.spec, input_size=tuple(spatial))
+            elif tuple(self.spec.input_size) != tuple(spatial):
+                raise SegmentationError(f"model {self.path}: takes {spatial[1]}x{spatial[0]} px (its input is "
+                                        f"{shape}), not the {self.spec.input_size[1]}x{self.spec.input_size[0]} "
+                                        f"asked for; give --input-size {spatial[1]}x{spatial[0]} or leave it out")
 
     def input_shapes(self, rows: int, cols: int) -> list[tuple[int, int]]:
         """The (rows, cols) the model is fed for a photo of ``rows`` x ``cols``, one per
@@ -250,7 +268,10 @@ class FloorModel:
         if out.ndim != 3 or max(s.floor_class) >= out.shape[0]:
             raise SegmentationError(f"model {self.path}: output shape {out.shape} has no class "
                                     f"{max(s.floor_class)}; check floor_class and layout")
-        if s.output == "logits":
+        if s.output == "logits" and out.shape[0] == 1:
+            # One channel: a floor-or-not model's logit (a softmax over one class is 1).
+            out = 1.0 / (1.0 + np.exp(-out))
+        elif s.output == "logits":
             out = np.exp(out - out.max(axis=0, keepdims=True))
             out /= out.sum(axis=0, keepdims=True)
         p = out[list(s.floor_class)].sum(axis=0).astype(np.float32)

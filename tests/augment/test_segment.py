@@ -129,6 +129,47 @@ def _tiny_model(path, layout="NCHW"):
     return path
 
 
+def _conv_model(path, weights, shape_in):
+    """A 1x1 convolution of the image by ``weights`` (classes, 3), input ``shape_in``."""
+    import onnx
+    from onnx import TensorProto, helper
+
+    w = np.asarray(weights, np.float32)[..., None, None]
+    shape_out = [1, len(w)] + list(shape_in[2:])
+    graph = helper.make_graph(
+        [helper.make_node("Conv", ["image", "w"], ["logits"])], "conv",
+        [helper.make_tensor_value_info("image", TensorProto.FLOAT, shape_in)],
+        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, shape_out)],
+        [helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.ravel())])
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
+    model.ir_version = 8
+    onnx.save(model, str(path))
+    return path
+
+
+def test_fixed_size_and_one_channel_models(tmp_path):
+    """A model exported for one input size is fed that size (onnxruntime refused the
+    photo's, a traceback); a model of one output channel is read as a logit (a softmax
+    over one class made every pixel floor)."""
+    image = np.zeros((96, 128, 3), np.uint8)
+    image[:, :64] = (200, 30, 30)   # red left half
+    image[:, 64:] = (30, 30, 200)   # blue right half
+    left = np.zeros((96, 128), bool)
+    left[:, :64] = True
+    fixed = _conv_model(tmp_path / "fixed.onnx", [[0, 0, 0], [0, 0, 0], [20, 0, -20]], [1, 3, 48, 64])
+    model = FloorModel(fixed, spec=ModelSpec(mean=(0, 0, 0), std=(1, 1, 1), floor_class=(2,)))
+    assert model.spec.input_size == (48, 64) and iou(model.floor_probability(image) > 0.5, left) > 0.95
+    with pytest.raises(SegmentationError, match=re.escape("takes 64x48 px (its input is [1, 3, 48, 64]), not "
+                                                          "the 128x96 asked for")):
+        FloorModel(fixed, spec=ModelSpec(input_size=(96, 128), floor_class=(2,)))
+    one = _conv_model(tmp_path / "one.onnx", [[20, 0, -20]], [1, 3, "rows", "cols"])
+    p = FloorModel(one, spec=ModelSpec(mean=(0, 0, 0), std=(1, 1, 1), floor_class=(0,))).floor_probability(image)
+    assert iou(p > 0.5, left) > 0.95 and p[:, 100:].max() < 0.01
+    flat = _conv_model(tmp_path / "flat.onnx", [[1, 2, 3, 4]], [1, 4, "rows", "cols"])
+    with pytest.raises(SegmentationError, match=re.escape("its input is [1, 4, 'rows', 'cols'], 4 channels")):
+        FloorModel(flat)  # a traceback from onnxruntime at the first photo
+
+
 def test_a_users_onnx_model_is_fed_as_its_spec_says(tmp_path):
     image = np.zeros((96, 128, 3), np.uint8)
     image[:, :64] = (200, 30, 30)   # red left half
