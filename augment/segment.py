@@ -113,7 +113,9 @@ class ModelSpec:
         Output channels whose probabilities add up to "floor" (e.g. SUN RGB-D floor = 2,
         or ADE20K floor and rug).
     output : "logits" or "probabilities"
-        Whether the model's output still needs a softmax over the class axis.
+        Whether the model's output still needs a softmax over the class axis (a sigmoid
+        for one channel). A model whose output is one integer class per pixel (its
+        argmax) is read as such, whatever this says.
     layout : "NCHW" or "NHWC"
     """
 
@@ -263,6 +265,10 @@ class FloorModel:
         x = (x * np.float32(s.scale) - np.float32(s.mean)) / np.float32(s.std)
         x = x.transpose(2, 0, 1)[None] if s.layout == "NCHW" else x[None]
         out = self.session.run(None, {self.input_name: np.ascontiguousarray(x, np.float32)})[0][0]
+        if out.ndim == 2 and np.issubdtype(out.dtype, np.integer):
+            # A model that gives its argmax, a class per pixel: floor where it is a floor class.
+            p = np.isin(out, s.floor_class).astype(np.float32)
+            return cv2.resize(p, size_px, interpolation=cv2.INTER_LINEAR)
         if s.layout == "NHWC" and out.ndim == 3:
             out = out.transpose(2, 0, 1)
         if out.ndim != 3 or max(s.floor_class) >= out.shape[0]:

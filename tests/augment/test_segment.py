@@ -150,7 +150,7 @@ def _conv_model(path, weights, shape_in):
 def test_fixed_size_and_one_channel_models(tmp_path):
     """A model exported for one input size is fed that size (onnxruntime refused the
     photo's, a traceback); a model of one output channel is read as a logit (a softmax
-    over one class made every pixel floor)."""
+    over one class made every pixel floor); one that gives class labels, as labels."""
     image = np.zeros((96, 128, 3), np.uint8)
     image[:, :64] = (200, 30, 30)   # red left half
     image[:, 64:] = (30, 30, 200)   # blue right half
@@ -165,6 +165,21 @@ def test_fixed_size_and_one_channel_models(tmp_path):
     one = _conv_model(tmp_path / "one.onnx", [[20, 0, -20]], [1, 3, "rows", "cols"])
     p = FloorModel(one, spec=ModelSpec(mean=(0, 0, 0), std=(1, 1, 1), floor_class=(0,))).floor_probability(image)
     assert iou(p > 0.5, left) > 0.95 and p[:, 100:].max() < 0.01
+    # A model that gives its argmax (int64, a class per pixel): floor where it is class 2.
+    import onnx
+    from onnx import helper
+
+    graph = onnx.load(str(_conv_model(tmp_path / "argmax.onnx", [[0, 0, 0], [0, 0, 0], [20, 0, -20]],
+                                      [1, 3, "rows", "cols"]))).graph
+    graph.node[0].output[0] = "scores"
+    graph.node.append(helper.make_node("ArgMax", ["scores"], ["labels"], axis=1, keepdims=0))
+    graph.output[0].CopyFrom(helper.make_tensor_value_info("labels", onnx.TensorProto.INT64, [1, "rows", "cols"]))
+    labels = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
+    labels.ir_version = 8
+    onnx.save(labels, str(tmp_path / "argmax.onnx"))
+    p = FloorModel(tmp_path / "argmax.onnx", spec=ModelSpec(mean=(0, 0, 0), std=(1, 1, 1), floor_class=(2,))
+                   ).floor_probability(image)
+    assert iou(p > 0.5, left) > 0.95
     flat = _conv_model(tmp_path / "flat.onnx", [[1, 2, 3, 4]], [1, 4, "rows", "cols"])
     with pytest.raises(SegmentationError, match=re.escape("its input is [1, 4, 'rows', 'cols'], 4 channels")):
         FloorModel(flat)  # a traceback from onnxruntime at the first photo
