@@ -111,30 +111,26 @@ def _paper(text: str) -> str:
     return key
 
 
+def _finite_numbers(text: str, count: int, usage: str) -> tuple[float, ...]:
+    """``count`` finite numbers separated by commas, else a usage error saying ``usage``."""
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"{text!r}: give {usage}")
+    return values
+
+
 def _click(text: str) -> tuple[float, float]:
     """``X,Y`` of ``--floor-at`` and ``--not-floor-at``."""
-    parts = text.split(",")
-    try:
-        x, y = (float(v) for v in parts)
-    except ValueError:
-        x = y = float("nan")
-    if len(parts) != 2 or not (math.isfinite(x) and math.isfinite(y)):
-        raise argparse.ArgumentTypeError(f"{text!r}: give X,Y, a pixel of the photo (0,0 at its top left), "
-                                         "e.g. 640,900")
-    return x, y
+    return _finite_numbers(text, 2, "X,Y, a pixel of the photo (0,0 at its top left), e.g. 640,900")
 
 
 def _door(text: str) -> tuple[float, float, float, float]:
     """``X1,Y1,X2,Y2`` of ``--door``."""
-    parts = text.split(",")
-    try:
-        values = tuple(float(v) for v in parts)
-    except ValueError:
-        values = ()
-    if len(values) != 4 or not all(math.isfinite(v) for v in values):
-        raise argparse.ArgumentTypeError(f"{text!r}: give X1,Y1,X2,Y2, the photo pixels of the feet of the door's "
-                                         "two sides (where they meet the floor), e.g. 980,220,1190,280")
-    return values
+    return _finite_numbers(text, 4, "X1,Y1,X2,Y2, the photo pixels of the feet of the door's two sides (where "
+                                    "they meet the floor), e.g. 980,220,1190,280")
 
 
 class _ClickAction(argparse.Action):
@@ -370,13 +366,7 @@ def _size_px(text: str) -> tuple[int, int]:
 
 
 def _triple(text: str) -> tuple[float, float, float]:
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        values = ()
-    if len(values) != 3 or not all(math.isfinite(v) for v in values):
-        raise argparse.ArgumentTypeError(f"{text!r}: expected three numbers R,G,B, e.g. 0.485,0.456,0.406")
-    return values
+    return _finite_numbers(text, 3, "three numbers R,G,B, e.g. 0.485,0.456,0.406")
 
 
 def _classes(text: str) -> tuple[int, ...]:

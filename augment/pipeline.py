@@ -497,6 +497,7 @@ def open_edges(polygon_m: np.ndarray, floor) -> list[int]:
     return [k for k, e in enumerate(nearest) if floor.edge_kind[e] != "boundary"]
 
 
+# Furniture area inside a marked door's swing zone that still leaves the door usable.
 DOOR_GRAZE_M2 = 0.005
 # A door's feet this far apart: a narrow cupboard door to a wide double door.
 DOOR_WIDTH_M = (0.5, 2.5)
@@ -628,8 +629,7 @@ def _layout_floor(floor, height_m: float, photo: Path, tol: Tolerances) -> np.nd
 
 
 def _clean(rep: dict) -> bool:
-    # A door the user marked is kept clear like a wall is kept (a few cm² of a corner
-    # grazing the swing zone is no blocked door).
+    # A door the user marked is kept clear as the floor's edge is kept.
     return (rep["overlaps"]["count"] == 0 and rep["outside_m2"] == 0.0
             and all(a <= DOOR_GRAZE_M2 for a in rep["door_clearance_m2"]))
 
