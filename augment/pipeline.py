@@ -584,7 +584,8 @@ def _spec_for_floor(source, polygon_m: np.ndarray, height_m: float, warnings: li
     sp = source
     if sp.doors or sp.windows:
         warnings.append(f"{sp.path}: its {len(sp.doors)} door(s) and {len(sp.windows)} window(s) are placed in "
-                        "the spec's own room, not the photo's floor; they are left out")
+                        "the spec's own room, not the photo's floor; they are left out (mark the photo's doors "
+                        "to keep them clear: --door, or Mark a door in the web app)")
     if sp.preset is not None:
         furnished = spec_from_dict({"room": {"preset": sp.preset, **room},
                                     "constraints": list(sp.constraint_tables)}, where=str(sp.path))

@@ -428,6 +428,7 @@ def test_spec_items_that_do_not_fit_are_dropped_with_a_warning(tmp_path):
     assert not result.spec.constraints and not result.spec.doors
     warnings = " ".join(result.warnings)
     assert "door" in warnings and "wardrobe" in warnings and "pool" in warnings and "sofa" in warnings
+    assert "1 door(s) and 0 window(s)" in warnings and "mark the photo's doors to keep them clear: --door" in warnings
     assert result.report["furniture"]["dropped"] == result.dropped
 
 
