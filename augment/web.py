@@ -230,7 +230,7 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
             raise UploadError(413, f"the photo has too many pixels (at most {max_pixels / 1e6:g} megapixels)") \
                 from None
         except (UnidentifiedImageError, OSError, ValueError):
-            raise UploadError(415, f"the file {decode_problem(data)}; send a {PHOTO_FORMATS} photo") from None
+            raise UploadError(415, f"the file {decode_problem(data)}") from None
     if (problem := size_problem(width, height)) is not None:
         raise UploadError(422, f"the photo {problem}")
     if width * height > max_pixels:
