@@ -101,15 +101,17 @@ def test_floor_the_model_nearly_rules_out_is_left_to_grabcut(model, monkeypatch)
     assert missed_and_extra()[0] > 0.03
 
 
-def _tiny_model(path, layout="NCHW"):
-    """A 1x1 convolution: class 2's logit is 20 (R - B), the others 0. So with RGB input
-    "floor" is where the photo is red; fed BGR by mistake, where it is blue. An NHWC
-    model (as exported from TensorFlow) takes and gives channels last."""
+# Class 2's logit is 20 (R - B), the others 0: "floor" is where the photo is red.
+RED_IS_CLASS_2 = [[0, 0, 0], [0, 0, 0], [20, 0, -20]]
+
+
+def _conv_model(path, weights, shape_in, layout="NCHW"):
+    """A 1x1 convolution of the image by ``weights`` (classes, 3), input ``shape_in``. An
+    NHWC model (as exported from TensorFlow) takes and gives channels last."""
     import onnx
     from onnx import TensorProto, helper
 
-    w = np.zeros((3, 3, 1, 1), np.float32)
-    w[2, 0, 0, 0], w[2, 2, 0, 0] = 20, -20
+    w = np.asarray(weights, np.float32)[..., None, None]
     nodes, inp = [], "image"
     if layout == "NHWC":
         nodes.append(helper.make_node("Transpose", ["image"], ["nchw"], perm=[0, 3, 1, 2]))
@@ -117,34 +119,21 @@ def _tiny_model(path, layout="NCHW"):
     nodes.append(helper.make_node("Conv", [inp, "w"], ["logits" if layout == "NCHW" else "conv"]))
     if layout == "NHWC":
         nodes.append(helper.make_node("Transpose", ["conv"], ["logits"], perm=[0, 2, 3, 1]))
+    shape_out = [1, len(w)] + list(shape_in[2:]) if layout == "NCHW" else list(shape_in[:3]) + [len(w)]
+    graph = helper.make_graph(
+        nodes, "conv", [helper.make_tensor_value_info("image", TensorProto.FLOAT, shape_in)],
+        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, shape_out)],
+        [helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.ravel())])
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
+    model.ir_version = 8
+    onnx.save(model, str(path))
+    return path
+
+
+def _tiny_model(path, layout="NCHW"):
+    """Red is class 2 (fed BGR by mistake, blue is), any input size."""
     shape_in = [1, "rows", "cols", 3] if layout == "NHWC" else [1, 3, "rows", "cols"]
-    shape_out = [1, "rows", "cols", 3] if layout == "NHWC" else [1, 3, "rows", "cols"]
-    graph = helper.make_graph(
-        nodes, "tiny", [helper.make_tensor_value_info("image", TensorProto.FLOAT, shape_in)],
-        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, shape_out)],
-        [helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.ravel())])
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
-    model.ir_version = 8
-    onnx.save(model, str(path))
-    return path
-
-
-def _conv_model(path, weights, shape_in):
-    """A 1x1 convolution of the image by ``weights`` (classes, 3), input ``shape_in``."""
-    import onnx
-    from onnx import TensorProto, helper
-
-    w = np.asarray(weights, np.float32)[..., None, None]
-    shape_out = [1, len(w)] + list(shape_in[2:])
-    graph = helper.make_graph(
-        [helper.make_node("Conv", ["image", "w"], ["logits"])], "conv",
-        [helper.make_tensor_value_info("image", TensorProto.FLOAT, shape_in)],
-        [helper.make_tensor_value_info("logits", TensorProto.FLOAT, shape_out)],
-        [helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.ravel())])
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
-    model.ir_version = 8
-    onnx.save(model, str(path))
-    return path
+    return _conv_model(path, RED_IS_CLASS_2, shape_in, layout)
 
 
 def test_fixed_size_and_one_channel_models(tmp_path):
@@ -156,7 +145,7 @@ def test_fixed_size_and_one_channel_models(tmp_path):
     image[:, 64:] = (30, 30, 200)   # blue right half
     left = np.zeros((96, 128), bool)
     left[:, :64] = True
-    fixed = _conv_model(tmp_path / "fixed.onnx", [[0, 0, 0], [0, 0, 0], [20, 0, -20]], [1, 3, 48, 64])
+    fixed = _conv_model(tmp_path / "fixed.onnx", RED_IS_CLASS_2, [1, 3, 48, 64])
     model = FloorModel(fixed, spec=ModelSpec(mean=(0, 0, 0), std=(1, 1, 1), floor_class=(2,)))
     assert model.spec.input_size == (48, 64) and iou(model.floor_probability(image) > 0.5, left) > 0.95
     with pytest.raises(SegmentationError, match=re.escape("takes 64x48 px (its input is [1, 3, 48, 64]), not "
@@ -169,8 +158,7 @@ def test_fixed_size_and_one_channel_models(tmp_path):
     import onnx
     from onnx import helper
 
-    graph = onnx.load(str(_conv_model(tmp_path / "argmax.onnx", [[0, 0, 0], [0, 0, 0], [20, 0, -20]],
-                                      [1, 3, "rows", "cols"]))).graph
+    graph = onnx.load(str(_tiny_model(tmp_path / "argmax.onnx"))).graph
     graph.node[0].output[0] = "scores"
     graph.node.append(helper.make_node("ArgMax", ["scores"], ["labels"], axis=1, keepdims=0))
     graph.output[0].CopyFrom(helper.make_tensor_value_info("labels", onnx.TensorProto.INT64, [1, "rows", "cols"]))
