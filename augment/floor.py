@@ -409,15 +409,20 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
     """
     out = np.asarray(image, dtype=np.uint8).copy()
     mask = np.asarray(mask, dtype=bool)
-    out[mask] = (0.55 * out[mask] + 0.45 * FLOOR_TINT).astype(np.uint8)
+    # Whole-image uint8 passes: on a 48 MP photo, floats per floor pixel took 1.9 GB.
+    tinted = cv2.addWeighted(out, 0.55, np.broadcast_to(np.uint8(FLOOR_TINT), out.shape).copy(), 0.45, 0.0)
+    np.copyto(out, tinted, where=mask[..., None])
+    del tinted
     rows, cols = mask.shape
     thick = max(2, round(max(rows, cols) / 500))
     edge = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_GRADIENT, np.ones((3, 3), np.uint8)) > 0
     out[edge] = (20, 120, 40)
     if disputed is not None:
-        doubt = cv2.resize(np.asarray(disputed, np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
-        y, x = np.mgrid[0:rows, 0:cols]
-        out[doubt & ((x + y) // (2 * thick) % 3 == 0)] = DISPUTED_COLOR
+        doubt = cv2.resize(np.asarray(disputed, np.uint8) * np.uint8(255), (cols, rows),
+                           interpolation=cv2.INTER_LINEAR) > 127
+        y, x = np.nonzero(doubt)
+        hatch = (x + y) // (2 * thick) % 3 == 0
+        out[y[hatch], x[hatch]] = DISPUTED_COLOR
     if polygon is not None and calibration is not None:
         n = len(polygon.polygon_m)
         for i in range(n):

@@ -1030,13 +1030,18 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     # Each furniture pixel's point on the floor frame; the key light's shadows on the
     # furniture (a depth map from the light, filtered over the light's size).
     t = time.perf_counter()
-    ys, xs = np.nonzero(full[..., 3])
+    # Per furniture pixel, millions on a large photo: int32 indices and float32 points
+    # (a few micrometers at room distances) halve what float64 would hold.
+    ys, xs = (i.astype(np.int32) for i in np.nonzero(full[..., 3]))
     d = depth[ys, xs]
     if (d <= 0).any():  # edge pixels whose depth sample missed: a neighbour's depth
         grown = cv2.dilate(depth, np.ones((3, 3), np.uint8))
         d = np.where(d > 0, d, grown[ys, xs])
-    rays = np.stack([(xs - Kr[0, 2]) / Kr[0, 0], (ys - Kr[1, 2]) / Kr[1, 1], np.ones(len(xs))])
-    world = (R.T @ (rays * d - tvec[:, None])).T
+    rays = np.empty((3, len(xs)), np.float32)
+    rays[0] = (xs - Kr[0, 2]) / Kr[0, 0]
+    rays[1] = (ys - Kr[1, 2]) / Kr[1, 1]
+    rays[2] = 1.0
+    world = (R.T.astype(np.float32) @ (rays * d - tvec[:, None].astype(np.float32))).T
     if self_shadows:
         corners = np.concatenate([_reach_points([(it, f)], lighting, tol)[:8] for it, f in placed])
         view = _light_view(renderer, fulls, lighting, corners.min(axis=0), corners.max(axis=0),
@@ -1044,9 +1049,9 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         radius_px = float(np.clip(0.3 * math.tan(lighting.softness_rad) / view.texel_m, 1.0, 8.0))
         # Tested on every second or third pixel of large renders (the shadows are soft).
         step = 3 if rw * rh > 2.5e6 else 2 if rw * rh > 6e5 else 1
-        world_image = np.full((rh, rw, 3), np.nan, np.float32)
-        world_image[ys, xs] = world
-        world_image = world_image[::step, ::step]
+        on_grid = (ys % step == 0) & (xs % step == 0)
+        world_image = np.full((-(-rh // step), -(-rw // step), 3), np.nan, np.float32)
+        world_image[ys[on_grid] // step, xs[on_grid] // step] = world[on_grid]
         lit = key[::step, ::step, :3].max(axis=2) > 0  # surfaces the key light reaches
         ly, lx, points, bias = _shadow_receivers(world_image, lit, cam_pos, lighting, view.texel_m, radius_px)
         visibility = np.ones(lit.shape, np.float32)
@@ -1057,8 +1062,11 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         visibility = cv2.blur(visibility, (3, 3))
         rgba = np.empty((rh, rw, 4), np.uint8)
         _combine(full, key, visibility, _DECODE, _ENCODE, rgba)
+        del world_image, visibility, key, points
     else:
         rgba = np.ascontiguousarray(full)
+    # Render-sized buffers a large photo need not hold through the stages below.
+    del full, depth
     timings["self_shadows"] = time.perf_counter() - t
 
     # Occlusion, and which furniture pixels lie on the floor (rugs), at render resolution.
@@ -1066,21 +1074,13 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     low = np.zeros((rh, rw), np.uint8)
     low[ys, xs] = np.where(world[:, 2] < tol.floor_level_m, 255, 0)
     if floor_mask is not None or (walls is not None and len(walls)):
-        reach_xy = np.hypot(world[:, 0] - cam_xy[0], world[:, 1] - cam_xy[1])
-        occluder = np.full(len(xs), np.inf)
-        if floor_mask is not None:
-            dmap, ms = _mask_occluders_cached(floor_mask, K, pose, tol)
-            if distorted:
-                px, _ = _project(world, K, pose, dist)
-            else:
-                px = np.stack([(xs + 0.5) * (bw / rw) - 0.5 + box[0], (ys + 0.5) * (bh / rh) - 0.5 + box[1]], 1)
-            mi = np.clip(np.rint((px[:, 1] + 0.5) * ms - 0.5).astype(int), 0, dmap.shape[0] - 1)
-            mj = np.clip(np.rint((px[:, 0] + 0.5) * ms - 0.5).astype(int), 0, dmap.shape[1] - 1)
-            occluder = np.minimum(occluder, dmap[mi, mj])
-        if walls is not None and len(walls):
-            occluder = np.minimum(occluder, _wall_occluders(walls, (R.T @ rays).T, cam_xy))
-        slack = tol.occlusion_m + tol.occlusion_rel * np.where(np.isfinite(occluder), occluder, 0.0)
-        hidden = reach_xy > occluder + slack
+        if floor_mask is not None and not distorted:  # the photo pixel of each render pixel
+            px = np.stack([(xs + 0.5) * (bw / rw) - 0.5 + box[0], (ys + 0.5) * (bh / rh) - 0.5 + box[1]], 1)
+        elif floor_mask is not None:
+            px = _project(world, K, pose, dist)[0]
+        else:
+            px = None
+        hidden = _hidden(world, rays, px, floor_mask, walls, K, pose, cam_xy, tol)
         if hidden.any():
             # Hidden pixels grown by one (so a hidden silhouette's soft edge goes too), then
             # a cut a pixel wide.
@@ -1090,6 +1090,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
             iy, ix = np.nonzero(cut)
             keep = (255 - cut[iy, ix]).astype(np.float32) * (1.0 / 255.0)
             rgba[iy, ix] = (rgba[iy, ix] * keep[:, None] + 0.5).astype(np.uint8)
+    del world, rays, ys, xs, d
     timings["occlusion"] = time.perf_counter() - t
 
     # Back to photo pixels: resample the render onto the box.
@@ -1127,6 +1128,24 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     timings["composite"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t0
     return Staged(out, lay, full_alpha, full_gain, lighting, roi, s, timings)
+
+
+def _hidden(world, rays, px, floor_mask, walls, K, pose, cam_xy, tol) -> np.ndarray:
+    """Which furniture pixels (points ``world`` (n, 3), camera rays ``rays`` (3, n),
+    photo pixels ``px`` (n, 2) when a floor mask is given) lie behind the nearest thing
+    the photo shows along their ray: the floor mask's edge or a wall."""
+    R = pose[:3, :3]
+    reach_xy = np.hypot(world[:, 0] - cam_xy[0], world[:, 1] - cam_xy[1])
+    occluder = np.full(len(world), np.inf)
+    if floor_mask is not None:
+        dmap, ms = _mask_occluders_cached(floor_mask, K, pose, tol)
+        mi = np.clip(np.rint((px[:, 1] + 0.5) * ms - 0.5).astype(int), 0, dmap.shape[0] - 1)
+        mj = np.clip(np.rint((px[:, 0] + 0.5) * ms - 0.5).astype(int), 0, dmap.shape[1] - 1)
+        occluder = np.minimum(occluder, dmap[mi, mj])
+    if walls is not None and len(walls):
+        occluder = np.minimum(occluder, _wall_occluders(walls, (R.T @ rays).T, cam_xy))
+    slack = tol.occlusion_m + tol.occlusion_rel * np.where(np.isfinite(occluder), occluder, 0.0)
+    return reach_xy > occluder + slack
 
 
 @njit(cache=True)
