@@ -1036,7 +1036,8 @@ def camera_profile(paths, board: Board) -> dict:
     profile : dict
         JSON-ready: ``K``, ``distortion``, ``size_px``, ``rms_px``, ``focal_uncertainty``,
         ``per_view_rms_px``, ``images`` (used), ``skipped`` (no board found), ``repeated``
-        (the same picture as an earlier shot, counted once) and ``board``.
+        (the same picture as an earlier shot, counted once), ``unreadable`` (files that
+        are there but are not a photo Stager reads, with why) and ``board``.
 
     Raises
     ------
@@ -1045,9 +1046,16 @@ def camera_profile(paths, board: Board) -> dict:
     """
     paths = [Path(p) for p in paths]
     obj, img, used, size = [], [], [], None
-    skipped, repeated, seen = [], [], {}
+    skipped, repeated, unreadable, seen = [], [], [], {}
     for path in paths:
-        image = read_photo(path)
+        if not path.is_file():
+            read_photo(path)  # a path that is not there: its error, now
+        try:
+            image = read_photo(path)
+        except CalibrationError as error:
+            # One broken file among twenty shots need not stop the calibration: it is named.
+            unreadable.append(f"{path.name} ({str(error).removeprefix(f'photo {path} ')})")
+            continue
         # The same view twice (a shot named twice, or copied) would weigh double and can
         # make three shots out of one: it counts once.
         digest = hashlib.sha256(image.tobytes()).digest()
@@ -1070,9 +1078,10 @@ def camera_profile(paths, board: Board) -> dict:
         used.append(path.name)
     if len(used) < 3:
         again = f", {len(repeated)} more repeated one: {', '.join(repeated)}" if repeated else ""
+        broken = f"; {len(unreadable)} could not be read: {', '.join(unreadable)}" if unreadable else ""
         raise CalibrationError(
-            f"a {board.describe()} was found in {len(used)} of {len(seen)} different photos{again}; at least 3 "
-            "are needed (10-20 from different angles is better). Check --board (inner corners).")
+            f"a {board.describe()} was found in {len(used)} of {len(seen)} different photos{again}{broken}; at "
+            "least 3 are needed (10-20 from different angles is better). Check --board (inner corners).")
     flags = cv2.CALIB_FIX_ASPECT_RATIO
     K0 = np.eye(3)
     rms, K, dist, _, _, std_intr, _, per_view = cv2.calibrateCameraExtended(
@@ -1082,6 +1091,6 @@ def camera_profile(paths, board: Board) -> dict:
         # With a fixed aspect ratio OpenCV reports the deviation on fx or fy, by version.
         "focal_uncertainty": float(np.nanmax(std_intr[:2, 0]) / K[0, 0]),
         "per_view_rms_px": per_view.ravel().round(4).tolist(),
-        "images": used, "skipped": skipped, "repeated": repeated,
+        "images": used, "skipped": skipped, "repeated": repeated, "unreadable": unreadable,
         "board": _board_json(board),
     }

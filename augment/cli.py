@@ -213,7 +213,8 @@ def _parser():
                                    "from several photos of the board taken with one camera in one mode "
                                    "(same zoom and resolution): 10-20 shots from different angles and "
                                    "distances, the board filling much of the frame. Pass it to `stage check "
-                                   "--camera`. Photos where the board is not found are skipped.")
+                                   "--camera`. Photos where the board is not found, and files that are not "
+                                   "photos Stager reads (named, with why), are skipped.")
     c.add_argument("shots", type=Path, nargs="+", metavar="SHOT",
                    help="photos of the board, or folders of them")
     _add_board_args(c)
@@ -493,7 +494,8 @@ def _calibrate_cmd(args):
     k1, k2, p1, p2, k3 = (profile["distortion"] + [0.0] * 5)[:5]
     print(f"images      {len(used)} used, {len(skipped)} skipped"
           + (f" (no {board.describe()} found): {', '.join(skipped)}" if skipped else "")
-          + (f"; counted once: {', '.join(profile['repeated'])}" if profile["repeated"] else ""))
+          + (f"; counted once: {', '.join(profile['repeated'])}" if profile["repeated"] else "")
+          + (f"; not read: {', '.join(profile['unreadable'])}" if profile["unreadable"] else ""))
     print(f"size        {w} x {h} px")
     sigma = profile.get("focal_uncertainty") or 0.0
     print(f"focal       fx {K[0][0]:.2f}  fy {K[1][1]:.2f} px"

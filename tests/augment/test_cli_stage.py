@@ -152,6 +152,24 @@ def test_calibrate_counts_a_repeated_shot_once(tmp_path, capsys):
     assert code == 2 and "found in 1 of 1 different photos, 2 more repeated one" in err, err
 
 
+def test_calibrate_names_a_broken_shot_and_goes_on(tmp_path, capsys):
+    """A shot cut short among good ones stopped the whole calibration; it is now named and
+    left out. With too few good shots left, the error names it too."""
+    four = sorted(OPENCV_DATA.glob("left*.jpg"))[:4]
+    cut = tmp_path / "cut.jpg"
+    cut.write_bytes(four[0].read_bytes()[:-3000])
+    code, stdout, err = run(["calibrate", *four[1:], cut, "--board", "9x6", "--square", "25",
+                             "--out", tmp_path / "p.json"], capsys)
+    assert code == 0, err
+    profile = json.loads((tmp_path / "p.json").read_text())
+    assert profile["images"] == [p.name for p in four[1:]] and len(profile["unreadable"]) == 1
+    assert profile["unreadable"][0].startswith("cut.jpg (is cut short: a JPEG file")
+    assert "; not read: cut.jpg (is cut short" in stdout
+    code, _, err = run(["calibrate", *four[1:3], cut, "--board", "9x6", "--square", "25",
+                        "--out", tmp_path / "q.json"], capsys)
+    assert code == 2 and "found in 2 of 2 different photos; 1 could not be read: cut.jpg (is cut short" in err, err
+
+
 # --------------------------------------------------------------------------- stage check
 
 
