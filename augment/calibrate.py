@@ -1048,11 +1048,11 @@ def camera_profile(paths, board: Board) -> dict:
     obj, img, used, size = [], [], [], None
     skipped, repeated, unreadable, seen = [], [], [], {}
     for path in paths:
-        if not path.is_file():
-            read_photo(path)  # a path that is not there: its error, now
         try:
             image = read_photo(path)
         except CalibrationError as error:
+            if not path.is_file():  # a path that is not there: its error, now
+                raise
             # One broken file among twenty shots need not stop the calibration: it is named.
             unreadable.append(f"{path.name} ({str(error).removeprefix(f'photo {path} ')})")
             continue

@@ -427,12 +427,17 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
     jobs: dict[str, Job] = {}
     pool: dict = {}
 
+    def forget(job: Job) -> None:
+        """The job, and its folder with the photo and every file made from it, deleted."""
+        jobs.pop(job.id, None)
+        shutil.rmtree(job.folder, ignore_errors=True)
+
     def sweep(now: float | None = None) -> list[str]:
         """Delete finished jobs older than keep_minutes, and leftover job folders."""
         now = time.time() if now is None else now
         gone = [j.id for j in jobs.values() if j.finished is not None and now - j.finished > keep_s]
         for job_id in gone:
-            shutil.rmtree(jobs.pop(job_id).folder, ignore_errors=True)
+            forget(jobs[job_id])
         for folder in jobs_dir.iterdir():
             if folder.name not in jobs and _is_uuid(folder.name) and now - folder.stat().st_mtime > keep_s:
                 shutil.rmtree(folder, ignore_errors=True)
@@ -586,10 +591,6 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
         if job.delete_when_done:
             # A pool thread: the jobs dict is the event loop's to change.
             loop.call_soon_threadsafe(forget, job)
-
-    def forget(job: Job) -> None:
-        jobs.pop(job.id, None)
-        shutil.rmtree(job.folder, ignore_errors=True)
 
     def get_job(job_id: str) -> Job:
         job = jobs.get(job_id)

@@ -81,12 +81,10 @@ def dispatch(command: Callable[[argparse.Namespace], int], args: argparse.Namesp
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
     except KeyboardInterrupt:
-        print(f"error: interrupted after {time.perf_counter() - t0:.1f} s", file=sys.stderr)
-        return 130
-    except Exception as e:  # noqa: BLE001 - sorted into bad input and bugs below
+        return _interrupted(t0)
+    except Exception as e:  # noqa: BLE001 - sorted into interruptions, bad input and bugs below
         if interrupted:
-            print(f"error: interrupted after {time.perf_counter() - t0:.1f} s", file=sys.stderr)
-            return 130
+            return _interrupted(t0)
         for types, describe in input_errors:
             if isinstance(e, types):
                 print(f"error: {describe(e)}", file=sys.stderr)
@@ -98,6 +96,11 @@ def dispatch(command: Callable[[argparse.Namespace], int], args: argparse.Namesp
     finally:
         if watch:
             signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def _interrupted(t0: float) -> int:
+    print(f"error: interrupted after {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+    return 130
 
 
 def run(main: Callable[[], int]) -> NoReturn:
