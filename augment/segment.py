@@ -48,6 +48,16 @@ MIN_PART_M2, MIN_PART_SHARE = 0.05, 0.005
 # floor is said to be uncertain (chosen on seeds 901-913: it flags 37 of the 68 polygons
 # more than 5 % off, and 84 of the 789 within).
 DISPUTED_SHARE_WARN = 0.10
+# GrabCut follows colour: a line of the floor's colour that touches the floor (a window's
+# shadow on a wall, the edge of a door) is taken in with it, a thin spur reaching far from
+# anything the model calls floor, and far up a wall one pixel is much floor. Parts of the
+# mask thinner than SPUR_WIDTH_PX and more than SPUR_REACH_PX from the model's floor (at
+# GrabCut's working size; floor the user clicked counts as the model's) are dropped.
+# Floor that GrabCut rightly finds past the model is near it (the foot of a wall, 10 px
+# or less) or a region, not a line; a sliver of floor behind a carton at a far wall lies
+# 10-25 px from the model's floor, which sets the reach (at 6 px the rule cut such slivers
+# in three renders of seeds 930-934, one of them past 5 % of area, and mended two more).
+SPUR_WIDTH_PX, SPUR_REACH_PX = 5, 25
 
 
 # A user's click says "floor here" or "not floor here" of the region around it: the
@@ -933,9 +943,15 @@ def _geometry_trimap(shape_small, scale, calibration) -> np.ndarray:
 def _clean(mask: np.ndarray, calibration, scale, probability=None, clicked=None) -> np.ndarray:
     """Keep the floor's region under the board (else the largest), the parts cut off
     from it at the photo's edge (:func:`floor_parts`) and the parts the user clicked as
-    floor (``clicked``), close pinholes, drop specks."""
+    floor (``clicked``), close pinholes, drop specks and thin spurs far from the model's
+    floor (``SPUR_WIDTH_PX``, ``SPUR_REACH_PX``)."""
     mask = mask.astype(np.uint8)
     mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    if probability is not None:
+        known = probability > 0.5 if clicked is None else (probability > 0.5) | clicked
+        far = cv2.distanceTransform((~known).astype(np.uint8), cv2.DIST_L2, 5) > SPUR_REACH_PX
+        disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (SPUR_WIDTH_PX, SPUR_WIDTH_PX))
+        mask[far & (cv2.morphologyEx(mask, cv2.MORPH_OPEN, disc) == 0)] = 0
     labels, main, parts = floor_parts(mask, None if calibration is None else calibration.scaled(scale),
                                       probability)
     if probability is None:

@@ -522,6 +522,52 @@ def test_a_part_the_model_calls_no_floor_is_left_out(held_out):
     assert floor_parts(right | speck, cal)[2] == []
 
 
+def test_thin_spurs_far_from_the_models_floor_are_dropped():
+    """The clean-up drops lines GrabCut took in far from the model's floor (a shadow's
+    edge up a wall), and keeps what GrabCut rightly adds past the model: a sliver near its
+    floor's edge (behind a carton at a far wall), a region (shade), and any line the user
+    clicked as floor."""
+    from augment.segment import SPUR_REACH_PX, SPUR_WIDTH_PX, _clean
+
+    floor = np.zeros((480, 640), bool)
+    floor[300:] = True
+    p = np.where(floor, 0.95, 0.02)
+    thin = SPUR_WIDTH_PX - 2
+    spur = np.zeros_like(floor)
+    spur[300 - 3 * SPUR_REACH_PX:300, 100:100 + thin] = True  # up the wall ...
+    spur[300 - 3 * SPUR_REACH_PX:300 - 3 * SPUR_REACH_PX + thin, 100:300] = True  # ... and along it
+    sliver = np.zeros_like(floor)
+    top = 300 - SPUR_REACH_PX // 2
+    sliver[top:top + thin, 400:500] = True
+    sliver[top:300, 400:400 + thin] = True
+    region = np.zeros_like(floor)
+    region[300 - 3 * SPUR_REACH_PX:300, 540:600] = True
+    mask = floor | spur | sliver | region
+    kept = _clean(mask, None, 1.0, p)
+    # (A region's sharp corners far out lose a pixel each.)
+    assert kept[floor].all() and kept[sliver].all() and kept[region].mean() > 0.999
+    far = spur.copy()
+    far[300 - SPUR_REACH_PX:] = False
+    assert not kept[far].any()
+    # A line the user clicked as floor is floor.
+    assert _clean(mask, None, 1.0, p, clicked=spur)[spur].all()
+
+
+def test_a_windows_shadow_on_a_wall_is_not_floor(model):
+    """Render 15 of seed 930: a window's shadow falls on a cream wall in lines of the
+    tiled floor's colour, one reaching down to the floor. GrabCut took the lines in with
+    the floor, a spur up the wall and along it that put the polygon 19 % over the true
+    floor's; now the polygon is within 5 % of the one outlined from the true mask."""
+    with Renderer() as renderer:
+        sample = render_sample([930, 15], renderer)
+    w, h = sample.truth["size_px"]
+    cal = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
+    seg = segment_floor(sample.image, model, cal)
+    truth_m2 = floor_polygon(sample.floor_mask, cal).area_m2
+    assert abs(floor_polygon(seg.mask, cal).area_m2 / truth_m2 - 1) < 0.05
+    assert iou(seg.mask, sample.floor_mask) > 0.98
+
+
 def test_grabcut_alone_keeps_only_the_boards_region(held_out):
     """The clean-up keeps a part cut off at the photo's edge only on the model's word:
     with GrabCut alone (no probabilities) the board's region is the floor."""
