@@ -46,14 +46,15 @@ CORNER_NOISE_FLOOR_PX = {"chessboard": 0.05, "charuco": 0.2}
 # ChArUco marker begins 1/8 of a square from each corner, so its window is smaller.
 SADDLE_WINDOW = {"chessboard": 0.4, "charuco": 0.15}
 MAX_SADDLE_RADIUS_PX = 24
-# Now and then a detector puts a corner of a small board a third of a square off (2-5 px:
-# 25 of 837 renders of seeds 903-906 and 930-936 had one over 2 px), and the saddle search
-# started there does not reach the true corner; one such corner tipped the floor of seed
-# 960 render 34 to the wrong tilt (area +340 %). Each corner is checked against where its
-# neighbours put it (those up to OUTLIER_REACH corners away, through a homography: local,
-# so that lens distortion does not matter); the worst one more than OUTLIER_SQUARES of the
-# corner spacing off (and 1 px) is searched again from there, or else moved there, and the
-# check repeats. On OpenCV's barrel-distorted photos the worst is 0.053 of a square.
+# Now and then a detector puts a corner of a small board a quarter to two thirds of a
+# square off, 2-8 px (25 of 837 renders of seeds 903-906, 930-936 and 960-961 had one over
+# 2 px), and the saddle search started there does not reach the true corner; one such
+# corner tipped the floor of seed 960 render 34 to the wrong tilt (area +340 %). Each
+# corner is checked against where its neighbours put it (those up to OUTLIER_REACH
+# corners away, through a homography: local, so that lens distortion does not matter);
+# the worst one more than OUTLIER_SQUARES of the corner spacing off (and 1 px) is searched
+# again from there, or else moved there, and the check repeats. On OpenCV's
+# barrel-distorted photos the worst is 0.053 of a square.
 OUTLIER_SQUARES, OUTLIER_REACH = 0.25, 2
 # When the whole photo yields no checkerboard, the strongest saddle points are grouped and
 # the detectors rerun on crops around the largest groups (a small board in a big, busy
