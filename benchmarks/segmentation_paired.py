@@ -1,0 +1,135 @@
+"""Paired segmentation runs: render held-out rooms once, then score any version of the
+code on the very same photos, and list the renders a change moves.
+
+Counts of polygons within 5 % move by 1 or 2 per set from one rendering to the next
+(GrabCut's start moves with a pixel), so a change is judged on the same renders as the
+code before it. Three steps::
+
+    .venv/bin/python benchmarks/segmentation_paired.py render --seeds 930 931 --cache data/paired
+    .venv/bin/python benchmarks/segmentation_paired.py score --cache data/paired --out before.json
+    # ... change the code (or check out another revision) ...
+    .venv/bin/python benchmarks/segmentation_paired.py score --cache data/paired --out after.json
+    .venv/bin/python benchmarks/segmentation_paired.py compare before.json after.json
+
+``render`` keeps, per calibrated render, the photo (PNG), its true floor mask, the true
+visible floor area (as ``benchmarks/segmentation.py`` measures it) and the truth, under
+``--cache``; ``--tall`` draws the boards 12-20 cm tall. ``score`` calibrates each photo
+from its board with the true focal length and runs the whole segmentation and the floor
+polygon with the code as it is now. ``compare`` prints both counts and every render that
+crosses 5 % or moves by more than a point.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+from tqdm import tqdm
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from augment.board import Board  # noqa: E402
+from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics  # noqa: E402
+from augment.floor import floor_polygon  # noqa: E402
+from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor  # noqa: E402
+from layout.fileio import write_atomic  # noqa: E402
+
+TALL_BASEBOARD_M = (0.12, 0.20)
+
+
+def render(seeds: list[int], count: int, cache: Path, tall: bool) -> None:
+    from augment.gl import Renderer
+    from augment.synth import render_sample
+    from segmentation import true_visible_area_m2
+
+    cache.mkdir(parents=True, exist_ok=True)
+    with Renderer() as renderer:
+        for seed in seeds:
+            for i in tqdm(range(count), desc=f"seed {seed}", disable=not sys.stderr.isatty()):
+                extra = {"baseboard_m": TALL_BASEBOARD_M} if tall else {}
+                sample = render_sample([seed, i], renderer, **extra)
+                w, h = sample.truth["size_px"]
+                try:
+                    calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
+                except CalibrationError:
+                    continue
+                stem = cache / f"{seed}_{i}"
+                write_atomic(stem.with_suffix(".png"), cv2.imencode(".png", sample.image[..., ::-1])[1].tobytes())
+                write_atomic(stem.with_name(stem.name + "_floor.png"),
+                             cv2.imencode(".png", sample.floor_mask.astype(np.uint8) * 255)[1].tobytes())
+                write_atomic(stem.with_suffix(".json"), json.dumps(
+                    {"true_area_m2": true_visible_area_m2(sample.floor_mask, sample.truth), "truth": sample.truth}))
+
+
+def score(cache: Path, out: Path) -> None:
+    model = FloorModel(DEFAULT_MODEL)
+    rows = {}
+    photos = sorted(p for p in cache.glob("*.png") if not p.stem.endswith("_floor"))
+    for photo in tqdm(photos, desc="renders", disable=not sys.stderr.isatty()):
+        meta = json.loads(photo.with_suffix(".json").read_text())
+        image = cv2.imread(str(photo))[..., ::-1].copy()
+        truth = cv2.imread(str(photo.with_name(photo.stem + "_floor.png")), cv2.IMREAD_GRAYSCALE) > 127
+        w, h = meta["truth"]["size_px"]
+        row = {}
+        try:
+            cal = calibrate_photo(image, Board(), intrinsics=exif_intrinsics(meta["truth"]["K"][0][0], (w, h)))
+            mask = segment_floor(image, model, cal).mask
+            row["iou"] = float((mask & truth).sum() / max(1, (mask | truth).sum()))
+            row["area_error"] = floor_polygon(mask, cal).area_m2 / meta["true_area_m2"] - 1
+        except (CalibrationError, ValueError) as error:
+            row["failed"] = str(error)
+        rows[photo.stem] = row
+    write_atomic(out, json.dumps(rows, indent=1))
+    print(summary(rows))
+
+
+def summary(rows: dict) -> str:
+    errors = [r["area_error"] for r in rows.values() if "area_error" in r]
+    inside = sum(abs(e) <= 0.05 for e in errors)
+    return (f"{inside} of {len(errors)} polygons within 5 %, mean |error| {100 * np.mean(np.abs(errors)):.2f} %, "
+            f"mean IoU {np.mean([r['iou'] for r in rows.values() if 'iou' in r]):.4f}")
+
+
+def compare(before_path: Path, after_path: Path) -> None:
+    before, after = (json.loads(p.read_text()) for p in (before_path, after_path))
+    print(f"before: {summary(before)}\nafter:  {summary(after)}")
+    for name in sorted(before.keys() & after.keys()):
+        a, b = before[name].get("area_error"), after[name].get("area_error")
+        if a is None or b is None:
+            continue
+        crossed = (abs(a) <= 0.05) != (abs(b) <= 0.05)
+        if crossed or abs(a - b) > 0.01:
+            tag = ("in" if abs(b) <= 0.05 else "out") if crossed else ""
+            print(f"{name:>10}  {100 * a:+6.1f} % -> {100 * b:+6.1f} %  {tag}")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    verbs = parser.add_subparsers(dest="verb", required=True)
+    r = verbs.add_parser("render", help="render and keep held-out rooms")
+    r.add_argument("--seeds", type=int, nargs="+", required=True)
+    r.add_argument("--count", type=int, default=80)
+    r.add_argument("--tall", action="store_true", help="boards 12-20 cm tall")
+    r.add_argument("--cache", type=Path, default=ROOT / "data" / "paired")
+    s = verbs.add_parser("score", help="segment the kept renders with the code as it is now")
+    s.add_argument("--cache", type=Path, default=ROOT / "data" / "paired")
+    s.add_argument("--out", type=Path, required=True)
+    c = verbs.add_parser("compare", help="the renders two scores disagree on")
+    c.add_argument("before", type=Path)
+    c.add_argument("after", type=Path)
+    args = parser.parse_args(argv)
+    if args.verb == "render":
+        render(args.seeds, args.count, args.cache, args.tall)
+    elif args.verb == "score":
+        score(args.cache, args.out)
+    else:
+        compare(args.before, args.after)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
