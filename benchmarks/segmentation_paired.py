@@ -11,12 +11,13 @@ code before it. Three steps::
     .venv/bin/python benchmarks/segmentation_paired.py score --cache data/paired --out after.json
     .venv/bin/python benchmarks/segmentation_paired.py compare before.json after.json
 
-``render`` keeps, per calibrated render, the photo (PNG), its true floor mask, the true
-visible floor area (as ``benchmarks/segmentation.py`` measures it) and the truth, under
+``render`` keeps, per render, the photo (PNG), its true floor mask, the true visible
+floor area (as ``benchmarks/segmentation.py`` measures it) and the truth, under
 ``--cache``; ``--tall`` draws the boards 12-20 cm tall. ``score`` calibrates each photo
 from its board with the true focal length and runs the whole segmentation and the floor
-polygon with the code as it is now. ``compare`` prints both counts and every render that
-crosses 5 % or moves by more than a point.
+polygon with the code as it is now; a render it cannot calibrate or outline counts as
+failed, so a change to the calibration shows too. ``compare`` prints both counts and
+every render that crosses 5 %, moves by more than a point, or fails on one side only.
 """
 from __future__ import annotations
 
@@ -37,6 +38,7 @@ from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics
 from augment.floor import floor_polygon  # noqa: E402
 from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
+from segmentation import iou, true_visible_area_m2  # noqa: E402
 
 TALL_BASEBOARD_M = (0.12, 0.20)
 
@@ -44,7 +46,6 @@ TALL_BASEBOARD_M = (0.12, 0.20)
 def render(seeds: list[int], count: int, cache: Path, tall: bool) -> None:
     from augment.gl import Renderer
     from augment.synth import render_sample
-    from segmentation import true_visible_area_m2
 
     cache.mkdir(parents=True, exist_ok=True)
     with Renderer() as renderer:
@@ -52,11 +53,6 @@ def render(seeds: list[int], count: int, cache: Path, tall: bool) -> None:
             for i in tqdm(range(count), desc=f"seed {seed}", disable=not sys.stderr.isatty()):
                 extra = {"baseboard_m": TALL_BASEBOARD_M} if tall else {}
                 sample = render_sample([seed, i], renderer, **extra)
-                w, h = sample.truth["size_px"]
-                try:
-                    calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
-                except CalibrationError:
-                    continue
                 stem = cache / f"{seed}_{i}"
                 write_atomic(stem.with_suffix(".png"), cv2.imencode(".png", sample.image[..., ::-1])[1].tobytes())
                 write_atomic(stem.with_name(stem.name + "_floor.png"),
@@ -78,7 +74,7 @@ def score(cache: Path, out: Path) -> None:
         try:
             cal = calibrate_photo(image, Board(), intrinsics=exif_intrinsics(meta["truth"]["K"][0][0], (w, h)))
             mask = segment_floor(image, model, cal).mask
-            row["iou"] = float((mask & truth).sum() / max(1, (mask | truth).sum()))
+            row["iou"] = iou(mask, truth)
             row["area_error"] = floor_polygon(mask, cal).area_m2 / meta["true_area_m2"] - 1
         except (CalibrationError, ValueError) as error:
             row["failed"] = str(error)
@@ -90,8 +86,9 @@ def score(cache: Path, out: Path) -> None:
 def summary(rows: dict) -> str:
     errors = [r["area_error"] for r in rows.values() if "area_error" in r]
     inside = sum(abs(e) <= 0.05 for e in errors)
+    failed = sum("failed" in r for r in rows.values())
     return (f"{inside} of {len(errors)} polygons within 5 %, mean |error| {100 * np.mean(np.abs(errors)):.2f} %, "
-            f"mean IoU {np.mean([r['iou'] for r in rows.values() if 'iou' in r]):.4f}")
+            f"mean IoU {np.mean([r['iou'] for r in rows.values() if 'iou' in r]):.4f}; {failed} failed")
 
 
 def compare(before_path: Path, after_path: Path) -> None:
@@ -100,6 +97,8 @@ def compare(before_path: Path, after_path: Path) -> None:
     for name in sorted(before.keys() & after.keys()):
         a, b = before[name].get("area_error"), after[name].get("area_error")
         if a is None or b is None:
+            if (a is None) != (b is None):
+                print(f"{name:>10}  {before[name].get('failed', a)} -> {after[name].get('failed', b)}")
             continue
         crossed = (abs(a) <= 0.05) != (abs(b) <= 0.05)
         if crossed or abs(a - b) > 0.01:

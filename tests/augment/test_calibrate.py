@@ -318,6 +318,10 @@ def test_small_board_missed_on_the_whole_photo_is_found_on_a_crop():
     assert errors.max() < 0.3
 
 
+def _unmended(gray, corners, *args):
+    """Stands in for ``calibrate._mend_outliers``: corners as the saddle search left them."""
+    return corners
+
 
 def test_a_corner_the_detector_puts_off_is_mended():
     """Seed [960, 34] (boards of 12-20 cm, 2016x1512): the classic detector, on a crop,
@@ -355,11 +359,12 @@ def test_mending_leaves_good_corners_alone(monkeypatch):
     mended = calibrate._mend_outliers(gray, moved, detection.ids, Board(), spacing, round(0.4 * spacing))
     assert _corner_errors_px(mended, detection.ids, truth)[12] < 0.2
     assert np.array_equal(np.delete(mended, 12, axis=0), np.delete(detection.corners_px, 12, axis=0))
-    monkeypatch.setattr(calibrate, "_mend_outliers", lambda gray, corners, *args: corners)
+    monkeypatch.setattr(calibrate, "_mend_outliers", _unmended)
     as_found = [detect_board(cv2.imread(str(path)), OPENCV).corners_px for path in LEFT]
     monkeypatch.undo()
     for path, corners in zip(LEFT, as_found):
         assert np.array_equal(detect_board(cv2.imread(str(path)), OPENCV).corners_px, corners), path.name
+
 
 # --------------------------------------------------------------------------- ChArUco
 
@@ -464,7 +469,7 @@ def as_detected(monkeypatch):
     vertical edges and the refusals are for."""
     import augment.calibrate as calibrate
 
-    monkeypatch.setattr(calibrate, "_mend_outliers", lambda gray, corners, *args: corners)
+    monkeypatch.setattr(calibrate, "_mend_outliers", _unmended)
 
 
 def _normal_error_deg(calibration, truth) -> float:
