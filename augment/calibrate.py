@@ -56,6 +56,19 @@ MAX_SADDLE_RADIUS_PX = 24
 # again from there, or else moved there, and the check repeats. On OpenCV's
 # barrel-distorted photos the worst is 0.053 of a square.
 OUTLIER_SQUARES, OUTLIER_REACH = 0.25, 2
+# A detector can return a grid of the right size that is not the board's: on a small,
+# blurred board SB once took the paper's edge for a row of corners at both ends, partly a
+# square or two off (seed 937 render 61: 13.6 px; each corner consistent with its
+# neighbours, so the mend above cannot see it, and the floor's tilt came out 31 degrees
+# wrong). The squares such a grid outlines do not alternate dark and light as printed.
+# Each square's middle (the middle half each way, through the homography of all corners)
+# is compared with its neighbours: every inner square must differ from them the printed
+# way by at least MIN_SQUARE_CONTRAST of the median inner difference, and along each side
+# of the ring of squares outside the inner corners most must (median, the ring's own four
+# corners left out: the paper's edge may cut them). Over 320 renders the true grids' worst
+# inner square reads 0.46 (a board partly behind a carton), the next 0.69; OpenCV's photos'
+# 0.66 (their ring's sides 0.38); 937/61's grid -1.2.
+MIN_SQUARE_CONTRAST = 0.3
 # When the whole photo yields no checkerboard, the strongest saddle points are grouped and
 # the detectors rerun on crops around the largest groups (a small board in a big, busy
 # photo is found far more often on its own), enlarged twice when its squares are small.
@@ -368,13 +381,65 @@ def _mend_outliers(gray: np.ndarray, corners: np.ndarray, ids: np.ndarray, board
     return corners
 
 
-def _find_chessboard(gray: np.ndarray, pattern: tuple[int, int]):
+def square_contrast(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> np.ndarray:
+    """How each square outlined by a checkerboard's corners differs from its neighbours,
+    the way the printed board alternates, in units of the median inner square's difference.
+
+    Parameters
+    ----------
+    gray : (h, w) uint8
+    corners_px : (cols * rows, 2) float
+        All inner corners, in :meth:`Board.corners_m` order (or the detector's: mirrored
+        or turned readings give the same values).
+    board : Board
+
+    Returns
+    -------
+    (rows + 1, cols + 1) float64
+        One per printed square, the ring outside the inner corners included: about 1 for a
+        square as dark or light as printed against its neighbours, negative for one the
+        wrong way round.
+    """
+    on_board = board.corners_m()[:, :2]
+    H, _ = cv2.findHomography(on_board, np.asarray(corners_px, np.float64).reshape(-1, 2), 0)
+    offsets = (np.linspace(-0.25, 0.25, 3) * board.square_m)
+    du, dv = (a.ravel() for a in np.meshgrid(offsets, offsets))
+    row, col = np.mgrid[-1:board.rows, -1:board.cols]
+    x = ((col + 0.5 - (board.cols - 1) / 2) * board.square_m)[..., None] + du
+    y = ((row + 0.5 - (board.rows - 1) / 2) * board.square_m)[..., None] + dv
+    px = cv2.perspectiveTransform(np.stack([x, y], -1).reshape(-1, 1, 2), H).reshape(1, -1, 2).astype(np.float32)
+    value = cv2.remap(gray, px[..., 0].copy(), px[..., 1].copy(), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    value = value.reshape(board.rows + 1, board.cols + 1, -1).mean(axis=-1, dtype=np.float64)
+    # Against the neighbours and relative to their brightness, not one threshold: a shadow
+    # across the board darkens its white squares below the sunlit black ones.
+    padded = np.pad(value, 1, constant_values=np.nan)
+    around = np.nanmean([padded[:-2, 1:-1], padded[2:, 1:-1], padded[1:-1, :-2], padded[1:-1, 2:]], axis=0)
+    parity = np.where((row + col) % 2 == 0, 1.0, -1.0)
+    relative = parity * (value - around) / (value + around + 1.0)
+    # Its sign says which squares are the black ones, which depends on how the detector
+    # read the board.
+    scale = np.median(relative[1:-1, 1:-1])
+    return relative / (scale if scale != 0 else 1.0)
+
+
+def squares_alternate(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> bool:
+    """Whether the squares between a checkerboard's detected corners alternate as printed
+    (``MIN_SQUARE_CONTRAST``): False for a grid a detector fit partly to something else."""
+    contrast = square_contrast(gray, corners_px, board)
+    if not (contrast[1:-1, 1:-1] >= MIN_SQUARE_CONTRAST).all():
+        return False
+    sides = (contrast[0, 1:-1], contrast[-1, 1:-1], contrast[1:-1, 0], contrast[1:-1, -1])
+    return all(np.median(side) >= MIN_SQUARE_CONTRAST for side in sides)
+
+
+def _find_chessboard(gray: np.ndarray, board: Board):
     """Corners (cols * rows, 2) in ``gray`` or None, and which detector found them."""
+    pattern = (board.cols, board.rows)
     found, corners = cv2.findChessboardCornersSB(gray, pattern, flags=_SB_FLAGS)
-    if found:
+    if found and squares_alternate(gray, corners, board):
         return corners.reshape(-1, 2).astype(np.float64), "sb"
     found, corners = cv2.findChessboardCorners(gray, pattern, flags=_CLASSIC_FLAGS)
-    if found:
+    if found and squares_alternate(gray, corners, board):
         return corners.reshape(-1, 2).astype(np.float64), "classic"
     return None, None
 
@@ -429,7 +494,6 @@ def _board_candidates(gray: np.ndarray, board: Board) -> list[tuple[np.ndarray, 
 
 def _find_in_crops(gray: np.ndarray, small: np.ndarray, scale: float, board: Board):
     """Corners found on crops of ``gray`` around the board candidates seen in ``small``."""
-    pattern = (board.cols, board.rows)
     height, width = gray.shape
     for points, spacing in _board_candidates(small, board):
         points = (points + 0.5) / scale - 0.5
@@ -441,7 +505,7 @@ def _find_in_crops(gray: np.ndarray, small: np.ndarray, scale: float, board: Boa
         zooms = (1, 2) if spacing / scale < CROP_ZOOM_BELOW_PX else (1,)
         for zoom in zooms:
             view = crop if zoom == 1 else cv2.resize(crop, None, fx=zoom, fy=zoom, interpolation=cv2.INTER_CUBIC)
-            corners, detector = _find_chessboard(view, pattern)
+            corners, detector = _find_chessboard(view, board)
             if corners is not None:
                 return (corners + 0.5) / zoom - 0.5 + [x0, y0], f"{detector} crop"
     return None, None
@@ -450,7 +514,7 @@ def _find_in_crops(gray: np.ndarray, small: np.ndarray, scale: float, board: Boa
 def _detect_chessboard(gray: np.ndarray, board: Board) -> BoardDetection | None:
     scale = min(1.0, DETECT_MAX_SIDE_PX / max(gray.shape))
     small = gray if scale == 1.0 else cv2.resize(gray, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
-    corners, detector = _find_chessboard(small, (board.cols, board.rows))
+    corners, detector = _find_chessboard(small, board)
     if corners is not None:
         # Map pixel centers of the small copy back: x_full = (x_small + 0.5) / scale - 0.5.
         corners = (corners + 0.5) / scale - 0.5
