@@ -62,12 +62,12 @@ OUTLIER_SQUARES, OUTLIER_REACH = 0.25, 2
 # neighbours, so the mend above cannot see it, and the floor's tilt came out 31 degrees
 # wrong). The squares such a grid outlines do not alternate dark and light as printed.
 # Each square's middle (the middle half each way, through the homography of all corners)
-# is compared with its neighbours: every inner square must differ from them the printed
-# way by at least MIN_SQUARE_CONTRAST of the median inner difference, and along each side
-# of the ring of squares outside the inner corners most must (median, the ring's own four
-# corners left out: the paper's edge may cut them). Over 320 renders the true grids' worst
-# inner square reads 0.46 (a board partly behind a carton), the next 0.69; OpenCV's photos'
-# 0.66 (their ring's sides 0.38); 937/61's grid -1.2.
+# is compared with its neighbours: every inner square (between the inner corners) must
+# differ from them the printed way by at least MIN_SQUARE_CONTRAST of the median inner
+# difference. Over 320 renders the true grids' worst inner square reads 0.46 (a board
+# partly behind a carton), the next 0.69; OpenCV's photos' 0.66; 937/61's grid -2.8.
+# The ring of squares outside the inner corners is not judged: a carton over the board's
+# edge hides it while the detector still finds every corner (seed [7, 60], 5 % hidden).
 MIN_SQUARE_CONTRAST = 0.3
 # When the whole photo yields no checkerboard, the strongest saddle points are grouped and
 # the detectors rerun on crops around the largest groups (a small board in a big, busy
@@ -424,12 +424,9 @@ def square_contrast(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> n
 
 def squares_alternate(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> bool:
     """Whether the squares between a checkerboard's detected corners alternate as printed
-    (``MIN_SQUARE_CONTRAST``): False for a grid a detector fit partly to something else."""
-    contrast = square_contrast(gray, corners_px, board)
-    if not (contrast[1:-1, 1:-1] >= MIN_SQUARE_CONTRAST).all():
-        return False
-    sides = (contrast[0, 1:-1], contrast[-1, 1:-1], contrast[1:-1, 0], contrast[1:-1, -1])
-    return all(np.median(side) >= MIN_SQUARE_CONTRAST for side in sides)
+    (``MIN_SQUARE_CONTRAST``): False for a grid a detector fit partly to something else.
+    A grid read a whole square along everywhere still alternates, and passes."""
+    return bool((square_contrast(gray, corners_px, board)[1:-1, 1:-1] >= MIN_SQUARE_CONTRAST).all())
 
 
 def _find_chessboard(gray: np.ndarray, board: Board):
