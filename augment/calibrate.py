@@ -402,7 +402,7 @@ def square_contrast(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> n
     """
     on_board = board.corners_m()[:, :2]
     H, _ = cv2.findHomography(on_board, np.asarray(corners_px, np.float64).reshape(-1, 2), 0)
-    offsets = (np.linspace(-0.25, 0.25, 3) * board.square_m)
+    offsets = np.linspace(-0.25, 0.25, 3) * board.square_m
     du, dv = (a.ravel() for a in np.meshgrid(offsets, offsets))
     row, col = np.mgrid[-1:board.rows, -1:board.cols]
     x = ((col + 0.5 - (board.cols - 1) / 2) * board.square_m)[..., None] + du
@@ -551,9 +551,11 @@ def detect_board(image: np.ndarray, board: Board) -> BoardDetection | None:
     A checkerboard is looked for in a copy at most ``DETECT_MAX_SIDE_PX`` on its long side
     (OpenCV's SB detector, then the classic one); when neither finds it, on crops around
     the strongest groups of saddle points, at full resolution and enlarged (small,
-    foreshortened boards in large photos). A ChArUco board's markers are read at full
-    resolution; any ``MIN_CHARUCO_CORNERS`` corners not in a line will do. Corners are
-    then refined at full resolution to the saddle point of the intensity.
+    foreshortened boards in large photos). A checkerboard grid whose inner squares do not
+    alternate as printed (:func:`squares_alternate`) is passed over. A ChArUco board's
+    markers are read at full resolution; any ``MIN_CHARUCO_CORNERS`` corners not in a line
+    will do. Corners are then refined at full resolution to the saddle point of the
+    intensity.
 
     Parameters
     ----------
