@@ -352,8 +352,6 @@ def test_mending_leaves_good_corners_alone(monkeypatch):
     """A corner moved 0.3 of a square off in a clean detection is put back within 0.2 px
     of the truth, and the others are left; so are all the corners of OpenCV's photos,
     barrel-distorted."""
-    from augment import calibrate
-
     with Renderer() as renderer:
         sample = render_sample([99, 3], renderer, size_px=(2016, 1512))
     detection = detect_board(sample.image, Board())
@@ -371,7 +369,6 @@ def test_mending_leaves_good_corners_alone(monkeypatch):
     monkeypatch.undo()
     for path, corners in zip(LEFT, as_found):
         assert np.array_equal(detect_board(cv2.imread(str(path)), OPENCV).corners_px, corners), path.name
-
 
 
 def test_a_grid_whose_squares_do_not_alternate_is_not_taken():
@@ -537,8 +534,6 @@ def as_detected(monkeypatch):
     boards below then have one corner 6.7 and 8.2 px off, and their two tilts fit alike,
     as a far board's can with exact corners (the planar pose ambiguity) - what the
     vertical edges and the refusals are for."""
-    import augment.calibrate as calibrate
-
     monkeypatch.setattr(calibrate, "_mend_outliers", _unmended)
 
 
@@ -551,8 +546,6 @@ def test_far_board_tilt_is_settled_by_the_vertical_edges(far_board, as_detected,
     """The board alone fits a floor tilted 60 degrees off a little better than the true one
     (RMS 0.99 against 1.04 px); the door's and the corner's vertical edges pick the true one,
     and refit with the board they bring its normal within 0.5 degrees."""
-    import augment.calibrate as calibrate
-
     w, h = far_board.truth["size_px"]
     intrinsics = exif_intrinsics(far_board.truth["K"][0][0], (w, h))
     assert _normal_error_deg(calibrate_photo(far_board.image, Board(), intrinsics=intrinsics), far_board.truth) < 0.5
@@ -587,8 +580,6 @@ def test_steep_view_levels_with_the_wall_edges_below_its_horizon(as_detected, mo
     edges below it are on the walls (not the floor's colour either side): refit with them
     the floor normal is within 0.2 degrees. Taken for lines on the floor (every edge below
     the horizon dropped) it stays 1.3 degrees off."""
-    import augment.calibrate as calibrate
-
     with Renderer() as renderer:
         sample = render_sample([907, 68], renderer)
     w, h = sample.truth["size_px"]
@@ -602,8 +593,6 @@ def test_far_board_with_its_corner_mended_needs_no_vertical_edges(far_board, mon
     """The far board's corner 6.7 px off, mended: every corner within 0.3 px of the truth,
     the board alone picks the right tilt (within 0.5 degrees), and it even shows enough
     perspective for a single-view focal length, within 1 % of the truth."""
-    import augment.calibrate as calibrate
-
     t = far_board.truth
     detection = detect_board(far_board.image, Board())
     assert _corner_errors_px(detection.corners_px, detection.ids, t["board"]["corners_px"]).max() < 0.3
