@@ -86,7 +86,8 @@ def _board_cover(board: Board, world_from_board: np.ndarray, fraction: float) ->
 
 def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = None,
                   board: Board | None = None, clutter: bool = True, photographic: bool = True,
-                  board_hidden: float = 0.0, furnished: float = 0.0, baseboard_m=BASEBOARD_M) -> Sample:
+                  board_hidden: float = 0.0, furnished: float = 0.0, baseboard_m=BASEBOARD_M,
+                  trim_like_floor: float = 0.0) -> Sample:
     """Render one synthetic room photo with its ground truth.
 
     Parameters
@@ -114,6 +115,11 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     baseboard_m : (low, high)
         The range the baseboards' height is drawn from, meters (another range keeps the
         random stream: only the boards' heights change).
+    trim_like_floor : float
+        Chance that the baseboards, casings and window frames are painted the floor's
+        colour, 0.5-1.3 of its brightness (0: never, and the random stream is the same as
+        without this option). Such boards look like a band of light or shade on the floor,
+        the skirting check's hardest case.
     """
     board = Board() if board is None else board
     rng = np.random.default_rng(seed)
@@ -142,7 +148,8 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     if board_hidden > 0:
         room = replace(room, clutter=room.clutter + (_board_cover(board, world_from_board, board_hidden),))
 
-    built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px), baseboard_m)
+    built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px), baseboard_m,
+                        trim_like_floor)
     width, height = size_px
     flags = pyrender.RenderFlags.SHADOWS_DIRECTIONAL | pyrender.RenderFlags.SHADOWS_SPOT
     # Small frames cannot show a 2048-texel shadow map's detail; it would cost half the time.

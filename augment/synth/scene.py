@@ -319,9 +319,11 @@ def _light_pose(direction, position=(0.0, 0.0, 0.0)):
 
 
 def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
-                world_from_board: np.ndarray, texture_px: int = 512, baseboard_m=BASEBOARD_M) -> Scene:
+                world_from_board: np.ndarray, texture_px: int = 512, baseboard_m=BASEBOARD_M,
+                trim_like_floor: float = 0.0) -> Scene:
     """Sample materials and lights and assemble the scene seen by ``shot`` (baseboards
-    drawn ``baseboard_m`` (low, high) tall)."""
+    drawn ``baseboard_m`` (low, high) tall; the trim painted the floor's colour, 0.5-1.3
+    of its brightness, with the chance ``trim_like_floor``)."""
     info: dict = {}
     sky = np.clip([0.92, 0.95, 1.0] + rng.normal(0, 0.03, 3), 0.8, 1.0)
     scene = GLScene(bg_color=np.append(sky, 1.0))
@@ -360,6 +362,13 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     _openings(rng, room, frames, doors, baseboard_m)
     white = _random_tint(rng, [0.85, 0.85, 0.83], 0.03)
     trim = white if rng.random() < 0.7 else _random_tint(rng, [0.45, 0.3, 0.18], 0.08)
+    # Drawn only when asked for, so that the default random stream stays as it was.
+    if trim_like_floor > 0 and rng.random() < trim_like_floor:
+        # The shader decodes textures from sRGB; a colour factor is linear already.
+        texels = image.reshape(-1, 3) / 255.0
+        linear = np.where(texels <= 0.04045, texels / 12.92, ((texels + 0.055) / 1.055) ** 2.4).mean(axis=0)
+        trim = np.clip(linear * rng.uniform(0.5, 1.3), 0.02, 1.0)
+        info["trim_like_floor"] = True
     if frames.positions:
         add(frames.mesh(_material(rng, trim, roughness=(0.3, 0.7), closed=True)), SEG_OTHER)
     if doors.positions:

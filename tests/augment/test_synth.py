@@ -322,6 +322,45 @@ def test_taller_baseboards_change_only_the_boards(renderer):
     assert (changed & ~tall.floor_mask).sum() >= 0.8 * changed.sum()
 
 
+def _trim_and_floor_chromaticity(sample):
+    """Mean r, g, b / (r + g + b) of the 3 px above the floor's top edge where they are
+    not floor, wall or ceiling (the baseboard), and of the floor just below it."""
+    def chroma(pixels):
+        pixels = np.concatenate(pixels).astype(np.float64) + 1
+        return (pixels / pixels.sum(axis=1, keepdims=True)).mean(axis=0)
+
+    top = np.argmax(sample.floor_mask, axis=0)
+    cols = np.flatnonzero(sample.floor_mask.any(axis=0) & (top > 6))
+    trim = [sample.image[top[c] - 4:top[c] - 1, c] for c in cols
+            if (sample.labels[top[c] - 4:top[c] - 1, c] == 0).all()]
+    floor = [sample.image[top[c] + 2:top[c] + 6, c] for c in cols]
+    return chroma(trim), chroma(floor)
+
+
+@pytest.mark.parametrize("seed", [6, 7])
+def test_trim_like_floor_paints_the_baseboards_the_floors_colour(renderer, seed):
+    """The skirting check's hardest boards: the same room and camera, the boards of the
+    floor's hue (a white or brown trim differs from these floors by 0.09-0.17 in
+    chromaticity)."""
+    default = render_sample(seed, renderer, size_px=(320, 240), photographic=False)
+    hue = render_sample(seed, renderer, size_px=(320, 240), photographic=False, trim_like_floor=1.0)
+    assert hue.truth["room"] == default.truth["room"]
+    assert hue.truth["camera_from_world"] == default.truth["camera_from_world"]
+    assert hue.truth["render"]["trim_like_floor"] and "trim_like_floor" not in default.truth["render"]
+    trim, floor = _trim_and_floor_chromaticity(default)
+    assert np.abs(trim - floor).max() > 0.06
+    trim, floor = _trim_and_floor_chromaticity(hue)
+    assert np.abs(trim - floor).max() < 0.04
+
+
+def test_cli_rejects_a_bad_trim_chance(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        synth_main(["--count", "1", "--out", str(tmp_path / "new"), "--trim-like-floor", "-0.5"])
+    assert exit_info.value.code == 2
+    assert "--trim-like-floor -0.5" in capsys.readouterr().err
+    assert not (tmp_path / "new").exists()
+
+
 def test_cli_rejects_a_bad_baseboard_range(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_info:
         synth_main(["--count", "1", "--out", str(tmp_path / "new"), "--baseboard-m", "0.3", "0.1"])
