@@ -13,7 +13,8 @@ code before it. Three steps::
 
 ``render`` keeps, per render, the photo (PNG), its true floor mask, the true visible
 floor area (as ``benchmarks/segmentation.py`` measures it) and the truth, under
-``--cache``; ``--tall`` draws the boards 12-20 cm tall. ``score`` calibrates each photo
+``--cache``; ``--tall`` draws the boards 12-20 cm tall, ``--hue`` paints every room's
+trim the floor's colour. ``score`` calibrates each photo
 from its board with the true focal length and runs the whole segmentation and the floor
 polygon with the code as it is now; a render it cannot calibrate or outline counts as
 failed, so a change to the calibration shows too. ``compare`` prints both counts and
@@ -43,7 +44,7 @@ from segmentation import iou, true_visible_area_m2  # noqa: E402
 TALL_BASEBOARD_M = (0.12, 0.20)
 
 
-def render(seeds: list[int], count: int, cache: Path, tall: bool) -> None:
+def render(seeds: list[int], count: int, cache: Path, tall: bool, hue: bool = False) -> None:
     from augment.gl import Renderer
     from augment.synth import render_sample
 
@@ -52,6 +53,8 @@ def render(seeds: list[int], count: int, cache: Path, tall: bool) -> None:
         for seed in seeds:
             for i in tqdm(range(count), desc=f"seed {seed}", disable=not sys.stderr.isatty()):
                 extra = {"baseboard_m": TALL_BASEBOARD_M} if tall else {}
+                if hue:
+                    extra["trim_like_floor"] = 1.0
                 sample = render_sample([seed, i], renderer, **extra)
                 stem = cache / f"{seed}_{i}"
                 write_atomic(stem.with_suffix(".png"), cv2.imencode(".png", sample.image[..., ::-1])[1].tobytes())
@@ -113,6 +116,7 @@ def main(argv=None) -> int:
     r.add_argument("--seeds", type=int, nargs="+", required=True)
     r.add_argument("--count", type=int, default=80)
     r.add_argument("--tall", action="store_true", help="boards 12-20 cm tall")
+    r.add_argument("--hue", action="store_true", help="trim painted the floor's colour")
     r.add_argument("--cache", type=Path, default=ROOT / "data" / "paired")
     s = verbs.add_parser("score", help="segment the kept renders with the code as it is now")
     s.add_argument("--cache", type=Path, default=ROOT / "data" / "paired")
@@ -122,7 +126,7 @@ def main(argv=None) -> int:
     c.add_argument("after", type=Path)
     args = parser.parse_args(argv)
     if args.verb == "render":
-        render(args.seeds, args.count, args.cache, args.tall)
+        render(args.seeds, args.count, args.cache, args.tall, args.hue)
     elif args.verb == "score":
         score(args.cache, args.out)
     else:

@@ -10,11 +10,11 @@ is known: segmented by the shipped pipeline without the trim, so the model sees 
 masks the trim sees.
 
 Recipe (what ``models/skirting_board.onnx`` was made with; 1,040 renders of the
-photographer's 5-12 cm boards and 520 with boards of 10-20 cm, about 20 minutes of
-rendering on two cores, 2-4 of training)::
+photographer's 5-12 cm boards, 520 with boards of 10-20 cm and 520 with the trim painted
+the floor's colour, about 30 minutes of rendering on two cores, 3-5 of training)::
 
     python models/train_skirting.py --seeds 950 951 952 954 955 956 957 --tall-seeds 958 959 962 963 \\
-        --val 953 --count 130 --out models/skirting_board.onnx
+        --hue-seeds 964 965 966 967 --val 953 --count 130 --out models/skirting_board.onnx
 
 Rendered columns are kept in ``--cache`` (one file per seed), so a second run trains
 without rendering. Everything random derives from ``--seed``. Training needs torch
@@ -47,10 +47,13 @@ KEEP_FROM_M, KEEP_TO_M = -0.05, 0.22
 # The photographer draws boards 5-12 cm tall; real ones reach 20 cm, and a check that
 # never saw one takes it for no board. ``--tall-seeds`` are rendered with these.
 TALL_BASEBOARD_M = (0.10, 0.20)
+# Boards painted the floor's colour look like a band of light or shade on the floor, which
+# the rules leave alone; ``--hue-seeds`` are rendered with every room's trim so painted.
+FLAVOURS = {"": {}, "tall": {"baseboard_m": TALL_BASEBOARD_M}, "hue": {"trim_like_floor": 1.0}}
 
 
-def render_columns(seed: int, count: int, tall: bool = False) -> dict:
-    """Render ``count`` rooms of ``seed`` (with ``TALL_BASEBOARD_M`` boards when ``tall``),
+def render_columns(seed: int, count: int, flavour: str = "") -> dict:
+    """Render ``count`` rooms of ``seed`` (with the render options of ``FLAVOURS[flavour]``),
     segment each without the trim and return every wall column's profile, scalars and
     true floor-line offset (m, NaN: no floor)."""
     from augment.board import Board
@@ -58,13 +61,12 @@ def render_columns(seed: int, count: int, tall: bool = False) -> dict:
     from augment.gl import Renderer
     from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
     from augment.synth import render_sample
-    from augment.synth.rooms import BASEBOARD_M
 
     model = FloorModel(DEFAULT_MODEL)
     out = {"profile": [], "scalars": [], "offset_m": [], "render": []}
     with Renderer() as renderer:
         for i in range(count):
-            sample = render_sample([seed, i], renderer, baseboard_m=TALL_BASEBOARD_M if tall else BASEBOARD_M)
+            sample = render_sample([seed, i], renderer, **FLAVOURS[flavour])
             w, h = sample.truth["size_px"]
             try:
                 cal = calibrate_photo(sample.image, Board(),
@@ -88,14 +90,14 @@ def render_columns(seed: int, count: int, tall: bool = False) -> dict:
     return {k: np.concatenate(v) if v else np.zeros(0) for k, v in out.items()}
 
 
-def _cache_path(cache: Path, seed: int, count: int, tall: bool) -> Path:
-    return cache / f"skirting_{seed}_{count}{'_tall' if tall else ''}.npz"
+def _cache_path(cache: Path, seed: int, count: int, flavour: str) -> Path:
+    return cache / f"skirting_{seed}_{count}{'_' + flavour if flavour else ''}.npz"
 
 
-def load_seed(seed: int, count: int, cache: Path, tall: bool = False) -> dict:
-    path = _cache_path(cache, seed, count, tall)
+def load_seed(seed: int, count: int, cache: Path, flavour: str = "") -> dict:
+    path = _cache_path(cache, seed, count, flavour)
     if not path.exists():
-        data = render_columns(seed, count, tall)
+        data = render_columns(seed, count, flavour)
         cache.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(".tmp.npz")
         np.savez_compressed(tmp, **data)
@@ -135,6 +137,8 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, nargs="+", required=True, help="render seeds to train on")
     parser.add_argument("--tall-seeds", type=int, nargs="*", default=[],
                         help="render seeds to train on, with baseboards of 10-20 cm")
+    parser.add_argument("--hue-seeds", type=int, nargs="*", default=[],
+                        help="render seeds to train on, with the trim painted the floor's colour")
     parser.add_argument("--val", type=int, nargs="+", required=True, help="render seeds to validate on")
     parser.add_argument("--count", type=int, default=130, help="renders per seed")
     parser.add_argument("--epochs", type=int, default=10)
@@ -145,11 +149,13 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     t0 = time.time()
-    seeds = [(s, False) for s in args.seeds + args.val] + [(s, True) for s in args.tall_seeds]
-    missing = [(s, tall) for s, tall in seeds if not _cache_path(args.cache, s, args.count, tall).exists()]
+    train = ([(s, "") for s in args.seeds] + [(s, "tall") for s in args.tall_seeds]
+             + [(s, "hue") for s in args.hue_seeds])
+    seeds = train + [(s, "") for s in args.val]
+    missing = [(s, f) for s, f in seeds if not _cache_path(args.cache, s, args.count, f).exists()]
     if missing:
         with multiprocessing.get_context("spawn").Pool(min(args.workers, len(missing))) as pool:
-            pool.starmap(load_seed, [(s, args.count, args.cache, tall) for s, tall in missing])
+            pool.starmap(load_seed, [(s, args.count, args.cache, f) for s, f in missing])
     data = {key: load_seed(key[0], args.count, args.cache, key[1]) for key in seeds}
     t_render = time.time() - t0
 
@@ -157,8 +163,8 @@ def main(argv=None) -> int:
         parts = [labelled(data[key], every) for key in group]
         return [torch.cat(x) for x in zip(*parts)]
 
-    profile, scalars, y = joined([(s, False) for s in args.seeds] + [(s, True) for s in args.tall_seeds], 2)
-    profile_v, scalars_v, y_v = joined([(s, False) for s in args.val], 4)
+    profile, scalars, y = joined(train, 2)
+    profile_v, scalars_v, y_v = joined([(s, "") for s in args.val], 4)
     print(f"{len(y)} training columns ({float(y.mean()):.1%} board), {len(y_v)} validation", flush=True)
 
     torch.manual_seed(args.seed)
@@ -197,6 +203,7 @@ def main(argv=None) -> int:
                                         "logit": {0: "columns"}})
     tmp.replace(args.out)
     sidecar = {"seeds": args.seeds, "tall_seeds": args.tall_seeds, "tall_baseboard_m": list(TALL_BASEBOARD_M),
+               "hue_seeds": args.hue_seeds,
                "val": args.val, "count": args.count, "seed": args.seed,
                "epochs": args.epochs, "kept_epoch": min(log, key=lambda e: e["val_loss"])["epoch"],
                "parameters": sum(p.numel() for p in net.parameters()), "training_columns": len(y),
