@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from augment import skirting
 from augment.board import Board
 from augment.calibrate import Calibration, Intrinsics
 from augment.skirting import trim_skirting
@@ -223,8 +224,6 @@ def test_a_board_whose_strongest_steps_spread_is_trimmed(monkeypatch):
     the most common height, the columns agree: the rules alone trim it. The board model
     sees a board along the walls too, and trims it when the rules doubt both readings.
     The truth is the render's floor mask."""
-    import augment.skirting as skirting
-
     sample, calibration, mask = _render_untrimmed(905, 73)
     truth = sample.floor_mask
     extra = mask & ~truth
@@ -271,8 +270,6 @@ def test_a_render_with_its_board_in_dashes(monkeypatch):
     walls. With the board model's say between the dashes the trimmed mask keeps under a
     quarter of what the untrimmed mask holds beyond the floor (11 % when written); by the
     dashes alone, over 40 % (49 %), and its polygon is 12 % too large."""
-    import augment.skirting as skirting
-
     sample, calibration, mask = _render_untrimmed(907, 34)
     extra = mask & ~sample.floor_mask
     left = (trim_skirting(sample.image, mask, calibration)[0] & extra).sum() / extra.sum()
@@ -305,7 +302,6 @@ def test_a_board_on_one_wall_is_cut_when_the_other_walls_show_none(monkeypatch):
     The polygon's area, 7 % over the true mask's untrimmed, comes within 2 % of it
     (0.7 % when written), and the cut follows the floor line: under 2 px of floor go
     with the board per column cut (1.3 px when written, along 447 columns)."""
-    import augment.skirting as skirting
     from augment.floor import floor_polygon
 
     sample, calibration, mask = _render_untrimmed(916, 78)
@@ -321,12 +317,24 @@ def test_a_board_on_one_wall_is_cut_when_the_other_walls_show_none(monkeypatch):
     assert trim_skirting(sample.image, mask, calibration)[1] is None
 
 
-def test_a_click_on_a_board_the_rules_take_for_shade_trims_its_wall():
-    """A board darker than the floor and of its hue looks like the floor in shade and is
-    left; a "not floor" click on its strip makes it the wall's board, cut all along. A
-    click on the floor in front of the wall changes nothing."""
-    board_rgb = (90, 66, 42)  # the floor's colour at 0.6 of its brightness
-    image, truth, mask, calibration = _room(0.10, board_rgb=board_rgb)
+def test_a_board_of_the_floors_hue_darker_is_trimmed():
+    """A board darker than the floor and of its hue looks like the floor in shade, and the
+    rules leave it; the board model, trained on rooms whose trim is painted the floor's
+    colour, sees the board and trims it to the floor line."""
+    image, truth, mask, calibration = _room(0.10, board_rgb=(90, 66, 42))  # 0.6 of the floor
+    band = mask & ~truth
+    trimmed, height_m = trim_skirting(image, mask, calibration)
+    assert height_m == pytest.approx(0.10, abs=0.01)
+    assert (trimmed & band).sum() < 0.05 * band.sum()
+    assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
+
+
+def test_a_click_on_a_board_the_board_model_misses_trims_its_wall(monkeypatch):
+    """Where the board model sees no board and the rules take a dark board of the floor's
+    hue for shade, the board is left; a "not floor" click on its strip makes it the wall's
+    board, cut all along. A click on the floor in front of the wall changes nothing."""
+    monkeypatch.setattr(skirting, "board_probability", lambda profile, scalars: np.full(len(profile), 0.02))
+    image, truth, mask, calibration = _room(0.10, board_rgb=(90, 66, 42))
     band = mask & ~truth
     trimmed, height_m = trim_skirting(image, mask, calibration)
     assert height_m is None and (trimmed & band).sum() == band.sum()
