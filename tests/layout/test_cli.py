@@ -185,9 +185,15 @@ def test_ctrl_c_reads_as_an_interruption_whatever_it_turns_into(capsys):
             raise TypeError("'NoneType' object cannot be interpreted as an integer") from None
         return 0
 
-    assert dispatch(command, None, "stage", []) == 130
-    assert capsys.readouterr().err.startswith("error: interrupted after ")
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # put back
+    # A shell starts background jobs (`make test &`) with Ctrl-C ignored, and Python then
+    # leaves it ignored: give the test the handler an interactive run has.
+    inherited = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        assert dispatch(command, None, "stage", []) == 130
+        assert capsys.readouterr().err.startswith("error: interrupted after ")
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # put back
+    finally:
+        signal.signal(signal.SIGINT, inherited)
 
     def broken(args):
         raise TypeError("a real bug")
