@@ -11,7 +11,8 @@ masks the trim sees.
 
 Recipe (what ``models/skirting_board.onnx`` was made with; 1,040 renders of the
 photographer's 5-12 cm boards, 520 with boards of 10-20 cm and 520 with the trim painted
-the floor's colour, about 30 minutes of rendering on two cores, 3-5 of training)::
+the floor's colour; 47 minutes of rendering on two cores and 5.4 of training, with other
+jobs on the machine)::
 
     python models/train_skirting.py --seeds 950 951 952 954 955 956 957 --tall-seeds 958 959 962 963 \\
         --hue-seeds 964 965 966 967 --val 953 --count 130 --out models/skirting_board.onnx
