@@ -27,6 +27,13 @@ skipped when it sees no board anywhere along the walls, and made when it is sure
 even where the rules doubt it (heights that spread past deep shadows); in between, the
 rules decide.
 
+GrabCut also stops short of the floor line: below a board's cast shadow or a dark band at
+the foot of the wall it sees something that is neither floor nor wall, and far away a few
+rows of floor are many square meters. :func:`extend_to_floor_line` asks a second small
+model (``models/skirting_gap.onnx``, trained on the same columns) whether the floor line
+lies above the mask's edge and how far, and moves the edge up to it along the walls where
+most columns say so.
+
 Whether the mask holds the board can differ from wall to wall: GrabCut may stop at the
 floor line along one wall and at the board's top along another. When the photo as a
 whole does not show a board, each wall is judged on its own (its columns between corners
@@ -41,8 +48,10 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from scipy.ndimage import median_filter
 
 BOARD_MODEL = Path(__file__).resolve().parent.parent / "models" / "skirting_board.onnx"
+GAP_MODEL = Path(__file__).resolve().parent.parent / "models" / "skirting_gap.onnx"
 
 # Work at this long side at most (the board is 10 px or more there at 4 m).
 WORK_LONG_PX = 1280
@@ -90,6 +99,11 @@ NO_BOARD_P, BOARD_P = 0.15, 0.5
 BOARD_CLICK_REACH = 0.10
 # A column where the board model's probability reaches this shows the board.
 SEEN_P = 0.5
+# A wall's mask edge moves up to the floor line where the gap model's mean probability
+# over its columns reaches this, by each column's offset where its own does, smoothed
+# over this many columns (a lone column's reach is a spike in the outline).
+GAP_P = 0.5
+GAP_SMOOTH_COLUMNS = 9
 # The mask's top edge bends at a wall's corner by more than this (pixels at the working
 # size); a wall judged on its own needs this many columns.
 CORNER_PX = 3.0
@@ -290,13 +304,13 @@ def board_profiles(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
     return profile.astype(np.float32), scalars.astype(np.float32), inside[:, -1]
 
 
-@lru_cache(maxsize=1)
+@lru_cache(maxsize=2)
 def _board_session(path: str):
     import onnxruntime as ort
 
     if not Path(path).is_file():
-        raise FileNotFoundError(f"the skirting-board model {path} is missing: it ships with Stager, "
-                                "restore it with `git checkout models/skirting_board.onnx`")
+        raise FileNotFoundError(f"the skirting model {path} is missing: it ships with Stager, "
+                                f"restore it with `git checkout models/{Path(path).name}`")
     options = ort.SessionOptions()
     options.log_severity_level = 3
     return ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
@@ -310,6 +324,53 @@ def board_probability(profile: np.ndarray, scalars: np.ndarray) -> np.ndarray:
     session = _board_session(str(BOARD_MODEL))
     logits = session.run(None, {"profile": profile, "scalars": scalars})[0].reshape(-1)
     return 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
+
+
+def floor_line_gap(profile: np.ndarray, scalars: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per column, the gap model's probability that the floor line lies above the mask's
+    edge, and how far above (m, 0 or more), from :func:`board_profiles`. Two (k,) float."""
+    if len(profile) == 0:
+        return np.zeros(0), np.zeros(0)
+    out = _board_session(str(GAP_MODEL)).run(None, {"profile": profile, "scalars": scalars})[0].astype(np.float64)
+    return 1.0 / (1.0 + np.exp(-out[:, 0])), np.maximum(0.0, -out[:, 1] / 100.0)
+
+
+def extend_to_floor_line(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndarray:
+    """Move the floor mask's top edge up to the floor line where it stops short of it.
+
+    Parameters
+    ----------
+    image : (rows, cols, 3) uint8
+        The photo. Not modified.
+    mask : (rows, cols) bool
+        Floor mask at the photo's size, its boards already trimmed. Not modified.
+    calibration : Calibration
+        The photo's calibration.
+
+    Returns
+    -------
+    mask : (rows, cols) bool
+        The mask with the strips of floor below the walls added, or the same values.
+    """
+    view = working_view(image, mask, calibration)
+    if view is None:
+        return mask.copy()
+    scale, small_image, small_mask, _, cols, rows, px_per_m = view
+    profile, scalars, _ = board_profiles(small_image, small_mask, cols, rows, px_per_m)
+    p_gap, gap_m = floor_line_gap(profile, scalars)
+    add = np.zeros(small_mask.shape, np.uint8)
+    for wall in _walls(cols, rows):
+        if len(wall) < MIN_WALL_COLUMNS or np.mean(p_gap[wall]) < GAP_P:
+            continue
+        reach_px = median_filter(np.where(p_gap[wall] >= GAP_P, gap_m[wall] * px_per_m[wall], 0.0),
+                                 size=GAP_SMOOTH_COLUMNS, mode="nearest")
+        for col, row, n in zip(cols[wall], rows[wall], np.round(reach_px).astype(int)):
+            add[max(0, row - n):row, col] = n > 0
+    if not add.any():
+        return mask.copy()
+    if scale < 1.0:
+        add = cv2.resize(add, mask.shape[::-1], interpolation=cv2.INTER_NEAREST)
+    return mask | (add > 0)
 
 
 def working_view(image: np.ndarray, mask: np.ndarray, calibration):

@@ -17,6 +17,14 @@ jobs on the machine)::
     python models/train_skirting.py --seeds 950 951 952 954 955 956 957 --tall-seeds 958 959 962 963 \\
         --hue-seeds 964 965 966 967 --val 953 --count 130 --out models/skirting_board.onnx
 
+``--task gap`` trains the floor-line model (``models/skirting_gap.onnx``) from the same
+rendered columns: per column, whether the floor line lies above the mask's edge (GrabCut
+stopped short, below the shade at the foot of a wall) and by how many centimeters::
+
+    python models/train_skirting.py --task gap --seeds 950 951 952 954 955 956 957 \\
+        --tall-seeds 958 959 962 963 --hue-seeds 964 965 966 967 --val 953 --count 130 \\
+        --epochs 8 --out models/skirting_gap.onnx
+
 Rendered columns are kept in ``--cache`` (one file per seed), so a second run trains
 without rendering. Everything random derives from ``--seed``. Training needs torch
 (``pip install -e '.[train]'``); Stager runs the exported model with onnxruntime.
@@ -48,6 +56,11 @@ KEEP_FROM_M, KEEP_TO_M = -0.05, 0.22
 # The photographer draws boards 5-12 cm tall; real ones reach 20 cm, and a check that
 # never saw one takes it for no board. ``--tall-seeds`` are rendered with these.
 TALL_BASEBOARD_M = (0.10, 0.20)
+# The gap model: the floor line lies above the mask's edge when this far or farther;
+# columns between this and the second value are anti-aliasing, left out, and so are
+# columns whose floor line is more than the profile's reach above the edge.
+GAP_M, GAP_UNSURE_M = -0.015, -0.005
+GAP_FAR_M = -0.10
 # Boards painted the floor's colour look like a band of light or shade on the floor, which
 # the rules leave alone; ``--hue-seeds`` are rendered with every room's trim so painted.
 FLAVOURS = {"": {}, "tall": {"baseboard_m": TALL_BASEBOARD_M}, "hue": {"trim_like_floor": 1.0}}
@@ -117,24 +130,50 @@ def labelled(data: dict, every: int):
             torch.tensor((off[pick] > BOARD_M).astype(np.float32)))
 
 
+def labelled_gap(data: dict, every: int):
+    """Like :func:`labelled`, for the gap model: the target is (floor line above the
+    edge, 0 or 1; its offset in cm, 0 or less)."""
+    off = data["offset_m"]
+    usable = (np.isfinite(off) & (off > GAP_FAR_M) & (off < KEEP_TO_M)
+              & ~((off > GAP_M) & (off < GAP_UNSURE_M)))
+    pick = np.flatnonzero(usable)[::every]
+    o = off[pick]
+    y = np.column_stack([o < GAP_M, 100 * np.minimum(o, 0)]).astype(np.float32)
+    return torch.tensor(data["profile"][pick]), torch.tensor(data["scalars"][pick]), torch.tensor(y)
+
+
 class BoardNet(nn.Module):
     """Two 1-D convolutions along the column's profile, a pooling, and a small head that
     also sees the scalars. Output: one logit per column (board or not)."""
 
-    def __init__(self, channels: int = 16, samples: int = 81):
+    def __init__(self, channels: int = 16, samples: int = 81, outputs: int = 1):
         super().__init__()
         self.conv = nn.Sequential(nn.Conv1d(7, channels, 5, padding=2), nn.ReLU(),
                                   nn.Conv1d(channels, channels, 5, padding=4, dilation=2), nn.ReLU(),
                                   nn.MaxPool1d(3, 3))
         self.head = nn.Sequential(nn.Dropout(0.2), nn.Linear(channels * (samples // 3) + 2, 32), nn.ReLU(),
-                                  nn.Linear(32, 1))
+                                  nn.Linear(32, outputs))
+        self.outputs = outputs
 
     def forward(self, profile, scalars):
-        return self.head(torch.cat([self.conv(profile).flatten(1), scalars], 1))[:, 0]
+        out = self.head(torch.cat([self.conv(profile).flatten(1), scalars], 1))
+        return out[:, 0] if self.outputs == 1 else out
+
+
+def _gap_loss(out, y):
+    """Cross-entropy of 'floor line above the edge', plus the offset's error (cm, Huber,
+    weighted 0.2) where it is."""
+    loss = nn.functional.binary_cross_entropy_with_logits(out[:, 0], y[:, 0])
+    above = y[:, 0] > 0.5
+    if above.any():
+        loss = loss + 0.2 * nn.functional.smooth_l1_loss(out[above, 1], y[above, 1])
+    return loss
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--task", choices=("board", "gap"), default="board",
+                        help="board: is the mask's edge a board's top; gap: does the floor line lie above it")
     parser.add_argument("--seeds", type=int, nargs="+", required=True, help="render seeds to train on")
     parser.add_argument("--tall-seeds", type=int, nargs="*", default=[],
                         help="render seeds to train on, with baseboards of 10-20 cm")
@@ -161,17 +200,20 @@ def main(argv=None) -> int:
     t_render = time.time() - t0
 
     def joined(group, every):
-        parts = [labelled(data[key], every) for key in group]
+        parts = [(labelled if args.task == "board" else labelled_gap)(data[key], every) for key in group]
         return [torch.cat(x) for x in zip(*parts)]
 
     profile, scalars, y = joined(train, 2)
     profile_v, scalars_v, y_v = joined([(s, "") for s in args.val], 4)
-    print(f"{len(y)} training columns ({float(y.mean()):.1%} board), {len(y_v)} validation", flush=True)
+    gap = args.task == "gap"
+    share = float((y[:, 0] if gap else y).mean())
+    print(f"{len(y)} training columns ({share:.1%} {'floor line above' if gap else 'board'}), "
+          f"{len(y_v)} validation", flush=True)
 
     torch.manual_seed(args.seed)
-    net = BoardNet(samples=profile.shape[2])
+    net = BoardNet(samples=profile.shape[2], outputs=2 if gap else 1)
     opt = torch.optim.AdamW(net.parameters(), 1e-3, weight_decay=1e-2)
-    loss_fn = nn.functional.binary_cross_entropy_with_logits
+    loss_fn = _gap_loss if gap else nn.functional.binary_cross_entropy_with_logits
     log, best = [], (float("inf"), None)
     for epoch in range(args.epochs):
         net.train()
@@ -186,8 +228,12 @@ def main(argv=None) -> int:
         with torch.no_grad():
             logits = net(profile_v, scalars_v)
             val_loss = float(loss_fn(logits, y_v))
-            val_acc = float(((logits > 0) == (y_v > 0.5)).float().mean())
+            said, told = (logits[:, 0], y_v[:, 0]) if gap else (logits, y_v)
+            val_acc = float(((said > 0) == (told > 0.5)).float().mean())
         log.append({"epoch": epoch + 1, "val_loss": round(val_loss, 4), "val_accuracy": round(val_acc, 4)})
+        if gap:
+            above = y_v[:, 0] > 0.5
+            log[-1]["val_offset_mae_cm"] = round(float((logits[above, 1] - y_v[above, 1]).abs().mean()), 3)
         print(log[-1], flush=True)
         if val_loss < best[0]:
             best = (val_loss, {k: v.clone() for k, v in net.state_dict().items()})
@@ -199,11 +245,11 @@ def main(argv=None) -> int:
     with warnings.catch_warnings():  # the TorchScript exporter is deprecated, and does this model fine
         warnings.simplefilter("ignore", DeprecationWarning)
         torch.onnx.export(net, (profile_v[:4], scalars_v[:4]), str(tmp), input_names=["profile", "scalars"],
-                          output_names=["logit"], opset_version=17, dynamo=False,
+                          output_names=["out" if gap else "logit"], opset_version=17, dynamo=False,
                           dynamic_axes={"profile": {0: "columns"}, "scalars": {0: "columns"},
-                                        "logit": {0: "columns"}})
+                                        ("out" if gap else "logit"): {0: "columns"}})
     tmp.replace(args.out)
-    sidecar = {"seeds": args.seeds, "tall_seeds": args.tall_seeds, "tall_baseboard_m": list(TALL_BASEBOARD_M),
+    sidecar = {"task": args.task, "seeds": args.seeds, "tall_seeds": args.tall_seeds, "tall_baseboard_m": list(TALL_BASEBOARD_M),
                "hue_seeds": args.hue_seeds,
                "val": args.val, "count": args.count, "seed": args.seed,
                "epochs": args.epochs, "kept_epoch": min(log, key=lambda e: e["val_loss"])["epoch"],

@@ -327,14 +327,17 @@ def test_one_click_brings_back_floor_in_a_cartons_shadow(tmp_path, capsys):
         assert code == 0, err
         areas.append(json.loads((tmp_path / name / "floor.json").read_text())["floor"]["area_m2"])
         masks.append(cv2.imread(str(tmp_path / name / "floor.png"), cv2.IMREAD_GRAYSCALE) > 0)
-    assert areas[0] < 16.96 * 0.985 and abs(areas[1] - 16.96) < 0.01 * 16.96, areas
+    # As found, the floor is 0.9 % short (less since the mask's edge moves up to the floor
+    # line where GrabCut stopped short of it: the far walls no longer hide floor).
+    assert areas[0] < 16.96 * 0.995 and abs(areas[1] - 16.96) < 0.01 * 16.96, areas
     shadow = np.zeros_like(truth)
     shadow[100:300, :120] = True  # the photo's left edge, below the carton
     assert (truth & shadow & ~masks[1]).sum() < 0.3 * (truth & shadow & ~masks[0]).sum()
     # GrabCut runs again on the whole photo, so edges elsewhere move by a pixel or so, and
     # the foot of the carton's shaded face, of the shadow's colour, comes with the floor
     # (2,420 pixels of floor brought back against 1,982 taken wrongly; with the region a
-    # disc of 5 % of the long side, 2,365 against 1,276): what the click brings back
+    # disc of 5 % of the long side, 2,365 against 1,276; since the edge moves up to the
+    # floor line without a click, 2,025 against 1,935): what the click brings back
     # outweighs what it takes wrongly.
     gained = (masks[1] & truth & ~masks[0]).sum()
-    assert (masks[1] & ~truth & ~masks[0]).sum() < 0.9 * gained, gained
+    assert (masks[1] & ~truth & ~masks[0]).sum() < gained, gained

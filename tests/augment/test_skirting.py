@@ -7,7 +7,7 @@ import pytest
 from augment import skirting
 from augment.board import Board
 from augment.calibrate import Calibration, Intrinsics
-from augment.skirting import trim_skirting
+from augment.skirting import extend_to_floor_line, trim_skirting
 
 WALL_Y_M = 4.0
 SIZE = (960, 720)
@@ -348,3 +348,34 @@ def test_a_click_on_a_board_the_board_model_misses_trims_its_wall(monkeypatch):
     assert truth[in_front[1], in_front[0]]
     trimmed, height_m = trim_skirting(image, mask, calibration, board_at=[in_front])
     assert height_m is None and (trimmed & band).sum() == band.sum()
+
+
+def test_floor_below_a_boards_shadow_is_brought_back():
+    """A render of the synthetic photographer (seed 930, render 69): below the far wall's
+    board lies a band of its shadow, darker than the floor, and GrabCut stops below it,
+    short of the floor line; far away those rows are 6 % of the floor's area. No board is
+    in the mask, so nothing is trimmed; the gap model moves the edge up to the floor
+    line. The truth is the render's floor mask, its polygon through the same calibration."""
+    from augment.floor import floor_polygon
+    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
+
+    sample, calibration, mask = _render_untrimmed(930, 69)
+    truth = sample.floor_mask
+    trimmed, height_m = trim_skirting(sample.image, mask, calibration)
+    assert height_m is None
+    missed = truth & ~trimmed
+    true_m2 = floor_polygon(truth, calibration).area_m2
+    assert floor_polygon(trimmed, calibration).area_m2 < 0.95 * true_m2  # the band matters
+    before = sample.image.copy(), trimmed.copy()
+    extended = extend_to_floor_line(sample.image, trimmed, calibration)
+    np.testing.assert_array_equal(before[0], sample.image)  # inputs untouched
+    np.testing.assert_array_equal(before[1], trimmed)
+    assert (extended & ~trimmed & ~truth).sum() < 0.1 * missed.sum()  # little but floor added
+    assert (truth & ~extended).sum() < 0.1 * missed.sum()  # and most of the band
+    assert floor_polygon(extended, calibration).area_m2 == pytest.approx(true_m2, rel=0.02)
+    # The true mask, already at the floor line, gains next to nothing.
+    assert (extend_to_floor_line(sample.image, truth, calibration) & ~truth).sum() < 0.1 * missed.sum()
+    # segment_floor extends where it trims no board.
+    seg = segment_floor(sample.image, FloorModel(DEFAULT_MODEL), calibration)
+    assert seg.skirting_m is None
+    assert (truth & ~seg.mask).sum() < 0.1 * missed.sum()
