@@ -24,7 +24,7 @@ import cv2
 import numpy as np
 
 from .imageio import size_problem
-from .skirting import extend_to_floor_line, trim_skirting
+from .skirting import trim_skirting
 
 DEFAULT_MODEL = Path(__file__).resolve().parent.parent / "models" / "floor_segnet.onnx"
 # GrabCut's cost grows with the pixel count; edges it can fix are a few pixels wide at
@@ -756,10 +756,9 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     skirting_m = None
     if skirting and calibration is not None and name != "onnx" and mask.any():
         # The refined mask's top edge sits on the skirting boards; the floor ends below.
-        trimmed, skirting_m = trim_skirting(image, mask, calibration, board_at=clicks[clicks[:, 2] == 0])
-        if skirting_m is None:
-            # No board in the mask: its edge may instead stop short of the floor line.
-            trimmed = extend_to_floor_line(image, trimmed, calibration)
+        # Where it holds none, its edge may instead stop short of the floor line.
+        trimmed, skirting_m = trim_skirting(image, mask, calibration, board_at=clicks[clicks[:, 2] == 0],
+                                            extend=True)
         # A strip the trim took for a board is floor within reach of a floor click there:
         # the user's word is the last.
         reach = np.zeros((rows, cols), np.uint8)

@@ -43,7 +43,7 @@ and of its hue looks like shade to both the rules and the model).
 """
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache, lru_cache
 from pathlib import Path
 
 import cv2
@@ -305,7 +305,7 @@ def board_profiles(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
 
 
 @lru_cache(maxsize=2)
-def _board_session(path: str):
+def _skirting_session(path: str):
     import onnxruntime as ort
 
     if not Path(path).is_file():
@@ -321,7 +321,7 @@ def board_probability(profile: np.ndarray, scalars: np.ndarray) -> np.ndarray:
     edge (the floor line lies below it), from :func:`board_profiles`. (k,) float."""
     if len(profile) == 0:
         return np.zeros(0)
-    session = _board_session(str(BOARD_MODEL))
+    session = _skirting_session(str(BOARD_MODEL))
     logits = session.run(None, {"profile": profile, "scalars": scalars})[0].reshape(-1)
     return 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
 
@@ -331,7 +331,7 @@ def floor_line_gap(profile: np.ndarray, scalars: np.ndarray) -> tuple[np.ndarray
     edge, and how far above (m, 0 or more), from :func:`board_profiles`. Two (k,) float."""
     if len(profile) == 0:
         return np.zeros(0), np.zeros(0)
-    out = _board_session(str(GAP_MODEL)).run(None, {"profile": profile, "scalars": scalars})[0].astype(np.float64)
+    out = _skirting_session(str(GAP_MODEL)).run(None, {"profile": profile, "scalars": scalars})[0].astype(np.float64)
     return 1.0 / (1.0 + np.exp(-out[:, 0])), np.maximum(0.0, -out[:, 1] / 100.0)
 
 
@@ -355,8 +355,20 @@ def extend_to_floor_line(image: np.ndarray, mask: np.ndarray, calibration) -> np
     view = working_view(image, mask, calibration)
     if view is None:
         return mask.copy()
-    scale, small_image, small_mask, _, cols, rows, px_per_m = view
-    profile, scalars, _ = board_profiles(small_image, small_mask, cols, rows, px_per_m)
+    return _extended(mask, view, _profiles_of(view))
+
+
+def _profiles_of(view):
+    """The view's :func:`board_profiles`, computed on the first call only: the trim and
+    the extension read the same columns."""
+    _, small_image, small_mask, _, cols, rows, px_per_m = view
+    return cache(lambda: board_profiles(small_image, small_mask, cols, rows, px_per_m))
+
+
+def _extended(mask: np.ndarray, view, profiles) -> np.ndarray:
+    """:func:`extend_to_floor_line` on a :func:`working_view` and its ``profiles``."""
+    scale, _, small_mask, _, cols, rows, px_per_m = view
+    profile, scalars, _ = profiles()
     p_gap, gap_m = floor_line_gap(profile, scalars)
     add = np.zeros(small_mask.shape, np.uint8)
     for wall in _walls(cols, rows):
@@ -432,7 +444,7 @@ def _clicked_walls(walls, cols, rows, px_per_m, known, shown, height_m, points, 
 
 
 def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
-                  board_at=None) -> tuple[np.ndarray, float | None]:
+                  board_at=None, extend: bool = False) -> tuple[np.ndarray, float | None]:
     """Remove the skirting board from the top of a floor mask.
 
     Parameters
@@ -447,11 +459,15 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
         Photo pixels ``x, y`` the user marked not floor. One on the strip at the top of
         a wall's floor makes that wall's strip a board, whatever the board model and the
         shade rule say (a board darker than the floor and of its hue looks like shade).
+    extend : bool
+        Where no board is trimmed, move the mask's edge up to the floor line instead
+        (:func:`extend_to_floor_line`, on the same columns).
 
     Returns
     -------
     mask : (rows, cols) bool
-        The mask without the board, or the same values when the photo shows none.
+        The mask without the board; when the photo shows none, the same values, or with
+        ``extend`` the mask extended to the floor line.
     height_m : float or None
         The board's height when it was trimmed.
     """
@@ -460,13 +476,18 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     if view is None:
         return mask.copy(), None
     scale, small_image, small_mask, small_cal, cols, rows, px_per_m = view
+    profiles = _profiles_of(view)
+
+    def no_board():
+        return (_extended(mask, view, profiles) if extend else mask.copy()), None
+
     t, brightness, hue_deg = _board_rows(small_image, small_mask, cols, rows, px_per_m)
     known = ~np.isnan(t)
     shown = known & (t > 0)
     if not shown.any():
-        return mask.copy(), None
+        return no_board()
     height_m = t / px_per_m
-    profile, scalars, whole = board_profiles(small_image, small_mask, cols, rows, px_per_m)
+    profile, scalars, whole = profiles()
     p_board = board_probability(profile, scalars)
     p_mean = float(np.mean(p_board[whole] if whole.any() else p_board))
     # Each column's strongest step is the board's lower edge in most columns, but a
@@ -492,11 +513,11 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
             judged |= _clicked_walls(walls, cols, rows, px_per_m, known, shown, height_m, points,
                                      BOARD_CLICK_REACH * max(small_mask.shape))
         if not (shown & judged).any():
-            return mask.copy(), None
+            return no_board()
         t_mode, _, _ = _board_rows(small_image, small_mask, cols, rows, px_per_m, _mode(height_m[shown & judged]))
         shown_mode = ~np.isnan(t_mode) & (t_mode > 0) & judged
         if not shown_mode.any():
-            return mask.copy(), None
+            return no_board()
     else:
         judged = np.ones(len(cols), bool)
     t, shown, height_m = t_mode, shown_mode, t_mode / px_per_m

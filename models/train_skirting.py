@@ -120,31 +120,28 @@ def load_seed(seed: int, count: int, cache: Path, flavour: str = "") -> dict:
         return dict(f)
 
 
-def labelled(data: dict, every: int):
-    """Tensors of every ``every``-th usable column (neighbours are nearly the same)."""
+def labelled(data: dict, every: int, task: str = "board"):
+    """Tensors of every ``every``-th usable column (neighbours are nearly the same). The
+    target is, for the board model, 1 where the mask's edge is a board's top; for the gap
+    model, (1 where the floor line lies above the edge, its offset in cm: 0 or less)."""
     off = data["offset_m"]
-    usable = (np.isfinite(off) & (off > KEEP_FROM_M) & (off < KEEP_TO_M)
-              & ~((off > UNSURE_M) & (off < BOARD_M)))
-    pick = np.flatnonzero(usable)[::every]
-    return (torch.tensor(data["profile"][pick]), torch.tensor(data["scalars"][pick]),
-            torch.tensor((off[pick] > BOARD_M).astype(np.float32)))
-
-
-def labelled_gap(data: dict, every: int):
-    """Like :func:`labelled`, for the gap model: the target is (floor line above the
-    edge, 0 or 1; its offset in cm, 0 or less)."""
-    off = data["offset_m"]
-    usable = (np.isfinite(off) & (off > GAP_FAR_M) & (off < KEEP_TO_M)
-              & ~((off > GAP_M) & (off < GAP_UNSURE_M)))
+    if task == "board":
+        near, unsure = KEEP_FROM_M, (UNSURE_M, BOARD_M)
+    else:
+        near, unsure = GAP_FAR_M, (GAP_M, GAP_UNSURE_M)
+    usable = (np.isfinite(off) & (off > near) & (off < KEEP_TO_M)
+              & ~((off > unsure[0]) & (off < unsure[1])))
     pick = np.flatnonzero(usable)[::every]
     o = off[pick]
-    y = np.column_stack([o < GAP_M, 100 * np.minimum(o, 0)]).astype(np.float32)
-    return torch.tensor(data["profile"][pick]), torch.tensor(data["scalars"][pick]), torch.tensor(y)
+    y = o > BOARD_M if task == "board" else np.column_stack([o < GAP_M, 100 * np.minimum(o, 0)])
+    return (torch.tensor(data["profile"][pick]), torch.tensor(data["scalars"][pick]),
+            torch.tensor(y.astype(np.float32)))
 
 
 class BoardNet(nn.Module):
     """Two 1-D convolutions along the column's profile, a pooling, and a small head that
-    also sees the scalars. Output: one logit per column (board or not)."""
+    also sees the scalars. Output: one logit per column (board or not), or with
+    ``outputs=2`` a row per column (the gap model's logit and offset in cm)."""
 
     def __init__(self, channels: int = 16, samples: int = 81, outputs: int = 1):
         super().__init__()
@@ -200,7 +197,7 @@ def main(argv=None) -> int:
     t_render = time.time() - t0
 
     def joined(group, every):
-        parts = [(labelled if args.task == "board" else labelled_gap)(data[key], every) for key in group]
+        parts = [labelled(data[key], every, args.task) for key in group]
         return [torch.cat(x) for x in zip(*parts)]
 
     profile, scalars, y = joined(train, 2)
@@ -240,14 +237,15 @@ def main(argv=None) -> int:
     net.load_state_dict(best[1])
     net.eval()
 
+    output = "out" if gap else "logit"
     args.out.parent.mkdir(parents=True, exist_ok=True)
     tmp = args.out.with_suffix(".tmp.onnx")
     with warnings.catch_warnings():  # the TorchScript exporter is deprecated, and does this model fine
         warnings.simplefilter("ignore", DeprecationWarning)
         torch.onnx.export(net, (profile_v[:4], scalars_v[:4]), str(tmp), input_names=["profile", "scalars"],
-                          output_names=["out" if gap else "logit"], opset_version=17, dynamo=False,
+                          output_names=[output], opset_version=17, dynamo=False,
                           dynamic_axes={"profile": {0: "columns"}, "scalars": {0: "columns"},
-                                        ("out" if gap else "logit"): {0: "columns"}})
+                                        output: {0: "columns"}})
     tmp.replace(args.out)
     sidecar = {"task": args.task, "seeds": args.seeds, "tall_seeds": args.tall_seeds, "tall_baseboard_m": list(TALL_BASEBOARD_M),
                "hue_seeds": args.hue_seeds,

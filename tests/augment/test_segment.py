@@ -784,7 +784,7 @@ def test_a_click_outranks_the_skirting_trim(held_out, model, monkeypatch):
     cut = np.zeros_like(truth)
     cut[max(0, y - 20):y + 20, max(0, x - 20):x + 20] = True
 
-    def over_cut(image, mask, calibration, board_at=None):  # a trim gone too deep, around (x, y)
+    def over_cut(image, mask, calibration, board_at=None, extend=False):  # a trim gone too deep, around (x, y)
         return mask & ~cut, 0.2
 
     monkeypatch.setattr(segment, "trim_skirting", over_cut)
@@ -799,7 +799,7 @@ def test_not_floor_clicks_are_handed_to_the_skirting_trim(held_out, model, monke
     sample, cal = held_out[0]
     heard = []
 
-    def trim(image, mask, calibration, board_at=None):
+    def trim(image, mask, calibration, board_at=None, extend=False):
         heard.append(np.asarray(board_at, float))
         return mask.copy(), None
 

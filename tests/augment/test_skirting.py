@@ -373,6 +373,8 @@ def test_floor_below_a_boards_shadow_is_brought_back():
     assert (extended & ~trimmed & ~truth).sum() < 0.1 * missed.sum()  # little but floor added
     assert (truth & ~extended).sum() < 0.1 * missed.sum()  # and most of the band
     assert floor_polygon(extended, calibration).area_m2 == pytest.approx(true_m2, rel=0.02)
+    # The trim asked to extend where it finds no board does the same, on the same columns.
+    np.testing.assert_array_equal(trim_skirting(sample.image, mask, calibration, extend=True)[0], extended)
     # The true mask, already at the floor line, gains next to nothing.
     assert (extend_to_floor_line(sample.image, truth, calibration) & ~truth).sum() < 0.1 * missed.sum()
     # segment_floor extends where it trims no board.
