@@ -400,9 +400,10 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
     cols, rows, px_per_m = _wall_columns(small_mask, small_cal)
     if len(cols) == 0:
         return None
-    # Only the band of rows the search looks at is needed at the working size.
-    top = max(0, int(rows.min()) - 2)
-    bottom = min(size[1], int((rows + np.ceil(SEARCH_M * px_per_m)).max()) + 12)
+    # Only the band of rows the search and the profiles look at is needed at the working
+    # size; a profile cut short reads black there, which the models would take for shade.
+    top = max(0, int(np.floor((rows + PROFILE_FROM_M * px_per_m).min())) - 2)
+    bottom = min(size[1], int(np.ceil((rows + max(SEARCH_M, PROFILE_TO_M) * px_per_m).max())) + 12)
     band = image[int(top / scale):min(rows_px, int(np.ceil(bottom / scale)) + 1)]
     small_image = np.zeros((size[1], size[0], 3), np.uint8)
     small_image[top:bottom] = cv2.resize(band, (size[0], bottom - top), interpolation=cv2.INTER_AREA)

@@ -10,12 +10,13 @@ is known: segmented by the shipped pipeline without the trim, so the model sees 
 masks the trim sees.
 
 Recipe (what ``models/skirting_board.onnx`` was made with; 1,040 renders of the
-photographer's 5-12 cm boards, 520 with boards of 10-20 cm and 520 with the trim painted
-the floor's colour; 47 minutes of rendering on two cores and 5.4 of training, with other
-jobs on the machine)::
+photographer's 5-12 cm boards, 520 with boards of 10-20 cm, 520 with the trim painted
+the floor's colour and 520 with it painted dark; 32 minutes of rendering on two cores for
+the first 16 seeds and 8 for the dark ones, 28 of training beside another training)::
 
     python models/train_skirting.py --seeds 950 951 952 954 955 956 957 --tall-seeds 958 959 962 963 \\
-        --hue-seeds 964 965 966 967 --val 953 --count 130 --out models/skirting_board.onnx
+        --hue-seeds 964 965 966 967 --dark-seeds 974 975 976 977 --val 953 --count 130 \\
+        --out models/skirting_board.onnx
 
 ``--task gap`` trains the floor-line model (``models/skirting_gap.onnx``) from the same
 rendered columns: per column, whether the floor line lies above the mask's edge (GrabCut
@@ -63,7 +64,9 @@ GAP_M, GAP_UNSURE_M = -0.015, -0.005
 GAP_FAR_M = -0.10
 # Boards painted the floor's colour look like a band of light or shade on the floor, which
 # the rules leave alone; ``--hue-seeds`` are rendered with every room's trim so painted.
-FLAVOURS = {"": {}, "tall": {"baseboard_m": TALL_BASEBOARD_M}, "hue": {"trim_like_floor": 1.0}}
+# The photographer's trims are white or light wood; ``--dark-seeds`` paint them dark.
+FLAVOURS = {"": {}, "tall": {"baseboard_m": TALL_BASEBOARD_M}, "hue": {"trim_like_floor": 1.0},
+            "dark": {"trim_dark": 1.0}}
 
 
 def render_columns(seed: int, count: int, flavour: str = "") -> dict:
@@ -176,6 +179,8 @@ def main(argv=None) -> int:
                         help="render seeds to train on, with baseboards of 10-20 cm")
     parser.add_argument("--hue-seeds", type=int, nargs="*", default=[],
                         help="render seeds to train on, with the trim painted the floor's colour")
+    parser.add_argument("--dark-seeds", type=int, nargs="*", default=[],
+                        help="render seeds to train on, with the trim painted a dark colour")
     parser.add_argument("--val", type=int, nargs="+", required=True, help="render seeds to validate on")
     parser.add_argument("--count", type=int, default=130, help="renders per seed")
     parser.add_argument("--epochs", type=int, default=10)
@@ -187,7 +192,7 @@ def main(argv=None) -> int:
 
     t0 = time.time()
     train = ([(s, "") for s in args.seeds] + [(s, "tall") for s in args.tall_seeds]
-             + [(s, "hue") for s in args.hue_seeds])
+             + [(s, "hue") for s in args.hue_seeds] + [(s, "dark") for s in args.dark_seeds])
     seeds = train + [(s, "") for s in args.val]
     missing = [(s, f) for s, f in seeds if not _cache_path(args.cache, s, args.count, f).exists()]
     if missing:
@@ -248,7 +253,7 @@ def main(argv=None) -> int:
                                         output: {0: "columns"}})
     tmp.replace(args.out)
     sidecar = {"task": args.task, "seeds": args.seeds, "tall_seeds": args.tall_seeds, "tall_baseboard_m": list(TALL_BASEBOARD_M),
-               "hue_seeds": args.hue_seeds,
+               "hue_seeds": args.hue_seeds, "dark_seeds": args.dark_seeds,
                "val": args.val, "count": args.count, "seed": args.seed,
                "epochs": args.epochs, "kept_epoch": min(log, key=lambda e: e["val_loss"])["epoch"],
                "parameters": sum(p.numel() for p in net.parameters()), "training_columns": len(y),

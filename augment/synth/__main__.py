@@ -59,6 +59,8 @@ def main(argv=None) -> int:
     parser.add_argument("--trim-like-floor", type=float, default=0.0, metavar="P",
                         help="chance that a room's baseboards and frames are painted the floor's colour "
                              "(default 0; the skirting check's hardest boards)")
+    parser.add_argument("--trim-dark", type=float, default=0.0, metavar="P",
+                        help="chance that they are painted a dark colour instead (default 0)")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="render processes (default: one per core)")
     parser.add_argument("--sheet", type=Path, default=None,
@@ -74,6 +76,8 @@ def main(argv=None) -> int:
         parser.error(f"--furnished {args.furnished}: must be a chance between 0 and 1, e.g. 0.7")
     if not 0.0 <= args.trim_like_floor <= 1.0:
         parser.error(f"--trim-like-floor {args.trim_like_floor}: must be a chance between 0 and 1, e.g. 0.5")
+    if not 0.0 <= args.trim_dark <= 1.0:
+        parser.error(f"--trim-dark {args.trim_dark}: must be a chance between 0 and 1, e.g. 0.5")
     low, high = args.baseboard_m
     if not 0.0 < low <= high <= 0.5:
         parser.error(f"--baseboard-m {low:g} {high:g}: give a low and a high height in meters, "
@@ -89,6 +93,7 @@ def main(argv=None) -> int:
 
     options = dict(seed=args.seed, size=args.size, out=args.out, clutter=args.clutter, furnished=args.furnished,
                    baseboard_m=(low, high), trim_like_floor=args.trim_like_floor,
+                   trim_dark=args.trim_dark,
                    board=Board(args.board.cols, args.board.rows, args.square, kind=args.board.kind))
     workers = max(1, min(args.workers, args.count))
     start = time.perf_counter()

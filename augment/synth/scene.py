@@ -320,10 +320,11 @@ def _light_pose(direction, position=(0.0, 0.0, 0.0)):
 
 def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                 world_from_board: np.ndarray, texture_px: int = 512, baseboard_m=BASEBOARD_M,
-                trim_like_floor: float = 0.0) -> Scene:
+                trim_like_floor: float = 0.0, trim_dark: float = 0.0) -> Scene:
     """Sample materials and lights and assemble the scene seen by ``shot`` (baseboards
     drawn ``baseboard_m`` (low, high) tall; the trim painted the floor's colour, 0.5-1.3
-    of its brightness, with the chance ``trim_like_floor``)."""
+    of its brightness, with the chance ``trim_like_floor``, else a dark colour with the
+    chance ``trim_dark``)."""
     info: dict = {}
     sky = np.clip([0.92, 0.95, 1.0] + rng.normal(0, 0.03, 3), 0.8, 1.0)
     scene = GLScene(bg_color=np.append(sky, 1.0))
@@ -369,6 +370,10 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
         linear = np.where(texels <= 0.04045, texels / 12.92, ((texels + 0.055) / 1.055) ** 2.4).mean(axis=0)
         trim = np.clip(linear * rng.uniform(0.5, 1.3), 0.02, 1.0)
         info["trim_like_floor"] = True
+    elif trim_dark > 0 and rng.random() < trim_dark:
+        # Charcoal, black or dark stained trim: linear 0.004-0.08 is sRGB 13-79.
+        trim = rng.uniform(0.004, 0.08) * np.clip(1 + rng.normal(0, 0.15, 3), 0.6, 1.4)
+        info["trim_dark"] = True
     if frames.positions:
         add(frames.mesh(_material(rng, trim, roughness=(0.3, 0.7), closed=True)), SEG_OTHER)
     if doors.positions:

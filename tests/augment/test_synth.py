@@ -353,11 +353,30 @@ def test_trim_like_floor_paints_the_baseboards_the_floors_colour(renderer, seed)
     assert np.abs(trim - floor).max() < 0.04
 
 
-def test_cli_rejects_a_bad_trim_chance(tmp_path, capsys):
+@pytest.mark.parametrize("seed", [6, 7])
+def test_trim_dark_paints_the_baseboards_dark(renderer, seed):
+    """Charcoal or black boards, which the photographer's white and wood trims never are:
+    the same room and camera, the boards' pixels far darker than before."""
+    default = render_sample(seed, renderer, size_px=(320, 240), photographic=False)
+    dark = render_sample(seed, renderer, size_px=(320, 240), photographic=False, trim_dark=1.0)
+    assert dark.truth["room"] == default.truth["room"]
+    assert dark.truth["camera_from_world"] == default.truth["camera_from_world"]
+    assert dark.truth["render"]["trim_dark"] and "trim_dark" not in default.truth["render"]
+    board = (default.labels == 0) & ~default.floor_mask  # the "other" class: trim, frames, doors
+    top = np.argmax(default.floor_mask, axis=0)
+    rows = np.arange(default.labels.shape[0])[:, None]
+    board &= (rows >= top - 3) & (rows < top)  # just above the floor line: the baseboard
+    assert board.sum() > 50
+    assert dark.image[board].mean() < 0.7 * default.image[board].mean()
+    assert dark.image[board].mean() < 90
+
+
+@pytest.mark.parametrize("option", ["--trim-like-floor", "--trim-dark"])
+def test_cli_rejects_a_bad_trim_chance(tmp_path, capsys, option):
     with pytest.raises(SystemExit) as exit_info:
-        synth_main(["--count", "1", "--out", str(tmp_path / "new"), "--trim-like-floor", "-0.5"])
+        synth_main(["--count", "1", "--out", str(tmp_path / "new"), option, "-0.5"])
     assert exit_info.value.code == 2
-    assert "--trim-like-floor -0.5" in capsys.readouterr().err
+    assert f"{option} -0.5" in capsys.readouterr().err
     assert not (tmp_path / "new").exists()
 
 
