@@ -121,8 +121,8 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         without this option). Such boards look like a band of light or shade on the floor,
         the skirting check's hardest case.
     trim_dark : float
-        Chance that they are painted a dark colour instead (charcoal, black, dark stained
-        wood; 0: never, and the random stream is the same as without this option).
+        Chance that they are painted a dark colour instead (charcoal to black, lightly
+        tinted; 0: never, and the random stream is the same as without this option).
     """
     board = Board() if board is None else board
     rng = np.random.default_rng(seed)

@@ -371,7 +371,7 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
         trim = np.clip(linear * rng.uniform(0.5, 1.3), 0.02, 1.0)
         info["trim_like_floor"] = True
     elif trim_dark > 0 and rng.random() < trim_dark:
-        # Charcoal, black or dark stained trim: linear 0.004-0.08 is sRGB 13-79.
+        # Charcoal to black, lightly tinted: linear 0.004-0.08 is sRGB 13-79.
         trim = rng.uniform(0.004, 0.08) * np.clip(1 + rng.normal(0, 0.15, 3), 0.6, 1.4)
         info["trim_dark"] = True
     if frames.positions:

@@ -412,7 +412,7 @@ def test_shade_at_the_foot_of_a_wall_seen_square_on_is_brought_back(depth_m):
     from augment.skirting import working_view
 
     image, truth, _, calibration = _room(0.0)
-    _, _, _, _, _, rows, px_per_m = working_view(image, truth, calibration)
+    *_, px_per_m = working_view(image, truth, calibration)
     top = np.argmax(truth, axis=0)
     band = truth & (np.arange(SIZE[1])[:, None] < top + round(depth_m * np.median(px_per_m)))
     assert 3 <= band.sum(axis=0).max() <= 6  # a few rows, across the whole photo
