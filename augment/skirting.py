@@ -34,11 +34,21 @@ model (``models/skirting_gap.onnx``, trained on the same columns) whether the fl
 lies above the mask's edge and how far, and moves the edge up to it along the walls where
 most columns say so.
 
+Where to cut is the rules' step, when it is the board's lower edge; but on a grained floor
+or below a board's shadow the strongest step is often another, and a board of the floor's
+own colour shows the rules a step in a few columns only, or none. A third small model
+(``models/skirting_depth.onnx``, trained on the same columns) says per column how tall
+the board is; a wall whose rules' height disagrees with it is cut at the step nearest
+its height instead, and a wall the board model is sure of is cut whole, also where the
+rules see no step.
+
 Whether the mask holds the board can differ from wall to wall: GrabCut may stop at the
 floor line along one wall and at the board's top along another. When the photo as a
 whole does not show a board, each wall is judged on its own (its columns between corners
-of the mask's top edge), and the walls where the board model is sure of one are cut,
-and the walls whose strip the user clicked as not floor (a board darker than the floor
+of the mask's top edge), and the walls where the board model is sure of one are cut
+(where the photo leans to no board, only if the rules see a step on them too: a strip
+of floor along one wall fools the model more often than one along every wall), and the
+walls whose strip the user clicked as not floor (a board darker than the floor
 and of its hue looks like shade to both the rules and the model).
 """
 from __future__ import annotations
@@ -52,6 +62,7 @@ from scipy.ndimage import median_filter
 
 BOARD_MODEL = Path(__file__).resolve().parent.parent / "models" / "skirting_board.onnx"
 GAP_MODEL = Path(__file__).resolve().parent.parent / "models" / "skirting_gap.onnx"
+DEPTH_MODEL = Path(__file__).resolve().parent.parent / "models" / "skirting_depth.onnx"
 
 # Work at this long side at most (the board is 10 px or more there at 4 m).
 WORK_LONG_PX = 1280
@@ -94,6 +105,12 @@ PROFILE_CONTEXT = 8
 # the mask (it already ends at the floor line); above the second, it shows one, whatever
 # the rules above say; in between, the rules decide.
 NO_BOARD_P, BOARD_P = 0.15, 0.5
+# Below this mean board probability over the photo, a wall the board model alone is sure
+# of (the rules see no step on it) is not cut.
+ALONE_P = 0.3
+# A wall's rules' height stands within this of the depth model's; elsewhere the board's
+# lower edge is looked for this far either side of the depth model's height.
+RULES_NEAR_M, LEARNED_NEAR_M = 0.04, 0.02
 # A "not floor" click this far across (a share of the long side) from a wall's column,
 # on its strip, is a click on that wall's board.
 BOARD_CLICK_REACH = 0.10
@@ -128,13 +145,14 @@ def _px_per_m(calibration, cols, rows) -> np.ndarray:
     return np.hypot(head[:, 0] - cols, head[:, 1] - rows) / SEARCH_M
 
 
-def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m, near_m: float | None = None):
+def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m, near_m=None, near_px=NEAR_PX):
     """Per column, the board's height in pixels below the mask's top edge: 0 where the
     column shows none, NaN where it cannot tell (too close to the photo's bottom, or
     the floor below the strip is not in the mask); and how the strip's colour compares
     with the floor's below it: brightness ratio, and angle between the RGB directions
-    (degrees). With ``near_m``, a column looks for the board's lower edge only within
-    ``NEAR_PX`` of that height, and shows none where that window is outside its search."""
+    (degrees). With ``near_m`` (one height, or one per column), a column looks for the
+    board's lower edge only within ``near_px`` (one, or one per column) of that height,
+    and shows none where that window is outside its search."""
     h = image.shape[0]
     span = np.ceil(SEARCH_M * px_per_m).astype(int)
     first = np.maximum(4, np.ceil(MIN_HEIGHT_M * px_per_m).astype(int))
@@ -146,7 +164,8 @@ def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m, near_
     t_of = np.arange(step.shape[1]) + 2  # the row a step ends the strip at
     allowed = (t_of[None] >= first[:, None]) & (t_of[None] < span[:, None])
     if near_m is not None:
-        allowed &= np.abs(t_of[None] - near_m * px_per_m[:, None]) <= NEAR_PX
+        near_px = np.broadcast_to(near_px, len(cols))[:, None]
+        allowed &= np.abs(t_of[None] - np.broadcast_to(near_m, len(cols))[:, None] * px_per_m[:, None]) <= near_px
     best = np.argmax(np.where(allowed, step, -1.0), axis=1)
     t = t_of[best]
     k = np.arange(len(cols))
@@ -335,6 +354,60 @@ def floor_line_gap(profile: np.ndarray, scalars: np.ndarray) -> tuple[np.ndarray
     return 1.0 / (1.0 + np.exp(-out[:, 0])), np.maximum(0.0, -out[:, 1] / 100.0)
 
 
+def board_depth_m(profile: np.ndarray, scalars: np.ndarray) -> np.ndarray:
+    """Per column, the depth model's height of the board whose top is the mask's edge
+    (m upright, at the edge), from :func:`board_profiles`: where the floor line lies below
+    the edge if the column shows a board. (k,) float."""
+    if len(profile) == 0:
+        return np.zeros(0)
+    out = _skirting_session(str(DEPTH_MODEL)).run(None, {"profile": profile, "scalars": scalars})[0]
+    return np.clip(out.reshape(-1).astype(np.float64) / 100.0, 0.0, MAX_HEIGHT_M)
+
+
+def _cut_depth_px(view, walls, rules_px: np.ndarray, decided: np.ndarray, profiles) -> np.ndarray:
+    """(k,) depth to cut (px, 0: none) in the ``decided`` columns, wall by wall.
+
+    The rules' cut (``rules_px``) follows the board's lower edge exactly where their step
+    is that edge, but on a grained floor or below a board's shadow the strongest step is
+    often another, and a board the floor's colour shows them none. The depth model says
+    about where the edge lies (within a centimeter or two): a wall whose rules' height
+    is within ``RULES_NEAR_M`` of it keeps the rules' cut (at their height in the
+    columns they leave); on any other, the step nearest the model's height (within
+    ``LEARNED_NEAR_M``) places it, one height along the wall, as boards have."""
+    _, small_image, small_mask, _, cols, rows, px_per_m = view
+    out = np.zeros(len(decided))
+    if not decided.any():
+        return out
+    profile, scalars, _ = profiles()
+    depth_m = board_depth_m(profile, scalars)
+    learned_m = np.zeros(len(cols))
+    rules_m = np.full(len(cols), np.nan)
+    for wall in walls:
+        cut = wall[decided[wall]]
+        if len(cut):
+            learned_m[wall] = np.median(depth_m[cut])
+        ruled = wall[rules_px[wall] > 0]
+        if len(ruled):
+            rules_m[wall] = np.median(rules_px[ruled] / px_per_m[ruled])
+    trusted = np.abs(rules_m - learned_m) <= RULES_NEAR_M
+    t = np.zeros(len(cols))
+    look = decided & ~trusted
+    if look.any():
+        t[look] = _board_rows(small_image, small_mask, cols[look], rows[look], px_per_m[look], learned_m[look],
+                              LEARNED_NEAR_M * px_per_m[look])[0]
+    for wall in walls:
+        cut = wall[decided[wall]]
+        if not len(cut):
+            continue
+        if trusted[wall[0]]:
+            out[cut] = np.where(rules_px[cut] > 0, rules_px[cut], rules_m[cut] * px_per_m[cut])
+            continue
+        found = cut[t[cut] > 0]
+        height_m = np.median(t[found] / px_per_m[found]) if len(found) else learned_m[cut[0]]
+        out[cut] = height_m * px_per_m[cut]
+    return out * (out >= MIN_HEIGHT_M * px_per_m)
+
+
 def extend_to_floor_line(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndarray:
     """Move the floor mask's top edge up to the floor line where it stops short of it.
 
@@ -444,6 +517,53 @@ def _clicked_walls(walls, cols, rows, px_per_m, known, shown, height_m, points, 
     return clicked
 
 
+def _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, whole, walls, board_at, scale):
+    """(k,) the depth the rules (with the board model's say) cut at each wall column (px; 0:
+    none): the board's lower edge as the column's step at the photo's most common height."""
+    none = np.zeros(len(cols))
+    t, brightness, hue_deg = _board_rows(small_image, small_mask, cols, rows, px_per_m)
+    known = ~np.isnan(t)
+    shown = known & (t > 0)
+    if not shown.any():
+        return none
+    height_m = t / px_per_m
+    # Each column's strongest step is the board's lower edge in most columns, but a
+    # plank seam or a grout line in others: the heights' mode is the board, and each
+    # column looks again for its step at that height.
+    t_mode = None
+    if p_mean >= NO_BOARD_P:
+        t_mode, brightness_mode, hue_mode = _board_rows(small_image, small_mask, cols, rows, px_per_m,
+                                                        _mode(height_m[shown]))
+        shown_mode = ~np.isnan(t_mode) & (t_mode > 0)
+        # The rules judge both readings: on a grained floor the strongest steps spread too
+        # widely for one height even where the board is plain to see at the mode.
+        if not shown_mode.any() or not (
+                p_mean >= BOARD_P
+                or _rules_see_a_board(known, shown, height_m, brightness, hue_deg)
+                or _rules_see_a_board(~np.isnan(t_mode), shown_mode, t_mode / px_per_m, brightness_mode, hue_mode)):
+            t_mode = None
+    if t_mode is None:
+        judged = _walls_with_a_board(walls, p_board, whole)
+        if board_at is not None and len(board_at):
+            points = np.asarray(board_at, np.float64)[:, :2] * scale
+            judged |= _clicked_walls(walls, cols, rows, px_per_m, known, shown, height_m, points,
+                                     BOARD_CLICK_REACH * max(small_mask.shape))
+        if not (shown & judged).any():
+            return none
+        t_mode, _, _ = _board_rows(small_image, small_mask, cols, rows, px_per_m, _mode(height_m[shown & judged]))
+        shown_mode = ~np.isnan(t_mode) & (t_mode > 0) & judged
+        if not shown_mode.any():
+            return none
+    else:
+        judged = np.ones(len(cols), bool)
+    t, shown, height_m = t_mode, shown_mode, t_mode / px_per_m
+    median = float(np.median(height_m[shown]))
+    agree = shown & (height_m > 0.5 * median) & (height_m < 1.5 * median)
+    # A board in dashes (its lower edge too faint for the rules in some columns, as on a
+    # grained floor) is cut whole where the board model sees it between the dashes.
+    return _bridge(cols, rows, np.where(agree, height_m, np.nan), p_board >= SEEN_P) * px_per_m * judged
+
+
 def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
                   board_at=None, extend: bool = False) -> tuple[np.ndarray, float | None]:
     """Remove the skirting board from the top of a floor mask.
@@ -482,51 +602,22 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     def no_board():
         return (_extended(mask, view, profiles) if extend else mask.copy()), None
 
-    t, brightness, hue_deg = _board_rows(small_image, small_mask, cols, rows, px_per_m)
-    known = ~np.isnan(t)
-    shown = known & (t > 0)
-    if not shown.any():
-        return no_board()
-    height_m = t / px_per_m
     profile, scalars, whole = profiles()
     p_board = board_probability(profile, scalars)
     p_mean = float(np.mean(p_board[whole] if whole.any() else p_board))
-    # Each column's strongest step is the board's lower edge in most columns, but a
-    # plank seam or a grout line in others: the heights' mode is the board, and each
-    # column looks again for its step at that height.
-    t_mode = None
-    if p_mean >= NO_BOARD_P:
-        t_mode, brightness_mode, hue_mode = _board_rows(small_image, small_mask, cols, rows, px_per_m,
-                                                        _mode(height_m[shown]))
-        shown_mode = ~np.isnan(t_mode) & (t_mode > 0)
-        # The rules judge both readings: on a grained floor the strongest steps spread too
-        # widely for one height even where the board is plain to see at the mode.
-        if not shown_mode.any() or not (
-                p_mean >= BOARD_P
-                or _rules_see_a_board(known, shown, height_m, brightness, hue_deg)
-                or _rules_see_a_board(~np.isnan(t_mode), shown_mode, t_mode / px_per_m, brightness_mode, hue_mode)):
-            t_mode = None
-    if t_mode is None:
-        walls = _walls(cols, rows)
-        judged = _walls_with_a_board(walls, p_board, whole)
-        if board_at is not None and len(board_at):
-            points = np.asarray(board_at, np.float64)[:, :2] * scale
-            judged |= _clicked_walls(walls, cols, rows, px_per_m, known, shown, height_m, points,
-                                     BOARD_CLICK_REACH * max(small_mask.shape))
-        if not (shown & judged).any():
-            return no_board()
-        t_mode, _, _ = _board_rows(small_image, small_mask, cols, rows, px_per_m, _mode(height_m[shown & judged]))
-        shown_mode = ~np.isnan(t_mode) & (t_mode > 0) & judged
-        if not shown_mode.any():
-            return no_board()
-    else:
-        judged = np.ones(len(cols), bool)
-    t, shown, height_m = t_mode, shown_mode, t_mode / px_per_m
-    median = float(np.median(height_m[shown]))
-    agree = shown & (height_m > 0.5 * median) & (height_m < 1.5 * median)
-    # A board in dashes (its lower edge too faint for the rules in some columns, as on a
-    # grained floor) is cut whole where the board model sees it between the dashes.
-    depth_px = _bridge(cols, rows, np.where(agree, height_m, np.nan), p_board >= SEEN_P) * px_per_m * judged
+    walls = _walls(cols, rows)
+    rules_px = _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, whole, walls, board_at,
+                          scale)
+    # A board the floor's colour shows the rules no step to cut at, in some columns or in
+    # all: where the board model is sure of a wall's board, that wall is cut too, unless
+    # the photo as a whole leans to no board and the rules see no step on that wall.
+    sure = _walls_with_a_board(walls, p_board, whole)
+    if p_mean < ALONE_P:
+        for wall in walls:
+            sure[wall] &= (rules_px[wall] > 0).any()
+    depth_px = _cut_depth_px(view, walls, rules_px, (rules_px > 0) | sure, profiles)
+    if not (depth_px > 0).any():
+        return no_board()
     cut = np.zeros(small_mask.shape, np.uint8)
     for col, row, n in zip(cols, rows, depth_px):
         if n > 0:
@@ -537,5 +628,6 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
         cut = cv2.resize(cut, (cols_px, rows_px), interpolation=cv2.INTER_NEAREST)
     # The height to report is measured where the board stands: the mask's top is the
     # board's top, which lies on the floor beyond the wall, where a meter looks shorter.
-    at_foot = _px_per_m(small_cal, cols[agree], rows[agree] + t[agree])
-    return mask & (cut == 0), float(np.median(t[agree] / at_foot))
+    cut_cols = depth_px > 0
+    at_foot = _px_per_m(small_cal, cols[cut_cols], rows[cut_cols] + depth_px[cut_cols])
+    return mask & (cut == 0), float(np.median(depth_px[cut_cols] / at_foot))

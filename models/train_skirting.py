@@ -26,6 +26,16 @@ stopped short, below the shade at the foot of a wall) and by how many centimeter
         --tall-seeds 958 959 962 963 --hue-seeds 964 965 966 967 --val 953 --count 130 \\
         --epochs 8 --out models/skirting_gap.onnx
 
+``--task depth`` trains the board-height model (``models/skirting_depth.onnx``) from the
+same columns, those whose floor line lies 2.5-22 cm below the mask's edge: per column,
+how far below (cm), so that the trim cuts at the board's lower edge rather than at the
+strongest step, which on a grained floor or below a board's shadow is often another
+(55 seconds of training)::
+
+    python models/train_skirting.py --task depth --seeds 950 951 952 954 955 956 957 \\
+        --tall-seeds 958 959 962 963 --hue-seeds 964 965 966 967 --dark-seeds 974 975 976 977 \\
+        --val 953 --count 130 --cache data/skirting_v2 --out models/skirting_depth.onnx
+
 Rendered columns are kept in ``--cache`` (one file per seed), so a second run trains
 without rendering. Everything random derives from ``--seed``. Training needs torch
 (``pip install -e '.[train]'``); Stager runs the exported model with onnxruntime.
@@ -130,13 +140,16 @@ def labelled(data: dict, every: int, task: str = "board"):
     off = data["offset_m"]
     if task == "board":
         near, unsure = KEEP_FROM_M, (UNSURE_M, BOARD_M)
+    elif task == "depth":
+        near, unsure = BOARD_M, (BOARD_M, BOARD_M)
     else:
         near, unsure = GAP_FAR_M, (GAP_M, GAP_UNSURE_M)
     usable = (np.isfinite(off) & (off > near) & (off < KEEP_TO_M)
               & ~((off > unsure[0]) & (off < unsure[1])))
     pick = np.flatnonzero(usable)[::every]
     o = off[pick]
-    y = o > BOARD_M if task == "board" else np.column_stack([o < GAP_M, 100 * np.minimum(o, 0)])
+    y = {"board": lambda: o > BOARD_M, "depth": lambda: 100 * o,
+         "gap": lambda: np.column_stack([o < GAP_M, 100 * np.minimum(o, 0)])}[task]()
     return (torch.tensor(data["profile"][pick]), torch.tensor(data["scalars"][pick]),
             torch.tensor(y.astype(np.float32)))
 
@@ -172,8 +185,9 @@ def _gap_loss(out, y):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--task", choices=("board", "gap"), default="board",
-                        help="board: is the mask's edge a board's top; gap: does the floor line lie above it")
+    parser.add_argument("--task", choices=("board", "depth", "gap"), default="board",
+                        help="board: is the mask's edge a board's top; depth: how far below it the floor "
+                             "line lies where it is; gap: does the floor line lie above it")
     parser.add_argument("--seeds", type=int, nargs="+", required=True, help="render seeds to train on")
     parser.add_argument("--tall-seeds", type=int, nargs="*", default=[],
                         help="render seeds to train on, with baseboards of 10-20 cm")
@@ -207,15 +221,20 @@ def main(argv=None) -> int:
 
     profile, scalars, y = joined(train, 2)
     profile_v, scalars_v, y_v = joined([(s, "") for s in args.val], 4)
-    gap = args.task == "gap"
-    share = float((y[:, 0] if gap else y).mean())
-    print(f"{len(y)} training columns ({share:.1%} {'floor line above' if gap else 'board'}), "
-          f"{len(y_v)} validation", flush=True)
+    gap, depth = args.task == "gap", args.task == "depth"
+    if depth:
+        print(f"{len(y)} training columns with a board (median {float(y.median()):.1f} cm), "
+              f"{len(y_v)} validation", flush=True)
+    else:
+        share = float((y[:, 0] if gap else y).mean())
+        print(f"{len(y)} training columns ({share:.1%} {'floor line above' if gap else 'board'}), "
+              f"{len(y_v)} validation", flush=True)
 
     torch.manual_seed(args.seed)
     net = BoardNet(samples=profile.shape[2], outputs=2 if gap else 1)
     opt = torch.optim.AdamW(net.parameters(), 1e-3, weight_decay=1e-2)
-    loss_fn = _gap_loss if gap else nn.functional.binary_cross_entropy_with_logits
+    loss_fn = (_gap_loss if gap else nn.functional.smooth_l1_loss if depth
+               else nn.functional.binary_cross_entropy_with_logits)
     log, best = [], (float("inf"), None)
     for epoch in range(args.epochs):
         net.train()
@@ -230,9 +249,15 @@ def main(argv=None) -> int:
         with torch.no_grad():
             logits = net(profile_v, scalars_v)
             val_loss = float(loss_fn(logits, y_v))
-            said, told = (logits[:, 0], y_v[:, 0]) if gap else (logits, y_v)
-            val_acc = float(((said > 0) == (told > 0.5)).float().mean())
+            if depth:
+                # the share of columns whose floor line it places within 1 cm
+                val_acc = float(((logits - y_v).abs() <= 1.0).float().mean())
+            else:
+                said, told = (logits[:, 0], y_v[:, 0]) if gap else (logits, y_v)
+                val_acc = float(((said > 0) == (told > 0.5)).float().mean())
         log.append({"epoch": epoch + 1, "val_loss": round(val_loss, 4), "val_accuracy": round(val_acc, 4)})
+        if depth:
+            log[-1]["val_depth_mae_cm"] = round(float((logits - y_v).abs().mean()), 3)
         if gap:
             above = y_v[:, 0] > 0.5
             log[-1]["val_offset_mae_cm"] = round(float((logits[above, 1] - y_v[above, 1]).abs().mean()), 3)
@@ -242,7 +267,7 @@ def main(argv=None) -> int:
     net.load_state_dict(best[1])
     net.eval()
 
-    output = "out" if gap else "logit"
+    output = "out" if gap else "depth_cm" if depth else "logit"
     args.out.parent.mkdir(parents=True, exist_ok=True)
     tmp = args.out.with_suffix(".tmp.onnx")
     with warnings.catch_warnings():  # the TorchScript exporter is deprecated, and does this model fine
