@@ -379,7 +379,8 @@ def _cut_depth_px(view, walls, rules_px: np.ndarray, decided: np.ndarray, profil
     if not decided.any():
         return out
     profile, scalars, _ = profiles()
-    depth_m = board_depth_m(profile, scalars)
+    depth_m = np.zeros(len(cols))
+    depth_m[decided] = board_depth_m(profile[decided], scalars[decided])  # only the columns cut are read
     learned_m = np.zeros(len(cols))
     rules_m = np.full(len(cols), np.nan)
     for wall in walls:
