@@ -24,7 +24,7 @@ import cv2
 import numpy as np
 
 from .imageio import size_problem
-from .skirting import trim_skirting
+from .skirting import board_clicks, trim_skirting
 
 DEFAULT_MODEL = Path(__file__).resolve().parent.parent / "models" / "floor_segnet.onnx"
 # GrabCut's cost grows with the pixel count; edges it can fix are a few pixels wide at
@@ -464,6 +464,9 @@ class Segmentation:
     doubt_px : (x, y) int or None
         When the floor is :attr:`uncertain`: the middle of the disputed patch with the
         most floor area, in photo pixels, where a look (and maybe a click) is best spent.
+        Otherwise, when the skirting trim may have left a board
+        (:func:`augment.skirting.trim_skirting`): a point on that board, where a "not
+        floor" click trims it.
     """
 
     mask: np.ndarray
@@ -688,7 +691,8 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         ``CLICK_REACH`` of it; a region clicked as floor is kept even when cut off from
         the rest, and within a floor click's reach the skirting trim cuts nothing; a "not
         floor" click on the strip at a wall's foot makes that wall's strip a skirting
-        board for the trim.
+        board for the trim, and marks no colour region (which of them are, a first pass
+        without the "not floor" clicks tells: :func:`augment.skirting.board_clicks`).
 
     Returns
     -------
@@ -705,6 +709,19 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         raise SegmentationError(f"method {method!r}: use onnx or grabcut")
     rows, cols = image.shape[:2]
     clicks = _check_clicks(clicks, (rows, cols))
+    trims = skirting and calibration is not None and (method == "grabcut" or refine)
+    wand, board_marks = clicks, clicks[:0]
+    if trims and (clicks[:, 2] == 0).any():
+        # A "not floor" click on the strip at a wall's foot marks a skirting board, which
+        # the trim cuts along the wall. Its colour region is left out: on a board of the
+        # floor's colour the board's lower edge is too faint to stop it, and it would carve
+        # a patch out of the floor below.
+        first = segment_floor(image, model, calibration, method, refine, skirting=False,
+                              clicks=clicks[clicks[:, 2] > 0])
+        other = np.flatnonzero(clicks[:, 2] == 0)
+        on_board = np.zeros(len(clicks), bool)
+        on_board[other] = board_clicks(image, first.mask, calibration, clicks[other, :2])
+        wand, board_marks = clicks[~on_board], clicks[on_board]
     warnings = []
     scale = _working_scale((rows, cols), GRABCUT_LONG_PX)
     size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
@@ -712,7 +729,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     small = _hide_board(cv2.resize(work, size_small, interpolation=cv2.INTER_AREA), calibration, scale)
     shape_small = small.shape[:2]
     probability = None
-    clicked_floor, clicked_other, clicked_near = _click_regions(small, scale, calibration, clicks)
+    clicked_floor, clicked_other, clicked_near = _click_regions(small, scale, calibration, wand)
 
     if method == "onnx":
         if model is None:
@@ -753,24 +770,31 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     # Linear interpolation of the 0/1 mask, cut at one half: edges come out straight
     # rather than staircased at the working pixel size.
     mask = cv2.resize(mask_small.astype(np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
-    skirting_m = None
-    if skirting and calibration is not None and name != "onnx" and mask.any():
+    skirting_m = board_doubt = None
+    board_cut = np.zeros((rows, cols), bool)
+    if trims and mask.any():
         # The refined mask's top edge sits on the skirting boards; the floor ends below.
         # Where it holds none, its edge may instead stop short of the floor line.
-        trimmed, skirting_m = trim_skirting(image, mask, calibration, board_at=clicks[clicks[:, 2] == 0],
-                                            extend=True)
+        trimmed, skirting_m, board_doubt = trim_skirting(image, mask, calibration,
+                                                         board_at=clicks[clicks[:, 2] == 0], extend=True)
         # A strip the trim took for a board is floor within reach of a floor click there:
         # the user's word is the last.
         reach = np.zeros((rows, cols), np.uint8)
         for x, y, _ in clicks[clicks[:, 2] > 0]:
             cv2.circle(reach, (round(x), round(y)), round(CLICK_REACH * max(rows, cols)), 1, -1)
+        board_cut = _cut_clicked(mask & ~trimmed, board_marks)
         mask = trimmed | (mask & (reach > 0))
-    if len(clicks):
+        if board_doubt is not None and reach[board_doubt[1], board_doubt[0]]:
+            board_doubt = None
+    if len(wand):
         other = cv2.resize(clicked_other.astype(np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
         mask &= ~other
     disputed = (None, None, None)
     if probability is not None and calibration is not None and mask.any():
-        disputed = disputed_floor(mask, probability, calibration, settled=clicked_near)
+        # A board the user clicked was cut where the model calls it floor: settled too.
+        settled = clicked_near | (cv2.resize(board_cut.astype(np.uint8), size_small,
+                                             interpolation=cv2.INTER_AREA) > 0)
+        disputed = disputed_floor(mask, probability, calibration, settled=settled)
     seg = Segmentation(mask, probability, name, tuple(warnings), skirting_m, *disputed, clicks)
     if seg.uncertain:
         x, y = _largest_patch_px(seg.disputed, calibration, (rows, cols))
@@ -779,7 +803,29 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
             f"of it ({100 * seg.disputed_share:.0f} %, hatched magenta in the floor overlay); the largest patch in "
             f"doubt is around {x},{y} (ringed there), now {'floor' if mask[y, x] else 'not floor'}: check it, and "
             "correct the floor where it is wrong",))
+    elif board_doubt is not None and mask[board_doubt[1], board_doubt[0]]:
+        x, y = board_doubt
+        seg = replace(seg, doubt_px=(x, y), warnings=seg.warnings + (
+            f"a skirting board may be left in the floor along the wall around {x},{y} (ringed in the floor "
+            "overlay; most often a board of the floor's own colour): if the photo shows one there, mark it not "
+            "floor there to trim it along that wall",))
     return seg
+
+
+def _cut_clicked(cut: np.ndarray, marks: np.ndarray) -> np.ndarray:
+    """The parts of ``cut`` (rows, cols) bool, what the skirting trim took, that hold a
+    board click of ``marks`` (n, 3): the nearest cut pixels at or above it in its column,
+    as the cut runs down from the mask's top edge."""
+    out = np.zeros(cut.shape, bool)
+    if not len(marks) or not cut.any():
+        return out
+    _, labels = cv2.connectedComponents(cut.astype(np.uint8), connectivity=8)
+    for x, y, _ in marks:
+        column = labels[:min(cut.shape[0] - 1, round(y)) + 1, min(cut.shape[1] - 1, round(x))]
+        hit = column[column > 0]
+        if len(hit):
+            out |= labels == hit[-1]
+    return out
 
 
 def _largest_patch_px(region: np.ndarray, calibration, shape: tuple[int, int]) -> tuple[int, int]:

@@ -49,7 +49,13 @@ of the mask's top edge), and the walls where the board model is sure of one are 
 (where the photo leans to no board, only if the rules see a step on them too: a strip
 of floor along one wall fools the model more often than one along every wall), and the
 walls whose strip the user clicked as not floor (a board darker than the floor
-and of its hue looks like shade to both the rules and the model).
+and of its hue looks like shade to both the rules and the model), at the depth model's
+height where the rules see no strip on them (a board of the floor's colour).
+
+A board of the floor's colour that the board model leans to without being sure of is
+left; :func:`trim_skirting` then says where it may be (``doubt_px``, on the wall left
+uncut with the highest mean probability, from ``DOUBT_P``), so that the user can look
+and, where a board is there, click it.
 """
 from __future__ import annotations
 
@@ -114,6 +120,9 @@ RULES_NEAR_M, LEARNED_NEAR_M = 0.04, 0.02
 # A "not floor" click this far across (a share of the long side) from a wall's column,
 # on its strip, is a click on that wall's board.
 BOARD_CLICK_REACH = 0.10
+# A wall left uncut where the board model's mean probability reaches this may hold a
+# board (most often one the floor's colour): the trim says where, for a look and a click.
+DOUBT_P = 0.3
 # A column where the board model's probability reaches this shows the board.
 SEEN_P = 0.5
 # A wall's mask edge moves up to the floor line where the gap model's mean probability
@@ -500,21 +509,18 @@ def _rules_see_a_board(known, shown, height_m, brightness, hue_deg) -> bool:
         np.median(brightness[shown]) < SHADOW_RATIO and np.median(hue_deg[shown]) < SHADOW_DEG)
 
 
-def _clicked_walls(walls, cols, rows, px_per_m, known, shown, height_m, points, reach_px) -> np.ndarray:
-    """(k,) bool: the columns of each of ``walls`` whose board the user clicked as not
+def _walls_clicked(walls, cols, rows, px_per_m, points, reach_px) -> np.ndarray:
+    """(k,) bool: the columns of each of ``walls`` whose strip the user clicked as not
     floor: a point within ``reach_px`` across of one of the wall's columns and on its strip
-    (from the mask's top edge down by a board's greatest height), where the wall's columns
-    show a strip of one height (no shade test: the user has seen it)."""
+    (from the mask's top edge down by a board's greatest height)."""
     clicked = np.zeros(len(cols), bool)
     for wall in walls:
         if len(wall) < MIN_WALL_COLUMNS:
             continue
-        on_strip = np.zeros(len(wall), bool)
         for x, y in points:
-            on_strip |= ((np.abs(cols[wall] - x) <= reach_px) & (y >= rows[wall] - 2)
-                         & (y <= rows[wall] + MAX_HEIGHT_M * px_per_m[wall] + 2))
-        if on_strip.any() and _strip_of_one_height(known[wall], shown[wall], height_m[wall]):
-            clicked[wall] = True
+            if ((np.abs(cols[wall] - x) <= reach_px) & (y >= rows[wall] - 2)
+                    & (y <= rows[wall] + MAX_HEIGHT_M * px_per_m[wall] + 2)).any():
+                clicked[wall] = True
     return clicked
 
 
@@ -547,8 +553,11 @@ def _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, w
         judged = _walls_with_a_board(walls, p_board, whole)
         if board_at is not None and len(board_at):
             points = np.asarray(board_at, np.float64)[:, :2] * scale
-            judged |= _clicked_walls(walls, cols, rows, px_per_m, known, shown, height_m, points,
-                                     BOARD_CLICK_REACH * max(small_mask.shape))
+            clicked = _walls_clicked(walls, cols, rows, px_per_m, points, BOARD_CLICK_REACH * max(small_mask.shape))
+            for wall in walls:
+                # No shade test: the user has seen the board.
+                if clicked[wall].any() and _strip_of_one_height(known[wall], shown[wall], height_m[wall]):
+                    judged[wall] = True
         if not (shown & judged).any():
             return none
         t_mode, _, _ = _board_rows(small_image, small_mask, cols, rows, px_per_m, _mode(height_m[shown & judged]))
@@ -592,16 +601,20 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
         ``extend`` the mask extended to the floor line.
     height_m : float or None
         The board's height when it was trimmed.
+    doubt_px : (x, y) int or None
+        Where a board may have been left: on the strip of a wall left uncut that the board
+        model leans to a board on (``DOUBT_P``), most often a board the floor's colour. A
+        "not floor" click there (``board_at``) trims that wall.
     """
     rows_px, cols_px = mask.shape
     view = working_view(image, mask, calibration)
     if view is None:
-        return mask.copy(), None
+        return mask.copy(), None, None
     scale, small_image, small_mask, small_cal, cols, rows, px_per_m = view
     profiles = _profiles_of(view)
 
-    def no_board():
-        return (_extended(mask, view, profiles) if extend else mask.copy()), None
+    def no_board(doubt_px=None):
+        return (_extended(mask, view, profiles) if extend else mask.copy()), None, doubt_px
 
     profile, scalars, whole = profiles()
     p_board = board_probability(profile, scalars)
@@ -616,9 +629,17 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     if p_mean < ALONE_P:
         for wall in walls:
             sure[wall] &= (rules_px[wall] > 0).any()
+    if board_at is not None and len(board_at):
+        # A board the floor's colour shows the rules no strip of one height to cut; the
+        # user's click says it is there, and the depth model says how tall.
+        sure |= _walls_clicked(walls, cols, rows, px_per_m, np.asarray(board_at, np.float64)[:, :2] * scale,
+                               BOARD_CLICK_REACH * max(small_mask.shape))
     depth_px = _cut_depth_px(view, walls, rules_px, (rules_px > 0) | sure, profiles)
+    doubt_px = _board_doubt_px(view, walls, p_board, whole, depth_px, profiles)
+    if doubt_px is not None:
+        doubt_px = (min(doubt_px[0], cols_px - 1), min(doubt_px[1], rows_px - 1))
     if not (depth_px > 0).any():
-        return no_board()
+        return no_board(doubt_px)
     cut = np.zeros(small_mask.shape, np.uint8)
     for col, row, n in zip(cols, rows, depth_px):
         if n > 0:
@@ -631,4 +652,60 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     # board's top, which lies on the floor beyond the wall, where a meter looks shorter.
     cut_cols = depth_px > 0
     at_foot = _px_per_m(small_cal, cols[cut_cols], rows[cut_cols] + depth_px[cut_cols])
-    return mask & (cut == 0), float(np.median(depth_px[cut_cols] / at_foot))
+    return mask & (cut == 0), float(np.median(depth_px[cut_cols] / at_foot)), doubt_px
+
+
+def board_clicks(image: np.ndarray, mask: np.ndarray, calibration, points) -> np.ndarray:
+    """Which clicks lie on the strip at the foot of a wall, where a "not floor" click
+    marks a skirting board (``board_at`` of :func:`trim_skirting`).
+
+    Parameters
+    ----------
+    image : (rows, cols, 3) uint8
+        The photo. Not modified.
+    mask : (rows, cols) bool
+        Floor mask at the photo's size, not yet trimmed.
+    calibration : Calibration
+    points : (n, 2) array_like of float
+        Photo pixels ``x, y``.
+
+    Returns
+    -------
+    (n,) bool
+        True for a point within ``BOARD_CLICK_REACH`` across of a wall's column and from
+        the mask's top edge there down by a board's greatest height (``MAX_HEIGHT_M``).
+    """
+    points = np.asarray(points, np.float64).reshape(-1, 2)
+    out = np.zeros(len(points), bool)
+    view = working_view(image, mask, calibration) if mask.any() and len(points) else None
+    if view is None:
+        return out
+    scale, _, small_mask, _, cols, rows, px_per_m = view
+    walls = _walls(cols, rows)
+    for i, point in enumerate(points):
+        out[i] = _walls_clicked(walls, cols, rows, px_per_m, point[None] * scale,
+                                BOARD_CLICK_REACH * max(small_mask.shape)).any()
+    return out
+
+
+def _board_doubt_px(view, walls, p_board: np.ndarray, whole: np.ndarray, depth_px: np.ndarray,
+                    profiles) -> tuple[int, int] | None:
+    """Photo pixel ``x, y`` on the strip of the wall left uncut (in most of its columns)
+    whose board model's mean probability is highest, at ``DOUBT_P`` or more: the middle
+    of its strip, where a "not floor" click trims it. None when there is none."""
+    scale, _, _, _, cols, rows, px_per_m = view
+    best, best_p = None, DOUBT_P
+    for wall in walls:
+        if len(wall) < MIN_WALL_COLUMNS or np.mean(depth_px[wall] > 0) >= 0.5:
+            continue
+        inside = wall[whole[wall]]
+        p = float(np.mean(p_board[inside if len(inside) else wall]))
+        if p >= best_p:
+            best, best_p = wall, p
+    if best is None:
+        return None
+    profile, scalars, _ = profiles()
+    height_m = float(np.median(board_depth_m(profile[best], scalars[best])))
+    mid = best[len(best) // 2]
+    return (int(round(cols[mid] / scale)),
+            int(round((rows[mid] + 0.5 * height_m * px_per_m[mid]) / scale)))

@@ -15,7 +15,8 @@ described on the app's OpenAPI page (``/docs``):
 ``GET /api/jobs/{id}``              ``status`` (queued, running, done, failed), per-stage
                                     progress, ``error`` (what went wrong, in words),
                                     ``files``, ``warnings``, ``doubt`` (where an
-                                    uncertain floor is most in doubt)
+                                    uncertain floor is most in doubt, or a
+                                    skirting board may be left in it)
 ``GET /api/jobs/{id}/files/{name}`` one output file; only names in the job's ``files``
 ``GET /api/jobs/{id}/download.zip`` every output file in one zip
 ``DELETE /api/jobs/{id}``           delete the job and its files now (a running job's as it ends)
@@ -603,7 +604,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
     async def status(job_id: str):
         """The job's status, per-stage progress, error, files and warnings, and where the
         floor is most in doubt (``doubt``: x_px, y_px and whether it is now floor) when it
-        is uncertain."""
+        is uncertain, or where a skirting board may be left in it."""
         job = get_job(job_id)
         state = _job_state(job)
         if state["error"] is not None and state["error"]["kind"] == "calibration" \

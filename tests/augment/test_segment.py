@@ -787,7 +787,7 @@ def test_a_click_outranks_the_skirting_trim(held_out, model, monkeypatch):
     cut[max(0, y - 20):y + 20, max(0, x - 20):x + 20] = True
 
     def over_cut(image, mask, calibration, board_at=None, extend=False):  # a trim gone too deep, around (x, y)
-        return mask & ~cut, 0.2
+        return mask & ~cut, 0.2, None
 
     monkeypatch.setattr(segment, "trim_skirting", over_cut)
     assert not segment_floor(sample.image, model, cal).mask[y, x]
@@ -803,13 +803,58 @@ def test_not_floor_clicks_are_handed_to_the_skirting_trim(held_out, model, monke
 
     def trim(image, mask, calibration, board_at=None, extend=False):
         heard.append(np.asarray(board_at, float))
-        return mask.copy(), None
+        return mask.copy(), None, None
 
     monkeypatch.setattr(segment, "trim_skirting", trim)
     rows, cols = sample.floor_mask.shape
     floor_y, floor_x = np.argwhere(sample.floor_mask)[len(np.argwhere(sample.floor_mask)) // 2]
     segment_floor(sample.image, model, cal, clicks=[(float(floor_x), float(floor_y), 1), (5.0, rows - 6.0, 0)])
     assert len(heard) == 1 and heard[0].shape == (1, 3) and tuple(heard[0][0, :2]) == (5.0, rows - 6.0)
+
+
+def test_a_not_floor_click_on_a_board_marks_no_colour_region(held_out, model, monkeypatch):
+    """A "not floor" click the trim takes for a board click (on the strip at a wall's
+    foot) goes to the trim only: its colour region, which on a board of the floor's colour
+    runs into the floor below, is not carved. Other clicks keep their regions."""
+    sample, cal = held_out[0]
+    rows, cols = sample.floor_mask.shape
+    board, carton, floor = (10.0, 20.0, 0), (30.0, 40.0, 0), (float(cols // 2), float(rows - 5), 1)
+    monkeypatch.setattr(segment, "board_clicks", lambda image, mask, calibration, points: np.array(
+        [tuple(p) == board[:2] for p in np.asarray(points)]))
+    given = []
+    regions = segment._click_regions
+
+    def recorded(small, scale, calibration, clicks):
+        given.append(np.asarray(clicks, float))
+        return regions(small, scale, calibration, clicks)
+
+    monkeypatch.setattr(segment, "_click_regions", recorded)
+    heard = []
+
+    def trim(image, mask, calibration, board_at=None, extend=False):
+        heard.append(np.asarray(board_at, float))
+        return mask.copy(), None, None
+
+    monkeypatch.setattr(segment, "trim_skirting", trim)
+    segment_floor(sample.image, model, cal, clicks=[board, carton, floor])
+    # the first pass (floor clicks only, to find the walls' strips), then the segmentation
+    assert [g[:, :2].tolist() for g in given] == [[list(floor[:2])], [list(carton[:2]), list(floor[:2])]]
+    assert heard[0][:, :2].tolist() == [list(board[:2]), list(carton[:2])]
+    given.clear()
+    segment_floor(sample.image, model, cal, clicks=[floor], skirting=False)
+    assert len(given) == 1  # no first pass without a "not floor" click
+
+
+def test_a_board_click_settles_the_band_the_trim_cut_above_it():
+    """Two bands the trim cut, along two walls; a board click on the strip of the first
+    (a few rows below its cut, in its column) settles that band alone, so the model, which
+    calls the board floor, does not put it back in dispute."""
+    cut = np.zeros((100, 200), bool)
+    cut[20:26, 10:90] = True
+    cut[30:35, 110:190] = True
+    settled = segment._cut_clicked(cut, np.array([[50.0, 28.0, 0.0]]))
+    np.testing.assert_array_equal(settled, cut & (np.arange(200) < 100)[None])
+    assert not segment._cut_clicked(cut, np.array([[100.0, 50.0, 0.0]])).any()  # between the bands
 
 
 def test_the_middle_of_a_patch_by_hand():

@@ -7,7 +7,7 @@ import pytest
 from augment import skirting
 from augment.board import Board
 from augment.calibrate import Calibration, Intrinsics
-from augment.skirting import extend_to_floor_line, trim_skirting
+from augment.skirting import board_clicks, extend_to_floor_line, trim_skirting
 
 WALL_Y_M = 4.0
 SIZE = (960, 720)
@@ -69,7 +69,7 @@ def test_board_is_trimmed_to_the_floor_line(board_m):
     band = mask & ~truth
     assert band.sum() > 5 * SIZE[0]  # the mistake is a real strip, several pixels tall
     before = image.copy(), mask.copy()
-    trimmed, height_m = trim_skirting(image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration)
     assert height_m == pytest.approx(board_m, abs=0.01)
     assert (trimmed & band).sum() < 0.05 * band.sum()  # the strip is gone
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()  # and the floor stays
@@ -83,7 +83,7 @@ def test_board_on_a_wall_seen_at_an_angle(board_m):
     the photo and few at the other, and its height is still one number in meters."""
     image, truth, mask, calibration = _room(board_m, yaw_deg=45.0)
     band = mask & ~truth
-    trimmed, height_m = trim_skirting(image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration)
     assert height_m == pytest.approx(board_m, abs=0.01)
     assert (trimmed & band).sum() < 0.1 * band.sum()
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
@@ -96,7 +96,7 @@ def test_board_on_a_wall_seen_at_an_angle(board_m):
 def test_shadow_at_the_wall_is_not_a_board(shadow):
     """A soft shadow fades out; a sharp one keeps the floor's colour, only darker."""
     image, truth, _, calibration = _room(0.0, shadow=shadow)
-    trimmed, height_m = trim_skirting(image, truth, calibration)
+    trimmed, height_m, _ = trim_skirting(image, truth, calibration)
     assert height_m is None
     np.testing.assert_array_equal(trimmed, truth)
 
@@ -105,7 +105,7 @@ def test_floor_reaching_the_top_of_the_photo_is_left_alone():
     image, truth, mask, calibration = _room(0.12)
     cropped = mask.copy()
     cropped[: SIZE[1] // 2] = True  # no wall above the floor anywhere: nothing to measure
-    trimmed, height_m = trim_skirting(image, cropped, calibration)
+    trimmed, height_m, _ = trim_skirting(image, cropped, calibration)
     assert height_m is None
     np.testing.assert_array_equal(trimmed, cropped)
 
@@ -120,7 +120,7 @@ def test_board_is_cut_along_the_wall_where_single_columns_cannot_tell():
     faint = block & mask & ~truth
     image = image.copy()
     image[faint] = (160, 118, 78)  # 10 or so from the floor's colour below
-    trimmed, height_m = trim_skirting(image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration)
     assert height_m == pytest.approx(0.12, abs=0.01)
     assert (trimmed & faint).sum() < 0.05 * faint.sum()
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
@@ -129,7 +129,7 @@ def test_board_is_cut_along_the_wall_where_single_columns_cannot_tell():
 def test_board_darker_than_the_floor_is_still_a_board():
     """Darker than the floor, as a shadow is, but another colour: a board."""
     image, truth, mask, calibration = _room(0.08, board_rgb=(70, 72, 80))
-    trimmed, height_m = trim_skirting(image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration)
     assert height_m == pytest.approx(0.08, abs=0.01)
     assert (trimmed & mask & ~truth).sum() < 0.05 * (mask & ~truth).sum()
 
@@ -147,7 +147,7 @@ def test_plank_joints_below_the_board_do_not_deepen_the_cut(seed):
         if rng.random() < 0.6:
             r = floor_line[c0:c0 + 24].min() + int(rng.integers(4, 40))
             image[r:r + 2, c0:c0 + 24] = (95, 70, 45)
-    trimmed, height_m = trim_skirting(image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration)
     assert height_m == pytest.approx(0.10, abs=0.01)
     below = np.argmax(trimmed, axis=0) - floor_line
     assert np.abs(below).max() <= 2  # every column cut at the floor line, none deeper
@@ -173,11 +173,11 @@ def test_mask_already_at_the_floor_line_is_left_alone(depth_m, factor):
     board model reads that the strip is floor and the wall above it is the board."""
     image, truth, mask, calibration = _room(0.10, board_rgb=(190, 176, 152))
     image = _plank_along_the_wall(image, truth, calibration, depth_m, factor)
-    trimmed, height_m = trim_skirting(image, truth, calibration)
+    trimmed, height_m, _ = trim_skirting(image, truth, calibration)
     assert height_m is None
     np.testing.assert_array_equal(trimmed, truth)
     # The same photo with the board still in the mask: trimmed to the floor line.
-    trimmed, height_m = trim_skirting(image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration)
     assert height_m == pytest.approx(0.10, abs=0.01)
     assert (trimmed & mask & ~truth).sum() < 0.05 * (mask & ~truth).sum()
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
@@ -258,12 +258,12 @@ def test_a_board_whose_strongest_steps_spread_is_trimmed(monkeypatch):
     known = ~np.isnan(t)
     assert not skirting._rules_see_a_board(known, known & (t > 0), t / px_per_m, brightness, hue)
     monkeypatch.setattr(skirting, "BOARD_P", 1.1)  # the rules decide
-    check(*trim_skirting(sample.image, mask, calibration))
+    check(*trim_skirting(sample.image, mask, calibration)[:2])
     monkeypatch.setattr(skirting, "_rules_see_a_board", lambda *args: False)
     assert trim_skirting(sample.image, mask, calibration)[1] is None
     monkeypatch.undo()
     monkeypatch.setattr(skirting, "_rules_see_a_board", lambda *args: False)
-    check(*trim_skirting(sample.image, mask, calibration))  # the model is sure
+    check(*trim_skirting(sample.image, mask, calibration)[:2])  # the model is sure
 
 def test_a_board_in_dashes_is_cut_whole_where_the_board_model_sees_it():
     """One stretch of wall, 100 columns on one row: the rules found the board (4 cm, then
@@ -329,7 +329,7 @@ def test_a_board_on_one_wall_is_cut_when_the_other_walls_show_none(monkeypatch):
     truth = sample.floor_mask
     true_m2 = floor_polygon(truth, calibration).area_m2
     assert floor_polygon(mask, calibration).area_m2 / true_m2 - 1 > 0.05
-    trimmed, height_m = trim_skirting(sample.image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(sample.image, mask, calibration)
     assert height_m is not None and 0.04 < height_m < 0.13
     assert abs(floor_polygon(trimmed, calibration).area_m2 / true_m2 - 1) < 0.02
     cut = mask & ~trimmed
@@ -346,7 +346,7 @@ def test_a_board_of_the_floors_colour_is_cut_along_the_whole_wall(board_rgb, boa
     board model is sure of the wall, so all of it goes, and the floor stays."""
     image, truth, mask, calibration = _room(board_m, board_rgb=board_rgb)
     band = mask & ~truth
-    trimmed, height_m = trim_skirting(image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration)
     assert height_m == pytest.approx(board_m, abs=0.01)
     assert (trimmed & band).sum() < 0.05 * band.sum()
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
@@ -358,7 +358,7 @@ def test_a_board_of_the_floors_hue_darker_is_trimmed():
     colour, sees the board and trims it to the floor line."""
     image, truth, mask, calibration = _room(0.10, board_rgb=(90, 66, 42))  # 0.6 of the floor
     band = mask & ~truth
-    trimmed, height_m = trim_skirting(image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration)
     assert height_m == pytest.approx(0.10, abs=0.01)
     assert (trimmed & band).sum() < 0.05 * band.sum()
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
@@ -371,18 +371,63 @@ def test_a_click_on_a_board_the_board_model_misses_trims_its_wall(monkeypatch):
     monkeypatch.setattr(skirting, "board_probability", lambda profile, scalars: np.full(len(profile), 0.02))
     image, truth, mask, calibration = _room(0.10, board_rgb=(90, 66, 42))
     band = mask & ~truth
-    trimmed, height_m = trim_skirting(image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration)
     assert height_m is None and (trimmed & band).sum() == band.sum()
     rows, cols = np.nonzero(band)
     on_strip = (cols.min() + 40, int(np.median(rows[cols == cols.min() + 40])))
-    trimmed, height_m = trim_skirting(image, mask, calibration, board_at=[on_strip])
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration, board_at=[on_strip])
     assert height_m == pytest.approx(0.10, abs=0.01)
     assert (trimmed & band).sum() < 0.05 * band.sum()
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
     in_front = (on_strip[0], on_strip[1] + 120)
     assert truth[in_front[1], in_front[0]]
-    trimmed, height_m = trim_skirting(image, mask, calibration, board_at=[in_front])
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration, board_at=[in_front])
     assert height_m is None and (trimmed & band).sum() == band.sum()
+
+
+@pytest.mark.parametrize("p_board", [0.35, 0.45])
+def test_the_trim_says_where_a_board_it_left_may_be_and_a_click_there_trims_it(monkeypatch, p_board):
+    """A board of the floor's colour that the board model leans to but is not sure of
+    (probability under 0.5), and in which the rules see no strip of one height (as on
+    most such renders): it is left. The trim points at its strip; a "not floor" click
+    there cuts the wall at the depth model's height, all along (before, such a click
+    needed the rules' strip and did nothing)."""
+    monkeypatch.setattr(skirting, "board_probability", lambda profile, scalars: np.full(len(profile), p_board))
+    monkeypatch.setattr(skirting, "_rules_cut", lambda small_image, small_mask, cols, *rest: np.zeros(len(cols)))
+    monkeypatch.setattr(skirting, "_strip_of_one_height", lambda known, shown, height_m: False)
+    image, truth, mask, calibration = _room(0.08, board_rgb=(140, 103, 66))
+    band = mask & ~truth
+    trimmed, height_m, doubt = trim_skirting(image, mask, calibration)
+    assert height_m is None and (trimmed & band).sum() > 0.9 * band.sum()
+    x, y = doubt
+    assert band[y, x]
+    trimmed, height_m, doubt = trim_skirting(image, mask, calibration, board_at=[(x, y)])
+    assert height_m == pytest.approx(0.08, abs=0.02) and doubt is None
+    assert (trimmed & band).sum() < 0.1 * band.sum()
+    assert (truth & ~trimmed).sum() < 0.005 * truth.sum()
+
+
+def test_a_click_on_the_strip_at_a_walls_foot_is_a_board_click():
+    """On the board's strip (the mask's top 20 cm along the wall): a board click; on the
+    floor 120 px in front of it, or on the wall above the mask: not."""
+    image, truth, mask, calibration = _room(0.10)
+    band = mask & ~truth
+    rows, cols = np.nonzero(band)
+    x = cols.min() + 40
+    on_strip = (x, int(np.median(rows[cols == x])))
+    in_front = (x, on_strip[1] + 120)
+    above = (x, int(rows[cols == x].min()) - 30)
+    assert truth[in_front[1], in_front[0]] and not mask[above[1], above[0]]
+    np.testing.assert_array_equal(board_clicks(image, mask, calibration, [on_strip, in_front, above]),
+                                  [True, False, False])
+    assert not board_clicks(image, np.zeros_like(mask), calibration, [on_strip]).any()
+
+
+def test_no_doubt_where_the_board_model_sees_no_board(monkeypatch):
+    """Below ``DOUBT_P`` the strip left is taken for floor, without a word."""
+    monkeypatch.setattr(skirting, "board_probability", lambda profile, scalars: np.full(len(profile), 0.25))
+    image, truth, mask, calibration = _room(0.08, board_rgb=(140, 103, 66))
+    assert trim_skirting(image, mask, calibration)[2] is None
 
 
 def test_floor_below_a_boards_shadow_is_brought_back():
@@ -396,7 +441,7 @@ def test_floor_below_a_boards_shadow_is_brought_back():
 
     sample, calibration, mask = _render_untrimmed(930, 69)
     truth = sample.floor_mask
-    trimmed, height_m = trim_skirting(sample.image, mask, calibration)
+    trimmed, height_m, _ = trim_skirting(sample.image, mask, calibration)
     assert height_m is None
     missed = truth & ~trimmed
     true_m2 = floor_polygon(truth, calibration).area_m2
@@ -434,7 +479,7 @@ def test_shade_at_the_foot_of_a_wall_seen_square_on_is_brought_back(depth_m):
     assert 3 <= band.sum(axis=0).max() <= 6  # a few rows, across the whole photo
     image = (image * np.where(band, 0.55, 1.0)[..., None]).astype(np.uint8)
     mask = truth & ~band
-    extended, height_m = trim_skirting(image, mask, calibration, extend=True)
+    extended, height_m, _ = trim_skirting(image, mask, calibration, extend=True)
     assert height_m is None
     assert (extended & band).sum() > 0.9 * band.sum()
     assert (extended & ~truth).sum() < 0.05 * band.sum()

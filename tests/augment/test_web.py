@@ -423,7 +423,7 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             page.click("#again")  # beside the corrections, below the overlays
             page.wait_for_selector("#download:not([hidden])", timeout=50_000)
             assert "(applied)" in page.inner_text("#clicks-note")
-            assert ("click it right on the floor overlay below: the magenta ring marks the patch most in doubt "
+            assert ("click it right on the floor overlay below: the magenta ring marks the spot most in doubt "
                     "(now not floor)") in page.inner_text("#warnings")
             report = page.request.get(server + page.get_attribute("#zip", "href").replace("download.zip",
                                                                                    "files/report.json"))
