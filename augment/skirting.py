@@ -524,9 +524,11 @@ def _walls_clicked(walls, cols, rows, px_per_m, points, reach_px) -> np.ndarray:
     return clicked
 
 
-def _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, whole, walls, board_at, scale):
+def _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, whole, walls, clicked):
     """(k,) the depth the rules (with the board model's say) cut at each wall column (px; 0:
-    none): the board's lower edge as the column's step at the photo's most common height."""
+    none): the board's lower edge as the column's step at the photo's most common height.
+    ``clicked`` (k,) bool: the columns of the walls whose strip the user clicked as not
+    floor (:func:`_walls_clicked`)."""
     none = np.zeros(len(cols))
     t, brightness, hue_deg = _board_rows(small_image, small_mask, cols, rows, px_per_m)
     known = ~np.isnan(t)
@@ -551,13 +553,10 @@ def _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, w
             t_mode = None
     if t_mode is None:
         judged = _walls_with_a_board(walls, p_board, whole)
-        if board_at is not None and len(board_at):
-            points = np.asarray(board_at, np.float64)[:, :2] * scale
-            clicked = _walls_clicked(walls, cols, rows, px_per_m, points, BOARD_CLICK_REACH * max(small_mask.shape))
-            for wall in walls:
-                # No shade test: the user has seen the board.
-                if clicked[wall].any() and _strip_of_one_height(known[wall], shown[wall], height_m[wall]):
-                    judged[wall] = True
+        for wall in walls:
+            # No shade test: the user has seen the board.
+            if clicked[wall].any() and _strip_of_one_height(known[wall], shown[wall], height_m[wall]):
+                judged[wall] = True
         if not (shown & judged).any():
             return none
         t_mode, _, _ = _board_rows(small_image, small_mask, cols, rows, px_per_m, _mode(height_m[shown & judged]))
@@ -575,7 +574,7 @@ def _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, w
 
 
 def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
-                  board_at=None, extend: bool = False) -> tuple[np.ndarray, float | None]:
+                  board_at=None, extend: bool = False) -> tuple[np.ndarray, float | None, tuple[int, int] | None]:
     """Remove the skirting board from the top of a floor mask.
 
     Parameters
@@ -620,8 +619,11 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     p_board = board_probability(profile, scalars)
     p_mean = float(np.mean(p_board[whole] if whole.any() else p_board))
     walls = _walls(cols, rows)
-    rules_px = _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, whole, walls, board_at,
-                          scale)
+    clicked = np.zeros(len(cols), bool)
+    if board_at is not None and len(board_at):
+        clicked = _walls_clicked(walls, cols, rows, px_per_m, np.asarray(board_at, np.float64)[:, :2] * scale,
+                                 BOARD_CLICK_REACH * max(small_mask.shape))
+    rules_px = _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, whole, walls, clicked)
     # A board the floor's colour shows the rules no step to cut at, in some columns or in
     # all: where the board model is sure of a wall's board, that wall is cut too, unless
     # the photo as a whole leans to no board and the rules see no step on that wall.
@@ -629,11 +631,9 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     if p_mean < ALONE_P:
         for wall in walls:
             sure[wall] &= (rules_px[wall] > 0).any()
-    if board_at is not None and len(board_at):
-        # A board the floor's colour shows the rules no strip of one height to cut; the
-        # user's click says it is there, and the depth model says how tall.
-        sure |= _walls_clicked(walls, cols, rows, px_per_m, np.asarray(board_at, np.float64)[:, :2] * scale,
-                               BOARD_CLICK_REACH * max(small_mask.shape))
+    # Nor does it show them a strip of one height to cut on a wall the user clicked; the
+    # click says the board is there, and the depth model says how tall.
+    sure |= clicked
     depth_px = _cut_depth_px(view, walls, rules_px, (rules_px > 0) | sure, profiles)
     doubt_px = _board_doubt_px(view, walls, p_board, whole, depth_px, profiles)
     if doubt_px is not None:
