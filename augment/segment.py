@@ -707,69 +707,45 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     image = _check_image(image)
     if method not in ("onnx", "grabcut"):
         raise SegmentationError(f"method {method!r}: use onnx or grabcut")
+    if method == "onnx" and model is None:
+        raise SegmentationError("method onnx needs a model; give --model PATH or use --method grabcut")
+    if method == "grabcut" and calibration is None:
+        raise SegmentationError("method grabcut needs the board's calibration (the board seeds the floor, "
+                                "the horizon bounds it); photograph the board on the floor, or use a model")
     rows, cols = image.shape[:2]
     clicks = _check_clicks(clicks, (rows, cols))
     trims = skirting and calibration is not None and (method == "grabcut" or refine)
-    wand, board_marks = clicks, clicks[:0]
-    if trims and (clicks[:, 2] == 0).any():
-        # A "not floor" click on the strip at a wall's foot marks a skirting board, which
-        # the trim cuts along the wall. Its colour region is left out: on a board of the
-        # floor's colour the board's lower edge is too faint to stop it, and it would carve
-        # a patch out of the floor below.
-        first = segment_floor(image, model, calibration, method, refine, skirting=False,
-                              clicks=clicks[clicks[:, 2] > 0])
-        other = np.flatnonzero(clicks[:, 2] == 0)
-        on_board = np.zeros(len(clicks), bool)
-        on_board[other] = board_clicks(image, first.mask, calibration, clicks[other, :2])
-        wand, board_marks = clicks[~on_board], clicks[on_board]
-    warnings = []
     scale = _working_scale((rows, cols), GRABCUT_LONG_PX)
     size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
     work = _shrink_to(image, PRESHRINK_LONG_PX)
     small = _hide_board(cv2.resize(work, size_small, interpolation=cv2.INTER_AREA), calibration, scale)
-    shape_small = small.shape[:2]
-    probability = None
-    clicked_floor, clicked_other, clicked_near = _click_regions(small, scale, calibration, wand)
+    probability = model.floor_probability(work, size_small) if method == "onnx" else None
 
-    if method == "onnx":
-        if model is None:
-            raise SegmentationError("method onnx needs a model; give --model PATH or use --method grabcut")
-        probability = p_small = model.floor_probability(work, size_small)
-        if refine:
-            trimap = np.where(p_small > 0.5, cv2.GC_PR_FGD, cv2.GC_PR_BGD).astype(np.uint8)
-            # Only well inside a confident region is the model taken as given: its edges
-            # are a few input pixels soft, and they are what GrabCut is for.
-            band = 5
-            kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * band + 1, 2 * band + 1))
-            trimap[cv2.erode((p_small > SURE_FLOOR).astype(np.uint8), kernel) > 0] = cv2.GC_FGD
-            trimap[cv2.erode((p_small < SURE_OTHER).astype(np.uint8), kernel) > 0] = cv2.GC_BGD
-            _seed_geometry(trimap, shape_small, scale, calibration)
-            _apply_clicks(trimap, clicked_floor, clicked_other, clicked_near)
-            small_mask = _grabcut(small, trimap, GRABCUT_ITERATIONS)
-            name = "onnx+grabcut"
-        else:
-            small_mask = p_small > 0.5
-            if calibration is not None:
-                trimap = np.where(small_mask, cv2.GC_FGD, cv2.GC_BGD).astype(np.uint8)
-                _seed_geometry(trimap, shape_small, scale, calibration)
-                small_mask = trimap == cv2.GC_FGD
-            small_mask = (small_mask | clicked_floor) & ~clicked_other
-            name = "onnx"
-    else:
-        if calibration is None:
-            raise SegmentationError("method grabcut needs the board's calibration (the board seeds the floor, "
-                                    "the horizon bounds it); photograph the board on the floor, or use a model")
-        trimap = _geometry_trimap(shape_small, scale, calibration)
-        _apply_clicks(trimap, clicked_floor, clicked_other, clicked_near)
-        small_mask = _grabcut(small, trimap, 5)
-        name = "grabcut"
+    def found(wand):
+        return _refined(small, scale, probability, calibration, method, refine, wand)
 
-    mask_small = _clean(small_mask, calibration, scale, probability, clicked_floor) & ~clicked_other
+    wand, board_marks = clicks, clicks[:0]
+    floor_clicks = clicks[clicks[:, 2] > 0]
+    first = None
+    if trims and len(floor_clicks) < len(clicks):
+        # A "not floor" click on the strip at a wall's foot marks a skirting board, which
+        # the trim cuts along the wall. Its colour region is left out: on a board of the
+        # floor's colour the board's lower edge is too faint to stop it, and it would carve
+        # a patch out of the floor below. Which clicks those are, the floor found without
+        # the "not floor" clicks tells.
+        first = found(floor_clicks)
+        other = np.flatnonzero(clicks[:, 2] == 0)
+        on_board = np.zeros(len(clicks), bool)
+        on_board[other] = board_clicks(image, _full_size(first[0], (cols, rows)), calibration, clicks[other, :2])
+        wand, board_marks = clicks[~on_board], clicks[on_board]
+    # When every "not floor" click is on a board, the floor clicks alone mark regions,
+    # and the first pass is the floor.
+    mask_small, name, clicked_floor, clicked_other, clicked_near = (
+        first if first is not None and len(wand) == len(floor_clicks) else found(wand))
+    warnings = []
     if not mask_small.any():
         warnings.append("no floor found")
-    # Linear interpolation of the 0/1 mask, cut at one half: edges come out straight
-    # rather than staircased at the working pixel size.
-    mask = cv2.resize(mask_small.astype(np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
+    mask = _full_size(mask_small, (cols, rows))
     skirting_m = board_doubt = None
     board_cut = np.zeros((rows, cols), bool)
     if trims and mask.any():
@@ -810,6 +786,48 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
             "overlay; most often a board of the floor's own colour): if the photo shows one there, mark it not "
             "floor there to trim it along that wall",))
     return seg
+
+
+def _full_size(mask_small: np.ndarray, size_px: tuple[int, int]) -> np.ndarray:
+    """The working size's mask at ``size_px = (width, height)``. Linear interpolation of the
+    0/1 mask, cut at one half: edges come out straight rather than staircased at the
+    working pixel size."""
+    return cv2.resize(mask_small.astype(np.float32), size_px, interpolation=cv2.INTER_LINEAR) > 0.5
+
+
+def _refined(small, scale, probability, calibration, method, refine, clicks):
+    """The floor at the working size for these clicks: the model's mask refined by
+    GrabCut (or taken as it is, or GrabCut alone), cleaned; with the clicks' regions and
+    reach (:func:`_click_regions`) and the method's name."""
+    shape_small = small.shape[:2]
+    clicked_floor, clicked_other, clicked_near = _click_regions(small, scale, calibration, clicks)
+    if method == "onnx" and refine:
+        trimap = np.where(probability > 0.5, cv2.GC_PR_FGD, cv2.GC_PR_BGD).astype(np.uint8)
+        # Only well inside a confident region is the model taken as given: its edges
+        # are a few input pixels soft, and they are what GrabCut is for.
+        band = 5
+        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * band + 1, 2 * band + 1))
+        trimap[cv2.erode((probability > SURE_FLOOR).astype(np.uint8), kernel) > 0] = cv2.GC_FGD
+        trimap[cv2.erode((probability < SURE_OTHER).astype(np.uint8), kernel) > 0] = cv2.GC_BGD
+        _seed_geometry(trimap, shape_small, scale, calibration)
+        _apply_clicks(trimap, clicked_floor, clicked_other, clicked_near)
+        small_mask = _grabcut(small, trimap, GRABCUT_ITERATIONS)
+        name = "onnx+grabcut"
+    elif method == "onnx":
+        small_mask = probability > 0.5
+        if calibration is not None:
+            trimap = np.where(small_mask, cv2.GC_FGD, cv2.GC_BGD).astype(np.uint8)
+            _seed_geometry(trimap, shape_small, scale, calibration)
+            small_mask = trimap == cv2.GC_FGD
+        small_mask = (small_mask | clicked_floor) & ~clicked_other
+        name = "onnx"
+    else:
+        trimap = _geometry_trimap(shape_small, scale, calibration)
+        _apply_clicks(trimap, clicked_floor, clicked_other, clicked_near)
+        small_mask = _grabcut(small, trimap, 5)
+        name = "grabcut"
+    mask_small = _clean(small_mask, calibration, scale, probability, clicked_floor) & ~clicked_other
+    return mask_small, name, clicked_floor, clicked_other, clicked_near
 
 
 def _cut_clicked(cut: np.ndarray, marks: np.ndarray) -> np.ndarray:

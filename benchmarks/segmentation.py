@@ -177,7 +177,11 @@ def main(argv=None) -> int:
     big = cv2.resize(sample.image, (4032, 3024), interpolation=cv2.INTER_CUBIC)
     cal_big = calibrate_photo(big, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0] * 4, (4032, 3024)))
     inputs = "+".join(f"{c}x{r}" for r, c in model.input_shapes(*sample.image.shape[:2]))
-    infer, whole = [], []
+    # A "not floor" click in the middle of the floor found: the dearest correction, a first
+    # pass to tell a click on a skirting board from one on a thing standing on the floor.
+    ys, xs = np.nonzero(segment_floor(big, model, cal_big).mask)
+    click = [[xs[len(xs) // 2], ys[len(ys) // 2], 0]]
+    infer, whole, clicked = [], [], []
     for _ in range(7):
         start = time.perf_counter()
         model.floor_probability(sample.image)
@@ -185,8 +189,11 @@ def main(argv=None) -> int:
         start = time.perf_counter()
         segment_floor(big, model, cal_big)
         whole.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        segment_floor(big, model, cal_big, clicks=click)
+        clicked.append(time.perf_counter() - start)
     speed = {"model_ms": 1000 * float(np.median(infer)), "model_inputs": inputs,
-             "segment_12mp_s": float(np.median(whole))}
+             "segment_12mp_s": float(np.median(whole)), "segment_12mp_not_floor_click_s": float(np.median(clicked))}
 
     synth_rows, worst = synthetic(args, model)
     real_rows, real_pictures = real(args.real, model) if args.real.is_dir() else ([], [])
@@ -239,8 +246,8 @@ def main(argv=None) -> int:
         lines += [f"| {r['image']} | {r['onnx']:.3f} | {r['onnx+grabcut']:.3f} |" for r in real_rows]
         lines += [f"| **mean** | {summary['real']['onnx']:.3f} | {summary['real']['onnx+grabcut']:.3f} |"]
     lines += ["", f"speed: model alone {speed['model_ms']:.1f} ms ({speed['model_inputs']} input, 1008x756 photo); "
-                  f"whole step on a 12 MP photo (4032x3024, model + GrabCut + clean-up) {speed['segment_12mp_s']:.2f} s "
-                  "(medians of 7)"]
+                  f"whole step on a 12 MP photo (4032x3024, model + GrabCut + clean-up) {speed['segment_12mp_s']:.2f} s, "
+                  f"with one \"not floor\" click {speed['segment_12mp_not_floor_click_s']:.2f} s (medians of 7)"]
     text = "\n".join(lines) + "\n"
     print(text)
     OUT.mkdir(parents=True, exist_ok=True)

@@ -845,6 +845,32 @@ def test_a_not_floor_click_on_a_board_marks_no_colour_region(held_out, model, mo
     assert len(given) == 1  # no first pass without a "not floor" click
 
 
+def test_the_first_pass_shares_the_model_and_is_the_floor_when_every_not_floor_click_is_a_board(
+        held_out, model, monkeypatch):
+    """With "not floor" clicks the floor is found twice (without them, to tell board clicks,
+    then with the clicks that mark regions), but the model runs once; and when every "not
+    floor" click is on a board the two passes have the same clicks, so GrabCut runs once."""
+    sample, cal = held_out[0]
+    rows, cols = sample.floor_mask.shape
+    board, carton, floor = (10.0, 20.0, 0), (30.0, 40.0, 0), (float(cols // 2), float(rows - 5), 1)
+    monkeypatch.setattr(segment, "board_clicks", lambda image, mask, calibration, points: np.array(
+        [tuple(p) == board[:2] for p in np.asarray(points)]))
+    calls = {"model": 0, "grabcut": 0}
+
+    def counted(name, function):
+        def call(*args, **kwargs):
+            calls[name] += 1
+            return function(*args, **kwargs)
+        return call
+
+    monkeypatch.setattr(model, "floor_probability", counted("model", model.floor_probability))
+    monkeypatch.setattr(segment, "_grabcut", counted("grabcut", segment._grabcut))
+    for clicks, grabcuts in (([board, floor], 1), ([board, carton, floor], 2), ([floor], 1)):
+        calls.update(model=0, grabcut=0)
+        segment_floor(sample.image, model, cal, clicks=clicks)
+        assert calls == {"model": 1, "grabcut": grabcuts}, clicks
+
+
 def test_a_board_click_settles_the_band_the_trim_cut_above_it():
     """Two bands the trim cut, along two walls; a board click on the strip of the first
     (a few rows below its cut, in its column) settles that band alone, so the model, which
