@@ -414,7 +414,7 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             def doubted(route):  # the job's answer as if its floor were uncertain
                 state = route.fetch().json()
                 if state["status"] == "done":
-                    state["doubt"] = {"x_px": 812, "y_px": 430, "floor": False}
+                    state["doubt"] = {"x_px": 500, "y_px": 850, "floor": False}  # floor in room_4
                 route.fulfill(json=state)
 
             jobs_route = re.compile(r"/api/jobs/[0-9a-f-]+$")
@@ -434,6 +434,16 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             # Where it was clicked, to within two screen pixels (the overlay is shown small).
             within = 2 * (1280 + 960) / box["width"]
             assert abs(clicks[0]["x_px"] - 1280 / 3) < within and abs(clicks[0]["y_px"] - 0.9 * 960) < within, clicks
+            # The ring's button: the click that overrules the mask there, sent at once.
+            assert page.inner_text("#fix-doubt") == "Mark the ring floor and furnish again"
+            before = page.get_attribute("#zip", "href")
+            page.click("#fix-doubt")
+            page.wait_for_function(f"document.getElementById('zip').getAttribute('href') !== {before!r} && "
+                                   "!document.getElementById('download').hidden", timeout=50_000)
+            report = page.request.get(server + page.get_attribute("#zip", "href").replace("download.zip",
+                                                                                   "files/report.json"))
+            assert report.json()["floor"]["clicks"][1:] == [{"x_px": 500.0, "y_px": 850.0, "floor": True}]
+            assert "(applied)" in page.inner_text("#clicks-note")
             # Deleted from the server by its button: the page says so, the job is gone.
             job_url = server + page.get_attribute("#zip", "href").removesuffix("/download.zip")
             page.unroute(jobs_route, doubted)
