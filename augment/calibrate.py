@@ -707,13 +707,10 @@ def single_view_intrinsics(corners_px: np.ndarray, board: Board, size_px: tuple[
 def _exif(path) -> tuple[dict, dict]:
     """The EXIF tags of an image file (HEIC too): its main directory and its Exif
     sub-directory, both empty when it has none or cannot be opened."""
-    from PIL import Image
+    from .imageio import pillow_open
 
-    from .imageio import register_heif
-
-    register_heif()
     try:
-        with Image.open(path) as im:
+        with pillow_open(path) as im:
             exif = im.getexif()
             return dict(exif), dict(exif.get_ifd(0x8769))
     except (OSError, ValueError):

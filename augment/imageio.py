@@ -6,6 +6,7 @@ Images are RGB ``(h, w, 3)``, RGBA ``(h, w, 4)`` or grey ``(h, w)`` uint8 arrays
 from __future__ import annotations
 
 import io
+from contextlib import contextmanager
 from pathlib import Path
 
 import cv2
@@ -74,6 +75,27 @@ def register_heif() -> None:
     pillow_heif.register_heif_opener()
 
 
+@contextmanager
+def pillow_open(source):
+    """``PIL.Image.open(source)`` (a path or a binary file), HEIC too, without Pillow's
+    decompression-bomb guard.
+
+    Pillow warns above 89 MP and refuses above 179 MP, where phones take 108 and 200 MP
+    photos. Stager decodes photos with OpenCV, which has no such guard, and the web app
+    refuses large uploads by their header itself (:func:`augment.web.check_photo`), so
+    here the guard would only stop a real photo's EXIF or a mask drawn at its size.
+    """
+    from PIL import Image
+
+    register_heif()
+    limit, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
+    try:
+        with Image.open(source) as image:
+            yield image
+    finally:
+        Image.MAX_IMAGE_PIXELS = limit
+
+
 def decode_grey(data: bytes) -> np.ndarray | None:
     """An encoded image as grey levels ``(h, w)`` float32 in [0, 255], upright as its EXIF
     says (as :func:`decode_image` turns photos), with what is transparent taken as black;
@@ -84,12 +106,10 @@ def decode_grey(data: bytes) -> np.ndarray | None:
     255. Pillow decodes it once, alpha and all; OpenCV turns only its colour decode
     upright, not the one that keeps the alpha.
     """
-    from PIL import Image, ImageOps
+    from PIL import ImageOps
 
-    if is_heif(data):
-        register_heif()
     try:
-        with Image.open(io.BytesIO(bytes(data))) as opened:
+        with pillow_open(io.BytesIO(bytes(data))) as opened:
             image = ImageOps.exif_transpose(opened)
             if image.mode.startswith("I;16") or image.mode == "I":
                 return np.asarray(image, np.float32) * np.float32(255 / 65535)
@@ -99,7 +119,7 @@ def decode_grey(data: bytes) -> np.ndarray | None:
             if "A" in image.getbands():
                 grey *= np.asarray(image.getchannel("A"), np.float32) / np.float32(255)
             return grey
-    except (OSError, ValueError, SyntaxError, Image.DecompressionBombError):
+    except (OSError, ValueError, SyntaxError):
         return None
 
 
@@ -107,14 +127,10 @@ def decode_problem(data: bytes) -> str:
     """Why an image did not decode, worded to follow its name ("photo room.jpg is cut
     short: ..."): empty, cut short (a copy or upload that stopped), samples of 32 bits
     or floats, or not an image at all."""
-    from PIL import Image
-
     if len(data) == 0:
         return "is empty (0 bytes); copy it again from the camera"
-    if is_heif(data):
-        register_heif()
     try:
-        with Image.open(io.BytesIO(bytes(data))) as image:
+        with pillow_open(io.BytesIO(bytes(data))) as image:
             kind, mode = image.format, image.mode
             try:
                 image.load()
@@ -124,7 +140,7 @@ def decode_problem(data: bytes) -> str:
                     return (f"is cut short: a {kind} file that ends before its picture does (a copy or upload "
                             "that stopped?); copy it again from the camera")
                 return f"is a {kind} file that cannot be decoded ({said[:120]}); save it again as JPEG or PNG"
-    except (OSError, ValueError, SyntaxError, Image.DecompressionBombError):
+    except (OSError, ValueError, SyntaxError):
         return f"is not an image Stager can read ({PHOTO_FORMATS})"
     if mode in ("I", "F") or mode.startswith(("I;32", "F;")):
         return f"is a {kind} of {'floating-point' if mode.startswith('F') else '32-bit'} samples; save it as an " \

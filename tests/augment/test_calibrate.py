@@ -225,6 +225,29 @@ def test_exif_orientation(tmp_path):
     assert read_photo(tmp_path / "turned.jpg").shape == (160, 80, 3)
 
 
+def test_exif_of_photos_past_pillows_size_guard_is_read(tmp_path, monkeypatch):
+    """Pillow refuses images over twice its ``MAX_IMAGE_PIXELS`` (179 MP; phones take
+    200 MP photos) and warns over it: with its guard at 1,000 pixels, a 160 x 120 photo
+    stands for such a photo. Its EXIF is read, without a warning, and the guard is back
+    after (a 200 MP photo crashed ``stage segment`` there)."""
+    import warnings
+
+    from PIL import Image
+
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    exif.get_ifd(0x8769)[0xA405] = 26
+    Image.new("RGB", (160, 120)).save(tmp_path / "big.jpg", exif=exif.tobytes())
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 1_000)
+    with pytest.raises(Image.DecompressionBombError):  # the guard the photo stands past
+        Image.open(tmp_path / "big.jpg")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert exif_orientation(tmp_path / "big.jpg") == 6
+        assert exif_focal_px(tmp_path / "big.jpg", (120, 160)) == pytest.approx(200 * 26 / 43.2666, rel=1e-3)
+    assert Image.MAX_IMAGE_PIXELS == 1_000
+
+
 def test_heic_photo_is_read_upright_with_its_exif(tmp_path):
     """iPhones save HEIC: it is decoded turned as the file says, and its EXIF focal
     length is found (26 mm equivalent on a 200 px diagonal: 200 * 26 / 43.27 px)."""

@@ -213,7 +213,7 @@ def test_a_photo_or_mask_that_cannot_be_read_is_named(tmp_path, capsys, monkeypa
     assert not any(tmp_path.glob("a*.png")) and not (tmp_path / "m").exists()
 
 
-def test_a_floor_mask_is_read_upright_alpha_and_all(tmp_path):
+def test_a_floor_mask_is_read_upright_alpha_and_all(tmp_path, monkeypatch):
     # An editor's layer: white everywhere, opaque (floor) on the stored image's left
     # quarter only, saved with an EXIF turn. The alpha turns with the colour; so does a
     # 16-bit grey mask's floor, whose mid greys count at half of 65535, not of 255.
@@ -237,6 +237,10 @@ def test_a_floor_mask_is_read_upright_alpha_and_all(tmp_path):
             image.save(path, exif=exif.tobytes())
             seg = read_floor_mask(path, truth.shape[::-1])
             assert np.array_equal(seg.mask, truth), (name, orientation)
+    # A mask drawn at a 200 MP photo's size is past Pillow's size guard (here set at 1,000
+    # pixels, which refuses over twice that): read all the same.
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 1_000)
+    assert np.array_equal(read_floor_mask(path, truth.shape[::-1]).mask, truth)
 
 
 def test_bad_floor_masks_are_refused(tmp_path, capsys):
