@@ -111,6 +111,25 @@ class Intrinsics:
     note: str = ""
 
 
+# How far out, as a share of the radius where the lens model's distortion stops growing,
+# a pixel is mapped to the floor: near that radius the mapping stretches without bound.
+LENS_REACH_SHARE = 0.98
+
+
+def _distortion_reach(distortion: np.ndarray) -> float:
+    """The largest distorted radius (in focal lengths) the radial terms k1, k2, k3 map
+    to one undistorted radius each; inf when they grow outward as far as a lens can see
+    (five focal lengths)."""
+    k1, k2, _, _, k3 = (list(np.ravel(distortion)) + [0.0] * 5)[:5]
+    if k1 == k2 == k3 == 0:
+        return np.inf
+    r = np.linspace(0.0, 5.0, 5001)
+    r2 = r * r
+    distorted = r * (1 + k1 * r2 + k2 * r2 ** 2 + k3 * r2 ** 3)
+    turn = np.flatnonzero(np.diff(distorted) <= 0)
+    return float(distorted[turn[0]]) if len(turn) else np.inf
+
+
 @dataclass(frozen=True)
 class Calibration:
     """Everything later stages need to map pixels to the floor and back.
@@ -174,8 +193,20 @@ class Calibration:
         """Camera pose in the floor frame, (4, 4)."""
         return np.linalg.inv(self.camera_from_floor)
 
+    def lens_maps(self, points_px: np.ndarray) -> np.ndarray:
+        """(k,) bool: pixels (k, 2) the lens model undistorts, those nearer the principal
+        point than where its radial distortion stops growing outward. A model fit from
+        the board alone holds near the board and can turn back before the photo's corners
+        (OpenCV's left13: k1 -0.25, k2 -0.13 turn at 0.64 focal lengths, the corners lie
+        at 0.74); undistorting a pixel beyond gives a point anywhere."""
+        pts = np.asarray(points_px, dtype=np.float64).reshape(-1, 2)
+        K = self.intrinsics.K
+        radius = np.hypot((pts[:, 0] - K[0, 2]) / K[0, 0], (pts[:, 1] - K[1, 2]) / K[1, 1])
+        return radius < LENS_REACH_SHARE * _distortion_reach(self.intrinsics.distortion)
+
     def floor_from_pixels(self, points_px: np.ndarray) -> np.ndarray:
-        """Floor coordinates (k, 2) meters of pixels (k, 2), distortion removed first."""
+        """Floor coordinates (k, 2) meters of pixels (k, 2), distortion removed first
+        (meaningless where the lens model does not reach: :meth:`lens_maps`)."""
         pts = np.asarray(points_px, dtype=np.float64).reshape(-1, 1, 2)
         if np.any(self.intrinsics.distortion):
             pts = cv2.undistortPoints(pts, self.intrinsics.K, self.intrinsics.distortion, P=self.intrinsics.K)

@@ -333,13 +333,16 @@ def board_polygon_px(calibration, grow: float = 1.0) -> np.ndarray:
 
 def floor_distance_m(shape: tuple[int, int], calibration) -> np.ndarray:
     """Horizontal distance (rows, cols) from the camera to each pixel's floor point; inf
-    at and above the horizon."""
+    at and above the horizon, and beyond the lens model's reach
+    (:meth:`~augment.calibrate.Calibration.lens_maps`)."""
     rows, cols = shape
     y, x = np.mgrid[0:rows, 0:cols].astype(np.float64)
     pts = np.column_stack([x.ravel(), y.ravel()])
     cam = np.linalg.inv(calibration.camera_from_floor)[:2, 3]
     floor = calibration.floor_from_pixels(pts)
-    d = np.hypot(floor[:, 0] - cam[0], floor[:, 1] - cam[1]).reshape(rows, cols)
+    d = np.hypot(floor[:, 0] - cam[0], floor[:, 1] - cam[1])
+    d[~calibration.lens_maps(pts)] = np.inf
+    d = d.reshape(rows, cols)
     d[~below_horizon(shape, calibration.horizon, 1.0)] = np.inf
     return d
 

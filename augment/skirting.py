@@ -138,13 +138,19 @@ MIN_WALL_COLUMNS = 24
 
 def _wall_columns(mask: np.ndarray, calibration):
     """Columns whose top floor pixel meets something above it (not the image's top
-    edge), that pixel's row, and how many pixels one meter upright there spans."""
+    edge), that pixel's row, and how many pixels one meter upright there spans; only
+    columns where the board's search (``SEARCH_M`` upright) fits in the photo."""
     top = np.argmax(mask, axis=0)
     cols = np.flatnonzero(mask[top, np.arange(mask.shape[1])] & (top > 0))
     rows = top[cols]
     if len(cols) == 0:
         return cols, rows, np.zeros(0)
-    return cols, rows, _px_per_m(calibration, cols, rows)
+    px_per_m = _px_per_m(calibration, cols, rows)
+    # Where the floor's pose puts an upright meter beyond the photo's height (or nowhere:
+    # a pixel on the horizon, or a "floor" that is a board held up at the camera), no
+    # board shows; each column's search would take a slice of that many rows.
+    fits = np.isfinite(px_per_m) & (px_per_m > 0) & (SEARCH_M * px_per_m < mask.shape[0])
+    return cols[fits], rows[fits], px_per_m[fits]
 
 
 def _px_per_m(calibration, cols, rows) -> np.ndarray:

@@ -17,6 +17,7 @@ from augment.calibrate import (CalibrationError, _find_chessboard, _focal_from_h
                                exif_focal_px, exif_orientation, load_profile, read_photo,
                                single_view_intrinsics, tilt_readings)
 from augment.gl import Renderer
+from augment.segment import floor_distance_m
 from augment.synth import render_sample
 from augment.synth.camera import look_pose
 
@@ -56,6 +57,28 @@ def test_single_view_focal_on_real_photos():
         errors.append(abs(c.intrinsics.K[0, 0] - ref) / ref)
         assert c.rms_px < 0.5
     assert max(errors) < 0.05 and np.median(errors) < 0.015
+
+
+def test_the_lens_model_maps_pixels_only_as_far_as_its_distortion_grows():
+    """r_d = r (1 + k1 r^2 + k2 r^4) stops growing where 1 + 3 k1 r^2 + 5 k2 r^4 = 0: for
+    left13's fit from the board (k1 -0.2525, k2 -0.1303) at r^2 = 0.787, r_d = 0.639
+    focal lengths, short of the photo's corners (0.74 at f 540 px); OpenCV's own model of
+    that lens (k3 0.238 too) grows throughout."""
+    k1, k2 = -0.25247767, -0.1303127
+    r2 = (-3 * k1 - np.sqrt(9 * k1 ** 2 - 20 * k2)) / (10 * k2)
+    reach = np.sqrt(r2) * (1 + k1 * r2 + k2 * r2 ** 2)
+    assert calibrate._distortion_reach(np.array([k1, k2, 0, 0, 0])) == pytest.approx(reach, abs=1e-3)
+    assert reach == pytest.approx(0.639, abs=1e-3)
+    assert calibrate._distortion_reach(np.array([-0.26637, -0.03859, 0.001783, -0.000281, 0.23839])) == np.inf
+    assert calibrate._distortion_reach(np.zeros(5)) == np.inf
+    c = calibrate_file(DATA / "left13.jpg", OPENCV)
+    assert c.intrinsics.distortion[:2] == pytest.approx([k1, k2], abs=0.02)
+    f, (cx, cy) = c.intrinsics.K[0, 0], c.intrinsics.K[:2, 2]
+    at = [(cx, cy), (cx + 0.6 * f, cy), (cx + 0.66 * f, cy), (639, 479)]
+    np.testing.assert_array_equal(c.lens_maps(at), [True, True, False, False])
+    # Beyond that radius undistortion gives points anywhere: pixels there are no floor.
+    distance = floor_distance_m((480, 640), c)
+    assert np.isinf(distance[479, 639]) and np.isfinite(distance[240, 320])
 
 
 def test_face_on_board_is_refused_not_guessed():

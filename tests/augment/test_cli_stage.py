@@ -92,6 +92,19 @@ def test_outputs_and_inputs_that_cannot_be_are_refused(tmp_path, capsys):
     assert code == 2 and f"--camera {tmp_path}: is a folder; make a camera profile" in err
 
 
+@pytest.mark.parametrize("name", ["left05", "left13"])
+def test_a_board_held_up_in_a_real_photo_is_no_floor_to_furnish(name, tmp_path, capsys):
+    """OpenCV's photos show the board held up, the "floor" its tilted plane; with no EXIF
+    the lens is fit from the board. left05's horizon runs near the mask's top, where an
+    upright meter spans millions of pixels (the skirting trim asked for 28.7 GiB);
+    left13's fit distortion turns back before the photo's corners, where its floor
+    points went kilometers out (the layout's inset asked for 51.6 GiB). Each is now the
+    one error a user can act on."""
+    code, _, err = run(["furnish", OPENCV_DATA / f"{name}.jpg", "--board", "9x6", "--square", "25",
+                        "--suggestions", "1", "--out", tmp_path / "out"], capsys)
+    assert code == 2 and "floor too small for any furniture" in err and "Traceback" not in err, err
+
+
 def test_board_that_does_not_fit_is_refused(tmp_path, capsys):
     code, _, err = run(["board", "--paper", "A4", "--square", "60", "--out", tmp_path / "b.pdf"], capsys)
     assert code == 2
