@@ -111,6 +111,17 @@ class Intrinsics:
     note: str = ""
 
 
+def turn_points(points_px, quarter_turns: int, size_px: tuple[int, int]) -> np.ndarray:
+    """Pixels (n, 2) of a photo of ``size_px = (width, height)`` where they show once it
+    is turned as ``np.rot90(photo, quarter_turns)``."""
+    pts = np.asarray(points_px, dtype=np.float64).reshape(-1, 2).copy()
+    w, h = size_px
+    for _ in range(int(quarter_turns) % 4):
+        pts = np.column_stack([pts[:, 1], w - 1 - pts[:, 0]])
+        w, h = h, w
+    return pts
+
+
 # How far out, as a share of the radius where the lens model's distortion stops growing,
 # a pixel is mapped to the floor: near that radius the mapping stretches without bound.
 LENS_REACH_SHARE = 0.98
@@ -187,6 +198,40 @@ class Calibration:
         return replace(self, intrinsics=replace(self.intrinsics, K=S @ self.intrinsics.K),
                        image_from_floor=S @ self.image_from_floor, horizon=horizon,
                        size_px=(round(self.size_px[0] * scale), round(self.size_px[1] * scale)))
+
+    def turned(self, quarter_turns: int) -> "Calibration":
+        """The same calibration for the photo turned as ``np.rot90(photo, quarter_turns)``
+        (counter-clockwise as shown, negative clockwise)."""
+        cal = self
+        for _ in range(int(quarter_turns) % 4):
+            w, _ = cal.size_px
+            # Pixel (u, v) shows at (v, w - 1 - u); the camera's x axis is its old y, its
+            # y axis its old -x.
+            T = np.array([[0.0, 1, 0], [-1, 0, w - 1], [0, 0, 1]])
+            R = np.array([[0.0, 1, 0], [-1, 0, 0], [0, 0, 1]])
+            K, dist, size = _quarter_turn(cal.intrinsics.K, cal.intrinsics.distortion, cal.size_px, clockwise=False)
+            camera_from_floor = cal.camera_from_floor.copy()
+            camera_from_floor[:3] = R @ camera_from_floor[:3]
+            H = T @ cal.image_from_floor
+            horizon = np.linalg.inv(T).T @ cal.horizon
+            cal = replace(cal, size_px=size, intrinsics=replace(cal.intrinsics, K=K, distortion=dist),
+                          camera_from_floor=camera_from_floor,
+                          floor_plane_camera=np.append(R @ cal.floor_plane_camera[:3], cal.floor_plane_camera[3]),
+                          image_from_floor=H / H[2, 2], horizon=horizon / np.hypot(horizon[0], horizon[1]),
+                          corners_px=turn_points(cal.corners_px, 1, cal.size_px))
+        return cal
+
+    @property
+    def upright_turns(self) -> int:
+        """How many quarter turns (``np.rot90``'s k) bring the room upright in the photo,
+        the floor toward its bottom, as a camera held level sees it: a photo whose
+        orientation was lost, or taken with the camera held sideways, shows it turned."""
+        down = np.asarray(self.horizon[:2], dtype=np.float64)  # toward the floor
+        below = []
+        for _ in range(4):
+            below.append(down[1])
+            down = np.array([down[1], -down[0]])  # as np.rot90 turns a direction
+        return int(np.argmax(below))
 
     @property
     def world_from_camera(self) -> np.ndarray:
@@ -1124,8 +1169,15 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
         warnings.append(f"{len(ids)} of the board's {board.corner_count} corners were seen (part of it is hidden "
                         "or out of the frame)")
     order = np.argsort(ids)
-    return Calibration(size_px, intrinsics, camera_from_floor, d, np.append(normal, d), image_from_floor,
-                       horizon, rms, corners[order], ids[order], detection.detector, board, tuple(warnings))
+    calibration = Calibration(size_px, intrinsics, camera_from_floor, d, np.append(normal, d), image_from_floor,
+                              horizon, rms, corners[order], ids[order], detection.detector, board, tuple(warnings))
+    turns = calibration.upright_turns
+    if turns:
+        side = {1: "left", 2: "top", 3: "right"}[turns]
+        calibration = replace(calibration, warnings=calibration.warnings + (
+            f"the photo shows the room turned, the floor at its {side} (its orientation lost, or the camera held "
+            "so): the floor is found with the room turned upright, and the staged images keep the photo's turn",))
+    return calibration
 
 
 def read_photo(path) -> np.ndarray:

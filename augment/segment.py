@@ -253,18 +253,24 @@ class FloorModel:
         return [(max(m, round(rows * long / max(rows, cols) / m) * m),
                  max(m, round(cols * long / max(rows, cols) / m) * m)) for long in s.input_long_px]
 
-    def floor_probability(self, image: np.ndarray, size_px: tuple[int, int] | None = None) -> np.ndarray:
+    def floor_probability(self, image: np.ndarray, size_px: tuple[int, int] | None = None,
+                          quarter_turns: int = 0) -> np.ndarray:
         """Floor probability float32 in [0, 1], ``(rows, cols)`` of the image or of
         ``size_px = (width, height)`` when given (cheaper than resizing twice); the mean
-        over the spec's input sizes."""
+        over the spec's input sizes. With ``quarter_turns`` k the model sees the image
+        turned as ``np.rot90(image, k)`` (the room upright, as it learned rooms:
+        ``Calibration.upright_turns``) and its answer is turned back."""
         image = _check_image(image)
         rows, cols = image.shape[:2]
         if size_px is not None:
             cols, rows = int(size_px[0]), int(size_px[1])
+        k = int(quarter_turns) % 4
+        if k % 2:
+            rows, cols = cols, rows
         shapes = self.input_shapes(rows, cols)
-        image = _shrink_to(image, PRESHRINK_LONG_PX)
+        image = np.rot90(_shrink_to(image, PRESHRINK_LONG_PX), k)
         p = sum(self._probability(image, shape, (cols, rows)) for shape in shapes)
-        return np.clip(p / len(shapes), 0, 1)
+        return np.ascontiguousarray(np.rot90(np.clip(p / len(shapes), 0, 1), -k))
 
     def _probability(self, image: np.ndarray, in_shape: tuple[int, int], size_px: tuple[int, int]) -> np.ndarray:
         s = self.spec
@@ -722,7 +728,10 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
     work = _shrink_to(image, PRESHRINK_LONG_PX)
     small = _hide_board(cv2.resize(work, size_small, interpolation=cv2.INTER_AREA), calibration, scale)
-    probability = model.floor_probability(work, size_small) if method == "onnx" else None
+    probability = None
+    if method == "onnx":
+        turns = 0 if calibration is None else calibration.upright_turns
+        probability = model.floor_probability(work, size_small, quarter_turns=turns)
 
     def found(wand):
         return _refined(small, scale, probability, calibration, method, refine, wand)

@@ -81,6 +81,38 @@ def test_the_lens_model_maps_pixels_only_as_far_as_its_distortion_grows():
     assert np.isinf(distance[479, 639]) and np.isfinite(distance[240, 320])
 
 
+def test_a_turned_calibration_maps_the_turned_pixels_to_the_same_floor(renders):
+    """``Calibration.turned(k)`` is the calibration of ``np.rot90(photo, k)``: each pixel,
+    moved as np.rot90 moves it (``turn_points``), lands on the same floor point, with a
+    lens that bends too (tangential terms turn with the frame); the horizon keeps the
+    floor on its positive side, four turns are none, and ``upright_turns`` undoes k."""
+    from dataclasses import replace
+
+    sample = renders[0]
+    h, w = sample.image.shape[:2]
+    cal = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
+    assert cal.upright_turns == 0
+    bent = replace(cal, intrinsics=replace(cal.intrinsics, distortion=np.array([-0.1, 0.02, 0.001, -0.002, 0])))
+    pts = np.array([[10.0, h - 5], [w / 2, h - 1], [w - 3, 0.8 * h]])
+    for c in (cal, bent):
+        for k in range(4):
+            turned, q = c.turned(k), calibrate.turn_points(pts, k, (w, h))
+            assert turned.size_px == ((w, h) if k % 2 == 0 else (h, w))
+            np.testing.assert_allclose(turned.floor_from_pixels(q), c.floor_from_pixels(pts), atol=1e-6)
+            np.testing.assert_allclose(turned.pixels_from_floor(c.floor_from_pixels(pts)), q, atol=1e-4)
+            assert all(turned.horizon @ [x, y, 1] > 0 for x, y in q)
+            assert turned.upright_turns == (-k) % 4
+    np.testing.assert_allclose(cal.turned(4).image_from_floor, cal.image_from_floor, atol=1e-12)
+    np.testing.assert_allclose(calibrate.turn_points([[0, 0], [w - 1, 0]], 1, (w, h)), [[0, w - 1], [0, 0]])
+    # The photo itself turned: calibrated as it is, it says where the floor is.
+    assert not any("turned" in warning for warning in cal.warnings)
+    for k, side in ((1, "left"), (2, "top"), (3, "right")):
+        photo = np.ascontiguousarray(np.rot90(sample.image, -k))  # turned k quarters clockwise
+        size = (photo.shape[1], photo.shape[0])
+        got = calibrate_photo(photo, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], size))
+        assert got.upright_turns == k and f"the floor at its {side}" in got.warnings[-1], got.warnings
+
+
 def test_face_on_board_is_refused_not_guessed():
     """A camera looking straight down at the board: the perspective carries no focal length."""
     board = Board()

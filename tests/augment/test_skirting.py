@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from augment import skirting
+from augment import calibrate, skirting
 from augment.board import Board
 from augment.calibrate import Calibration, Intrinsics
 from augment.skirting import board_clicks, extend_to_floor_line, trim_skirting
@@ -55,6 +55,7 @@ def _room(board_m: float, shadow: str | None = None, seed: int = 0, board_rgb=(2
     R, t = camera_from_floor[:3, :3], camera_from_floor[:3, 3]
     H = K @ np.column_stack([R[:, 0], R[:, 1], t])
     horizon = np.linalg.inv(K).T @ R[:, 2]
+    horizon *= np.sign(horizon @ [w / 2, h - 1, 1])  # the floor, at the photo's bottom, on its positive side
     calibration = Calibration(
         size_px=SIZE, intrinsics=Intrinsics(K, np.zeros(5), "truth", 0.0), camera_from_floor=camera_from_floor,
         camera_height_m=1.5, floor_plane_camera=np.append(R[:, 2], -R[:, 2] @ t), image_from_floor=H / H[2, 2],
@@ -405,6 +406,27 @@ def test_the_trim_says_where_a_board_it_left_may_be_and_a_click_there_trims_it(m
     assert height_m == pytest.approx(0.08, abs=0.02) and doubt is None
     assert (trimmed & band).sum() < 0.1 * band.sum()
     assert (truth & ~trimmed).sum() < 0.005 * truth.sum()
+
+
+def test_a_room_turned_is_trimmed_as_upright(monkeypatch):
+    """The trim reads each column up from the floor to the wall: in a photo turned a
+    quarter or a half (its orientation lost) it turns the room upright first, so the same
+    board is cut, the same height found, and a click on it, turned, is still a board
+    click. (Before, it read the turned columns: across the board, or along the wall.)"""
+    image, truth, mask, calibration = _room(0.10)
+    band = mask & ~truth
+    trimmed, height_m, _ = trim_skirting(image, mask, calibration)
+    assert height_m == pytest.approx(0.10, abs=0.02) and (trimmed & band).sum() < 0.1 * band.sum()
+    rows, cols = np.nonzero(band)
+    on_strip = (cols.min() + 40, int(np.median(rows[cols == cols.min() + 40])))
+    h, w = mask.shape
+    for k in (1, 2, 3):
+        turned = calibration.turned(k)
+        got, got_m, _ = trim_skirting(np.rot90(image, k), np.rot90(mask, k), turned)
+        assert got_m == pytest.approx(height_m, abs=0.005), k
+        assert (np.rot90(got, -k) != trimmed).sum() < 0.002 * truth.sum(), k
+        point = calibrate.turn_points([on_strip], k, (w, h))
+        assert board_clicks(np.rot90(image, k), np.rot90(mask, k), turned, point).all(), k
 
 
 def test_a_click_on_the_strip_at_a_walls_foot_is_a_board_click():
