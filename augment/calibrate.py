@@ -1176,7 +1176,8 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
         side = {1: "left", 2: "top", 3: "right"}[turns]
         calibration = replace(calibration, warnings=calibration.warnings + (
             f"the photo shows the room turned, the floor at its {side} (its orientation lost, or the camera held "
-            "so): the floor is found with the room turned upright, and the staged images keep the photo's turn",))
+            "so): the floor is found with the room turned upright, and the staged images keep the photo's turn; "
+            "if the room stands upright in the photo, the board is not lying flat on the floor",))
     return calibration
 
 
