@@ -222,16 +222,18 @@ class Calibration:
         return cal
 
     @property
+    def roll_deg(self) -> float:
+        """How far to turn the photo counter-clockwise, in degrees (-180 to 180), for the
+        room to stand level in it, the floor toward its bottom: the camera's roll. A photo
+        whose orientation was lost, or taken with the camera held sideways, shows the room
+        turned by about a quarter or a half."""
+        a, b = self.horizon[:2]  # toward the floor
+        return float(np.degrees(np.arctan2(-a, b)))
+
+    @property
     def upright_turns(self) -> int:
-        """How many quarter turns (``np.rot90``'s k) bring the room upright in the photo,
-        the floor toward its bottom, as a camera held level sees it: a photo whose
-        orientation was lost, or taken with the camera held sideways, shows it turned."""
-        down = np.asarray(self.horizon[:2], dtype=np.float64)  # toward the floor
-        below = []
-        for _ in range(4):
-            below.append(down[1])
-            down = np.array([down[1], -down[0]])  # as np.rot90 turns a direction
-        return int(np.argmax(below))
+        """How many quarter turns (``np.rot90``'s k) bring the room nearest to level."""
+        return round(self.roll_deg / 90) % 4
 
     @property
     def world_from_camera(self) -> np.ndarray:

@@ -102,6 +102,8 @@ def test_a_turned_calibration_maps_the_turned_pixels_to_the_same_floor(renders):
             np.testing.assert_allclose(turned.pixels_from_floor(c.floor_from_pixels(pts)), q, atol=1e-4)
             assert all(turned.horizon @ [x, y, 1] > 0 for x, y in q)
             assert turned.upright_turns == (-k) % 4
+            # np.rot90 turns the photo a quarter counter-clockwise: a quarter less to level.
+            assert (turned.roll_deg - (c.roll_deg - 90 * k) + 180) % 360 == pytest.approx(180)
     np.testing.assert_allclose(cal.turned(4).image_from_floor, cal.image_from_floor, atol=1e-12)
     np.testing.assert_allclose(calibrate.turn_points([[0, 0], [w - 1, 0]], 1, (w, h)), [[0, w - 1], [0, 0]])
     # The photo itself turned: calibrated as it is, it says where the floor is.
