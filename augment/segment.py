@@ -89,6 +89,10 @@ CLICK_CANNY = (10, 30)
 # the model and GrabCut are made from it: shrinking a 12 MP photo costs more than the model.
 PRESHRINK_LONG_PX = 2048
 MAX_INPUT_PX = 4096  # a model input side: larger would take seconds and gigabytes on a CPU
+# The input element types a model may take (as onnxruntime names them): exports for phones
+# often take bytes, or half floats.
+INPUT_TYPES = {"tensor(float)": np.float32, "tensor(float16)": np.float16, "tensor(double)": np.float64,
+               "tensor(uint8)": np.uint8}
 
 
 class SegmentationError(ValueError):
@@ -224,6 +228,10 @@ class FloorModel:
         if len(inputs) != 1:
             raise SegmentationError(f"model {self.path}: expected one input, found {len(inputs)}")
         self.input_name = inputs[0].name
+        self.input_dtype = INPUT_TYPES.get(inputs[0].type)
+        if self.input_dtype is None:
+            raise SegmentationError(f"model {self.path}: its input {self.input_name} is {inputs[0].type}; Stager "
+                                    f"feeds images as {', '.join(INPUT_TYPES)}")
         shape = list(inputs[0].shape)
         if len(shape) != 4:
             raise SegmentationError(f"model {self.path}: its input {self.input_name} is {shape}; expected an image "
@@ -275,12 +283,16 @@ class FloorModel:
     def _probability(self, image: np.ndarray, in_shape: tuple[int, int], size_px: tuple[int, int]) -> np.ndarray:
         s = self.spec
         in_rows, in_cols = in_shape
-        x = cv2.resize(image, (in_cols, in_rows), interpolation=cv2.INTER_AREA).astype(np.float32)
+        x = cv2.resize(image, (in_cols, in_rows), interpolation=cv2.INTER_AREA)
         if s.channel_order == "BGR":
             x = x[..., ::-1]
-        x = (x * np.float32(s.scale) - np.float32(s.mean)) / np.float32(s.std)
+        if self.input_dtype != np.uint8:
+            # A model that takes bytes takes the pixels as they are, and scales them itself.
+            x = (x.astype(np.float32) * np.float32(s.scale) - np.float32(s.mean)) / np.float32(s.std)
         x = x.transpose(2, 0, 1)[None] if s.layout == "NCHW" else x[None]
-        out = self.session.run(None, {self.input_name: np.ascontiguousarray(x, np.float32)})[0][0]
+        out = self.session.run(None, {self.input_name: np.ascontiguousarray(x, self.input_dtype)})[0][0]
+        if np.issubdtype(out.dtype, np.floating):
+            out = out.astype(np.float32)
         if out.ndim == 2 and np.issubdtype(out.dtype, np.integer):
             # A model that gives its argmax, a class per pixel: floor where it is a floor class.
             p = np.isin(out, s.floor_class).astype(np.float32)

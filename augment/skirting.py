@@ -173,7 +173,9 @@ def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m, near_
     h = image.shape[0]
     span = np.ceil(SEARCH_M * px_per_m).astype(int)
     first = np.maximum(4, np.ceil(MIN_HEIGHT_M * px_per_m).astype(int))
-    length = int(span.max()) + 8 if len(span) else 0
+    # At least the rows a column too far off to tell (span under 4) is read in, below a
+    # strip of the least height.
+    length = max(int(span.max()), 4) + 8 if len(span) else 0
     offsets = np.arange(length)
     r = np.minimum(rows[:, None] + offsets[None], h - 1)
     c = image[r, cols[:, None]].astype(np.float32)  # (k, length, 3)

@@ -105,23 +105,27 @@ def test_floor_the_model_nearly_rules_out_is_left_to_grabcut(model, monkeypatch)
 RED_IS_CLASS_2 = [[0, 0, 0], [0, 0, 0], [20, 0, -20]]
 
 
-def _conv_model(path, weights, shape_in, layout="NCHW"):
+def _conv_model(path, weights, shape_in, layout="NCHW", input_type=None):
     """A 1x1 convolution of the image by ``weights`` (classes, 3), input ``shape_in``. An
-    NHWC model (as exported from TensorFlow) takes and gives channels last."""
+    NHWC model (as exported from TensorFlow) takes and gives channels last; one of
+    another ``input_type`` (onnx.TensorProto's) casts its input to floats first."""
     import onnx
     from onnx import TensorProto, helper
 
     w = np.asarray(weights, np.float32)[..., None, None]
     nodes, inp = [], "image"
+    if input_type is not None:
+        nodes.append(helper.make_node("Cast", ["image"], ["floats"], to=TensorProto.FLOAT))
+        inp = "floats"
     if layout == "NHWC":
-        nodes.append(helper.make_node("Transpose", ["image"], ["nchw"], perm=[0, 3, 1, 2]))
+        nodes.append(helper.make_node("Transpose", [inp], ["nchw"], perm=[0, 3, 1, 2]))
         inp = "nchw"
     nodes.append(helper.make_node("Conv", [inp, "w"], ["logits" if layout == "NCHW" else "conv"]))
     if layout == "NHWC":
         nodes.append(helper.make_node("Transpose", ["conv"], ["logits"], perm=[0, 2, 3, 1]))
     shape_out = [1, len(w)] + list(shape_in[2:]) if layout == "NCHW" else list(shape_in[:3]) + [len(w)]
     graph = helper.make_graph(
-        nodes, "conv", [helper.make_tensor_value_info("image", TensorProto.FLOAT, shape_in)],
+        nodes, "conv", [helper.make_tensor_value_info("image", input_type or TensorProto.FLOAT, shape_in)],
         [helper.make_tensor_value_info("logits", TensorProto.FLOAT, shape_out)],
         [helper.make_tensor("w", TensorProto.FLOAT, w.shape, w.ravel())])
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
@@ -190,6 +194,30 @@ def test_a_users_onnx_model_is_fed_as_its_spec_says(tmp_path):
     (tmp_path / "tiny_NCHW.json").write_text(json.dumps({"input_size": [48, 64], "mean": [0, 0, 0],
                                                          "std": [1, 1, 1], "floor_class": 2, "note": "x"}))
     assert FloorModel(tmp_path / "tiny_NCHW.onnx").spec.floor_class == (2,)
+
+
+def test_models_that_take_bytes_or_half_floats(tmp_path):
+    """Exports for phones often take uint8 pixels (and scale them themselves) or float16:
+    each is fed its type (both crashed in onnxruntime, "Unexpected input data type"); an
+    input no image can be is one clear error."""
+    from onnx import TensorProto
+
+    image = np.zeros((96, 128, 3), np.uint8)
+    image[:, :64] = (200, 30, 30)   # red left half
+    image[:, 64:] = (30, 30, 200)
+    left = np.zeros((96, 128), bool)
+    left[:, :64] = True
+    shape = [1, 3, "rows", "cols"]
+    # With ImageNet's mean and std, the default: bytes go in as they are all the same.
+    for name, kind, spec in (("bytes", TensorProto.UINT8, ModelSpec(floor_class=(2,))),
+                             ("half", TensorProto.FLOAT16, ModelSpec(mean=(0, 0, 0), std=(1, 1, 1),
+                                                                     floor_class=(2,)))):
+        model = FloorModel(_conv_model(tmp_path / f"{name}.onnx", RED_IS_CLASS_2, shape, input_type=kind), spec=spec)
+        p = model.floor_probability(image)
+        assert p.dtype == np.float32 and iou(p > 0.5, left) > 0.95, name
+    with pytest.raises(SegmentationError, match=re.escape("its input image is tensor(int64); Stager feeds images "
+                                                          "as tensor(float), tensor(float16)")):
+        FloorModel(_conv_model(tmp_path / "ints.onnx", RED_IS_CLASS_2, shape, input_type=TensorProto.INT64))
 
 
 def test_several_input_sizes_average_the_floor_probability(held_out, model):

@@ -507,3 +507,16 @@ def test_shade_at_the_foot_of_a_wall_seen_square_on_is_brought_back(depth_m):
     assert (extended & ~truth).sum() < 0.05 * band.sum()
     # At the floor line already, the mask gains next to nothing.
     assert (extend_to_floor_line(image, truth, calibration) & ~truth).sum() < 0.05 * band.sum()
+
+
+def test_columns_too_far_off_to_tell_a_board_are_unknown():
+    """Where a board's search (25 cm upright) spans a pixel or less, as on a far wall, a
+    column cannot tell a board: unknown (NaN). It read past its rows (IndexError: a user's
+    model whose floor ran to far walls crashed ``stage segment``)."""
+    image = np.full((60, 80, 3), 128, np.uint8)
+    mask = np.zeros((60, 80), bool)
+    mask[30:] = True
+    cols, rows = np.arange(10, 20), np.full(10, 30)
+    for px_per_m in (2.0, 6.0):  # spans of 1 and 2 px
+        out, brightness, hue_deg = skirting._board_rows(image, mask, cols, rows, np.full(10, px_per_m))
+        assert np.isnan(out).all() and np.isfinite(brightness).all() and np.isfinite(hue_deg).all()
