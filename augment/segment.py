@@ -798,9 +798,13 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     seg = Segmentation(mask, probability, name, tuple(warnings), skirting_m, *disputed, clicks)
     if seg.uncertain:
         x, y = _largest_patch_px(seg.disputed, calibration, (rows, cols))
+        # Where the model calls much floor that the mask leaves out, the patches in doubt
+        # can outgrow the floor found.
+        share = (f"{100 * seg.disputed_share:.0f} % of the floor found" if seg.disputed_share <= 1 else
+                 f"{seg.disputed_share:.1f} times the floor found")
         seg = replace(seg, doubt_px=(x, y), warnings=seg.warnings + (
             f"the floor found is uncertain: the floor model and GrabCut disagree on {seg.disputed_m2:.1f} m\u00b2 "
-            f"of it ({100 * seg.disputed_share:.0f} %, hatched magenta in the floor overlay); the largest patch in "
+            f"({share}, hatched magenta in the floor overlay); the largest patch in "
             f"doubt is around {x},{y} (ringed there), now {'floor' if mask[y, x] else 'not floor'}: check it, and "
             "correct the floor where it is wrong",))
     elif board_doubt is not None and mask[board_doubt[1], board_doubt[0]]:

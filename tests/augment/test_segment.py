@@ -654,7 +654,8 @@ def test_an_uncertain_floor_is_said(held_out, model, monkeypatch):
         monkeypatch.setattr(segment, "DISPUTED_SHARE_WARN", threshold)
         again = segment_floor(sample.image, model, cal)
         assert again.uncertain == said and (again.doubted is not None) == said
-        assert any("floor found is uncertain" in w and f"{m2:.1f} m²" in w for w in again.warnings) == said
+        assert any("floor found is uncertain" in w and f"{m2:.1f} m² ({100 * share:.0f} % of the floor found"
+                   in w for w in again.warnings) == said
         assert (again.doubt_px is not None) == said and (again.doubt_json() is not None) == said
     # The warning names a pixel in the largest patch in doubt and what the mask says
     # there; the overlay rings it.
@@ -678,6 +679,10 @@ def test_an_uncertain_floor_is_said(held_out, model, monkeypatch):
     assert abs(np.median(radius) - 12 * thick) < 1.5 * thick and radius.min() > 9 * thick, radius
     assert np.array_equal(plain[y, x], ringed[y, x])
     assert segment_floor(sample.image, model, None).disputed_m2 is None  # no calibration, no m²
+    # Patches in doubt larger than the floor found (a model calling floor where the mask has
+    # none) are said as a multiple, not as "250 % of it".
+    monkeypatch.setattr(segment, "disputed_floor", lambda *args, **kwargs: (region, 2.5 * m2 / share, 2.5))
+    assert "(2.5 times the floor found," in segment_floor(sample.image, model, cal).warnings[-1]
 
 
 class _Blind:
