@@ -128,16 +128,17 @@ LENS_REACH_SHARE = 0.98
 
 
 def _distortion_reach(distortion: np.ndarray) -> float:
-    """The largest distorted radius (in focal lengths) the radial terms k1, k2, k3 map
-    to one undistorted radius each; inf when they grow outward as far as a lens can see
-    (five focal lengths)."""
-    k1, k2, _, _, k3 = (list(np.ravel(distortion)) + [0.0] * 5)[:5]
-    if k1 == k2 == k3 == 0:
+    """The largest distorted radius (in focal lengths) the radial terms (k1, k2, k3, and
+    OpenCV's rational k4, k5, k6 when given) map to one undistorted radius each; inf when
+    they grow outward as far as a lens can see (five focal lengths)."""
+    k1, k2, _, _, k3, k4, k5, k6 = (list(np.ravel(distortion)) + [0.0] * 8)[:8]
+    if k1 == k2 == k3 == k4 == k5 == k6 == 0:
         return np.inf
     r = np.linspace(0.0, 5.0, 5001)
     r2 = r * r
-    distorted = r * (1 + k1 * r2 + k2 * r2 ** 2 + k3 * r2 ** 3)
-    turn = np.flatnonzero(np.diff(distorted) <= 0)
+    below = 1 + k4 * r2 + k5 * r2 ** 2 + k6 * r2 ** 3
+    distorted = r * (1 + k1 * r2 + k2 * r2 ** 2 + k3 * r2 ** 3) / np.where(below > 0, below, np.inf)
+    turn = np.flatnonzero((np.diff(distorted) <= 0) | (below[1:] <= 0))
     return float(distorted[turn[0]]) if len(turn) else np.inf
 
 

@@ -71,6 +71,8 @@ def test_the_lens_model_maps_pixels_only_as_far_as_its_distortion_grows():
     assert reach == pytest.approx(0.639, abs=1e-3)
     assert calibrate._distortion_reach(np.array([-0.26637, -0.03859, 0.001783, -0.000281, 0.23839])) == np.inf
     assert calibrate._distortion_reach(np.zeros(5)) == np.inf
+    # OpenCV's rational model, k4 alone: r / (1 + 0.5 r^2) peaks at r^2 = 2, at sqrt(2) / 2.
+    assert calibrate._distortion_reach(np.array([0, 0, 0, 0, 0, 0.5, 0, 0])) == pytest.approx(np.sqrt(0.5), abs=1e-3)
     c = calibrate_file(DATA / "left13.jpg", OPENCV)
     assert c.intrinsics.distortion[:2] == pytest.approx([k1, k2], abs=0.02)
     f, (cx, cy) = c.intrinsics.K[0, 0], c.intrinsics.K[:2, 2]
