@@ -6,6 +6,7 @@ Images are RGB ``(h, w, 3)``, RGBA ``(h, w, 4)`` or grey ``(h, w)`` uint8 arrays
 from __future__ import annotations
 
 import io
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -75,6 +76,9 @@ def register_heif() -> None:
     pillow_heif.register_heif_opener()
 
 
+_UNGUARDED = threading.Lock()
+
+
 @contextmanager
 def pillow_open(source):
     """``PIL.Image.open(source)`` (a path or a binary file), HEIC too, without Pillow's
@@ -88,12 +92,16 @@ def pillow_open(source):
     from PIL import Image
 
     register_heif()
-    limit, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
-    try:
-        with Image.open(source) as image:
-            yield image
-    finally:
-        Image.MAX_IMAGE_PIXELS = limit
+    # Pillow reads its guard, a global, when it opens a file: lifted for this open only,
+    # one thread at a time, so that the web app's threads never leave it lifted.
+    with _UNGUARDED:
+        limit, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
+        try:
+            image = Image.open(source)
+        finally:
+            Image.MAX_IMAGE_PIXELS = limit
+    with image:
+        yield image
 
 
 def decode_grey(data: bytes) -> np.ndarray | None:
