@@ -696,7 +696,9 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     model : FloorModel, optional
         Needed for ``method="onnx"``.
     calibration : Calibration, optional
-        From :func:`augment.calibrate.calibrate_photo`; its board and horizon seed GrabCut.
+        From :func:`augment.calibrate.calibrate_photo`; its board and horizon seed GrabCut,
+        and its horizon says which way is up: the model and the skirting trim see a room
+        that the photo shows turned (``Calibration.upright_turns``) turned upright.
     method : {"onnx", "grabcut"}
         ``"grabcut"`` runs GrabCut alone, seeded from the calibration's geometry.
     refine : bool
