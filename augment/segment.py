@@ -23,6 +23,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from .calibrate import turn_points
 from .imageio import size_problem
 from .skirting import board_clicks, trim_skirting
 
@@ -784,7 +785,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         reach = np.zeros((rows, cols), np.uint8)
         for x, y, _ in clicks[clicks[:, 2] > 0]:
             cv2.circle(reach, (round(x), round(y)), round(CLICK_REACH * max(rows, cols)), 1, -1)
-        board_cut = _cut_clicked(mask & ~trimmed, board_marks)
+        board_cut = _cut_clicked(mask & ~trimmed, board_marks, calibration.upright_turns)
         mask = trimmed | (mask & (reach > 0))
         if board_doubt is not None and reach[board_doubt[1], board_doubt[0]]:
             board_doubt = None
@@ -860,20 +861,24 @@ def _refined(small, scale, probability, calibration, method, refine, clicks):
     return mask_small, name, clicked_floor, clicked_other, clicked_near
 
 
-def _cut_clicked(cut: np.ndarray, marks: np.ndarray) -> np.ndarray:
+def _cut_clicked(cut: np.ndarray, marks: np.ndarray, turns: int = 0) -> np.ndarray:
     """The parts of ``cut`` (rows, cols) bool, what the skirting trim took, that hold a
     board click of ``marks`` (n, 3): the nearest cut pixels at or above it in its column,
-    as the cut runs down from the mask's top edge."""
+    as the cut runs down from the mask's top edge in the room turned upright by ``turns``
+    quarters (``Calibration.upright_turns``), as the trim cut it."""
     out = np.zeros(cut.shape, bool)
     if not len(marks) or not cut.any():
         return out
-    _, labels = cv2.connectedComponents(cut.astype(np.uint8), connectivity=8)
-    for x, y, _ in marks:
-        column = labels[:min(cut.shape[0] - 1, round(y)) + 1, min(cut.shape[1] - 1, round(x))]
+    points = turn_points(np.asarray(marks, np.float64)[:, :2], turns, cut.shape[::-1])
+    upright = np.rot90(cut, turns)
+    _, labels = cv2.connectedComponents(upright.astype(np.uint8), connectivity=8)
+    hits = np.zeros(upright.shape, bool)
+    for x, y in points:
+        column = labels[:min(upright.shape[0] - 1, round(y)) + 1, min(upright.shape[1] - 1, round(x))]
         hit = column[column > 0]
         if len(hit):
-            out |= labels == hit[-1]
-    return out
+            hits |= labels == hit[-1]
+    return np.rot90(hits, -turns)
 
 
 def _largest_patch_px(region: np.ndarray, calibration, shape: tuple[int, int]) -> tuple[int, int]:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from skimage.measure import points_in_poly
 
-from augment import segment
+from augment import calibrate, segment
 from augment.board import Board
 from augment.calibrate import calibrate_photo, exif_intrinsics
 from augment.floor import (BRIDGE_M, DISPUTED_COLOR, _bridge, floor_area_m2, floor_overlay,
@@ -914,6 +914,12 @@ def test_a_board_click_settles_the_band_the_trim_cut_above_it():
     settled = segment._cut_clicked(cut, np.array([[50.0, 28.0, 0.0]]))
     np.testing.assert_array_equal(settled, cut & (np.arange(200) < 100)[None])
     assert not segment._cut_clicked(cut, np.array([[100.0, 50.0, 0.0]])).any()  # between the bands
+    # In a photo that shows the room turned, the column runs up the room's way, as the
+    # trim cut: the same band, turned.
+    for k in (1, 2, 3):
+        click = np.column_stack([calibrate.turn_points([[50.0, 28.0]], k, (200, 100)), [0.0]])
+        np.testing.assert_array_equal(segment._cut_clicked(np.rot90(cut, k), click, (-k) % 4),
+                                      np.rot90(settled, k))
 
 
 def test_a_photo_of_the_room_turned_finds_the_same_floor(held_out, model):
