@@ -50,7 +50,6 @@ from layout.presets import PRESETS
 from .board import (BOARD_KINDS, CHARUCO_DICTIONARY, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM,
                     MIN_SQUARE_MM, PAPER_MM)
 
-PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".webp", ".bmp")
 DEFAULT_PROFILE = "profile.json"
 DEFAULT_BOARD_PDF = "board.pdf"
 
@@ -462,6 +461,8 @@ def _board_cmd(args):
 
 
 def _expand_shots(paths: list[Path]) -> list[Path]:
+    from .imageio import PHOTO_SUFFIXES
+
     shots = []
     for path in paths:
         if path.is_dir():

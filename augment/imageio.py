@@ -18,6 +18,8 @@ _HEIF_BRANDS = (b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"mif1", b
 
 # What decode_image reads, as error messages name it.
 PHOTO_FORMATS = "JPEG, PNG, HEIC, TIFF, WebP or BMP"
+# The names photos of those formats go by, as a folder of shots is searched for them.
+PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".heic", ".heif", ".tif", ".tiff", ".webp", ".bmp")
 JPEG_QUALITY = 92  # staged photos: no visible loss, about a third of the PNG's size
 MIN_PHOTO_PX = 64  # a side: a thumbnail; a board in it would be a few pixels across
 # Long side over short. Phones take 4:3 to 21:9; wider is a panorama (not one pinhole

@@ -140,6 +140,26 @@ def test_calibrate_matches_opencvs_reference_profile(tmp_path, capsys):
     assert "fx" in stdout and "RMS" in stdout and str(out) in stdout
 
 
+def test_calibrate_reads_a_folder_of_heic_shots(tmp_path, capsys):
+    """An iPhone saves HEIC: a folder of its shots was refused as holding no photos."""
+    import pillow_heif
+    from PIL import Image
+
+    pillow_heif.register_heif_opener()
+    folder = tmp_path / "shots"
+    folder.mkdir()
+    four = sorted(OPENCV_DATA.glob("left*.jpg"))[:4]
+    for i, shot in enumerate(four):
+        Image.open(shot).convert("RGB").save(folder / f"IMG_{i:04d}.HEIC", format="HEIF", quality=95)
+    (folder / "notes.txt").write_text("not a photo")
+    code, _, err = run(["calibrate", folder, "--board", "9x6", "--square", "25", "-q",
+                        "--out", tmp_path / "p.json"], capsys)
+    assert code == 0, err
+    profile = json.loads((tmp_path / "p.json").read_text())
+    assert profile["images"] == [f"IMG_{i:04d}.HEIC" for i in range(4)]
+    assert np.array(profile["K"])[0, 0] == pytest.approx(OPENCV_FX, rel=0.05)
+
+
 def test_calibrate_quiet_prints_nothing(tmp_path, capsys):
     shots = sorted(OPENCV_DATA.glob("left*.jpg"))[:4]
     code, stdout, err = run(["calibrate", *shots, "--board", "9x6", "--square", "25", "-q",
