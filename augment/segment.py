@@ -954,6 +954,13 @@ MASK_ASPECT_TOLERANCE = 0.01
 # scaled mask's edges are a few percent; a photo's is most of it.
 MAX_MASK_GREY = 0.25
 
+# Share of a floor mask's white that may lie above the horizon, where no floor can show.
+# A brush spilling over the top of a wall far away leaves a little there, and is left out
+# with a word; a mask white over walls and ceiling (all white, or another photo's) is
+# refused: its floor would run through the walls to the polygon's 15 m limit.
+MASK_SKY_WARN = 0.005
+MAX_MASK_SKY = 0.10
+
 
 def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segmentation:
     """A floor mask the user made or corrected, in place of :func:`segment_floor`.
@@ -1015,6 +1022,7 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
                                     "evenly, e.g. the floor.png of `stage segment`")
         lightness = cv2.resize(lightness, (cols, rows), interpolation=cv2.INTER_LINEAR)
     mask = lightness > 127
+    warnings = ()
     if not mask.any():
         raise SegmentationError(f"floor mask {path}: no floor in it (no pixel lighter than grey 127); "
                                 "paint the floor white on black")
@@ -1024,7 +1032,18 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
         if 0 <= row < rows and 0 <= col < cols and not mask[row, col]:
             raise SegmentationError(f"floor mask {path}: the board's center (pixel {col}, {row}) is not floor "
                                     "in it; white must be floor (is the mask inverted, or of another photo?)")
-    return Segmentation(mask, None, "user mask")
+        below = below_horizon((rows, cols), calibration.horizon, 0.0)
+        sky = float((mask & ~below).sum() / mask.sum())
+        if sky > MAX_MASK_SKY:
+            raise SegmentationError(f"floor mask {path}: {sky:.0%} of its white lies above the horizon (the "
+                                    "camera's eye level, which the board gives: dashed in the calibration "
+                                    "overlay), where no floor can show, so it marks walls or the ceiling as "
+                                    "floor; paint only the floor white")
+        mask &= below
+        if sky > MASK_SKY_WARN:
+            warnings = (f"floor mask {path}: {sky:.1%} of its white lies above the horizon, where no floor can "
+                        "show (a wall's top, painted over?); left out",)
+    return Segmentation(mask, None, "user mask", warnings)
 
 
 def _geometry_trimap(shape_small, scale, calibration) -> np.ndarray:

@@ -348,3 +348,36 @@ def test_one_click_brings_back_floor_in_a_cartons_shadow(tmp_path, capsys):
     # click takes the carton's shaded foot nearly as much as the floor it brings back.
     gained = (masks[1] & truth & ~masks[0]).sum()
     assert (masks[1] & ~truth & ~masks[0]).sum() < 1.25 * gained, gained
+
+
+def test_floor_mask_white_above_the_horizon(tmp_path, capsys):
+    """No floor shows above the horizon (room_1's crosses the photo near its top): white
+    there is left out with a warning where a brush spilled over, and a mask white over
+    the walls up to there is refused."""
+    from augment.board import Board
+    from augment.calibrate import calibrate_file
+    from augment.segment import below_horizon
+
+    photo = SAMPLES / "room_1.jpg"
+    truth = cv2.imread(str(SAMPLES / "room_1_floor.png"), cv2.IMREAD_GRAYSCALE) > 127
+    horizon = calibrate_file(photo, Board()).horizon
+    horizon = horizon / np.hypot(*horizon[:2])
+    sky = ~below_horizon(truth.shape, horizon)
+    spill = sky & below_horizon(truth.shape, horizon, -20.0)  # a brush 20 px over the horizon
+    spill[:, :300] = spill[:, 900:] = False
+    for name, mask in (("spilled.png", truth | spill), ("walls.png", truth | sky)):
+        share = (mask & sky).sum() / mask.sum()
+        path = tmp_path / name
+        cv2.imwrite(str(path), mask.astype(np.uint8) * 255)
+        code, out, err = run(["measure", photo, "--floor-mask", path, "--out", tmp_path / name[:-4]], capsys)
+        if name == "spilled.png":
+            assert 0.005 < share < 0.1 and code == 0, (share, err)
+            assert f"{share:.1%} of its white lies above the horizon" in err and "left out" in err, err
+            floor = json.loads((tmp_path / "spilled" / "report.json").read_text())["floor"]
+            code, _, err = run(["measure", photo, "--floor-mask", SAMPLES / "room_1_floor.png",
+                                "--out", tmp_path / "truth"], capsys)
+            assert code == 0 and "above the horizon" not in err, err
+            assert floor == json.loads((tmp_path / "truth" / "report.json").read_text())["floor"]
+        else:
+            assert share > 0.1 and code == 2 and err.count("\n") == 1, (share, err)
+            assert f"{share:.0%} of its white lies above the horizon" in err and "paint only the floor" in err, err
