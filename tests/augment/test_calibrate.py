@@ -59,6 +59,39 @@ def test_single_view_focal_on_real_photos():
     assert max(errors) < 0.05 and np.median(errors) < 0.015
 
 
+def test_exif_focal_of_a_cropped_photo_gives_way_to_the_board(tmp_path):
+    """A crop keeps the whole frame's EXIF focal length. left02 with its true focal
+    length as EXIF (29 mm equivalent on its 800 px diagonal: 537 px, OpenCV's 536) keeps
+    it; cropped to three quarters, off its middle, EXIF says 29 / 43.27 * 600 = 402 px,
+    which the board's view (about 536 px) rules out: the board's is used, with a warning.
+    Where the board cannot tell the focal length (too small in room_2 cropped to half)
+    and the fit fails, the error names the EXIF focal length too."""
+    from PIL import Image
+
+    exif = Image.Exif()
+    exif.get_ifd(0x8769)[0xA405] = 29
+    photo = Image.open(DATA / "left02.jpg")
+    ref = _reference()[0, 0]
+    whole, cropped = tmp_path / "whole.jpg", tmp_path / "cropped.jpg"
+    photo.save(whole, exif=exif.tobytes(), quality=95)
+    photo.crop((120, 60, 600, 420)).save(cropped, exif=exif.tobytes(), quality=95)
+    c = calibrate_file(whole, OPENCV)
+    assert c.intrinsics.source == "exif" and c.intrinsics.K[0, 0] == pytest.approx(29 / 43.2666 * 800, rel=1e-3)
+    assert not any("EXIF" in w for w in c.warnings)
+    c = calibrate_file(cropped, OPENCV)
+    assert c.intrinsics.source == "single-view" and c.intrinsics.K[0, 0] == pytest.approx(ref, rel=0.05)
+    (warning,) = [w for w in c.warnings if "EXIF" in w]
+    assert "(402 px)" in warning and "cropped" in warning and "as the camera took it" in warning
+    assert not any("no EXIF" in w for w in c.warnings)
+    # room_2 (a render: 785 px, 21 mm equivalent) cropped to its lower right half.
+    room = Image.open(Path(__file__).resolve().parents[2] / "samples" / "photos" / "room_2.jpg")
+    half = tmp_path / "half.jpg"
+    exif.get_ifd(0x8769)[0xA405] = 21
+    room.crop((640, 480, 1280, 960)).save(half, exif=exif.tobytes(), quality=95)
+    with pytest.raises(CalibrationError, match=r"EXIF focal length \(388 px\) does not fit it: a cropped photo"):
+        calibrate_file(half, Board())
+
+
 def test_the_lens_model_maps_pixels_only_as_far_as_its_distortion_grows():
     """r_d = r (1 + k1 r^2 + k2 r^4) stops growing where 1 + 3 k1 r^2 + 5 k2 r^4 = 0: for
     left13's fit from the board (k1 -0.2525, k2 -0.1303) at r^2 = 0.787, r_d = 0.639
@@ -348,18 +381,20 @@ def test_unreadable_photo(tmp_path):
 
 
 def test_exif_focal_length_is_used_before_the_board(tmp_path, renders):
-    """A photo whose EXIF says 26 mm (35 mm equivalent) gets f = 26 / 43.27 x diagonal."""
+    """A photo whose EXIF gives its 35 mm equivalent focal length in whole millimeters,
+    as phones do, gets f = mm / 43.27 x diagonal."""
     from PIL import Image
 
     sample = renders[0]
+    w, h = sample.truth["size_px"]
+    mm = round(np.array(sample.truth["K"])[0, 0] * np.hypot(36, 24) / np.hypot(w, h))
     exif = Image.Exif()
-    exif.get_ifd(0x8769)[0xA405] = 26  # FocalLengthIn35mmFilm
+    exif.get_ifd(0x8769)[0xA405] = mm  # FocalLengthIn35mmFilm
     path = tmp_path / "phone.jpg"
     Image.fromarray(sample.image).save(path, quality=92, exif=exif)
     c = calibrate_file(path, Board())
-    w, h = sample.truth["size_px"]
-    assert c.intrinsics.source == "exif"
-    assert np.isclose(c.intrinsics.K[0, 0], 26 / np.hypot(36, 24) * np.hypot(w, h))
+    assert c.intrinsics.source == "exif" and c.warnings == ()
+    assert np.isclose(c.intrinsics.K[0, 0], mm / np.hypot(36, 24) * np.hypot(w, h))
     # Without EXIF the same pixels fall back to the board.
     plain = tmp_path / "plain.jpg"
     Image.fromarray(sample.image).save(plain, quality=92)
