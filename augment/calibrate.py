@@ -35,6 +35,11 @@ MAX_RMS_PX = 2.0               # worse reprojection means a bent, moved or mis-s
 MIN_TILT_DEG = 15.0
 MAX_TILT_DEG = 85.0
 MAX_SINGLE_VIEW_UNCERTAINTY = 0.05   # relative focal uncertainty allowed before refusing
+# Where people hold a phone to photograph a room: crouching to arms raised. Outside, the
+# board's printed scale is the likelier mistake (a print scaled to fit the page, another
+# board's --square): every length scales with it, the camera's height too.
+CAMERA_HEIGHT_M = (0.3, 2.5)
+USUAL_CAMERA_HEIGHT_M = (1.0, 1.8)  # standing, as most photos of a room are taken
 # A crop keeps the whole frame's EXIF focal length (as do phones' modes that crop the
 # sensor, when the maker does not restate it), which then does not fit the photo. Where
 # the board's own view rules the EXIF value out by this many standard deviations of the
@@ -1177,7 +1182,14 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
     center = corners.mean(axis=0)
     if horizon @ [center[0], center[1], 1.0] < 0:
         horizon = -horizon
-    if intrinsics.source == "single-view" and not warnings:
+    if not CAMERA_HEIGHT_M[0] <= d <= CAMERA_HEIGHT_M[1]:
+        low, high = (board.square_mm * h / d for h in USUAL_CAMERA_HEIGHT_M)
+        warnings.append(f"the camera comes out {d:.2f} m above the floor, by the board's squares of "
+                        f"{board.square_mm:g} mm: if it was not, the printed squares are another size (a print "
+                        "scaled to fit the page has smaller ones) and every length is off by as much; measure "
+                        f"one and give it as --square (with the camera {USUAL_CAMERA_HEIGHT_M[0]:g}-"
+                        f"{USUAL_CAMERA_HEIGHT_M[1]:g} m up, they would be {low:.0f}-{high:.0f} mm)")
+    if intrinsics.source == "single-view" and not any("EXIF" in w for w in warnings):
         warnings.append("focal length estimated from the board alone (no EXIF, no camera profile): "
                         f"uncertain by about {100 * intrinsics.focal_uncertainty:.1f} %")
     if len(ids) < board.corner_count:

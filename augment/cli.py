@@ -603,6 +603,7 @@ def _segment_cmd(args):
     warnings = []
     try:
         calibration = calibrate_file(args.photo, board, profile=args.camera)
+        warnings += calibration.warnings  # the polygon's meters rest on it
     except CalibrationError as error:
         if args.method == "grabcut":
             raise StageError(f"--method grabcut needs the board to seed the floor: {error}") from None

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
 from PIL import Image
 
 from augment import cli
@@ -381,3 +382,28 @@ def test_floor_mask_white_above_the_horizon(tmp_path, capsys):
         else:
             assert share > 0.1 and code == 2 and err.count("\n") == 1, (share, err)
             assert f"{share:.0%} of its white lies above the horizon" in err and "paint only the floor" in err, err
+
+
+def test_a_board_printed_at_another_scale_is_said(tmp_path, capsys):
+    """Every length scales with --square: given 5 or 150 mm for room_3's 45 mm squares,
+    the camera comes out 5/45 and 150/45 of its true height, outside where people hold a
+    phone (0.3-2.5 m); the warning says so, and what the squares would measure with the
+    camera 1.0-1.8 m up, which brackets the true 45 mm."""
+    import re
+
+    from augment.board import Board
+    from augment.calibrate import calibrate_file
+
+    photo = SAMPLES / "room_3.jpg"
+    height_m = calibrate_file(photo, Board()).camera_height_m
+    assert 1.0 < height_m < 1.8
+    code, _, err = run(["segment", photo, "--out", tmp_path / "right.png"], capsys)
+    assert code == 0 and "m above the floor" not in err, err
+    for square in (5, 150):
+        code, _, err = run(["segment", photo, "--square", square, "--out", tmp_path / f"{square}.png"], capsys)
+        found = re.search(r"the camera comes out ([\d.]+) m above the floor, by the board's squares of "
+                          rf"{square} mm: .* give it as --square \(with the camera 1-1.8 m up, they would be "
+                          r"(\d+)-(\d+) mm\)", err)
+        assert code == 0 and found, err
+        assert float(found[1]) == pytest.approx(height_m * square / 45, abs=0.006)
+        assert int(found[2]) < 45 < int(found[3])
