@@ -87,6 +87,12 @@ MIN_SQUARE_CONTRAST = 0.3
 CROP_CANDIDATES = 3
 CROP_MARGIN = 0.3              # of the group's extent, on each side
 CROP_ZOOM_BELOW_PX = 16        # corner spacing under which a crop is also tried enlarged 2x
+# A board far away or seen low is squashed along the view and often blurred, and then
+# neither detector finds it on the crop (46 of 640 renders with the whole board in view,
+# boards up to 180 px across). The group's saddle points show the squash: an affine map
+# that makes their spread round undoes most of it, and the detectors run once more on
+# that view, its corners this far apart.
+RECTIFIED_SPACING_PX = 28.0
 # A small or far board is a nearly affine view of a plane, which two tilts explain about
 # equally well (the planar pose ambiguity): on the synthetic renders the wrong one fit a
 # little better in 1 of 857, and both were within 2x of each other's RMS in 18. Within
@@ -324,7 +330,8 @@ class BoardDetection:
         board gives the corners it shows, at least ``MIN_CHARUCO_CORNERS``.
     detector : str
         ``"sb"`` or ``"classic"`` (OpenCV's checkerboard detectors), with ``" crop"`` when
-        found only on a crop around the board; ``"charuco"``.
+        found only on a crop around the board, ``" rectified"`` when only on a view of it
+        with its foreshortening undone (:func:`_find_rectified`); ``"charuco"``.
     """
 
     corners_px: np.ndarray
@@ -596,7 +603,35 @@ def _find_in_crops(gray: np.ndarray, small: np.ndarray, scale: float, board: Boa
             corners, detector = _find_chessboard(view, board)
             if corners is not None:
                 return (corners + 0.5) / zoom - 0.5 + [x0, y0], f"{detector} crop"
+        corners, detector = _find_rectified(gray, points, board)
+        if corners is not None:
+            return corners, f"{detector} rectified"
     return None, None
+
+
+def _find_rectified(gray: np.ndarray, points: np.ndarray, board: Board):
+    """Corners found on an affine view of ``gray`` in which the saddle points ``points``
+    (k, 2), a board candidate, spread evenly every way, mapped back to ``gray``; or None.
+
+    A grid of cols x rows corners a unit apart spreads (cols^2 - 1) / 12 and
+    (rows^2 - 1) / 12 along its sides; the view gives each direction the mean of the two,
+    at ``RECTIFIED_SPACING_PX`` a unit, so its squares come out within a factor of
+    about 1.5 of square whatever the squash. The map is symmetric and positive: no mirror.
+    """
+    center = points.mean(axis=0)
+    spread, axes = np.linalg.eigh(np.cov((points - center).T))
+    if spread.min() <= 1e-6:
+        return None, None
+    unit = np.sqrt((board.cols ** 2 + board.rows ** 2 - 2) / 24) * RECTIFIED_SPACING_PX
+    A = axes @ np.diag(unit / np.sqrt(spread)) @ axes.T
+    side = int(round((max(board.cols, board.rows) + 4) * RECTIFIED_SPACING_PX * 1.3))
+    to_view = np.hstack([A, (side / 2 - A @ center)[:, None]])
+    view = cv2.warpAffine(gray, to_view, (side, side), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
+    corners, detector = _find_chessboard(view, board)
+    if corners is None:
+        return None, None
+    back = cv2.invertAffineTransform(to_view)
+    return corners @ back[:, :2].T + back[:, 2], detector
 
 
 def _detect_chessboard(gray: np.ndarray, board: Board) -> BoardDetection | None:

@@ -436,6 +436,22 @@ def test_small_board_missed_on_the_whole_photo_is_found_on_a_crop():
     assert errors.max() < 0.3
 
 
+def test_a_far_squashed_board_is_found_on_a_rectified_view():
+    """Seed [932, 37]: a 7x5 board 180 px across in a 2016x1512 photo, seen low (its rows
+    16 px apart) and blurred (1.6 px). Neither detector finds it on the whole photo nor
+    on the crop around its saddle points, enlarged or not; on a view of that crop made
+    so that the saddle points spread evenly every way SB does, and the corners land within
+    0.5 px of the truth."""
+    with Renderer() as renderer:
+        sample = render_sample([932, 37], renderer)
+    gray = cv2.cvtColor(sample.image, cv2.COLOR_RGB2GRAY)
+    assert gray.shape == (1512, 2016) and _find_chessboard(gray, Board())[0] is None
+    detection = detect_board(sample.image, Board())
+    assert detection is not None and detection.detector == "sb rectified"
+    errors = _corner_errors_px(detection.corners_px, detection.ids, sample.truth["board"]["corners_px"])
+    assert errors.max() < 0.5, errors.max()
+
+
 def _unmended(gray, corners, *args):
     """Stands in for ``calibrate._mend_outliers``: corners as the saddle search left them."""
     return corners
