@@ -81,6 +81,11 @@ OUTLIER_SQUARES, OUTLIER_REACH = 0.25, 2
 # The ring of squares outside the inner corners is not judged: a carton over the board's
 # edge hides it while the detector still finds every corner (seed [7, 60], 5 % hidden).
 MIN_SQUARE_CONTRAST = 0.3
+# A grid is a patch of a larger board when this share of the squares along a side of the
+# next ring out alternates as printed (the side's end squares left out: they border the
+# paper). Not all: a lens's distortion two squares past the grid, where the grid's
+# homography is extrapolated, puts a square or two off.
+GOES_ON_SHARE = 0.75
 # When the whole photo yields no checkerboard, the strongest saddle points are grouped and
 # the detectors rerun on crops around the largest groups (a small board in a big, busy
 # photo is found far more often on its own), enlarged twice when its squares are small.
@@ -91,8 +96,9 @@ CROP_ZOOM_BELOW_PX = 16        # corner spacing under which a crop is also tried
 # neither detector finds it on the crop (46 of 640 renders with the whole board in view,
 # boards up to 180 px across). The group's saddle points show the squash: an affine map
 # that makes their spread round undoes most of it, and the detectors run once more on
-# that view, its corners this far apart.
-RECTIFIED_SPACING_PX = 28.0
+# that view, its corners this far apart (the first; the others where it fails: the
+# detectors' luck turns with the scale on boards whose rows are 6-9 px apart).
+RECTIFIED_SPACINGS_PX = (28.0, 20.0, 40.0)
 # A small or far board is a nearly affine view of a plane, which two tilts explain about
 # equally well (the planar pose ambiguity): on the synthetic renders the wrong one fit a
 # little better in 1 of 857, and both were within 2x of each other's RMS in 18. Within
@@ -527,14 +533,28 @@ def squares_alternate(gray: np.ndarray, corners_px: np.ndarray, board: Board) ->
     return bool((square_contrast(gray, corners_px, board)[1:-1, 1:-1] >= MIN_SQUARE_CONTRAST).all())
 
 
+def board_goes_on(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> bool:
+    """Whether the checkerboard goes on past the squares around the detected corners:
+    along some side, most squares of the next ring out (``GOES_ON_SHARE``) alternate as
+    printed (``MIN_SQUARE_CONTRAST``). Then the grid is a patch of a larger board (a 9x6 board
+    given as 7x5, which the detectors find in it), not the board."""
+    H, _ = cv2.findHomography(board.corners_m()[:, :2], np.asarray(corners_px, np.float64).reshape(-1, 2), 0)
+    wider = Board(board.cols + 2, board.rows + 2, board.square_mm)  # its paper does not matter here
+    wider_px = cv2.perspectiveTransform(wider.corners_m()[None, :, :2], H)[0]
+    ring = square_contrast(gray, wider_px, wider) >= MIN_SQUARE_CONTRAST
+    sides = (ring[0, 2:-2], ring[-1, 2:-2], ring[2:-2, 0], ring[2:-2, -1])
+    return any(side.mean() >= GOES_ON_SHARE for side in sides)
+
+
 def _find_chessboard(gray: np.ndarray, board: Board):
-    """Corners (cols * rows, 2) in ``gray`` or None, and which detector found them."""
+    """Corners (cols * rows, 2) in ``gray`` or None, and which detector found them: a
+    grid whose squares alternate as printed and that is not a patch of a larger board."""
     pattern = (board.cols, board.rows)
     found, corners = cv2.findChessboardCornersSB(gray, pattern, flags=_SB_FLAGS)
-    if found and squares_alternate(gray, corners, board):
+    if found and squares_alternate(gray, corners, board) and not board_goes_on(gray, corners, board):
         return corners.reshape(-1, 2).astype(np.float64), "sb"
     found, corners = cv2.findChessboardCorners(gray, pattern, flags=_CLASSIC_FLAGS)
-    if found and squares_alternate(gray, corners, board):
+    if found and squares_alternate(gray, corners, board) and not board_goes_on(gray, corners, board):
         return corners.reshape(-1, 2).astype(np.float64), "classic"
     return None, None
 
@@ -603,35 +623,44 @@ def _find_in_crops(gray: np.ndarray, small: np.ndarray, scale: float, board: Boa
             corners, detector = _find_chessboard(view, board)
             if corners is not None:
                 return (corners + 0.5) / zoom - 0.5 + [x0, y0], f"{detector} crop"
-        corners, detector = _find_rectified(gray, points, board)
+        corners, detector = _find_rectified(gray, points, board, (x0, y0, x1, y1))
         if corners is not None:
             return corners, f"{detector} rectified"
     return None, None
 
 
-def _find_rectified(gray: np.ndarray, points: np.ndarray, board: Board):
+def _find_rectified(gray: np.ndarray, points: np.ndarray, board: Board, box: tuple[int, int, int, int]):
     """Corners found on an affine view of ``gray`` in which the saddle points ``points``
     (k, 2), a board candidate, spread evenly every way, mapped back to ``gray``; or None.
+    The view holds all of ``box`` (x0, y0, x1, y1), the crop around them: cut shorter, a
+    larger board (9x6 given as 7x5) shows a 7x5 patch of whole squares, which the
+    detectors take for the board.
 
     A grid of cols x rows corners a unit apart spreads (cols^2 - 1) / 12 and
     (rows^2 - 1) / 12 along its sides; the view gives each direction the mean of the two,
-    at ``RECTIFIED_SPACING_PX`` a unit, so its squares come out within a factor of
-    about 1.5 of square whatever the squash. The map is symmetric and positive: no mirror.
+    at each of ``RECTIFIED_SPACINGS_PX`` a unit in turn, so its squares come out within a
+    factor of about 1.5 of square whatever the squash. The map is symmetric and positive:
+    no mirror.
     """
     center = points.mean(axis=0)
     spread, axes = np.linalg.eigh(np.cov((points - center).T))
     if spread.min() <= 1e-6:
         return None, None
-    unit = np.sqrt((board.cols ** 2 + board.rows ** 2 - 2) / 24) * RECTIFIED_SPACING_PX
-    A = axes @ np.diag(unit / np.sqrt(spread)) @ axes.T
-    side = int(round((max(board.cols, board.rows) + 4) * RECTIFIED_SPACING_PX * 1.3))
-    to_view = np.hstack([A, (side / 2 - A @ center)[:, None]])
-    view = cv2.warpAffine(gray, to_view, (side, side), flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
-    corners, detector = _find_chessboard(view, board)
-    if corners is None:
-        return None, None
-    back = cv2.invertAffineTransform(to_view)
-    return corners @ back[:, :2].T + back[:, 2], detector
+    even = axes @ np.diag(1 / np.sqrt(spread)) @ axes.T * np.sqrt((board.cols ** 2 + board.rows ** 2 - 2) / 24)
+    x0, y0, x1, y1 = box
+    corners_box = (np.array([[x0, y0], [x1, y0], [x0, y1], [x1, y1]]) - center) @ even.T
+    for spacing in RECTIFIED_SPACINGS_PX:
+        A = even * spacing
+        lo, hi = corners_box.min(axis=0) * spacing, corners_box.max(axis=0) * spacing
+        to_view = np.hstack([A, (-lo - A @ center)[:, None]])
+        size = tuple(int(v) for v in np.ceil(hi - lo) + 1)
+        view = cv2.warpAffine(gray, to_view, size, flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_CONSTANT,
+                              borderValue=int(np.median(gray[y0:y1 + 1, x0:x1 + 1])))
+        corners, detector = _find_chessboard(view, board)
+        if corners is not None:
+            back = cv2.invertAffineTransform(to_view)
+            return corners @ back[:, :2].T + back[:, 2], detector
+    return None, None
 
 
 def _detect_chessboard(gray: np.ndarray, board: Board) -> BoardDetection | None:

@@ -234,6 +234,10 @@ def test_wrong_board_size_is_named_and_the_right_one_suggested():
     image = read_photo(LEFT[0])
     with pytest.raises(CalibrationError, match=r"no 7x5 checkerboard .*use --board 9x6"):
         calibrate_photo(image, Board(7, 5, 25), where=str(LEFT[0]))
+    # OpenCV's classic detector finds an 8x6 patch in the 9x6 board (on a crop); the ring
+    # of squares past it alternates on one side, so the patch is not taken for the board.
+    with pytest.raises(CalibrationError, match=r"no 8x6 checkerboard .*use --board 9x6"):
+        calibrate_photo(image, Board(8, 6, 25), where=str(LEFT[0]))
     # A plain checkerboard photographed, a ChArUco board given: the plain one is suggested.
     with pytest.raises(CalibrationError, match=r"no 9x6 ChArUco board \(DICT_4X4_50\) .*use --board 9x6"):
         calibrate_photo(image, Board(9, 6, 25, kind="charuco"), where=str(LEFT[0]))
@@ -241,6 +245,19 @@ def test_wrong_board_size_is_named_and_the_right_one_suggested():
     with pytest.raises(CalibrationError, match="inner corners"):
         calibrate_photo(gray, Board())
     assert detect_board(gray, Board()) is None
+
+
+def test_a_whole_board_does_not_go_on():
+    """The ring of squares past each of OpenCV's 13 boards, found as 9x6, is paper: none is
+    taken for a patch of a larger board. Read as 7x5 (its corners less a column each side
+    and a row), left01's board goes on."""
+    for path in LEFT:
+        gray = cv2.cvtColor(read_photo(path), cv2.COLOR_RGB2GRAY)
+        found = detect_board(read_photo(path), OPENCV)
+        assert found is not None and not calibrate.board_goes_on(gray, found.corners_px, OPENCV), path.name
+    gray = cv2.cvtColor(read_photo(LEFT[0]), cv2.COLOR_RGB2GRAY)
+    corners = detect_board(read_photo(LEFT[0]), OPENCV).corners_px.reshape(6, 9, 2)
+    assert calibrate.board_goes_on(gray, corners[:5, 1:-1].reshape(-1, 2), Board(7, 5, 25))
 
 
 def test_profile_scales_to_another_resolution_and_refuses_another_aspect(tmp_path):
