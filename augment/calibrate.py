@@ -1220,10 +1220,12 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
             f"the board in {where} is only {extent.max():.0f} px across (at least {MIN_BOARD_EXTENT_PX} needed): "
             "move the board closer to the camera or use a larger board")
     warnings = []
+    exif_ruled_out = False
     if intrinsics is None:
         intrinsics = single_view_intrinsics(detection.corners_px, board, size_px, detection.ids)
     elif intrinsics.source == "exif":
-        intrinsics = _exif_or_board(intrinsics, detection, board, size_px, where, warnings)
+        chosen = _exif_or_board(intrinsics, detection, board, size_px, where, warnings)
+        exif_ruled_out, intrinsics = chosen is not intrinsics, chosen
     camera_from_floor, ids = _pose(detection, board, intrinsics)
     corners = detection.corners_px
     camera_from_floor = _settle_tilt(image, corners, board.corners_m()[ids], intrinsics, camera_from_floor, warnings)
@@ -1253,7 +1255,7 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
                         "scaled to fit the page has smaller ones) and every length is off by as much; measure "
                         f"one and give it as --square (with the camera {USUAL_CAMERA_HEIGHT_M[0]:g}-"
                         f"{USUAL_CAMERA_HEIGHT_M[1]:g} m up, they would be {low:.0f}-{high:.0f} mm)")
-    if intrinsics.source == "single-view" and not any("EXIF" in w for w in warnings):
+    if intrinsics.source == "single-view" and not exif_ruled_out:  # its own warning says why
         warnings.append("focal length estimated from the board alone (no EXIF, no camera profile): "
                         f"uncertain by about {100 * intrinsics.focal_uncertainty:.1f} %")
     if len(ids) < board.corner_count:
