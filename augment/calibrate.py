@@ -546,15 +546,21 @@ def board_goes_on(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> boo
     return any(side.mean() >= GOES_ON_SHARE for side in sides)
 
 
+def _is_the_board(gray: np.ndarray, corners, board: Board) -> bool:
+    """Whether a detector's grid is the board: its squares alternate as printed, and it
+    is not a patch of a larger board."""
+    return squares_alternate(gray, corners, board) and not board_goes_on(gray, corners, board)
+
+
 def _find_chessboard(gray: np.ndarray, board: Board):
-    """Corners (cols * rows, 2) in ``gray`` or None, and which detector found them: a
-    grid whose squares alternate as printed and that is not a patch of a larger board."""
+    """Corners (cols * rows, 2) in ``gray`` or None, and which detector found them
+    (:func:`_is_the_board`)."""
     pattern = (board.cols, board.rows)
     found, corners = cv2.findChessboardCornersSB(gray, pattern, flags=_SB_FLAGS)
-    if found and squares_alternate(gray, corners, board) and not board_goes_on(gray, corners, board):
+    if found and _is_the_board(gray, corners, board):
         return corners.reshape(-1, 2).astype(np.float64), "sb"
     found, corners = cv2.findChessboardCorners(gray, pattern, flags=_CLASSIC_FLAGS)
-    if found and squares_alternate(gray, corners, board) and not board_goes_on(gray, corners, board):
+    if found and _is_the_board(gray, corners, board):
         return corners.reshape(-1, 2).astype(np.float64), "classic"
     return None, None
 
@@ -649,13 +655,14 @@ def _find_rectified(gray: np.ndarray, points: np.ndarray, board: Board, box: tup
     even = axes @ np.diag(1 / np.sqrt(spread)) @ axes.T * np.sqrt((board.cols ** 2 + board.rows ** 2 - 2) / 24)
     x0, y0, x1, y1 = box
     corners_box = (np.array([[x0, y0], [x1, y0], [x0, y1], [x1, y1]]) - center) @ even.T
+    around = int(np.median(gray[y0:y1 + 1, x0:x1 + 1]))  # what the view shows past the crop
     for spacing in RECTIFIED_SPACINGS_PX:
         A = even * spacing
         lo, hi = corners_box.min(axis=0) * spacing, corners_box.max(axis=0) * spacing
         to_view = np.hstack([A, (-lo - A @ center)[:, None]])
         size = tuple(int(v) for v in np.ceil(hi - lo) + 1)
         view = cv2.warpAffine(gray, to_view, size, flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_CONSTANT,
-                              borderValue=int(np.median(gray[y0:y1 + 1, x0:x1 + 1])))
+                              borderValue=around)
         corners, detector = _find_chessboard(view, board)
         if corners is not None:
             back = cv2.invertAffineTransform(to_view)
