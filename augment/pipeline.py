@@ -857,7 +857,7 @@ def report_dict(result: FurnishResult) -> dict:
             "overlap_area_m2": rep["overlaps"]["area_m2"], "outside_m2": rep["outside_m2"],
             "traversable": rep["traversable"], "unreachable": rep["unreachable"],
             "files": {"staged": f"staged_{k}.jpg", "layout": f"layout_{k}.json", "plan": f"plan_{k}.png",
-                      "scene": f"scene_{k}.glb"}})
+                      "scene": f"scene_{k}.glb", **({"layer": f"staged_{k}_layer.png"} if result.layers else {})}})
     return _jsonable({
         "photo": str(result.photo),
         "size_px": list(cal.size_px),
@@ -1113,6 +1113,11 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
 # Writing
 # --------------------------------------------------------------------------------------
 
+# What each suggestion K writes: ``layout solve``'s files, the staged photo, its layer
+# (with ``--layers``) and the 3-D scene.
+SUGGESTION_FILES = (*layout_report.SUGGESTION_FILES, "staged_{k}.jpg", "staged_{k}_layer.png", "scene_{k}.glb")
+
+
 def _write_files(result: FurnishResult, folder: Path) -> list[str]:
     """Every output file into ``folder``; returns their names."""
     import json
@@ -1144,7 +1149,11 @@ def write_outputs(result: FurnishResult, out_dir, inputs=()) -> list[Path]:
     The files are made in a temporary folder beside ``out_dir`` and then moved in (a new
     ``out_dir`` is renamed into place whole), so a failure leaves ``out_dir`` as it was.
     Files there that this run does not write are left alone, and so are ``inputs`` (the
-    run's input files, paths or None): none of the outputs may replace one.
+    run's input files, paths or None): none of the outputs may replace one. Only an
+    earlier run's suggestions that this run does not write again (its ``staged_K.jpg``,
+    ``staged_K_layer.png``, ``layout_K.json``, ``plan_K.png`` and ``scene_K.glb``, of a
+    run with more suggestions or with ``--layers``) are taken away with the move, so
+    that the folder holds this run's files and its report.
 
     Returns
     -------
@@ -1161,7 +1170,9 @@ def write_outputs(result: FurnishResult, out_dir, inputs=()) -> list[Path]:
     if out.exists() and not out.is_dir():
         raise FurnishError(f"output folder {out}: exists and is not a folder")
     try:
-        with staged_folder(out) as staging:
+        stale = [n for n in layout_report.earlier_suggestion_files(out, SUGGESTION_FILES)
+                 if replaced_input([out / n], inputs) is None]
+        with staged_folder(out, stale=stale) as staging:
             names = _write_files(result, staging)
             if (clash := replaced_input([out / name for name in names], inputs)) is not None:
                 raise FurnishError(f"output folder {out}: {clash[0].name} there is the input {clash[1]}, which "

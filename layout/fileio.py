@@ -52,14 +52,16 @@ def write_atomic(path, data: bytes | str) -> Path:
 
 
 @contextmanager
-def staged_folder(out_dir):
+def staged_folder(out_dir, stale=()):
     """Yield a temporary folder beside ``out_dir``; what is written there is moved into
     ``out_dir`` all or none when the block ends without an exception.
 
     A new ``out_dir`` is the staging folder renamed into place whole; into an existing one
     each file is renamed in, and if one move fails those already moved are put back as
-    they were. Files in ``out_dir`` that the block did not write are left alone. Errors
-    are ``OSError``; the temporary folder never outlives the block.
+    they were. Files in ``out_dir`` that the block did not write are left alone, but for
+    the names in ``stale`` (an earlier run's outputs this run replaces): those are taken
+    away with the move, and put back if it fails. Errors are ``OSError``; the temporary
+    folder never outlives the block.
     """
     out = Path(out_dir)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -71,14 +73,15 @@ def staged_folder(out_dir):
             staging.chmod(0o755)  # mkdtemp makes it private; outputs are meant to be shared
             os.rename(staging, out)
         else:
-            _move_in(staging, names, out)
+            _move_in(staging, names, out, [n for n in stale if n not in names and (out / n).is_file()])
     finally:
         shutil.rmtree(staging, ignore_errors=True)
 
 
-def _move_in(staging: Path, names: list[str], out: Path) -> None:
-    """Move the files ``names`` from ``staging`` into ``out``: each an atomic rename; when
-    one fails, the files already moved are put back as they were."""
+def _move_in(staging: Path, names: list[str], out: Path, stale: list[str]) -> None:
+    """Move the files ``names`` from ``staging`` into ``out`` and the files ``stale`` out of
+    it: each an atomic rename; when one fails, the files already moved are put back as
+    they were."""
     backup = staging / ".previous"
     backup.mkdir()
     done = []  # (name, had an older file)
@@ -89,6 +92,9 @@ def _move_in(staging: Path, names: list[str], out: Path) -> None:
                 os.replace(out / name, backup / name)
             done.append((name, old))
             os.replace(staging / name, out / name)
+        for name in stale:
+            os.replace(out / name, backup / name)
+            done.append((name, True))
     except OSError:
         for name, old in reversed(done):
             try:

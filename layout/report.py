@@ -8,13 +8,14 @@ and ``energy.png`` with every suggestion's energy trace.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 
 from . import metrics, plot
 from .errors import LayoutError
-from .fileio import replaced_input, write_atomic
+from .fileio import replaced_input, staged_folder
 from .geometry import SIDE_NAMES, access_box_corners, box_corners
 
 # Overlaps smaller than this (m²) are contacts of touching boxes, not collisions.
@@ -206,9 +207,42 @@ def output_files(layouts, reports=None, title=""):
     return files
 
 
+# What one suggestion K writes: the layout and its plan; ``stage furnish`` adds its own.
+SUGGESTION_FILES = ("layout_{k}.json", "plan_{k}.png")
+
+
+def earlier_suggestion_files(out_dir, per_suggestion=SUGGESTION_FILES) -> list[str]:
+    """Names of the files in ``out_dir`` that an earlier run wrote per suggestion.
+
+    A suggestion K is taken for an earlier run's where ``layout_K.json`` is a layout as
+    :meth:`~layout.solver.Layout.to_dict` writes it (an object with ``room`` and
+    ``items``); its files are then ``per_suggestion`` (patterns of ``k``) that exist.
+    Written again, they are replaced; the others would be left over from a run with more
+    suggestions, or other options, and would not match what this run reports.
+    """
+    out = Path(out_dir)
+    if not out.is_dir():
+        return []
+    names = []
+    for path in out.iterdir():
+        match = re.fullmatch(r"layout_([1-9][0-9]*)\.json", path.name)
+        if match is None or not path.is_file():
+            continue
+        try:
+            earlier = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, ValueError):
+            continue
+        if isinstance(earlier, dict) and {"room", "items"} <= earlier.keys():
+            k = int(match[1])
+            names += [n for n in (p.format(k=k) for p in per_suggestion) if (out / n).is_file()]
+    return sorted(names)
+
+
 def write_outputs(layouts, out_dir, reports=None, title="", inputs=()):
-    """Write :func:`output_files` into ``out_dir`` (created if missing), each file
-    atomically; none may replace one of ``inputs`` (the run's input files, paths).
+    """Write :func:`output_files` into ``out_dir`` (created if missing), all or none
+    (:func:`~layout.fileio.staged_folder`); none may replace one of ``inputs`` (the run's
+    input files, paths). An earlier run's suggestions that this run does not write again
+    (:func:`earlier_suggestion_files`) are taken away, so the folder holds one run.
 
     Returns
     -------
@@ -219,11 +253,16 @@ def write_outputs(layouts, out_dir, reports=None, title="", inputs=()):
     ------
     LayoutError
         When an output would replace one of ``inputs``; nothing is written then.
+    OSError
+        When ``out_dir`` cannot be written; nothing is changed in it then.
     """
     out = Path(out_dir)
     files = output_files(layouts, reports, title)
     if (clash := replaced_input([out / name for name in files], inputs)) is not None:
         raise LayoutError(f"--out {out}: {clash[0].name} there is the input {clash[1]}, which is never "
                           "overwritten; write the outputs to another folder")
-    out.mkdir(parents=True, exist_ok=True)
-    return [write_atomic(out / name, data) for name, data in files.items()]
+    stale = [n for n in earlier_suggestion_files(out) if replaced_input([out / n], inputs) is None]
+    with staged_folder(out, stale=stale) as staging:
+        for name, data in files.items():
+            (staging / name).write_bytes(data.encode("utf-8") if isinstance(data, str) else data)
+    return [out / name for name in files]

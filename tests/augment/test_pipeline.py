@@ -182,6 +182,26 @@ def test_rewrite_replaces_files_and_failure_leaves_the_folder_alone(roomy, tmp_p
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # the staging folder is gone
 
 
+def test_an_earlier_runs_extra_suggestions_are_taken_away(roomy, tmp_path):
+    """Furnished again with fewer suggestions, or without --layers: the earlier run's
+    files of the suggestions not written again go, so the folder matches report.json; a
+    file of the user's, and an input, stay."""
+    result, _ = roomy
+    out = tmp_path / "out"
+    write_outputs(result, out)
+    # The same run as if it had made a fourth suggestion and layers.
+    (out / "layout_4.json").write_bytes((out / "layout_1.json").read_bytes())
+    for name in ("staged_4.jpg", "plan_4.png", "scene_4.glb", "staged_2_layer.png", "mine.txt"):
+        (out / name).write_bytes(b"earlier")
+    photo = out / "staged_4_layer.png"  # a photo of the user's, under a name of the run
+    photo.write_bytes(ROOMY.read_bytes())
+    paths = write_outputs(result, out, inputs=[photo])
+    assert {p.name for p in out.iterdir()} == {p.name for p in paths} | {"mine.txt", photo.name}
+    assert _digest(photo) == _digest(ROOMY)
+    assert [s["files"]["staged"] for s in result.report["suggestions"]] == ["staged_1.jpg", "staged_2.jpg",
+                                                                            "staged_3.jpg"]
+
+
 def test_outputs_never_replace_an_input(roomy, tmp_path):
     """A photo furnished again into the folder it came from, under a name the outputs use
     (a staged photo staged again): refused, the folder as it was, the input intact, whatever
@@ -254,7 +274,9 @@ def test_a_users_model_replaces_a_kind(roomy, tmp_path, capsys):
     sofa = scene.geometry["sofa"]
     assert len(sofa.vertices) == len(trimesh.load(red, force="mesh").vertices)
     assert "warning: no item of kind piano" in err
-    assert json.loads((out / "report.json").read_text())["furniture"]["assets"] == {"sofa": str(red), "piano": str(red)}
+    report = json.loads((out / "report.json").read_text())
+    assert report["furniture"]["assets"] == {"sofa": str(red), "piano": str(red)}
+    assert report["suggestions"][0]["files"]["layer"] == "staged_1_layer.png"
     # --layers: the RGBA layer laid over the photo gives the staged photo (up to its JPEG).
     layer = cv2.cvtColor(cv2.imread(str(out / "staged_1_layer.png"), cv2.IMREAD_UNCHANGED), cv2.COLOR_BGRA2RGBA)
     photo = read_photo(ROOMY).astype(np.float32)

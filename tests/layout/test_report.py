@@ -126,9 +126,14 @@ def test_write_outputs(tmp_path):
     files = report.output_files(layouts, title="test: ")
     assert list(files) == [p.name for p in paths]
     assert all(files[p.name] == p.read_bytes() for p in paths)
-    # Writing again replaces the files in place.
+    # Writing again replaces the files in place, and takes away the earlier run's second
+    # suggestion; files that are not a run's suggestions stay.
+    (out / "notes.txt").write_text("mine")
+    (out / "layout_7.json").write_text('{"room": "mine, not a layout"}')
     report.write_outputs(layouts[:1], out)
     assert json.loads((out / "layout_1.json").read_text())["seed"] == 0
+    assert sorted(p.name for p in out.iterdir()) == ["energy.png", "layout_1.json", "layout_7.json", "notes.txt",
+                                                     "plan_1.png"]
     # ... but never one of the run's inputs, however its path is written: nothing is written.
     spec = out / "energy.png"
     before = spec.read_bytes()
