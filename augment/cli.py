@@ -316,8 +316,11 @@ def _parser():
                         "stretched onto each item of that kind; repeat for more kinds "
                         "(e.g. --asset sofa=models/my_sofa.glb)")
     f.add_argument("--layers", action="store_true",
-                   help="also write staged_K_layer.png: what suggestion K adds to the photo (furniture and "
-                        "shadows) as RGBA, to composite by hand")
+                   help="also write staged_K_layer.png: what suggestion K adds to the photo (furniture, "
+                        "shadows and the floor over the board) as RGBA, to composite by hand")
+    f.add_argument("--keep-board", action="store_true",
+                   help="leave the board in the staged photos (by default its sheet is filled with the floor "
+                        "around it)")
     f.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
                    help="output folder (default out/<photo name>; created)")
     f.add_argument("--quiet", "-q", action="store_true",
@@ -777,7 +780,8 @@ def _furnish_cmd(args):
                 result = furnish(photo, board, room=args.room, spec=args.spec, suggestions=args.suggestions,
                                  seed=args.seed, camera=args.camera, model=shared.get("model", args.model),
                                  floor_mask=args.floor_mask, clicks=args.clicks, doors=args.door,
-                                 assets=dict(args.asset), layers=args.layers, renderer=shared.get("renderer"),
+                                 assets=dict(args.asset), layers=args.layers, keep_board=args.keep_board,
+                                 renderer=shared.get("renderer"),
                                  progress=not args.quiet and sys.stderr.isatty())
                 paths = write_outputs(result, out, inputs=[photo, args.floor_mask, args.spec, args.camera,
                                                             args.model, *dict(args.asset).values()])

@@ -148,7 +148,11 @@ class FurnishResult:
         The user's models by kind (``assets`` of :func:`furnish`), as given.
     layers : list of (h, w, 4) uint8
         With ``layers=True``: what each suggestion adds to the photo (furniture and
-        shadows) as straight-alpha RGBA; laid over the photo it gives the staged image.
+        shadows, and the floor over the board) as straight-alpha RGBA; laid over the photo
+        it gives the staged image.
+    erased : ErasedBoard or None
+        The board's sheet filled with floor (:func:`augment.erase.erase_board`), the
+        photo the furniture was rendered into; None with ``keep_board``.
     report : dict
         What ``report.json`` holds (:func:`report_dict`).
     timings_s : dict of str -> float
@@ -175,6 +179,7 @@ class FurnishResult:
     layout_files: dict
     assets: dict = field(default_factory=dict)
     layers: list = field(default_factory=list)
+    erased: object = None
     report: dict = field(default_factory=dict)
     timings_s: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
@@ -837,7 +842,7 @@ def _jsonable(x):
     return x
 
 
-REPORT_KEYS = ("photo", "size_px", "versions", "calibration", "floor", "height", "furniture", "suggestions",
+REPORT_KEYS = ("photo", "size_px", "versions", "calibration", "board", "floor", "height", "furniture", "suggestions",
                "files", "timings_s", "warnings")
 
 
@@ -864,6 +869,11 @@ def report_dict(result: FurnishResult) -> dict:
         "versions": versions(),
         "calibration": {"source": cal.intrinsics.source, "rms_px": cal.rms_px,
                         "camera_height_m": cal.camera_height_m, **cal.to_json()},
+        "board": {"erased": result.erased is not None,
+                  **({} if result.erased is None else {
+                      "sheet_m": np.round(result.erased.sheet_m, 4),
+                      "texture_from_m": None if result.erased.source_m is None else
+                      np.round(result.erased.source_m, 4)})},
         "floor": {"method": seg.method, "floor_fraction": float(seg.mask.mean()), "skirting_m": seg.skirting_m,
                   "disputed_m2": seg.disputed_m2, "disputed_share": seg.disputed_share,
                   "clicks": seg.clicks_json(), "doubt": seg.doubt_json(), **floor.to_json()},
@@ -923,8 +933,8 @@ def _load_model(model):
 
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
             seed: int = 0, camera=None, model=None, floor_mask=None, clicks=None, doors=None,
-            assets: dict | None = None, layers: bool = False, progress: bool = False, reporter=None,
-            renderer=None, tol: Tolerances = TOL) -> FurnishResult:
+            assets: dict | None = None, layers: bool = False, keep_board: bool = False, progress: bool = False,
+            reporter=None, renderer=None, tol: Tolerances = TOL) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
     Parameters
@@ -964,6 +974,10 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     layers : bool
         Also keep each suggestion's RGBA layer (``FurnishResult.layers``; written as
         ``staged_K_layer.png``), to composite by hand.
+    keep_board : bool
+        Leave the board in the staged photos. By default its sheet is filled with the
+        floor around it (:func:`augment.erase.erase_board`) before the furniture is
+        rendered in; the overlays always show the photo as it is.
     progress : bool
         A progress bar on stderr.
     reporter : callable, optional
@@ -987,6 +1001,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     from .height import measure_height
     from .overlay import calibration_overlay
     from .overlay_height import height_overlay
+    from .erase import erase_board, layer_over_photo
     from .segment import read_floor_mask, segment_floor
 
     if isinstance(suggestions, bool) or not isinstance(suggestions, (int, np.integer)) or suggestions < 1:
@@ -1067,15 +1082,18 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             own = renderer is None
             gl = render.Renderer() if own else renderer
             try:
-                lighting = render.estimate_lighting(image, calibration, seg.mask)
+                erased = None if keep_board else erase_board(image, calibration, seg.mask)
+                base = image if erased is None else erased.image
+                lighting = render.estimate_lighting(base, calibration, seg.mask)
                 staged, staged_layers = [], []
                 for lay in layouts:
-                    done = render.render_staged(image, calibration, lay, gl, floor_mask=seg.mask,
+                    done = render.render_staged(base, calibration, lay, gl, floor_mask=seg.mask,
                                                 floor_polygon=floor, lighting=lighting, seed=seed,
                                                 assets=user_models, layer=layers)
                     staged.append(done.image)
                     if layers:
-                        staged_layers.append(done.layer)
+                        staged_layers.append(done.layer if erased is None else
+                                             layer_over_photo(done.layer, erased, image))
                     bar.step()
             finally:
                 if own:
@@ -1103,7 +1121,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     result = FurnishResult(photo, image, calibration, seg, floor, height, room_height, source_name, fitted,
                            dropped, layouts, reports, staged, sheet, overlays, scenes, layout_files,
                            assets={k: str(v) if isinstance(v, (str, Path)) else "parts" for k, v in
-                                   (assets or {}).items()}, layers=staged_layers,
+                                   (assets or {}).items()}, layers=staged_layers, erased=erased,
                            timings_s=timings, warnings=warnings)
     result.report = report_dict(result)
     return result

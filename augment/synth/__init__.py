@@ -87,7 +87,7 @@ def _board_cover(board: Board, world_from_board: np.ndarray, fraction: float) ->
 def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = None,
                   board: Board | None = None, clutter: bool = True, photographic: bool = True,
                   board_hidden: float = 0.0, furnished: float = 0.0, baseboard_m=BASEBOARD_M,
-                  trim_like_floor: float = 0.0, trim_dark: float = 0.0) -> Sample:
+                  trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True) -> Sample:
     """Render one synthetic room photo with its ground truth.
 
     Parameters
@@ -120,6 +120,9 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         colour, 0.5-1.3 of its brightness (0: never, and the random stream is the same as
         without this option). Such boards look like a band of light or shade on the floor,
         the skirting check's hardest case.
+    board_drawn : bool
+        False: the same photo without the board (the floor under it shows), for the truth
+        of the board's removal from staged photos.
     trim_dark : float
         Chance that they are painted a dark colour instead (charcoal to black, lightly
         tinted; 0: never, and the random stream is the same as without this option).
@@ -152,7 +155,7 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         room = replace(room, clutter=room.clutter + (_board_cover(board, world_from_board, board_hidden),))
 
     built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px), baseboard_m,
-                        trim_like_floor, trim_dark)
+                        trim_like_floor, trim_dark, board_drawn)
     width, height = size_px
     flags = pyrender.RenderFlags.SHADOWS_DIRECTIONAL | pyrender.RenderFlags.SHADOWS_SPOT
     # Small frames cannot show a 2048-texel shadow map's detail; it would cost half the time.

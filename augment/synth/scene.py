@@ -320,11 +320,12 @@ def _light_pose(direction, position=(0.0, 0.0, 0.0)):
 
 def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                 world_from_board: np.ndarray, texture_px: int = 512, baseboard_m=BASEBOARD_M,
-                trim_like_floor: float = 0.0, trim_dark: float = 0.0) -> Scene:
+                trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True) -> Scene:
     """Sample materials and lights and assemble the scene seen by ``shot`` (baseboards
     drawn ``baseboard_m`` (low, high) tall; the trim painted the floor's colour, 0.5-1.3
     of its brightness, with the chance ``trim_like_floor``, else a dark colour with the
-    chance ``trim_dark``)."""
+    chance ``trim_dark``). Without ``board_drawn`` the board is left out and everything
+    else drawn as with it: the floor the board hides, as the truth of its removal."""
     info: dict = {}
     sky = np.clip([0.92, 0.95, 1.0] + rng.normal(0, 0.03, 3), 0.8, 1.0)
     scene = GLScene(bg_color=np.append(sky, 1.0))
@@ -408,9 +409,11 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                [0, 0, 1.0], [[0, 1], [1, 1], [1, 0], [0, 0]])
     ink = np.repeat(sheet[..., None], 3, axis=2)
     # Only the ChArUco board is filtered sharply: checkerboard photos stay as they were.
-    add(paper.mesh(_material(rng, np.full(3, rng.uniform(0.8, 0.95)), ink, roughness=(0.6, 0.9), wrap=False,
-                             sharp=board.kind == "charuco")),
-        SEG_FLOOR, pose=world_from_board)
+    # The material is drawn either way, so the random stream goes on the same.
+    printed = _material(rng, np.full(3, rng.uniform(0.8, 0.95)), ink, roughness=(0.6, 0.9), wrap=False,
+                        sharp=board.kind == "charuco")
+    if board_drawn:
+        add(paper.mesh(printed), SEG_FLOOR, pose=world_from_board)
 
     # Lights. One exposure factor scales them all, like the camera's exposure would.
     exposure = float(np.exp(rng.normal(0.0, 0.25)))

@@ -182,6 +182,31 @@ def test_rewrite_replaces_files_and_failure_leaves_the_folder_alone(roomy, tmp_p
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # the staging folder is gone
 
 
+def _board_found(image) -> bool:
+    gray = cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2GRAY)
+    return bool(cv2.findChessboardCorners(gray, (7, 5))[0] or cv2.findChessboardCornersSB(gray, (7, 5))[0])
+
+
+def test_the_staged_photos_show_no_board(roomy):
+    """The board's sheet is filled with floor before the furniture goes in: OpenCV finds
+    the board in the photo, in no staged photo; the overlays keep it."""
+    result, _ = roomy
+    assert _board_found(result.image)
+    assert not any(_board_found(image) for image in result.staged)
+    assert result.report["board"]["erased"] and len(result.report["board"]["sheet_m"]) == 4
+    changed = np.abs(result.erased.image.astype(int) - result.image.astype(int)).max(axis=2) > 0
+    assert changed.mean() < 0.05
+
+
+def test_keep_board_leaves_it(tmp_path, capsys):
+    out = tmp_path / "kept"
+    code, _, err = run(["furnish", ROOMY, "--suggestions", "1", "--keep-board", "--out", out, "--quiet"], capsys)
+    assert code == 0, err
+    staged = cv2.cvtColor(cv2.imread(str(out / "staged_1.jpg")), cv2.COLOR_BGR2RGB)
+    assert _board_found(staged)
+    assert json.loads((out / "report.json").read_text())["board"] == {"erased": False}
+
+
 def test_an_earlier_runs_extra_suggestions_are_taken_away(roomy, tmp_path):
     """Furnished again with fewer suggestions, or without --layers: the earlier run's
     files of the suggestions not written again go, so the folder matches report.json; a

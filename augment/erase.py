@@ -1,0 +1,492 @@
+"""The board erased from the photo: the floor it lies on filled in, for the staged images.
+
+A staged photo should show the room, not the printed checkerboard that measured it. The
+sheet is filled on a top-down view of the floor around it (the calibration's floor plane,
+looked at square-on), where the floor's texture has one scale and one orientation:
+
+1. **Where.** The sheet the board was printed on (``Board.sheet_mm``), grown side by side
+   while the next line beyond it is still the paper's colour (a board printed on larger
+   paper than Stager assumes), at most one square.
+2. **Light.** The floor's slow changes of light and colour (shade, the falloff of a lamp)
+   are filled smoothly from the sheet's rim (OpenCV's Telea inpainting, then blurred).
+3. **Texture.** What remains of the floor (grain, carpet, blotches, tile joints) is
+   copied from the place beside the sheet whose rim matches the sheet's rim best (masked
+   template matching, the squared differences relative to the two rims' energy, so that
+   a flat place does not win): a tiled or planked floor lines up its joints, a carpet
+   keeps its grain. The place is found on a small view, then refined at full size; the
+   copy runs on over the rim it was matched on, fading out, so it has no edge.
+
+The view is then mapped back into the photo and blended over the sheet's pixels with a
+soft edge. Measured against renders of the same room without the board: see
+``benchmarks/erase.py`` and the README.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+# The floor shown around the sheet on each side, as a share of the sheet's longer side:
+# the places the texture may be taken from.
+CONTEXT_SHARE = 1.5
+# The top-down view's long side at most (pixels); the view is as sharp as the photo at
+# the sheet, unless that would be larger.
+MAX_VIEW_PX = 4096
+# The working size for the light and for finding the texture's source: the sheet's
+# shorter side this many pixels.
+SEARCH_SHEET_PX = 96
+# Light is what varies more slowly than this share of the sheet's shorter side (the
+# floor's own blotches and planks belong to the texture, copied whole: 0.08 left them to
+# the smooth fill, a visible blur on marble; chosen on 20 renders of seeds 7000-7001).
+LIGHT_SIGMA_SHARE = 0.5
+# The rim compared when choosing the texture's source, as a share of the shorter side.
+RIM_SHARE = 0.07
+# Beyond the sheet: how far the paper may reach (squares), and the margin always taken
+# for the paper's edge, shadow and blur (meters).
+PAPER_GROWTH_SQUARES = 1.0
+EDGE_MARGIN_M = 0.004
+# A line beyond the sheet is paper while at least this share of it has the paper's colour.
+PAPER_LINE_SHARE = 0.5
+# Pixels of the photo added around the sheet for the print's blurred edge, and the soft
+# edge of the blend (Gaussian sigma, pixels).
+EDGE_GROW_PX = 2
+FEATHER_PX = 1.0
+# Where no place beside the sheet is all floor, its halves look for one, and theirs.
+MAX_SPLITS = 2
+# The coarse grid on which the view's pixel maps are computed, then interpolated.
+MAP_STEP_PX = 4
+
+
+@dataclass(frozen=True)
+class ErasedBoard:
+    """The photo with the board's sheet filled with floor.
+
+    Attributes
+    ----------
+    image : (h, w, 3) uint8
+        The photo, the sheet's pixels replaced.
+    box_px : (4,) int
+        ``(x0, y0, x1, y1)``: the part of the photo the fill may touch (end exclusive);
+        the photo is unchanged outside it.
+    alpha : (y1 - y0, x1 - x0) float32
+        In the box, how much of each pixel is the fill (0 off the sheet, 1 on it, soft at
+        its edge): ``image = alpha * fill + (1 - alpha) * photo``
+        (:meth:`full_alpha` gives it at the photo's size).
+    sheet_m : (4, 2) float64
+        The sheet as erased, floor meters (the printed sheet grown to the paper found,
+        plus the edge margin).
+    source_m : (k, 2) float64
+        Where the texture was taken from: per part of the sheet, the offset, floor
+        meters, to the floor copied. One part, or where no place beside the whole sheet
+        is all floor (near a wall, or the photo's edge), halves and quarters of it; none
+        where even those find no place (the fill is smooth there).
+    """
+
+    image: np.ndarray
+    box_px: tuple
+    alpha: np.ndarray
+    sheet_m: np.ndarray
+    source_m: np.ndarray
+
+    def full_alpha(self) -> np.ndarray:
+        """(h, w) float32: :attr:`alpha` at the photo's size (0 outside the box)."""
+        out = np.zeros(self.image.shape[:2], np.float32)
+        x0, y0, x1, y1 = self.box_px
+        out[y0:y1, x0:x1] = self.alpha
+        return out
+
+
+def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = None) -> ErasedBoard:
+    """The photo with the calibration board's sheet filled with the floor around it.
+
+    Parameters
+    ----------
+    image : (h, w, 3) uint8
+        The photo the board was found in (RGB), not modified.
+    calibration : Calibration
+        Of this photo (:func:`augment.calibrate.calibrate_photo`): the board's pose and
+        the floor plane.
+    floor_mask : (h, w) bool, optional
+        The floor found (:func:`augment.segment.segment_floor`): texture is taken from
+        floor only, and only floor pixels are replaced (a thing standing on the board
+        stays). Without it, every pixel below the horizon counts as floor.
+
+    Returns
+    -------
+    ErasedBoard
+
+    Raises
+    ------
+    ValueError
+        When ``image`` is not (h, w, 3) uint8 of the calibration's size, or ``floor_mask``
+        not (h, w).
+    """
+    image = np.asarray(image)
+    h, w = image.shape[:2]
+    if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
+        raise ValueError(f"image must be (h, w, 3) uint8, got shape {image.shape} dtype {image.dtype}")
+    if (w, h) != tuple(calibration.size_px):
+        raise ValueError(f"image is {w}x{h} but the calibration is of a "
+                         f"{calibration.size_px[0]}x{calibration.size_px[1]} photo")
+    if floor_mask is not None:
+        floor_mask = np.ascontiguousarray(floor_mask, dtype=bool)
+        if floor_mask.shape != (h, w):
+            raise ValueError(f"floor_mask must be ({h}, {w}) like the image, got {floor_mask.shape}")
+
+    board = calibration.board
+    half = np.array(board.size_m) / 2
+    sheet = np.array([-half, half]) + [[-EDGE_MARGIN_M], [EDGE_MARGIN_M]]
+    context = CONTEXT_SHARE * 2 * float(half.max())
+    origin = -half - context
+    extent = 2 * (half + context)
+    ppm = min(_density_px_per_m(calibration, half), MAX_VIEW_PX / float(extent.max()))
+    short_m = float(np.min(sheet[1] - sheet[0]))
+    scale = min(1.0, SEARCH_SHEET_PX / (short_m * ppm))
+
+    # The whole neighbourhood, small: where the paper ends, the light, and where the
+    # texture best matches.
+    small = _TopDown(calibration, origin, ppm * scale)
+    cols, rows = (int(np.ceil(v * small.ppm)) for v in extent)
+    small_rgb, small_valid = small.sample(image, floor_mask, (0, 0, cols, rows), shrink=True)
+    sheet = _grow_to_paper(small, small_rgb, small_valid, sheet, board)
+    short_m = float(np.min(sheet[1] - sheet[0]))
+    hole = small.rectangle(sheet, (0, 0, cols, rows))
+    bad = hole | ~small_valid
+    sigma = max(1.0, LIGHT_SIGMA_SHARE * short_m * small.ppm)
+    smooth = cv2.inpaint(small_rgb, bad.astype(np.uint8) * 255, 3, cv2.INPAINT_TELEA)
+    light = cv2.GaussianBlur(smooth.astype(np.float32), (0, 0), sigma)
+    ring = max(2, round(RIM_SHARE * short_m * small.ppm))
+    parts = _sources(small, small_rgb.astype(np.float32) - light, sheet, bad, ring)
+
+    # The sheet at full size, and the places its texture comes from.
+    full = _TopDown(calibration, origin, ppm)
+    ring = max(2, round(RIM_SHARE * short_m * ppm))
+    (c0, r0), (c1, r1) = np.floor(full.view_px(sheet)).astype(int) + [[-ring], [ring + 1]]
+    box = (c0, r0, c1, r1)
+    rgb, valid = full.sample(image, floor_mask, box)
+    hole_full = full.rectangle(sheet, box)
+    light_full = _upsample(light, scale, box)
+    texture = rgb.astype(np.float32) - light_full
+    copied = np.zeros_like(light_full)
+    have = np.zeros(hole_full.shape, bool)
+    kernel = np.ones((2 * ring + 1,) * 2, np.uint8)
+    reach = int(np.ceil(1 / scale)) + 2
+    offsets = []
+    for part_m, found in parts:
+        part = full.rectangle(part_m, box)
+        dx, dy = (round(v / scale) for v in found)
+        source = (c0 + dx - reach, r0 + dy - reach, c1 + dx + reach, r1 + dy + reach)
+        src_rgb, src_valid = full.sample(image, floor_mask, source)
+        src_texture = src_rgb.astype(np.float32) - _upsample(light, scale, source)
+        refined = _best_offset(texture, part, hole_full | ~valid, ring, search=(src_texture, ~src_valid, reach))
+        if refined is None:
+            continue
+        ox, oy = refined
+        rows, cols = hole_full.shape
+        # The part and its rim, where no part before it copied.
+        take = (cv2.dilate(part.astype(np.uint8), kernel) > 0) & ~have
+        copied[take] = src_texture[reach + oy:reach + oy + rows, reach + ox:reach + ox + cols][take]
+        have |= take
+        offsets.append((dx + ox, dy + oy))
+    fill = light_full + copied
+    # How much of the fill each pixel takes: all of the sheet, and where a texture was
+    # copied, a ramp over the rim it was matched on, so that the copy has no edge.
+    outside = cv2.distanceTransform((~hole_full).astype(np.uint8), cv2.DIST_L2, 3)
+    weight = np.where(hole_full, 1.0, np.where(have, np.clip(1.0 - outside / (ring + 1), 0.0, 1.0), 0.0))
+    weight = weight.astype(np.float32)
+    filled = np.clip(fill + 0.5, 0, 255).astype(np.uint8)
+
+    # Back into the photo: the sheet's pixels, with the print's blurred edge, and the ramp.
+    corners_m = np.array([[sheet[0, 0], sheet[0, 1]], [sheet[1, 0], sheet[0, 1]],
+                          [sheet[1, 0], sheet[1, 1]], [sheet[0, 0], sheet[1, 1]]])
+    region = _photo_region(calibration, corners_m, (ring + 1) / ppm, (h, w))
+    result = image.copy()
+    if region is None:
+        return ErasedBoard(result, (0, 0, 0, 0), np.zeros((0, 0), np.float32), corners_m, np.zeros((0, 2)))
+    x0, y0, x1, y1, inside = region
+    map_x, map_y = (m.astype(np.float32) for m in full.view_px_of_photo(x0, y0, x1, y1))
+    map_x -= c0
+    map_y -= r0
+    back = cv2.remap(filled, map_x, map_y, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
+    ramp = cv2.remap(weight, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+    grown = cv2.dilate(inside.astype(np.uint8), np.ones((2 * EDGE_GROW_PX + 1,) * 2, np.uint8))
+    a = np.maximum(cv2.GaussianBlur(grown.astype(np.float32), (0, 0), FEATHER_PX), ramp)
+    # Only floor: what stands on the board stays; nothing above the horizon, where a
+    # pixel maps to a point behind the camera.
+    a *= _below_horizon(calibration.horizon, x0, y0, x1, y1)
+    if floor_mask is not None:
+        a *= floor_mask[y0:y1, x0:x1]
+    blend = a[..., None] * back.astype(np.float32) + (1 - a[..., None]) * image[y0:y1, x0:x1]
+    result[y0:y1, x0:x1] = np.clip(blend + 0.5, 0, 255).astype(np.uint8)
+    return ErasedBoard(result, (x0, y0, x1, y1), a, corners_m, np.asarray(offsets, np.float64).reshape(-1, 2) / ppm)
+
+
+class _TopDown:
+    """The floor seen square-on at ``ppm`` pixels per meter: view pixel (c, r) is the floor
+    point ``origin_m + ((c, r) + 0.5) / ppm``. Boxes are ``(c0, r0, c1, r1)``, view pixels,
+    end exclusive, anywhere on the floor plane."""
+
+    def __init__(self, calibration, origin_m, ppm):
+        self.calibration = calibration
+        self.origin_m = np.asarray(origin_m, np.float64)
+        self.ppm = float(ppm)
+
+    def view_px(self, points_m):
+        return (np.asarray(points_m, np.float64) - self.origin_m) * self.ppm - 0.5
+
+    def sample(self, image, floor_mask, box, shrink=False):
+        """The photo seen in ``box``: (rows, cols, 3) uint8 and where it shows floor
+        (bool: in the frame, before the camera, within the lens model, on ``floor_mask``
+        when given).
+        ``shrink``: from the photo shrunk by the power of two nearest the view's scale,
+        so that a small view does not alias."""
+        c0, r0, c1, r1 = box
+        map_x, map_y = self._photo_maps(c0, r0, c1 - c0, r1 - r0)
+        h, w = image.shape[:2]
+        seen = (map_x >= 0) & (map_x <= w - 1) & (map_y >= 0) & (map_y <= h - 1)
+        source, factor = image, 1
+        if shrink:
+            photo_ppm = _density_px_per_m(self.calibration, np.zeros(2))
+            while photo_ppm / (2 * factor) >= self.ppm and min(h, w) // (2 * factor) >= 16:
+                factor *= 2
+            if factor > 1:
+                source = cv2.resize(image, (w // factor, h // factor), interpolation=cv2.INTER_AREA)
+        sx = (map_x + 0.5) / factor - 0.5
+        sy = (map_y + 0.5) / factor - 0.5
+        rgb = cv2.remap(source, sx, sy, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
+        if floor_mask is None:
+            return rgb, seen
+        on_floor = cv2.remap(floor_mask.view(np.uint8), map_x, map_y, cv2.INTER_NEAREST,
+                             borderMode=cv2.BORDER_CONSTANT)
+        return rgb, seen & (on_floor > 0)
+
+    def _photo_maps(self, c0, r0, cols, rows):
+        """Photo pixel of each view pixel of the box (float32, far outside the photo where
+        it does not show the point: behind the camera or beyond the lens model),
+        computed on a coarse grid and interpolated."""
+        step = MAP_STEP_PX
+        gx, gy = np.meshgrid(np.arange(c0, c0 + cols + step, step, dtype=np.float64),
+                             np.arange(r0, r0 + rows + step, step, dtype=np.float64))
+        floor = self.origin_m + (np.column_stack([gx.ravel(), gy.ravel()]) + 0.5) / self.ppm
+        cal = self.calibration
+        depth = floor @ cal.camera_from_floor[2, :2] + cal.camera_from_floor[2, 3]
+        px = cal.pixels_from_floor(floor)
+        ok = (depth > 1e-3) & np.all(np.isfinite(px), axis=1)
+        ok[ok] &= cal.lens_maps(px[ok])
+        size = (gx.shape[1] - 1) * step + 1, (gx.shape[0] - 1) * step + 1
+        maps = []
+        for k in range(2):
+            grid = np.where(ok, px[:, k], -1e4).reshape(gx.shape).astype(np.float32)
+            maps.append(cv2.resize(grid, size, interpolation=cv2.INTER_LINEAR)[:rows, :cols])
+        return maps
+
+    def rectangle(self, sheet_m, box) -> np.ndarray:
+        """(rows, cols) bool: the box's pixels inside ``sheet_m`` ((2, 2) low, high corner)."""
+        c0, r0, c1, r1 = box
+        (a0, b0), (a1, b1) = self.view_px(sheet_m)
+        c = np.arange(c0, c1)
+        r = np.arange(r0, r1)
+        return ((r >= np.floor(b0)) & (r <= np.ceil(b1)))[:, None] & ((c >= np.floor(a0)) & (c <= np.ceil(a1)))[None]
+
+    def view_px_of_photo(self, x0, y0, x1, y1):
+        """Maps (float32, (y1 - y0, x1 - x0)) from the photo's box to view pixels."""
+        step = MAP_STEP_PX
+        gx, gy = np.meshgrid(np.arange(x0, x1 + step, step, dtype=np.float64),
+                             np.arange(y0, y1 + step, step, dtype=np.float64))
+        v = self.view_px(self.calibration.floor_from_pixels(np.column_stack([gx.ravel(), gy.ravel()])))
+        size = (gx.shape[1] - 1) * step + 1, (gx.shape[0] - 1) * step + 1
+        return [cv2.resize(v[:, k].reshape(gx.shape).astype(np.float32), size,
+                           interpolation=cv2.INTER_LINEAR)[:y1 - y0, :x1 - x0] for k in range(2)]
+
+
+def _upsample(small: np.ndarray, scale: float, box) -> np.ndarray:
+    """The small view's ``small`` (at ``scale`` of the full view) at the full view's box."""
+    c0, r0, c1, r1 = box
+    gx, gy = np.meshgrid(np.arange(c0, c1, dtype=np.float32), np.arange(r0, r1, dtype=np.float32))
+    return cv2.remap(small, (gx + 0.5) * scale - 0.5, (gy + 0.5) * scale - 0.5, cv2.INTER_LINEAR,
+                     borderMode=cv2.BORDER_REPLICATE)
+
+
+def _density_px_per_m(calibration, half_m) -> float:
+    """The photo's sharpest pixels per meter on the floor at the corners of the rectangle
+    ``+-half_m`` around the board's center."""
+    corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * half_m
+    d = 1e-3
+    best = 1.0
+    for p in corners:
+        px = calibration.pixels_from_floor(np.array([p, p + [d, 0], p + [0, d]]))
+        J = np.column_stack([px[1] - px[0], px[2] - px[0]]) / d
+        best = max(best, float(np.linalg.svd(J, compute_uv=False)[0]))
+    return best
+
+
+def _below_horizon(horizon, x0, y0, x1, y1) -> np.ndarray:
+    """(y1 - y0, x1 - x0) bool: the box's pixels below the horizon ``(a, b, c)``."""
+    a, b, c = horizon
+    return (a * np.arange(x0, x1)[None, :] + b * np.arange(y0, y1)[:, None] + c) > 0
+
+
+def _grow_to_paper(view: _TopDown, rgb, valid, sheet_m: np.ndarray, board) -> np.ndarray:
+    """``sheet_m`` ((2, 2) low, high corner) grown side by side while the next line of the
+    view ``rgb`` (the box from the view's origin) beyond it is mostly the paper's colour
+    (the print's lightest), at most :data:`PAPER_GROWTH_SQUARES` squares; not at all
+    where the floor beyond is the paper's colour."""
+    rows, cols = valid.shape
+    box = (0, 0, cols, rows)
+    squares = np.array([board.cols + 1, board.rows + 1]) * board.square_m / 2
+    inside = view.rectangle(np.array([-squares, squares]), box) & valid
+    if inside.sum() < 50:
+        return sheet_m
+    lab = cv2.cvtColor(rgb, cv2.COLOR_RGB2LAB).astype(np.float32)
+    lightness = lab[..., 0][inside]
+    # The paper: the lightest fifth of the print (a ChArUco board's white squares hold
+    # markers: about a quarter of it is paper).
+    white = lab[inside][lightness >= np.percentile(lightness, 80)]
+    paper = np.median(white, axis=0)
+    tolerance = max(12.0, 3.0 * 1.4826 * float(np.median(np.linalg.norm(white - paper, axis=1))))
+    like_paper = (np.linalg.norm(lab - paper, axis=2) < tolerance) & valid
+    reach = int(PAPER_GROWTH_SQUARES * board.square_m * view.ppm)
+    # A floor the paper's colour tells nothing: the sheet stays as printed.
+    far = board.square_m * (PAPER_GROWTH_SQUARES + 0.5)
+    ring = view.rectangle(sheet_m + [[-2 * far], [2 * far]], box) & ~view.rectangle(sheet_m + [[-far], [far]], box)
+    if (ring & valid).sum() >= 20 and np.linalg.norm(np.median(lab[ring & valid], axis=0) - paper) < tolerance:
+        return sheet_m
+    grown = sheet_m.copy()
+    (c0, r0), (c1, r1) = np.round(view.view_px(sheet_m)).astype(int)
+    c0, c1 = np.clip([c0, c1], 0, cols - 1)
+    r0, r1 = np.clip([r0, r1], 0, rows - 1)
+    for start, axis, sign in ((c0, 0, -1), (c1, 0, 1), (r0, 1, -1), (r1, 1, 1)):
+        n = 0
+        for k in range(1, reach + 1):
+            at = start + sign * k
+            if not 0 <= at < (cols, rows)[axis]:
+                break
+            line = like_paper[r0:r1 + 1, at] if axis == 0 else like_paper[at, c0:c1 + 1]
+            seen = valid[r0:r1 + 1, at] if axis == 0 else valid[at, c0:c1 + 1]
+            if seen.sum() < 0.5 * len(seen) or line.sum() < PAPER_LINE_SHARE * seen.sum():
+                break
+            n = k
+        grown[0 if sign < 0 else 1, axis] += sign * n / view.ppm
+    return grown
+
+
+def _sources(view: _TopDown, texture, sheet_m, bad, ring, depth=0) -> list:
+    """Parts of the sheet ``sheet_m`` ((2, 2) low, high corner, meters) with the offset
+    (view pixels) of the place their texture is copied from (:func:`_best_offset`): the
+    whole sheet, or where no place is all floor, its halves across the longer side, and
+    theirs (to :data:`MAX_SPLITS` deep). Parts that find none are left out."""
+    rows, cols = bad.shape
+    part = view.rectangle(sheet_m, (0, 0, cols, rows))
+    found = _best_offset(texture, part, bad, ring)
+    if found is not None:
+        return [(sheet_m, found)]
+    if depth >= MAX_SPLITS:
+        return []
+    axis = int(np.argmax(sheet_m[1] - sheet_m[0]))
+    middle = 0.5 * (sheet_m[0, axis] + sheet_m[1, axis])
+    low, high = sheet_m.copy(), sheet_m.copy()
+    low[1, axis] = high[0, axis] = middle
+    return (_sources(view, texture, low, bad, ring, depth + 1)
+            + _sources(view, texture, high, bad, ring, depth + 1))
+
+
+def _best_offset(texture, hole, bad, ring, search=None):
+    """(dx, dy) minimizing the masked sum of squared differences between the rim of
+    ``hole`` in ``texture`` and the rim of the place (dx, dy) away, over places whose
+    hole and rim hold nothing ``bad``; None when there is no such place. ``search =
+    (texture, bad, reach)``: look there instead, a box ``reach`` larger all round than
+    ``texture`` and displaced from it; the offset is then relative to that
+    displacement."""
+    rows, cols = hole.shape
+    ys, xs = np.nonzero(hole)
+    if not len(ys):
+        return None
+    y0, y1 = max(0, ys.min() - ring), min(rows, ys.max() + 1 + ring)
+    x0, x1 = max(0, xs.min() - ring), min(cols, xs.max() + 1 + ring)
+    kernel = np.ones((2 * ring + 1,) * 2, np.uint8)
+    near = cv2.dilate(hole.astype(np.uint8), kernel) > 0
+    rim = near & ~bad
+    if not rim.any():
+        return None
+    templ = np.ascontiguousarray(texture[y0:y1, x0:x1])
+    weight = np.repeat(rim[y0:y1, x0:x1, None], 3, axis=2).astype(np.float32)
+    need = near[y0:y1, x0:x1].astype(np.float32)
+    if search is None:
+        image, bad_image, base_x, base_y = texture, bad, x0, y0
+    else:
+        image, bad_image, reach = search
+        image = image[y0:y1 + 2 * reach, x0:x1 + 2 * reach]
+        bad_image = bad_image[y0:y1 + 2 * reach, x0:x1 + 2 * reach]
+        base_x = base_y = reach
+    if image.shape[0] < templ.shape[0] or image.shape[1] < templ.shape[1]:
+        return None
+    image = np.ascontiguousarray(image)
+    ssd = cv2.matchTemplate(image, templ, cv2.TM_SQDIFF, mask=weight)
+    # Relative to the two rims' energy: a plain SSD would prefer a flat place, whose
+    # difference to any texture is only that texture.
+    energy = float(np.sum(weight * templ * templ)) + cv2.matchTemplate(image * image, weight, cv2.TM_CCORR)
+    ssd = ssd / np.maximum(energy, 1e-6)
+    blocked = cv2.matchTemplate(bad_image.astype(np.float32), need, cv2.TM_CCORR)
+    ssd[blocked > 0.5] = np.inf
+    if not np.isfinite(ssd).any():
+        return None
+    py, px = np.unravel_index(int(np.argmin(ssd)), ssd.shape)
+    return int(px - base_x), int(py - base_y)
+
+
+def _photo_region(calibration, corners_m, around_m, shape):
+    """The photo's box around the sheet ``corners_m`` (4, 2) grown by ``around_m`` (x0, y0,
+    x1, y1) and, in it, the sheet's pixels (bool); None when the sheet is out of the photo."""
+    h, w = shape
+    t = np.linspace(0, 1, 16, endpoint=False)[:, None]
+
+    def outline_px(corners):
+        # Densified, so that lens distortion bends the edges.
+        dense = np.concatenate([a + t * (b - a) for a, b in zip(corners, np.roll(corners, -1, axis=0))])
+        return calibration.pixels_from_floor(dense)
+
+    outer = outline_px(corners_m + np.sign(corners_m - corners_m.mean(axis=0)) * around_m)
+    pad = EDGE_GROW_PX + 3 * int(np.ceil(FEATHER_PX)) + 1
+    x0, y0 = np.floor(outer.min(axis=0)).astype(int) - pad
+    x1, y1 = np.ceil(outer.max(axis=0)).astype(int) + pad + 1
+    x0, y0, x1, y1 = max(0, x0), max(0, y0), min(w, x1), min(h, y1)
+    if x1 <= x0 or y1 <= y0:
+        return None
+    inside = np.zeros((y1 - y0, x1 - x0), np.uint8)
+    cv2.fillPoly(inside, [np.round((outline_px(corners_m) - [x0, y0]) * 16).astype(np.int32)], 1, cv2.LINE_8, 4)
+    return x0, y0, x1, y1, inside > 0
+
+
+def layer_over_photo(layer: np.ndarray, erased: ErasedBoard, photo: np.ndarray) -> np.ndarray:
+    """A straight-alpha RGBA layer made over ``erased.image``, as a layer over ``photo``
+    (the photo before the board was erased): the fill under the layer joins it, so that
+    laid over the photo it gives what it gave over the erased photo.
+
+    Parameters
+    ----------
+    layer : (h, w, 4) uint8
+        Over the erased photo: ``c a + (1 - a) E``.
+    erased : ErasedBoard
+        ``E = alpha F + (1 - alpha) P`` with the fill F.
+    photo : (h, w, 3) uint8
+        P.
+
+    Returns
+    -------
+    (h, w, 4) uint8
+        Alpha ``a + (1 - a) alpha``, colour ``(a c + (1 - a) alpha F) / that``.
+    """
+    out = layer.copy()
+    x0, y0, x1, y1 = erased.box_px
+    part = layer[y0:y1, x0:x1]
+    a = part[..., 3].astype(np.float32) / 255.0
+    b = erased.alpha
+    total = a + (1.0 - a) * b
+    # alpha F, from the erased photo and the photo: no division by a small alpha.
+    fill = erased.image[y0:y1, x0:x1].astype(np.float32) - (1.0 - b)[..., None] * photo[y0:y1, x0:x1]
+    colour = (a[..., None] * part[..., :3].astype(np.float32) + (1.0 - a)[..., None] * fill) \
+        / np.maximum(total, 1e-4)[..., None]
+    colour = np.where(total[..., None] > 0, colour, part[..., :3].astype(np.float32))
+    out[y0:y1, x0:x1] = (np.dstack([np.clip(colour, 0, 255), np.clip(total * 255.0, 0, 255)]) + 0.5).astype(np.uint8)
+    return out
