@@ -162,7 +162,8 @@ def _run_job(job_dir: str, options: dict) -> dict:
         result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
                                   room=None if spec is not None else options["room"], spec=spec,
                                   suggestions=options["suggestions"], seed=options["seed"], camera=camera,
-                                  floor_mask=floor_mask, clicks=clicks, doors=doors, reporter=_FileProgress,
+                                  floor_mask=floor_mask, clicks=clicks, doors=doors,
+                                  keep_board=options.get("keep_board", False), reporter=_FileProgress,
                                   renderer=_renderer)
         state = json.loads(_progress_path.read_text())
         _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
@@ -349,6 +350,7 @@ def _job_state(job: Job) -> dict:
                          "floor_mask": job.options.get("floor_mask") is not None,
                          "clicks": len(job.options.get("clicks") or ()),
                          "doors": len(job.options.get("doors") or ()),
+                         "keep_board": job.options.get("keep_board", False),
                          "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
     try:
         progress = json.loads((job.folder / "progress.json").read_text())
@@ -511,7 +513,10 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                                                              "for floor), photo pixels, in order")] = "",
                      doors: Annotated[str, Form(description="doors to keep clear: a JSON list of [x1, y1, x2, "
                                                             "y2], the photo pixels of the feet of each door's "
-                                                            "two sides")] = ""):
+                                                            "two sides")] = "",
+                     keep_board: Annotated[bool, Form(description="leave the board in the staged photos (by "
+                                                                  "default its sheet is filled with the floor "
+                                                                  "around it)")] = False):
         """Start furnishing a photo; answers the job's id."""
         board_spec = _check_options(board, square, room, suggestions, seed)
         corrections = _check_clicks(clicks)
@@ -574,7 +579,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                    "clicks": corrections, "doors": door_feet,
                    "board": (board_spec.cols, board_spec.rows), "kind": board_spec.kind, "square": float(square),
                    "room": None if layout_spec is not None else room, "suggestions": int(suggestions),
-                   "seed": int(seed)}
+                   "seed": int(seed), "keep_board": bool(keep_board)}
         job = jobs[job_id] = Job(job_id, folder, options)
         try:
             job.future = pool["executor"].submit(_run_job, str(folder), options)

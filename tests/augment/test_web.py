@@ -69,8 +69,10 @@ def test_job_runs_to_completion(finished):
             "report.json", "scene_1.glb"} <= set(state["files"])
     assert any("focal length" in w for w in state["warnings"])
     assert state["doubt"] is None  # this floor is found well
+    assert client.get(f"/api/jobs/{job_id}/files/report.json").json()["board"]["erased"] is True
     assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "spec": False,
-                                "floor_mask": False, "clicks": 0, "doors": 0, "suggestions": 1, "seed": 0}
+                                "floor_mask": False, "clicks": 0, "doors": 0, "keep_board": False,
+                                "suggestions": 1, "seed": 0}
 
 
 def test_a_job_is_deleted_on_request(finished):
@@ -453,3 +455,15 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             assert page.locator("#staged img").count() == 0 and page.request.get(job_url).status == 404
         finally:
             browser.close()
+
+
+def test_keep_board(finished):
+    """The board stays in the staged photos when asked (test_job_runs_to_completion: by
+    default it is erased)."""
+    client = finished[0]
+    response = client.post("/api/jobs", files={"photo": ("room_4.jpg", PHOTO.read_bytes(), "image/jpeg")},
+                           data={"suggestions": "1", "keep_board": "true"})
+    assert response.status_code == 202, response.text
+    state = _wait(client, response.json()["id"])
+    assert state["status"] == "done" and state["options"]["keep_board"] is True, state
+    assert client.get(f"/api/jobs/{state['id']}/files/report.json").json()["board"] == {"erased": False}
