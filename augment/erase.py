@@ -6,7 +6,9 @@ looked at square-on), where the floor's texture has one scale and one orientatio
 
 1. **Where.** The sheet the board was printed on (``Board.sheet_mm``), grown side by side
    while the next line beyond it is still the paper's colour (a board printed on larger
-   paper than Stager assumes), at most one square.
+   paper than Stager assumes), at most one square; less what stands on it (a carton
+   over part of a ChArUco board), found where the photo does not follow the print's
+   pattern.
 2. **Light.** The floor's slow changes of light and colour (shade, the falloff of a lamp)
    are filled smoothly from the sheet's rim (OpenCV's Telea inpainting, then blurred).
 3. **Texture.** What remains of the floor (grain, carpet, blotches, tile joints) is
@@ -76,6 +78,9 @@ class ErasedBoard:
     sheet_m : (4, 2) float64
         The sheet as erased, floor meters (the printed sheet grown to the paper found,
         plus the edge margin).
+    covered : float
+        The share of the sheet that something standing on it covers (0-1): left as it
+        is, though its edges over the paper may be painted over.
     source_m : (k, 2) float64
         Where the texture was taken from: per part of the sheet, the offset, floor
         meters, to the floor copied. One part, or where no place beside the whole sheet
@@ -88,6 +93,7 @@ class ErasedBoard:
     alpha: np.ndarray
     sheet_m: np.ndarray
     source_m: np.ndarray
+    covered: float = 0.0
 
     def full_alpha(self) -> np.ndarray:
         """(h, w) float32: :attr:`alpha` at the photo's size (0 outside the box)."""
@@ -149,9 +155,17 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     small = _TopDown(calibration, origin, ppm * scale)
     cols, rows = (int(np.ceil(v * small.ppm)) for v in extent)
     small_rgb, small_valid = small.sample(image, floor_mask, (0, 0, cols, rows), shrink=True)
-    sheet = _grow_to_paper(small, small_rgb, small_valid, sheet, board)
+    lab = cv2.cvtColor(small_rgb, cv2.COLOR_RGB2LAB).astype(np.float32)
+    printed, on = _printed(small, (rows, cols), board)
+    colours = _print_colours(lab, small_valid, printed, on)
+    sheet = _grow_to_paper(small, lab, small_valid, sheet, board, colours)
     short_m = float(np.min(sheet[1] - sheet[0]))
     hole = small.rectangle(sheet, (0, 0, cols, rows))
+    # What stands on the sheet stays, and is no floor to copy from.
+    foreign = _foreign(lab, hole, printed, on, board.square_m * small.ppm, colours)
+    covered = float(foreign.sum()) / max(1, int(hole.sum()))
+    small_valid = small_valid & ~foreign
+    hole &= ~foreign
     bad = hole | ~small_valid
     sigma = max(1.0, LIGHT_SIGMA_SHARE * short_m * small.ppm)
     smooth = cv2.inpaint(small_rgb, bad.astype(np.uint8) * 255, 3, cv2.INPAINT_TELEA)
@@ -165,7 +179,9 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     (c0, r0), (c1, r1) = np.floor(full.view_px(sheet)).astype(int) + [[-ring], [ring + 1]]
     box = (c0, r0, c1, r1)
     rgb, valid = full.sample(image, floor_mask, box)
-    hole_full = full.rectangle(sheet, box)
+    standing = _upsample(foreign.astype(np.float32), scale, box) > 0.5
+    hole_full = full.rectangle(sheet, box) & ~standing
+    valid &= ~standing
     light_full = _upsample(light, scale, box)
     texture = rgb.astype(np.float32) - light_full
     copied = np.zeros_like(light_full)
@@ -194,7 +210,7 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     # copied, a ramp over the rim it was matched on, so that the copy has no edge.
     outside = cv2.distanceTransform((~hole_full).astype(np.uint8), cv2.DIST_L2, 3)
     weight = np.where(hole_full, 1.0, np.where(have, np.clip(1.0 - outside / (ring + 1), 0.0, 1.0), 0.0))
-    weight = weight.astype(np.float32)
+    weight = np.where(standing, 0.0, weight).astype(np.float32)
     filled = np.clip(fill + 0.5, 0, 255).astype(np.uint8)
 
     # Back into the photo: the sheet's pixels, with the print's blurred edge, and the ramp.
@@ -203,7 +219,7 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     region = _photo_region(calibration, corners_m, (ring + 1) / ppm, (h, w))
     result = image.copy()
     if region is None:
-        return ErasedBoard(result, (0, 0, 0, 0), np.zeros((0, 0), np.float32), corners_m, np.zeros((0, 2)))
+        return ErasedBoard(result, (0, 0, 0, 0), np.zeros((0, 0), np.float32), corners_m, np.zeros((0, 2)), covered)
     x0, y0, x1, y1, inside = region
     map_x, map_y = (m.astype(np.float32) for m in full.view_px_of_photo(x0, y0, x1, y1))
     map_x -= c0
@@ -212,6 +228,10 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     ramp = cv2.remap(weight, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
     grown = cv2.dilate(inside.astype(np.uint8), np.ones((2 * EDGE_GROW_PX + 1,) * 2, np.uint8))
     a = np.maximum(cv2.GaussianBlur(grown.astype(np.float32), (0, 0), FEATHER_PX), ramp)
+    if foreign.any():
+        sx = ((map_x + c0 + 0.5) * scale - 0.5).astype(np.float32)
+        sy = ((map_y + r0 + 0.5) * scale - 0.5).astype(np.float32)
+        a *= 1.0 - cv2.remap(foreign.astype(np.float32), sx, sy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
     # Only floor: what stands on the board stays; nothing above the horizon, where a
     # pixel maps to a point behind the camera.
     a *= _below_horizon(calibration.horizon, x0, y0, x1, y1)
@@ -219,7 +239,8 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
         a *= floor_mask[y0:y1, x0:x1]
     blend = a[..., None] * back.astype(np.float32) + (1 - a[..., None]) * image[y0:y1, x0:x1]
     result[y0:y1, x0:x1] = np.clip(blend + 0.5, 0, 255).astype(np.uint8)
-    return ErasedBoard(result, (x0, y0, x1, y1), a, corners_m, np.asarray(offsets, np.float64).reshape(-1, 2) / ppm)
+    return ErasedBoard(result, (x0, y0, x1, y1), a, corners_m, np.asarray(offsets, np.float64).reshape(-1, 2) / ppm,
+                       covered)
 
 
 class _TopDown:
@@ -327,24 +348,103 @@ def _below_horizon(horizon, x0, y0, x1, y1) -> np.ndarray:
     return (a * np.arange(x0, x1)[None, :] + b * np.arange(y0, y1)[:, None] + c) > 0
 
 
-def _grow_to_paper(view: _TopDown, rgb, valid, sheet_m: np.ndarray, board) -> np.ndarray:
+def _printed(view: _TopDown, shape, board) -> tuple[np.ndarray, np.ndarray]:
+    """The print as :meth:`Board.image` lays it on the floor, in the view: (rows, cols)
+    float32 grey levels, and where the sheet is (bool)."""
+    rows, cols = shape
+    k = max(4, int(np.ceil(board.square_m * view.ppm)))
+    sheet = board.image(px_per_square=k)
+    # Image pixel (u, v) is the board point ((u + 0.5) / px_per_m - w / 2, ...): an affine
+    # map into the view.
+    px_per_m = k / board.square_m
+    size = np.array(sheet.shape[::-1]) / px_per_m
+    scale = view.ppm / px_per_m
+    offset = (-size / 2 - view.origin_m) * view.ppm + 0.5 * scale - 0.5
+    warp = np.array([[scale, 0.0, offset[0]], [0.0, scale, offset[1]]])
+    # Beyond the sheet as white as its margin: no edge of the print where none is printed.
+    printed = cv2.warpAffine(sheet.astype(np.float32), warp, (cols, rows), flags=cv2.INTER_LINEAR,
+                             borderMode=cv2.BORDER_CONSTANT, borderValue=255)
+    on = cv2.warpAffine(np.ones_like(sheet), warp, (cols, rows), flags=cv2.INTER_NEAREST) > 0
+    return printed, on
+
+
+def _print_colours(lab, valid, printed, on):
+    """The paper's and the ink's colour (Lab), and how far from either a pixel of the
+    print may be: medians over the insides of the print's white and black (the photo
+    blurs their edges), so that a thing covering part of the board (a ChArUco board may
+    be partly hidden) does not count while it covers less than half. None when too
+    little of the print shows."""
+    kernel = np.ones((5, 5), np.uint8)
+    white = (cv2.erode((printed > 200).astype(np.uint8), kernel) > 0) & on & valid
+    black = (cv2.erode((printed < 55).astype(np.uint8), kernel) > 0) & on & valid
+    if white.sum() < 20 or black.sum() < 20:
+        return None
+    paper, ink = np.median(lab[white], axis=0), np.median(lab[black], axis=0)
+    if paper[0] < ink[0]:
+        # A checkerboard seen from above is its print mirrored: the colours swap.
+        white, black = black, white
+        paper, ink = ink, paper
+    spread = max(float(np.median(np.linalg.norm(lab[white] - paper, axis=1))),
+                 float(np.median(np.linalg.norm(lab[black] - ink, axis=1))))
+    return paper, ink, max(12.0, 3.0 * 1.4826 * spread)
+
+
+def _foreign(lab, hole, printed, on, square_px, colours) -> np.ndarray:
+    """(rows, cols) bool: what stands on the sheet (a carton over part of a ChArUco
+    board). Where the print's squares are, the photo follows their pattern (shade
+    darkens black and white alike) and a thing on them does not: the local correlation
+    of the lightness with the print, over a square, is low. Such a patch, a quarter
+    square across or more, then takes in the sheet's pixels of its colour joined to it
+    (the thing over the margin)."""
+    window = (max(3, int(round(square_px)) | 1),) * 2
+    box = lambda im: cv2.boxFilter(im, cv2.CV_32F, window)  # noqa: E731
+    light = lab[..., 0]
+    mo, mp = box(light), box(printed)
+    cov = box(light * printed) - mo * mp
+    var_o = np.maximum(box(light * light) - mo * mo, 0)
+    var_p = np.maximum(box(printed * printed) - mp * mp, 0)
+    if not on.any():
+        return np.zeros(hole.shape, bool)
+    patterned = var_p > 0.5 * float(np.percentile(var_p[on], 90))
+    ncc = cov / np.sqrt(var_o * var_p + 1e-6)
+    # A checkerboard may be seen mirrored (colours swapped): the correlation's sign says.
+    sign = 1.0 if np.median(ncc[patterned & hole]) >= 0 else -1.0 if (patterned & hole).any() else 1.0
+    core = (sign * ncc < 0.3) & patterned & hole
+    size = max(3, int(round(square_px / 4)) | 1)
+    core = cv2.morphologyEx(core.astype(np.uint8), cv2.MORPH_OPEN, np.ones((size, size), np.uint8)) > 0
+    if core.sum() < square_px ** 2 / 4:
+        return np.zeros(hole.shape, bool)
+    colour = np.median(lab[core], axis=0)
+    spread = max(8.0, 3.0 * 1.4826 * float(np.median(np.linalg.norm(lab[core] - colour, axis=1))))
+    alike = (np.linalg.norm(lab - colour, axis=2) < spread) & hole
+    if colours is not None:
+        # Not the paper: a thing the paper's colour cannot be told from the margin.
+        paper, _, tolerance = colours
+        nearer = np.linalg.norm(lab - paper, axis=2) < np.linalg.norm(lab - colour, axis=2)
+        alike &= ~((np.linalg.norm(lab - paper, axis=2) < tolerance) | nearer)
+    alike |= core
+    n, labels = cv2.connectedComponents(alike.astype(np.uint8), connectivity=8)
+    joined = np.unique(labels[core])
+    thing = np.isin(labels, joined[joined > 0]).astype(np.uint8)
+    # Whole: its own marks and the print's blurred edges under its rim are not floor either.
+    thing = cv2.morphologyEx(thing, cv2.MORPH_CLOSE, np.ones((2 * size + 1,) * 2, np.uint8))
+    outside = thing == 0
+    n, labels = cv2.connectedComponents(outside.astype(np.uint8), connectivity=4)
+    rim = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    holes = outside & ~np.isin(labels, rim)
+    return ((thing > 0) | holes) & hole
+
+
+def _grow_to_paper(view: _TopDown, lab, valid, sheet_m: np.ndarray, board, colours) -> np.ndarray:
     """``sheet_m`` ((2, 2) low, high corner) grown side by side while the next line of the
-    view ``rgb`` (the box from the view's origin) beyond it is mostly the paper's colour
-    (the print's lightest), at most :data:`PAPER_GROWTH_SQUARES` squares; not at all
-    where the floor beyond is the paper's colour."""
+    view (``lab``, the box from the view's origin) beyond it is mostly the paper's colour
+    (``colours``, :func:`_print_colours`), at most :data:`PAPER_GROWTH_SQUARES` squares;
+    not at all where the floor beyond is the paper's colour."""
     rows, cols = valid.shape
     box = (0, 0, cols, rows)
-    squares = np.array([board.cols + 1, board.rows + 1]) * board.square_m / 2
-    inside = view.rectangle(np.array([-squares, squares]), box) & valid
-    if inside.sum() < 50:
+    if colours is None:
         return sheet_m
-    lab = cv2.cvtColor(rgb, cv2.COLOR_RGB2LAB).astype(np.float32)
-    lightness = lab[..., 0][inside]
-    # The paper: the lightest fifth of the print (a ChArUco board's white squares hold
-    # markers: about a quarter of it is paper).
-    white = lab[inside][lightness >= np.percentile(lightness, 80)]
-    paper = np.median(white, axis=0)
-    tolerance = max(12.0, 3.0 * 1.4826 * float(np.median(np.linalg.norm(white - paper, axis=1))))
+    paper, _, tolerance = colours
     like_paper = (np.linalg.norm(lab - paper, axis=2) < tolerance) & valid
     reach = int(PAPER_GROWTH_SQUARES * board.square_m * view.ppm)
     # A floor the paper's colour tells nothing: the sheet stays as printed.
