@@ -877,8 +877,7 @@ def report_dict(result: FurnishResult) -> dict:
         "board": {"erased": result.erased is not None,
                   **({} if result.erased is None else {
                       "sheet_m": np.round(result.erased.sheet_m, 4), "covered": round(result.erased.covered, 4),
-                      "texture_from_m": None if result.erased.source_m is None else
-                      np.round(result.erased.source_m, 4)})},
+                      "texture_from_m": np.round(result.erased.source_m, 4)})},
         "floor": {"method": seg.method, "floor_fraction": float(seg.mask.mean()), "skirting_m": seg.skirting_m,
                   "disputed_m2": seg.disputed_m2, "disputed_share": seg.disputed_share,
                   "clicks": seg.clicks_json(), "doubt": seg.doubt_json(), **floor.to_json()},
@@ -1002,11 +1001,11 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         Bad input (see the module docstring); the message says what would work.
     """
     from .calibrate import calibrate_file, read_photo
+    from .erase import erase_board, layer_over_photo
     from .floor import floor_overlay, floor_polygon
     from .height import measure_height
     from .overlay import calibration_overlay
     from .overlay_height import height_overlay
-    from .erase import erase_board, layer_over_photo
     from .segment import read_floor_mask, segment_floor
 
     if isinstance(suggestions, bool) or not isinstance(suggestions, (int, np.integer)) or suggestions < 1:

@@ -198,6 +198,27 @@ def test_the_staged_photos_show_no_board(roomy):
     assert changed.mean() < 0.05
 
 
+def test_something_on_the_board_is_said(tmp_path):
+    """A ChArUco board a third under a carton (a render, its EXIF focal length as a phone
+    writes it): the erasure keeps the carton and says so."""
+    from PIL import Image
+
+    from augment.gl import Renderer
+    from augment.synth import render_sample
+
+    board = Board(kind="charuco")
+    with Renderer() as renderer:
+        sample = render_sample([7600, 1], renderer, size_px=(960, 720), board=board, board_hidden=0.3)
+    mm = round(np.array(sample.truth["K"])[0, 0] * np.hypot(36, 24) / np.hypot(960, 720))
+    exif = Image.Exif()
+    exif.get_ifd(0x8769)[0xA405] = mm  # FocalLengthIn35mmFilm
+    photo = tmp_path / "hidden.jpg"
+    Image.fromarray(sample.image).save(photo, quality=92, exif=exif)
+    result = furnish(photo, board, suggestions=1)
+    assert 0.15 < result.report["board"]["covered"] < 0.35
+    assert any(w.startswith("something stands on 2") and "--keep-board" in w for w in result.warnings)
+
+
 def test_keep_board_leaves_it(tmp_path, capsys):
     out = tmp_path / "kept"
     code, _, err = run(["furnish", ROOMY, "--suggestions", "1", "--keep-board", "--out", out, "--quiet"], capsys)
