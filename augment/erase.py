@@ -32,9 +32,10 @@ import numpy as np
 # The floor shown around the sheet on each side, as a share of the sheet's longer side:
 # the places the texture may be taken from.
 CONTEXT_SHARE = 1.5
-# The top-down view's long side at most (pixels); the view is as sharp as the photo at
-# the sheet, unless that would be larger.
-MAX_VIEW_PX = 4096
+# The top-down view is as sharp as the photo at the sheet, up to this many pixels per
+# meter (a 45 mm square 270 px across; only the sheet and the place its texture comes
+# from are sampled at that size).
+MAX_PX_PER_M = 6000
 # The working size for the light and for finding the texture's source: the sheet's
 # shorter side this many pixels.
 SEARCH_SHEET_PX = 96
@@ -146,7 +147,7 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     context = CONTEXT_SHARE * 2 * float(half.max())
     origin = -half - context
     extent = 2 * (half + context)
-    ppm = min(_density_px_per_m(calibration, half), MAX_VIEW_PX / float(extent.max()))
+    ppm = min(_density_px_per_m(calibration, half), MAX_PX_PER_M)
     short_m = float(np.min(sheet[1] - sheet[0]))
     scale = min(1.0, SEARCH_SHEET_PX / (short_m * ppm))
 
