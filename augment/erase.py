@@ -163,7 +163,7 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     short_m = float(np.min(sheet[1] - sheet[0]))
     hole = small.rectangle(sheet, (0, 0, cols, rows))
     # What stands on the sheet stays, and is no floor to copy from.
-    foreign = _foreign(lab, hole, printed, on, board.square_m * small.ppm, colours)
+    foreign = _foreign(lab, small_valid, hole, printed, on, board.square_m * small.ppm, colours)
     covered = float(foreign.sum()) / max(1, int(hole.sum()))
     small_valid = small_valid & ~foreign
     hole &= ~foreign
@@ -390,7 +390,7 @@ def _print_colours(lab, valid, printed, on):
     return paper, ink, max(12.0, 3.0 * 1.4826 * spread)
 
 
-def _foreign(lab, hole, printed, on, square_px, colours) -> np.ndarray:
+def _foreign(lab, valid, hole, printed, on, square_px, colours) -> np.ndarray:
     """(rows, cols) bool: what stands on the sheet (a carton over part of a ChArUco
     board). Where the print's squares are, the photo follows their pattern (shade
     darkens black and white alike) and a thing on them does not: the local correlation
@@ -406,18 +406,19 @@ def _foreign(lab, hole, printed, on, square_px, colours) -> np.ndarray:
     var_p = np.maximum(box(printed * printed) - mp * mp, 0)
     if not on.any():
         return np.zeros(hole.shape, bool)
-    patterned = var_p > 0.5 * float(np.percentile(var_p[on], 90))
+    # Only windows the photo shows (a board cut off at the photo's edge).
+    patterned = (var_p > 0.5 * float(np.percentile(var_p[on], 90))) & (box(valid.astype(np.float32)) > 0.9)
     ncc = cov / np.sqrt(var_o * var_p + 1e-6)
     # A checkerboard may be seen mirrored (colours swapped): the correlation's sign says.
     sign = 1.0 if np.median(ncc[patterned & hole]) >= 0 else -1.0 if (patterned & hole).any() else 1.0
-    core = (sign * ncc < 0.3) & patterned & hole
+    core = (sign * ncc < 0.3) & patterned & hole & valid
     size = max(3, int(round(square_px / 4)) | 1)
     core = cv2.morphologyEx(core.astype(np.uint8), cv2.MORPH_OPEN, np.ones((size, size), np.uint8)) > 0
     if core.sum() < square_px ** 2 / 4:
         return np.zeros(hole.shape, bool)
     colour = np.median(lab[core], axis=0)
     spread = max(8.0, 3.0 * 1.4826 * float(np.median(np.linalg.norm(lab[core] - colour, axis=1))))
-    alike = (np.linalg.norm(lab - colour, axis=2) < spread) & hole
+    alike = (np.linalg.norm(lab - colour, axis=2) < spread) & hole & valid
     if colours is not None:
         # Not the paper: a thing the paper's colour cannot be told from the margin.
         paper, _, tolerance = colours

@@ -80,6 +80,23 @@ def test_a_charuco_board_on_a_floor_of_its_papers_colour():
     np.testing.assert_allclose(erased.sheet_m.max(axis=0), [0.214, 0.1525], atol=1e-3)
 
 
+def test_a_board_cut_off_at_the_photos_edge():
+    """The photo cut through a ChArUco board: what shows is erased, and the part beyond
+    the edge is not taken for a thing lying on the board."""
+    board = Board(kind="charuco")
+    with Renderer() as renderer:
+        photo = render_sample([7500, 0], renderer, size_px=(960, 720), board=board)
+        truth = render_sample([7500, 0], renderer, size_px=(960, 720), board=board, board_drawn=False)
+    cut = int(np.median(np.array(photo.truth["board"]["corners_px"])[:, 0])) + 20
+    image = np.ascontiguousarray(photo.image[:, :cut])
+    cal = calibrate_photo(image, board, intrinsics=exif_intrinsics(photo.truth["K"][0][0], (cut, 720)))
+    erased = erase_board(image, cal)
+    printed = np.abs(image.astype(int) - truth.image[:, :cut].astype(int)).max(axis=2) > 8
+    assert printed.sum() > 3000
+    assert not (printed & (erased.full_alpha() < 0.5)).any()
+    assert erased.covered == 0
+
+
 def test_a_carton_over_part_of_the_board_stays():
     """A ChArUco board a third under a carton: the print that shows is erased; the
     carton, which the floor mask calls floor there (the board's surroundings are seeded
