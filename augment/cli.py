@@ -825,6 +825,11 @@ def _print_furnished(result, out: Path, paths: list, quiet: bool, photo: Path | 
         print(f"furniture   {result.source}: {len(result.spec.items)} items ({kinds})")
         if result.dropped:
             print(f"left out    {dropped_summary(result.dropped)}")
+        if result.erased is None:
+            print("board       kept in the staged photos (--keep-board)")
+        else:
+            how = "floor copied from beside it" if len(result.erased.source_m) else "filled in smoothly"
+            print(f"board       erased from the staged photos ({how})")
         print(f"{'K':>3} {'energy':>9} {'overlaps':>8} {'outside m²':>11} {'walkable':>8}")
         for k, (lay, rep) in enumerate(zip(result.layouts, result.reports), start=1):
             print(f"{k:>3} {lay.energy:>9.4g} {rep['overlaps']['count']:>8d} {rep['outside_m2']:>11.3f} "

@@ -221,8 +221,9 @@ def test_something_on_the_board_is_said(tmp_path):
 
 def test_keep_board_leaves_it(tmp_path, capsys):
     out = tmp_path / "kept"
-    code, _, err = run(["furnish", ROOMY, "--suggestions", "1", "--keep-board", "--out", out, "--quiet"], capsys)
+    code, stdout, err = run(["furnish", ROOMY, "--suggestions", "1", "--keep-board", "--out", out], capsys)
     assert code == 0, err
+    assert "board       kept in the staged photos (--keep-board)" in stdout
     staged = cv2.cvtColor(cv2.imread(str(out / "staged_1.jpg")), cv2.COLOR_BGR2RGB)
     assert _board_found(staged)
     assert json.loads((out / "report.json").read_text())["board"] == {"erased": False}
@@ -286,6 +287,7 @@ def test_furnish_command_on_a_cramped_floor(tmp_path, capsys):
     assert code == 0, err
     assert _digest(CRAMPED) == before
     assert "staged_all.jpg" in stdout and "walkable" in stdout and "warning: " in err
+    assert "board       erased from the staged photos" in stdout
     report = json.loads((out / "report.json").read_text())
     assert report["furniture"]["source"] == "preset bedroom" and len(report["suggestions"]) == 2
     assert all(s["overlaps"] == 0 and s["outside_m2"] == 0 for s in report["suggestions"])
