@@ -29,6 +29,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from .segment import below_horizon
+
 # The floor shown around the sheet on each side, as a share of the sheet's longer side:
 # the places the texture may be taken from.
 CONTEXT_SHARE = 1.5
@@ -190,6 +192,7 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     kernel = np.ones((2 * ring + 1,) * 2, np.uint8)
     reach = int(np.ceil(1 / scale)) + 2
     offsets = []
+    crop_rows, crop_cols = hole_full.shape
     for part_m, found in parts:
         part = full.rectangle(part_m, box)
         dx, dy = (round(v / scale) for v in found)
@@ -200,10 +203,9 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
         if refined is None:
             continue
         ox, oy = refined
-        rows, cols = hole_full.shape
         # The part and its rim, where no part before it copied.
         take = (cv2.dilate(part.astype(np.uint8), kernel) > 0) & ~have
-        copied[take] = src_texture[reach + oy:reach + oy + rows, reach + ox:reach + ox + cols][take]
+        copied[take] = src_texture[reach + oy:reach + oy + crop_rows, reach + ox:reach + ox + crop_cols][take]
         have |= take
         offsets.append((dx + ox, dy + oy))
     fill = light_full + copied
@@ -230,12 +232,11 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     grown = cv2.dilate(inside.astype(np.uint8), np.ones((2 * EDGE_GROW_PX + 1,) * 2, np.uint8))
     a = np.maximum(cv2.GaussianBlur(grown.astype(np.float32), (0, 0), FEATHER_PX), ramp)
     if foreign.any():
-        sx = ((map_x + c0 + 0.5) * scale - 0.5).astype(np.float32)
-        sy = ((map_y + r0 + 0.5) * scale - 0.5).astype(np.float32)
-        a *= 1.0 - cv2.remap(foreign.astype(np.float32), sx, sy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+        a *= 1.0 - _small_at(foreign.astype(np.float32), scale, map_x + c0, map_y + r0, cv2.BORDER_CONSTANT)
     # Only floor: what stands on the board stays; nothing above the horizon, where a
     # pixel maps to a point behind the camera.
-    a *= _below_horizon(calibration.horizon, x0, y0, x1, y1)
+    ha, hb, hc = calibration.horizon
+    a *= below_horizon((y1 - y0, x1 - x0), (ha, hb, hc + ha * x0 + hb * y0))
     if floor_mask is not None:
         a *= floor_mask[y0:y1, x0:x1]
     blend = a[..., None] * back.astype(np.float32) + (1 - a[..., None]) * image[y0:y1, x0:x1]
@@ -296,12 +297,7 @@ class _TopDown:
         px = cal.pixels_from_floor(floor)
         ok = (depth > 1e-3) & np.all(np.isfinite(px), axis=1)
         ok[ok] &= cal.lens_maps(px[ok])
-        size = (gx.shape[1] - 1) * step + 1, (gx.shape[0] - 1) * step + 1
-        maps = []
-        for k in range(2):
-            grid = np.where(ok, px[:, k], -1e4).reshape(gx.shape).astype(np.float32)
-            maps.append(cv2.resize(grid, size, interpolation=cv2.INTER_LINEAR)[:rows, :cols])
-        return maps
+        return [_from_grid(np.where(ok, px[:, k], -1e4).reshape(gx.shape), rows, cols) for k in range(2)]
 
     def rectangle(self, sheet_m, box) -> np.ndarray:
         """(rows, cols) bool: the box's pixels inside ``sheet_m`` ((2, 2) low, high corner)."""
@@ -317,17 +313,28 @@ class _TopDown:
         gx, gy = np.meshgrid(np.arange(x0, x1 + step, step, dtype=np.float64),
                              np.arange(y0, y1 + step, step, dtype=np.float64))
         v = self.view_px(self.calibration.floor_from_pixels(np.column_stack([gx.ravel(), gy.ravel()])))
-        size = (gx.shape[1] - 1) * step + 1, (gx.shape[0] - 1) * step + 1
-        return [cv2.resize(v[:, k].reshape(gx.shape).astype(np.float32), size,
-                           interpolation=cv2.INTER_LINEAR)[:y1 - y0, :x1 - x0] for k in range(2)]
+        return [_from_grid(v[:, k].reshape(gx.shape), y1 - y0, x1 - x0) for k in range(2)]
+
+
+def _from_grid(grid: np.ndarray, rows: int, cols: int) -> np.ndarray:
+    """(rows, cols) float32: values given every :data:`MAP_STEP_PX` pixels from the
+    first (``grid``, one more row and column than needed), interpolated between."""
+    step = MAP_STEP_PX
+    size = (grid.shape[1] - 1) * step + 1, (grid.shape[0] - 1) * step + 1
+    return cv2.resize(grid.astype(np.float32), size, interpolation=cv2.INTER_LINEAR)[:rows, :cols]
 
 
 def _upsample(small: np.ndarray, scale: float, box) -> np.ndarray:
     """The small view's ``small`` (at ``scale`` of the full view) at the full view's box."""
     c0, r0, c1, r1 = box
     gx, gy = np.meshgrid(np.arange(c0, c1, dtype=np.float32), np.arange(r0, r1, dtype=np.float32))
-    return cv2.remap(small, (gx + 0.5) * scale - 0.5, (gy + 0.5) * scale - 0.5, cv2.INTER_LINEAR,
-                     borderMode=cv2.BORDER_REPLICATE)
+    return _small_at(small, scale, gx, gy, cv2.BORDER_REPLICATE)
+
+
+def _small_at(small: np.ndarray, scale: float, x, y, border) -> np.ndarray:
+    """The small view's ``small`` read at full-view pixels ``x``, ``y`` (float arrays)."""
+    return cv2.remap(small, ((x + 0.5) * scale - 0.5).astype(np.float32), ((y + 0.5) * scale - 0.5).astype(np.float32),
+                     cv2.INTER_LINEAR, borderMode=border)
 
 
 def _density_px_per_m(calibration, half_m) -> float:
@@ -341,12 +348,6 @@ def _density_px_per_m(calibration, half_m) -> float:
         J = np.column_stack([px[1] - px[0], px[2] - px[0]]) / d
         best = max(best, float(np.linalg.svd(J, compute_uv=False)[0]))
     return best
-
-
-def _below_horizon(horizon, x0, y0, x1, y1) -> np.ndarray:
-    """(y1 - y0, x1 - x0) bool: the box's pixels below the horizon ``(a, b, c)``."""
-    a, b, c = horizon
-    return (a * np.arange(x0, x1)[None, :] + b * np.arange(y0, y1)[:, None] + c) > 0
 
 
 def _printed(view: _TopDown, shape, board) -> tuple[np.ndarray, np.ndarray]:
@@ -397,6 +398,8 @@ def _foreign(lab, valid, hole, printed, on, square_px, colours) -> np.ndarray:
     of the lightness with the print, over a square, is low. Such a patch, a quarter
     square across or more, then takes in the sheet's pixels of its colour joined to it
     (the thing over the margin)."""
+    if not on.any():
+        return np.zeros(hole.shape, bool)
     window = (max(3, int(round(square_px)) | 1),) * 2
     box = lambda im: cv2.boxFilter(im, cv2.CV_32F, window)  # noqa: E731
     light = lab[..., 0]
@@ -404,13 +407,12 @@ def _foreign(lab, valid, hole, printed, on, square_px, colours) -> np.ndarray:
     cov = box(light * printed) - mo * mp
     var_o = np.maximum(box(light * light) - mo * mo, 0)
     var_p = np.maximum(box(printed * printed) - mp * mp, 0)
-    if not on.any():
-        return np.zeros(hole.shape, bool)
     # Only windows the photo shows (a board cut off at the photo's edge).
     patterned = (var_p > 0.5 * float(np.percentile(var_p[on], 90))) & (box(valid.astype(np.float32)) > 0.9)
     ncc = cov / np.sqrt(var_o * var_p + 1e-6)
     # A checkerboard may be seen mirrored (colours swapped): the correlation's sign says.
-    sign = 1.0 if np.median(ncc[patterned & hole]) >= 0 else -1.0 if (patterned & hole).any() else 1.0
+    probe = patterned & hole
+    sign = -1.0 if probe.any() and np.median(ncc[probe]) < 0 else 1.0
     core = (sign * ncc < 0.3) & patterned & hole & valid
     size = max(3, int(round(square_px / 4)) | 1)
     core = cv2.morphologyEx(core.astype(np.uint8), cv2.MORPH_OPEN, np.ones((size, size), np.uint8)) > 0
@@ -422,8 +424,8 @@ def _foreign(lab, valid, hole, printed, on, square_px, colours) -> np.ndarray:
     if colours is not None:
         # Not the paper: a thing the paper's colour cannot be told from the margin.
         paper, _, tolerance = colours
-        nearer = np.linalg.norm(lab - paper, axis=2) < np.linalg.norm(lab - colour, axis=2)
-        alike &= ~((np.linalg.norm(lab - paper, axis=2) < tolerance) | nearer)
+        to_paper = np.linalg.norm(lab - paper, axis=2)
+        alike &= ~((to_paper < tolerance) | (to_paper < np.linalg.norm(lab - colour, axis=2)))
     alike |= core
     n, labels = cv2.connectedComponents(alike.astype(np.uint8), connectivity=8)
     joined = np.unique(labels[core])

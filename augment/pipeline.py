@@ -1196,8 +1196,7 @@ def write_outputs(result: FurnishResult, out_dir, inputs=()) -> list[Path]:
     if out.exists() and not out.is_dir():
         raise FurnishError(f"output folder {out}: exists and is not a folder")
     try:
-        stale = [n for n in layout_report.earlier_suggestion_files(out, SUGGESTION_FILES)
-                 if replaced_input([out / n], inputs) is None]
+        stale = layout_report.earlier_suggestion_files(out, SUGGESTION_FILES, inputs)
         with staged_folder(out, stale=stale) as staging:
             names = _write_files(result, staging)
             if (clash := replaced_input([out / name for name in names], inputs)) is not None:

@@ -211,14 +211,15 @@ def output_files(layouts, reports=None, title=""):
 SUGGESTION_FILES = ("layout_{k}.json", "plan_{k}.png")
 
 
-def earlier_suggestion_files(out_dir, per_suggestion=SUGGESTION_FILES) -> list[str]:
+def earlier_suggestion_files(out_dir, per_suggestion=SUGGESTION_FILES, inputs=()) -> list[str]:
     """Names of the files in ``out_dir`` that an earlier run wrote per suggestion.
 
     A suggestion K is taken for an earlier run's where ``layout_K.json`` is a layout as
     :meth:`~layout.solver.Layout.to_dict` writes it (an object with ``room`` and
-    ``items``); its files are then ``per_suggestion`` (patterns of ``k``) that exist.
-    Written again, they are replaced; the others would be left over from a run with more
-    suggestions, or other options, and would not match what this run reports.
+    ``items``); its files are then ``per_suggestion`` (patterns of ``k``) that exist and
+    are none of this run's ``inputs`` (paths or None). Written again, they are replaced;
+    the others would be left over from a run with more suggestions, or other options,
+    and would not match what this run reports.
     """
     out = Path(out_dir)
     if not out.is_dir():
@@ -234,7 +235,8 @@ def earlier_suggestion_files(out_dir, per_suggestion=SUGGESTION_FILES) -> list[s
             continue
         if isinstance(earlier, dict) and {"room", "items"} <= earlier.keys():
             k = int(match[1])
-            names += [n for n in (p.format(k=k) for p in per_suggestion) if (out / n).is_file()]
+            names += [n for n in (p.format(k=k) for p in per_suggestion)
+                      if (out / n).is_file() and replaced_input([out / n], inputs) is None]
     return sorted(names)
 
 
@@ -261,8 +263,7 @@ def write_outputs(layouts, out_dir, reports=None, title="", inputs=()):
     if (clash := replaced_input([out / name for name in files], inputs)) is not None:
         raise LayoutError(f"--out {out}: {clash[0].name} there is the input {clash[1]}, which is never "
                           "overwritten; write the outputs to another folder")
-    stale = [n for n in earlier_suggestion_files(out) if replaced_input([out / n], inputs) is None]
-    with staged_folder(out, stale=stale) as staging:
+    with staged_folder(out, stale=earlier_suggestion_files(out, inputs=inputs)) as staging:
         for name, data in files.items():
             (staging / name).write_bytes(data.encode("utf-8") if isinstance(data, str) else data)
     return [out / name for name in files]

@@ -15,12 +15,36 @@ from augment.synth import render_sample
 SIZE = (640, 480)
 
 
-def _pair(seed, board=None):
+def _render(seed, size=SIZE, **options):
+    """A render and the same render without the board (its floor): the sample and the
+    truth's image."""
     with Renderer() as renderer:
-        photo = render_sample(seed, renderer, size_px=SIZE, board=board)
-        truth = render_sample(seed, renderer, size_px=SIZE, board=board, board_drawn=False)
-    cal = calibrate_photo(photo.image, Board(), intrinsics=exif_intrinsics(photo.truth["K"][0][0], SIZE))
-    return photo, truth.image, cal
+        photo = render_sample(seed, renderer, size_px=size, **options)
+        truth = render_sample(seed, renderer, size_px=size, board_drawn=False, **options)
+    return photo, truth.image
+
+
+def _calibrated(image, photo, board):
+    """``image`` (the render ``photo`` or a crop of it) calibrated from ``board`` with the
+    render's true focal length."""
+    return calibrate_photo(image, board, intrinsics=exif_intrinsics(photo.truth["K"][0][0], image.shape[1::-1]))
+
+
+def _pair(seed, board=None):
+    photo, truth = _render(seed, board=board)
+    return photo, truth, _calibrated(photo.image, photo, Board())
+
+
+def _changed(image, truth, levels=8):
+    """Where the board (or its paper) shows: the photo more than ``levels`` off its truth."""
+    return np.abs(image.astype(int) - truth.astype(int)).max(axis=2) > levels
+
+
+@pytest.fixture(scope="module")
+def charuco():
+    """A ChArUco board on a light wood floor of its paper's colour (seed [7500, 0])."""
+    board = Board(kind="charuco")
+    return (board, *_render([7500, 0], (960, 720), board=board))
 
 
 def _blur(image, sigma):
@@ -34,7 +58,7 @@ def test_the_floor_under_the_board_comes_back(seed):
     erased = erase_board(photo.image, cal, photo.floor_mask)
     alpha = erased.full_alpha()
     assert np.array_equal(photo.image, given)  # the input is not modified
-    board = np.abs(photo.image.astype(int) - truth.astype(int)).max(axis=2) > 8
+    board = _changed(photo.image, truth)
     assert board.sum() > 2000
     # Every pixel the board changed is filled ...
     assert not (board & (alpha < 0.5)).any()
@@ -60,38 +84,30 @@ def test_paper_larger_than_the_board_assumes_is_erased_too():
     photo, truth, cal = _pair([7200, 0], Board(sheet_mm=(500.0, 380.0)))
     erased = erase_board(photo.image, cal, photo.floor_mask)
     alpha = erased.full_alpha()
-    paper = np.abs(photo.image.astype(int) - truth.astype(int)).max(axis=2) > 20
+    paper = _changed(photo.image, truth, 20)
     assert not (paper & (alpha < 0.5)).any()
     np.testing.assert_allclose(erased.sheet_m.max(axis=0), [0.25, 0.19], atol=0.01)
 
 
-def test_a_charuco_board_on_a_floor_of_its_papers_colour():
+def test_a_charuco_board_on_a_floor_of_its_papers_colour(charuco):
     """The paper's colour is the floor's here (light wood): the sheet stays as printed
     (A3) rather than growing over floor that only looks like paper."""
-    board = Board(kind="charuco")
-    with Renderer() as renderer:
-        photo = render_sample([7500, 0], renderer, size_px=(960, 720), board=board)
-        truth = render_sample([7500, 0], renderer, size_px=(960, 720), board=board, board_drawn=False)
-    cal = calibrate_photo(photo.image, board, intrinsics=exif_intrinsics(photo.truth["K"][0][0], (960, 720)))
+    board, photo, truth = charuco
+    cal = _calibrated(photo.image, photo, board)
     erased = erase_board(photo.image, cal, photo.floor_mask)
     alpha = erased.full_alpha()
-    printed = np.abs(photo.image.astype(int) - truth.image.astype(int)).max(axis=2) > 8
-    assert not (printed & (alpha < 0.5)).any()
+    assert not (_changed(photo.image, truth) & (alpha < 0.5)).any()
     np.testing.assert_allclose(erased.sheet_m.max(axis=0), [0.214, 0.1525], atol=1e-3)
 
 
-def test_a_board_cut_off_at_the_photos_edge():
+def test_a_board_cut_off_at_the_photos_edge(charuco):
     """The photo cut through a ChArUco board: what shows is erased, and the part beyond
     the edge is not taken for a thing lying on the board."""
-    board = Board(kind="charuco")
-    with Renderer() as renderer:
-        photo = render_sample([7500, 0], renderer, size_px=(960, 720), board=board)
-        truth = render_sample([7500, 0], renderer, size_px=(960, 720), board=board, board_drawn=False)
+    board, photo, truth = charuco
     cut = int(np.median(np.array(photo.truth["board"]["corners_px"])[:, 0])) + 20
     image = np.ascontiguousarray(photo.image[:, :cut])
-    cal = calibrate_photo(image, board, intrinsics=exif_intrinsics(photo.truth["K"][0][0], (cut, 720)))
-    erased = erase_board(image, cal)
-    printed = np.abs(image.astype(int) - truth.image[:, :cut].astype(int)).max(axis=2) > 8
+    erased = erase_board(image, _calibrated(image, photo, board))
+    printed = _changed(image, truth[:, :cut])
     assert printed.sum() > 3000
     assert not (printed & (erased.full_alpha() < 0.5)).any()
     assert erased.covered == 0
@@ -103,15 +119,11 @@ def test_a_carton_over_part_of_the_board_stays():
     as floor), mostly stays (all of it was painted over before the print's pattern was
     checked; 27 % of its pixels over the sheet are now)."""
     board = Board(kind="charuco")
-    with Renderer() as renderer:
-        photo = render_sample([7600, 1], renderer, size_px=(960, 720), board=board, board_hidden=0.3)
-        truth = render_sample([7600, 1], renderer, size_px=(960, 720), board=board, board_hidden=0.3,
-                              board_drawn=False)
-    cal = calibrate_photo(photo.image, board, intrinsics=exif_intrinsics(photo.truth["K"][0][0], (960, 720)))
+    photo, truth = _render([7600, 1], (960, 720), board=board, board_hidden=0.3)
+    cal = _calibrated(photo.image, photo, board)
     erased = erase_board(photo.image, cal)
     alpha = erased.full_alpha()
-    printed = np.abs(photo.image.astype(int) - truth.image.astype(int)).max(axis=2) > 8
-    assert not (printed & (alpha < 0.5)).any()
+    assert not (_changed(photo.image, truth) & (alpha < 0.5)).any()
     sheet = np.zeros(alpha.shape, np.uint8)
     cv2.fillPoly(sheet, [np.round(cal.pixels_from_floor(erased.sheet_m)).astype(np.int32)], 1)
     carton = (sheet > 0) & ~photo.floor_mask
