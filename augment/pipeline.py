@@ -855,8 +855,9 @@ def report_dict(result: FurnishResult) -> dict:
     """What ``report.json`` holds (keys :data:`REPORT_KEYS`): the calibration (its
     ``source`` and ``rms_px`` first), the floor (area, polygon, edge kinds, caveat), the
     wall height (with confidence, and ``used_m``), the furniture (source, items laid
-    out, items dropped and why), per suggestion its energy, overlaps, area off the floor
-    and walkability, seconds per stage and the library versions."""
+    out, items dropped and why), per suggestion its energy, overlaps, area off the floor,
+    walkability and how deep the worst item stands in another's clearance, seconds per
+    stage and the library versions."""
     cal, seg, floor, height = result.calibration, result.segmentation, result.floor, result.height
     n = len(result.layouts)
     suggestions = []
@@ -866,6 +867,7 @@ def report_dict(result: FurnishResult) -> dict:
             "items": len(lay.items), "overlaps": rep["overlaps"]["count"],
             "overlap_area_m2": rep["overlaps"]["area_m2"], "outside_m2": rep["outside_m2"],
             "traversable": rep["traversable"], "unreachable": rep["unreachable"],
+            "clearance_intrusion_m": rep["clearances"]["deepest_m"],
             "files": {"staged": f"staged_{k}.jpg", "layout": f"layout_{k}.json", "plan": f"plan_{k}.png",
                       "scene": f"scene_{k}.glb", **({"layer": f"staged_{k}_layer.png"} if result.layers else {})}})
     return _jsonable({

@@ -7,11 +7,13 @@ Modes:
   paper   one run per seed, as in Weiss et al. (restarts=0), exact box collisions
   sphere  the same with the paper's bounding-sphere collisions
   default Stager's defaults: up to 20 fresh restarts when a run's best layout still
-          collides, leaves the floor or is not walkable (the time covers all runs)
+          collides, leaves the floor, is not walkable or has an item more than 10 cm
+          inside another's clearance (the time covers all runs)
 
 "clean" = zero exact box overlaps (> 1 cm²), nothing outside the floor, and walkable
 (Henderson et al.'s traversability: 0.25 m radius, every door and access side
-connected). Times are medians after JIT warm-up; compile time is reported once.
+connected). "clear" = no item more than 10 cm (``ACCESS_CLEAR_M``) inside another's
+clearance. Times are medians after JIT warm-up; compile time is reported once.
 """
 from __future__ import annotations
 
@@ -38,6 +40,7 @@ MODES = {"paper": dict(restarts=0), "sphere": dict(restarts=0, collision="sphere
 
 def run(seeds, only):
     from layout.report import evaluate
+    from layout.solver import ACCESS_CLEAR_M
     from layout.spec import build, load_spec
 
     t0 = time.perf_counter()
@@ -53,7 +56,7 @@ def run(seeds, only):
             solver = dataclasses.replace(base, **overrides)
             solver.solve(model, seed=0)  # warm-up: JIT for this model's shapes
             times, energies, iters, runs, clean = [], [], [], [], []
-            overlaps = outside = walkable = 0
+            overlaps = outside = walkable = clear = 0
             for seed in range(seeds):
                 layout = solver.solve(model, seed=seed)
                 ev = evaluate(layout)
@@ -64,6 +67,7 @@ def run(seeds, only):
                 overlaps += ev["overlaps"]["count"] == 0
                 outside += ev["outside_m2"] == 0.0
                 walkable += ev["traversable"]
+                clear += ev["clearances"]["deepest_m"] <= ACCESS_CLEAR_M
                 clean.append(ev["overlaps"]["count"] == 0 and ev["outside_m2"] == 0.0 and ev["traversable"])
             rows.append(dict(
                 scenario=name, mode=mode, objects=len(model.items), paper_objects=paper_n,
@@ -71,32 +75,32 @@ def run(seeds, only):
                 paper_s=paper_s, speedup=paper_s / float(np.median(times)),
                 median_energy=float(np.median(energies)), median_iterations=float(np.median(iters)),
                 mean_runs=float(np.mean(runs)), no_overlap=overlaps, inside=outside, walkable=walkable,
-                clean=int(sum(clean)), seeds=seeds,
+                clean=int(sum(clean)), clear=clear, seeds=seeds,
             ))
             print(_line(rows[-1]), flush=True)
     return compile_s, rows
 
 
 HEADER = ("| scenario | mode | objects | median ms | max ms | paper s | x faster | E median | "
-          "iterations | runs | no overlap | inside | walkable | clean |")
+          "iterations | runs | no overlap | inside | walkable | clean | clear |")
 
 
 def _line(r):
     return (f"| {r['scenario']} | {r['mode']} | {r['objects']} | {r['median_ms']:.1f} | {r['max_ms']:.1f} | "
             f"{r['paper_s']:.2f} | {r['speedup']:.0f} | {r['median_energy']:.3f} | {r['median_iterations']:.0f} | "
             f"{r['mean_runs']:.1f} | {r['no_overlap']}/{r['seeds']} | {r['inside']}/{r['seeds']} | "
-            f"{r['walkable']}/{r['seeds']} | {r['clean']}/{r['seeds']} |")
+            f"{r['walkable']}/{r['seeds']} | {r['clean']}/{r['seeds']} | {r['clear']}/{r['seeds']} |")
 
 
 def main():
     seeds, only = results_io.scenario_args(__doc__)
     print(HEADER)
-    print("|" + "---|" * 14)
+    print("|" + "---|" * 15)
     compile_s, rows = run(seeds, only)
     print(f"\nfirst solve in a fresh process (JIT compile or cache load): {compile_s:.1f} s")
     meta = results_io.machine(compile_or_cache_s=compile_s)
     md = ["# Paper scenarios, 10 seeds (benchmarks/scenarios.py)", "", f"{meta['machine']}, {meta['date']}", "",
-          HEADER, "|" + "---|" * 14, *[_line(r) for r in rows], "",
+          HEADER, "|" + "---|" * 15, *[_line(r) for r in rows], "",
           f"First solve in a fresh process: {compile_s:.1f} s (JIT compile, or loading numba's disk cache)."]
     paths = results_io.write("scenarios", dict(meta=meta, rows=rows), md)
     print("wrote", *paths)

@@ -15,6 +15,7 @@ _HOMES = {
     "Model": "model",
     "Solver": "solver",
     "State": "model",
+    "clearance_intrusions": "solver",
     "diversity": "solver",
     "energy_terms": "solver",
     "initial_state": "solver",

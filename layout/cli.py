@@ -92,9 +92,11 @@ def _solve(args):
 
 
 def _warnings(reports) -> list[str]:
-    """Suggestions a user should not take as they are: colliding, off the floor or not
-    walkable. (Suggestions alike are no warning: a theater's seats or a desk corner may
+    """Suggestions a user should not take as they are: colliding, off the floor, not
+    walkable or with an item deep in another's clearance. (Suggestions alike are no warning: a theater's seats or a desk corner may
     allow one arrangement; the diversity line shows it.)"""
+    from .solver import ACCESS_CLEAR_M
+
     lines = []
     for k, rep in enumerate(reports, start=1):
         problems = []
@@ -109,6 +111,10 @@ def _warnings(reports) -> list[str]:
             problems.append("not walkable (" + "; ".join(
                 [f"cannot reach {where}"] * bool(where) + [f"door {doors} blocked"] * bool(doors)
                 or [f"the free floor falls into {rep['components']} parts"]) + ")")
+        deepest = rep["clearances"]["deepest_m"]
+        if deepest > ACCESS_CLEAR_M:
+            a, b, _ = max(rep["clearances"]["pairs"], key=lambda p: p[2])
+            problems.append(f"{a} and {b}: one stands {100 * deepest:.0f} cm inside the other's clearance")
         if problems:
             lines.append(f"suggestion {k}: {'; '.join(problems)}; the room may be too small or narrow for "
                          "these items: remove some, or make them smaller in the spec")

@@ -17,11 +17,14 @@ from . import metrics, plot
 from .errors import LayoutError
 from .fileio import replaced_input, staged_folder
 from .geometry import SIDE_NAMES, access_box_corners, box_corners
+from .solver import ACCESS_CLEAR_M, clearance_intrusions
 
 # Overlaps smaller than this (m²) are contacts of touching boxes, not collisions.
 MIN_OVERLAP_M2 = 1e-4
 # Area outside the floor below this (m²) is rounding, not a misplaced item.
 MIN_OUTSIDE_M2 = 1e-4
+# Clearance intrusions listed by evaluate: shallower ones are the solver's tolerance.
+MIN_INTRUSION_M = 0.01
 
 
 def _item_geometry(layout):
@@ -91,7 +94,9 @@ def evaluate(layout) -> dict:
         Henderson et al.), ``components``, ``unreachable`` (``[id, side]``),
         ``blocked_doors`` (door numbers from 1); ``door_clearance_m2`` (furniture area
         inside each door's swing zone) and ``door_blockers`` (ids of the items there,
-        per door).
+        per door); ``clearances``: ``deepest_m``, how far the worst item stands inside
+        another's clearance (0 if none), and ``pairs`` as ``[id, id, depth_m]`` of those
+        more than ``MIN_INTRUSION_M`` in (:func:`layout.solver.clearance_intrusions`).
 
     Notes
     -----
@@ -108,6 +113,7 @@ def evaluate(layout) -> dict:
     outside = metrics.area_outside(polygon, corners)
     doors = layout.corners_m(m.door_particles) if len(m.door_particles) else np.zeros((0, 4, 2))
     trav = walkability(layout)
+    intruding, depth = clearance_intrusions(m, layout)
     clearance = metrics.door_clearance(doors, corners, collides) if len(doors) else np.zeros(0)
     blockers = [
         [ids[i] for i in np.flatnonzero(collides)
@@ -131,6 +137,10 @@ def evaluate(layout) -> dict:
         "blocked_doors": [int(d) + 1 for d in trav.blocked_doors],
         "door_clearance_m2": [float(a) for a in clearance],
         "door_blockers": blockers,
+        "clearances": {
+            "deepest_m": float(depth.max()) if len(depth) else 0.0,
+            "pairs": [[m.names[a], m.names[b], float(d)] for (a, b), d in zip(intruding, depth) if d > MIN_INTRUSION_M],
+        },
     }
 
 
@@ -193,6 +203,8 @@ def output_files(layouts, reports=None, title=""):
         overlap = [[index[a], index[b]] for a, b, _ in rep["overlaps"]["pairs"]]
         doors = lay.corners_m(m.door_particles) if len(m.door_particles) else None
         verdict = "walkable" if rep["traversable"] else "NOT walkable"
+        if rep["clearances"]["deepest_m"] > ACCESS_CLEAR_M:
+            verdict += f", an item {100 * rep['clearances']['deepest_m']:.0f} cm inside a clearance"
         files[f"plan_{k}.png"] = plot.figure_png(plot.plan_figure(
             m.floor_polygon_m, corners, [m.names[i] for i in items], lay.yaw_rad[items],
             door_zones_m=doors, door_segments_m=m.door_segments_m,

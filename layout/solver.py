@@ -36,6 +36,11 @@ TABLE_5_1 = (
 HARD_KINDS = ("collision", "boundary")
 HARD_CLEAN = 1e-4
 
+# An item deeper than this (m) in another's clearance spoils a suggestion even when
+# nothing collides: a nightstand held in front of its bed by its maximum distance, a
+# local minimum PBD does not leave. Such a run counts as unusable and is restarted.
+ACCESS_CLEAR_M = 0.10
+
 # From this many items placed at random, the start is stratified (see initial_state).
 STRATIFY_FROM = 100
 
@@ -292,9 +297,10 @@ class Solver:
         faster on two threads, 3,000 theater seats 17 % slower). The layout depends
         on the choice (the order of the projections changes), not on timing.
     restarts : fresh random starts allowed when a run's best layout still collides,
-        leaves the floor or is not walkable (0: one run, as in the paper). In the
-        tightly packed bedroom one run in three is clean, so 10 restarts left 5 of 40
-        seeds unwalkable; with 20, none of 140 (seeds 0-139).
+        leaves the floor, is not walkable or has an item more than ``ACCESS_CLEAR_M``
+        inside another's clearance (0: one run, as in the paper). In the tightly
+        packed bedroom one run in three is clean, so 10 restarts left 5 of 40 seeds
+        unwalkable; with 20, none of 140 (seeds 0-139).
     stratify_from : from this many bodies placed at random, the start is stratified
         instead of uniform (:func:`initial_state`).
     polish_rounds : after the loop, at most this many rounds of collision and
@@ -344,11 +350,13 @@ class Solver:
     def solve(self, model: Model, seed=None, state: State | None = None) -> Layout:
         """Solve from a random start drawn with ``seed`` (or from ``state``).
 
-        When the best layout of a run still collides, leaves the floor or is not
-        walkable (:func:`layout.report.walkability`), the solver starts again from a
+        When the best layout of a run still collides, leaves the floor, is not
+        walkable (:func:`layout.report.walkability`) or has an item more than
+        ``ACCESS_CLEAR_M`` inside another's clearance, the solver starts again from a
         fresh random start of the same generator, up to ``restarts`` times, and
-        returns the best run: clean first, then walkable, then lowest energy. The returned layout says how many runs
-        it took; its time covers all of them.
+        returns the best run: clean first, then walkable, then clear, then lowest
+        energy. The returned layout says how many runs it took; its time covers all
+        of them.
         """
         rng = np.random.default_rng(seed)
         best = None
@@ -361,10 +369,11 @@ class Solver:
             clean = sum(terms[k] for k in HARD_KINDS) <= HARD_CLEAN
             # Walkability is only worth checking (a rasterization) for a clean layout.
             walkable = clean and (self.restarts == 0 or _walkable(model, pos, yaw))
-            key = (not clean, not walkable, float(np.sqrt(sum(terms.values()))))
+            clear = self.restarts == 0 or _deepest_intrusion_m(model, State(pos, yaw), self.collision) <= ACCESS_CLEAR_M
+            key = (not clean, not walkable, not clear, float(np.sqrt(sum(terms.values()))))
             if best is None or key < best[0]:
                 best = (key, pos, yaw, trace, best_it, iters, degen, terms)
-            if clean and walkable:
+            if clean and walkable and clear:
                 break
         elapsed = time.perf_counter() - t0
         # All the runs it took, not the index of the best one (they differ when no run
@@ -431,6 +440,42 @@ def energy_terms(model: Model, state: State, collision: str = "box") -> dict:
     terms = K.energy_terms(model.packed(), state.position_m, state.yaw_rad, cs, pairs,
                            codes.COLLISION_NAMES[collision], np.array(codes.ENERGY_WEIGHTS))
     return {k: float(v) for k, v in zip(codes.KINDS, terms)}
+
+
+def clearance_intrusions(model: Model, state: State, collision: str = "box"):
+    """Pairs of items of which one stands in the other's clearance (access sides).
+
+    Parameters
+    ----------
+    model, state, collision
+        As for :func:`residuals` (a Layout serves as the state).
+
+    Returns
+    -------
+    pairs : (k, 2) int64
+        Particle indices (i < j) of the items; members of one group are never a pair.
+    depth_m : (k,) float64
+        How far in, > 0: the root-sum-square of the penetrations into each access
+        box either item has against the other (0.25 for an item 25 cm inside).
+    """
+    P = model.packed()[0]
+    # Copies: a Layout's arrays are read-only, and the kernel is compiled for writable ones.
+    pos = np.array(state.position_m, dtype=np.float64)
+    yaw = np.array(state.yaw_rad, dtype=np.float64)
+    pairs = K.candidate_pairs(P, pos, yaw, _cell_size(model), 0.05)
+    cs = np.empty((model.n, 2))
+    K.trig(yaw, cs)
+    depth = np.zeros(len(pairs))
+    if len(pairs):
+        K.residual_access(P, pairs, pos, cs, codes.COLLISION_NAMES[collision], depth)
+    inside = depth < 0.0
+    return pairs[inside, :2].astype(np.int64), -depth[inside]
+
+
+def _deepest_intrusion_m(model, state, collision) -> float:
+    """How deep (m) the worst item stands in another's clearance, 0 if none does."""
+    _, depth = clearance_intrusions(model, state, collision)
+    return float(depth.max()) if len(depth) else 0.0
 
 
 def residuals(model: Model, state: State, collision: str = "box") -> dict:

@@ -21,6 +21,7 @@ from augment.floor import DOOR_COLOR, FloorPolygon
 from augment.pipeline import (REPORT_KEYS, FurnishError, contact_sheet, fit_spec, furnish, inset_polygon,
                               open_edges, scene_glb, write_outputs)
 from layout.geometry import edge_distances, polygon_area
+from layout.solver import ACCESS_CLEAR_M
 from layout.spec import load_spec
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -131,6 +132,7 @@ def test_report_is_complete(roomy):
     assert [s["k"] for s in report["suggestions"]] == [1, 2, 3]
     for s in report["suggestions"]:
         assert {"energy", "overlaps", "outside_m2", "traversable"} <= set(s)
+        assert 0.0 <= s["clearance_intrusion_m"] <= ACCESS_CLEAR_M  # restarted until clear
     for stage in ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene",
                   "overlays", "total"):
         assert report["timings_s"][stage] >= 0

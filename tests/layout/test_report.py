@@ -6,7 +6,7 @@ import matplotlib.image
 import numpy as np
 import pytest
 
-from layout import LayoutBuilder, Solver, report
+from layout import LayoutBuilder, Solver, cli, report
 from layout.errors import LayoutError
 
 
@@ -69,6 +69,7 @@ def test_door_zone_and_walkability():
     r = report.evaluate(lay)
     assert not r["traversable"]
     assert r["unreachable"] == [["bookcase", "front"]]
+    assert r["clearances"] == {"deepest_m": 0.0, "pairs": []}
     assert r["blocked_doors"] == []
     assert r["door_clearance_m2"] == [pytest.approx(0.16)]
     assert r["door_blockers"] == [["stool"]]
@@ -77,6 +78,18 @@ def test_door_zone_and_walkability():
                      "stool": (2.9, 0.2, 0.0)})
     r = report.evaluate(lay)
     assert r["traversable"] and r["unreachable"] == [] and r["door_blockers"] == [[]]
+    # The stool (x 2.7-3.1, y 0-0.4) stands 7.5 cm inside the bookcase's front
+    # clearance (x 3.025-3.625, y 0.2-1.0); in the first layout nothing was.
+    assert r["clearances"]["deepest_m"] == pytest.approx(0.075)
+    assert [p[:2] for p in r["clearances"]["pairs"]] == [["bookcase", "stool"]]
+    assert cli._warnings([r]) == []  # within the solver's 10 cm
+    # 0.3 m further in, 20 cm deep (the stool's 0.2 m overlap across the clearance's width).
+    lay = placed(b, {"cabinet": (2.0, 0.2, np.pi / 2), "bookcase": (3.8, 0.6, np.pi),
+                     "stool": (3.2, 0.2, 0.0)})
+    r = report.evaluate(lay)
+    assert r["clearances"]["deepest_m"] == pytest.approx(0.2)
+    (line,) = cli._warnings([r])
+    assert "bookcase and stool: one stands 20 cm inside the other's clearance" in line
 
 
 def test_group_mates_may_take_an_access_side():

@@ -11,7 +11,7 @@ from layout._kernels import inside_polygon
 from layout.geometry import box_corners, polygon_area
 from layout.metrics import box_overlaps
 from layout.report import evaluate
-from layout.solver import _random_inside, _stratified_inside, initial_state
+from layout.solver import _deepest_intrusion_m, _random_inside, _stratified_inside, initial_state
 from layout.spec import build, load_spec
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
@@ -241,6 +241,22 @@ def test_runs_counts_every_run_taken_when_none_is_clean():
     layout = Solver(restarts=3, max_iterations=150).solve(b.finalize(), seed=0)
     assert evaluate(layout)["overlaps"]["count"] == 1
     assert layout.runs == 4
+
+
+def test_deepest_intrusion_into_a_clearance_by_hand():
+    # A 1.4 x 2.0 m bed at (2, 2) facing +x: its 0.6 m front clearance spans x 3.0-3.6,
+    # y 1.3-2.7. A 0.4 m stool centered at x = 3.55 covers x 3.35-3.75: 0.25 m inside
+    # (the clearance's far edge is the shallowest way out); at x = 3.7, 0.1 m; at 3.85, none.
+    b = LayoutBuilder([[0, 0], [6, 0], [6, 4], [0, 4]])
+    b.add_item("bed", (1.4, 2.0, 0.5), access_m=(0, 0, 0.6, 0))
+    b.add_item("stool", (0.4, 0.4, 0.5))
+    model = b.finalize()
+    for x, depth in ((3.55, 0.25), (3.7, 0.1), (3.85, 0.0)):
+        pos = np.array([[2.0, 2.0, 0.25], [x, 2.0, 0.25]])
+        assert _deepest_intrusion_m(model, State(pos, np.zeros(2)), "box") == pytest.approx(depth, abs=1e-9)
+    # Behind the bed, which has no clearance there: none.
+    pos = np.array([[2.0, 2.0, 0.25], [0.45, 2.0, 0.25]])
+    assert _deepest_intrusion_m(model, State(pos, np.zeros(2)), "box") == 0.0
 
 
 def test_stratified_start_puts_one_point_in_each_cell():
