@@ -145,7 +145,7 @@ def _game_room(area):
     group, table = _table_set("games", "game_table", "chair", 2 if area < 9 else 4)
     groups.append(group)
     items += table
-    arcades = 1 if area < 9 else 2 if area < 40 else 4
+    arcades = 1 if area < 12 else 2 if area < 40 else 4
     items.append(_item("arcade", "arcade_cabinet", count=arcades))
     if area >= 40:
         items.append(_item("sofa", "sofa"))
