@@ -28,6 +28,19 @@ def square_room(tmp_path, preset, area_m2, door=True):
     return spec.load_spec(path)
 
 
+def rect_room(tmp_path, preset, width_m, depth_m, door_x):
+    """A width x depth room with the preset and a 0.8 m door in its first wall at ``door_x``."""
+    path = tmp_path / f"{preset}_{width_m:g}x{depth_m:g}.toml"
+    path.write_text(textwrap.dedent(f"""
+        [room]
+        polygon = [[0, 0], [{width_m}, 0], [{width_m}, {depth_m}], [0, {depth_m}]]
+        height = 2.6
+        preset = "{preset}"
+        doors = [{{ at = [{door_x}, 0.0], width = 0.8 }}]
+    """))
+    return spec.load_spec(path)
+
+
 def expanded(parts):
     out = []
     for t in parts["items"]:
@@ -122,15 +135,7 @@ def test_bad_preset_arguments(args, match):
 
 @pytest.mark.parametrize("name", list(presets.PRESETS))
 def test_solved_preset_in_a_small_room_has_no_overlaps(tmp_path, name):
-    path = tmp_path / "room.toml"
-    path.write_text(textwrap.dedent(f"""
-        [room]
-        polygon = [[0, 0], [4, 0], [4, 3.5], [0, 3.5]]
-        height = 2.6
-        preset = "{name}"
-        doors = [{{ at = [3.4, 0.0], width = 0.8 }}]
-    """))
-    model, _ = spec.build(spec.load_spec(path))
+    model, _ = spec.build(rect_room(tmp_path, name, 4.0, 3.5, door_x=3.4))
     # The solver is a local method: of three random starts, the best must be clean.
     reports = [evaluate(lay) for lay in Solver(max_iterations=400).suggest(model, 3)]
     clean = [r for r in reports if r["overlaps"]["count"] == 0 and r["outside_m2"] == 0.0]
@@ -142,14 +147,6 @@ def test_every_suggestion_in_a_small_room_leaves_the_clearances_free(tmp_path, n
     # 3 x 3.2 m with a door: what a preset puts here must fit with its clearances
     # (before one arcade cabinet below 12 m², the game room's two stood in the way of the
     # table set's chairs in 17 of 30 suggestions, restarts and all).
-    path = tmp_path / "room.toml"
-    path.write_text(textwrap.dedent(f"""
-        [room]
-        polygon = [[0, 0], [3, 0], [3, 3.2], [0, 3.2]]
-        height = 2.6
-        preset = "{name}"
-        doors = [{{ at = [1.0, 0.0], width = 0.8 }}]
-    """))
-    model, solver = spec.build(spec.load_spec(path))
+    model, solver = spec.build(rect_room(tmp_path, name, 3.0, 3.2, door_x=1.0))
     deepest = [evaluate(lay)["clearances"]["deepest_m"] for lay in solver.suggest(model, 5)]
     assert max(deepest) <= ACCESS_CLEAR_M, deepest
