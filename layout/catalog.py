@@ -66,7 +66,7 @@ CATALOG = dict(
         # Bedroom.
         _k("bed", (1.6, 2.1, 0.5), (0, 0.6, 0.6, 0.6), True, label="double bed"),
         _k("single_bed", (0.9, 2.0, 0.5), (0, 0.6, 0.6, 0), True, label="single bed"),
-        _k("nightstand", (0.5, 0.4, 0.55), (0, 0, 0.3, 0), label="nightstand"),
+        _k("nightstand", (0.5, 0.4, 0.55), (0, 0, 0.4, 0), label="nightstand"),
         _k("wardrobe", (1.2, 0.6, 2.0), (0, 0, 0.7, 0), True, label="wardrobe"),
         _k("dresser", (1.0, 0.5, 0.8), (0, 0, 0.6, 0), True, label="dresser / sideboard"),
         # Living room.
