@@ -725,6 +725,8 @@ def _asset(text: str) -> tuple[str, Path]:
 
 
 def _furnish_cmd(args):
+    from layout.solver import COMPILE_NOTE, compiled
+
     from .pipeline import furnish, write_outputs
 
     photos = args.photo
@@ -773,6 +775,8 @@ def _furnish_cmd(args):
         from .gl import Renderer
 
         shared = {"model": _load_model(args.model), "renderer": Renderer()}
+    if not args.quiet and sys.stderr.isatty() and not compiled():  # said where a progress bar shows
+        print(f"note: {COMPILE_NOTE}", file=sys.stderr)
     refused, uncertain = 0, []
     try:
         for photo, out in zip(photos, outs):

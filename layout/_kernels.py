@@ -12,6 +12,12 @@ numbers in comments are the paper's. Kernels use numpy's error model (a division
 zero gives inf, never an exception check in the hot loop); every division that could
 see a zero is guarded. Degenerate cases (a zero-length direction) are
 skipped and counted in ``degen[kind]``.
+
+Kernels call each other with run numbers, iteration counts and the Jacobi flag wrapped
+in ``np.int64``/``np.bool_``: numba compiles a callee once more for every literal value
+it is passed (``collision_pass`` was compiled six times), which made up a third of the
+first run's compile. The ``project`` flag of the passes stays literal on purpose: its
+two versions, residual and projection, each leave out the other's code.
 """
 from __future__ import annotations
 
@@ -679,7 +685,7 @@ def project_orientation(O, P, pos, yaw, acc, jac, it, rate, degen):
 
 @njit(cache=True, error_model="numpy")
 def residual_orientation(O, P, pos, yaw, out):
-    orientation_pass(O, P, pos, yaw, np.empty((0, 6)), False, 1, 1.0, out, False)
+    orientation_pass(O, P, pos, yaw, np.empty((0, 6)), np.bool_(False), np.int64(1), 1.0, out, False)
 
 
 @njit(cache=True, error_model="numpy")
@@ -928,7 +934,7 @@ def boundary_item(R, P, pos, yaw, i, project):
 @njit(cache=True, error_model="numpy")
 def project_boundary(R, P, pos, yaw):
     """The layout boundary alone, every movable body (:func:`floor_pass`)."""
-    floor_pass(R, P, pos, yaw, np.empty((0, 2)), 0.0, body_sides(P, pos, 1), 0, False)
+    floor_pass(R, P, pos, yaw, np.empty((0, 2)), 0.0, body_sides(P, pos, np.int64(1)), np.int64(0), np.bool_(False))
 
 
 @njit(cache=True, error_model="numpy")
@@ -1416,14 +1422,14 @@ def collision_pass(P, R, pairs, run, pos, yaw, cs, acc, jac, k, model, gap_m, de
 
 @njit(cache=True, error_model="numpy")
 def project_collision(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m, degen):
-    return collision_pass(P, R, pairs, -1, pos, yaw, cs, acc, jac, k, model, gap_m, degen, np.empty(0), True)
+    return collision_pass(P, R, pairs, np.int64(-1), pos, yaw, cs, acc, jac, k, model, gap_m, degen, np.empty(0), True)
 
 
 @njit(cache=True, error_model="numpy")
 def residual_collision(P, R, pairs, pos, cs, model, out):
     # The projection-only arguments are placeholders here.
-    return collision_pass(P, R, pairs, -1, pos, np.empty(0), cs, np.empty((0, 6)), False, 0.0, model, 0.0,
-                          np.zeros(N_KINDS, np.int64), out, False)
+    return collision_pass(P, R, pairs, np.int64(-1), pos, np.empty(0), cs, np.empty((0, 6)), np.bool_(False), 0.0,
+                          model, 0.0, np.zeros(N_KINDS, np.int64), out, False)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -1538,7 +1544,7 @@ def access_pass(P, pairs, run, pos, yaw, cs, acc, jac, k, model, out, project):
 
 @njit(cache=True, error_model="numpy")
 def project_access(P, pairs, pos, yaw, cs, acc, jac, k, model, degen):
-    access_pass(P, pairs, -1, pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
+    access_pass(P, pairs, np.int64(-1), pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -1595,7 +1601,7 @@ def residual_access_in_floor(R, P, pos, yaw, cs):
 @njit(cache=True, error_model="numpy")
 def residual_access(P, pairs, pos, cs, model, out):
     """Squared-sum violation of all access sides, per candidate pair."""
-    access_pass(P, pairs, -1, pos, np.empty(0), cs, np.empty((0, 6)), False, 0.0, model, out, False)
+    access_pass(P, pairs, np.int64(-1), pos, np.empty(0), cs, np.empty((0, 6)), np.bool_(False), 0.0, model, out, False)
 
 
 # ------------------------------------------- two threads for the pair passes
@@ -1628,8 +1634,8 @@ def project_collision_split(P, R, pairs, pos, yaw, cs, acc, jac, k, model, gap_m
     two threads, then the pairs across."""
     local = np.zeros((2, N_KINDS), np.int64)
     for t in prange(2):
-        collision_pass(P, R, pairs, t, pos, yaw, cs, acc, jac, k, model, gap_m, local[t], np.empty(0), True)
-    collision_pass(P, R, pairs, 2, pos, yaw, cs, acc, jac, k, model, gap_m, degen, np.empty(0), True)
+        collision_pass(P, R, pairs, np.int64(t), pos, yaw, cs, acc, jac, k, model, gap_m, local[t], np.empty(0), True)
+    collision_pass(P, R, pairs, np.int64(2), pos, yaw, cs, acc, jac, k, model, gap_m, degen, np.empty(0), True)
     for q in range(N_KINDS):
         degen[q] += local[0, q] + local[1, q]
 
@@ -1639,8 +1645,8 @@ def project_access_split(P, pairs, pos, yaw, cs, acc, jac, k, model):
     """:func:`project_access` over the runs of :func:`pair_run`, like
     :func:`project_collision_split`."""
     for t in prange(2):
-        access_pass(P, pairs, t, pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
-    access_pass(P, pairs, 2, pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
+        access_pass(P, pairs, np.int64(t), pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
+    access_pass(P, pairs, np.int64(2), pos, yaw, cs, acc, jac, k, model, np.empty(0), True)
 
 
 @njit(cache=True, error_model="numpy")
@@ -1662,7 +1668,7 @@ def project_floor_split(R, P, pos, yaw, cs, k_access, side, access):
     """:func:`floor_pass` for both sides, each on its own thread: a thread moves only
     its own bodies, so the boundary still comes last for each."""
     for t in prange(2):
-        floor_pass(R, P, pos, yaw, cs, k_access, side, t, access)
+        floor_pass(R, P, pos, yaw, cs, k_access, side, np.int64(t), access)
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
@@ -1811,7 +1817,7 @@ def iterate(M, pos, yaw, pairs, side, threads, acc, cs, cs_yaw, degen, it, rate,
     if threads > 1:
         project_floor_split(R, P, pos, yaw, cs, k_access, side, order[row, 2])
     else:
-        floor_pass(R, P, pos, yaw, cs, k_access, side, 0, order[row, 2])
+        floor_pass(R, P, pos, yaw, cs, k_access, side, np.int64(0), order[row, 2])
 
 
 @njit(cache=True, error_model="numpy")
@@ -1829,8 +1835,8 @@ def polish(M, pos, yaw, rounds, model, gap_m, cell_m, pad_m):
         trig(yaw, cs)
         if residual_collision(P, R, pairs, pos, cs, model, np.empty(pairs.shape[0])) == 0:
             return
-        project_collision(P, R, pairs, pos, yaw, cs, acc, False, 1.0, model, gap_m, degen)
-        project_stack(ST, P, pos, yaw, acc, False, 1, 1.0, degen)
+        project_collision(P, R, pairs, pos, yaw, cs, acc, np.bool_(False), 1.0, model, gap_m, degen)
+        project_stack(ST, P, pos, yaw, acc, np.bool_(False), np.int64(1), 1.0, degen)
         project_boundary(R, P, pos, yaw)
 
 

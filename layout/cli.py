@@ -56,7 +56,7 @@ def _check_out_dir(out):
 
 def _solve(args):
     from . import report, spec
-    from .solver import diversity
+    from .solver import COMPILE_NOTE, compiled, diversity
 
     if not 1 <= args.suggestions <= MAX_SUGGESTIONS:
         raise LayoutError(f"--suggestions {args.suggestions}: choose from 1 to {MAX_SUGGESTIONS} (each is a "
@@ -65,6 +65,8 @@ def _solve(args):
     _check_out_dir(out)
     sp = spec.load_spec(args.spec)
     model, solver = spec.build(sp)
+    if not args.quiet and sys.stderr.isatty() and not compiled():  # said where a progress bar shows
+        print(f"note: {COMPILE_NOTE}", file=sys.stderr)
     layouts, reports = [], []
     for k in _progress(range(args.suggestions), args.suggestions, args.quiet):
         # Same seeds as Solver.suggest: suggestion k + 1 starts from seed + k.

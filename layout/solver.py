@@ -416,6 +416,24 @@ class Solver:
         return [self.solve(model, seed=seed + k) for k in range(n)]
 
 
+# What the command lines say before a solve that compiles.
+COMPILE_NOTE = ("the first run on this machine compiles the layout solver (numba): 1-2 minutes, once; "
+                "later runs load it in about a second")
+
+
+def compiled() -> bool:
+    """Whether the solver's loop is ready without compiling: compiled in this process, or
+    in numba's disk cache for this source (the first run on a machine compiles it for
+    1-2 minutes). True when that cannot be told: the cache's index is not numba's public
+    API."""
+    if K.solve_loop.signatures:
+        return True
+    try:
+        return bool(K.solve_loop._cache._cache_file._load_index())
+    except Exception:
+        return True
+
+
 def _walkable(model, pos, yaw) -> bool:
     from .report import walkability  # report draws plans; import it only when needed
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import sys
 import textwrap
 from pathlib import Path
 
@@ -221,10 +222,16 @@ def test_something_on_the_board_is_said(tmp_path):
     assert any(w.startswith("something stands on 2") and "--keep-board" in w for w in result.warnings)
 
 
-def test_keep_board_leaves_it(tmp_path, capsys):
+def test_keep_board_leaves_it(tmp_path, capsys, monkeypatch):
+    # On a terminal, and as if the solver were not compiled yet: the one-line note first.
+    import layout.solver
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    monkeypatch.setattr(layout.solver, "compiled", lambda: False)
     out = tmp_path / "kept"
     code, stdout, err = run(["furnish", ROOMY, "--suggestions", "1", "--keep-board", "--out", out], capsys)
     assert code == 0, err
+    assert err.startswith("note: the first run on this machine compiles the layout solver (numba)"), err
     assert "board       kept in the staged photos (--keep-board)" in stdout
     staged = cv2.cvtColor(cv2.imread(str(out / "staged_1.jpg")), cv2.COLOR_BGR2RGB)
     assert _board_found(staged)

@@ -1,8 +1,10 @@
 """The ``layout`` command line (layout.cli)."""
 import json
+import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -200,3 +202,34 @@ def test_ctrl_c_reads_as_an_interruption_whatever_it_turns_into(capsys):
 
     assert dispatch(broken, None, "stage", []) == 1
     assert "unexpected failure (a bug in stage)" in capsys.readouterr().err
+
+
+def test_solve_says_when_the_first_run_compiles(spec_file, tmp_path, capsys, monkeypatch):
+    import layout.solver
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)  # a terminal, as the note is for one
+    for ready in (False, True):
+        monkeypatch.setattr(layout.solver, "compiled", lambda: ready)
+        assert cli.main(["solve", str(spec_file), "--suggestions", "1", "--out", str(tmp_path / "o")]) == 0
+        err = capsys.readouterr().err
+        assert ("note: the first run on this machine compiles the layout solver" in err) is not ready, err
+    # Not on a terminal (tests, CI, a pipe), or with --quiet: not a word.
+    monkeypatch.setattr(layout.solver, "compiled", lambda: False)
+    assert cli.main(["solve", str(spec_file), "--out", str(tmp_path / "o"), "-q"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_compiled_reads_a_cold_cache_without_compiling(spec_file, tmp_path):
+    # An empty numba cache: the solver would compile, and asking does not start it.
+    code = "from layout.solver import compiled; import layout._kernels as K; print(compiled(), K.solve_loop.signatures)"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                          cwd=Path(__file__).resolve().parents[2])
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["False", "[]"]
+    # Once compiled or loaded in a process, it is ready.
+    from layout.solver import compiled
+
+    model, solver = spec.build(spec.load_spec(spec_file))
+    solver.solve(model, seed=0)
+    assert compiled()
