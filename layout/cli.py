@@ -95,8 +95,9 @@ def _solve(args):
 
 def _warnings(reports) -> list[str]:
     """Suggestions a user should not take as they are: colliding, off the floor, not
-    walkable or with an item deep in another's clearance. (Suggestions alike are no warning: a theater's seats or a desk corner may
-    allow one arrangement; the diversity line shows it.)"""
+    walkable or with an item deep in another's clearance. (Suggestions alike are no
+    warning: a theater's seats or a desk corner may allow one arrangement; the
+    diversity line shows it.)"""
     from .solver import ACCESS_CLEAR_M
 
     lines = []

@@ -139,7 +139,8 @@ def evaluate(layout) -> dict:
         "door_blockers": blockers,
         "clearances": {
             "deepest_m": float(depth.max()) if len(depth) else 0.0,
-            "pairs": [[m.names[a], m.names[b], float(d)] for (a, b), d in zip(intruding, depth) if d > MIN_INTRUSION_M],
+            "pairs": [[m.names[a], m.names[b], float(d)] for (a, b), d in zip(intruding, depth)
+                      if d > MIN_INTRUSION_M],
         },
     }
 

@@ -369,7 +369,8 @@ class Solver:
             clean = sum(terms[k] for k in HARD_KINDS) <= HARD_CLEAN
             # Walkability is only worth checking (a rasterization) for a clean layout.
             walkable = clean and (self.restarts == 0 or _walkable(model, pos, yaw))
-            clear = self.restarts == 0 or _deepest_intrusion_m(model, State(pos, yaw), self.collision) <= ACCESS_CLEAR_M
+            clear = (self.restarts == 0
+                     or _deepest_intrusion_m(model, State(pos, yaw), self.collision) <= ACCESS_CLEAR_M)
             key = (not clean, not walkable, not clear, float(np.sqrt(sum(terms.values()))))
             if best is None or key < best[0]:
                 best = (key, pos, yaw, trace, best_it, iters, degen, terms)
