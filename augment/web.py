@@ -163,7 +163,7 @@ def _run_job(job_dir: str, options: dict) -> dict:
                                   room=None if spec is not None else options["room"], spec=spec,
                                   suggestions=options["suggestions"], seed=options["seed"], camera=camera,
                                   floor_mask=floor_mask, clicks=clicks, doors=doors,
-                                  keep_board=options.get("keep_board", False), reporter=_FileProgress,
+                                  keep_board=options["keep_board"], reporter=_FileProgress,
                                   renderer=_renderer)
         state = json.loads(_progress_path.read_text())
         _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
@@ -350,7 +350,7 @@ def _job_state(job: Job) -> dict:
                          "floor_mask": job.options.get("floor_mask") is not None,
                          "clicks": len(job.options.get("clicks") or ()),
                          "doors": len(job.options.get("doors") or ()),
-                         "keep_board": job.options.get("keep_board", False),
+                         "keep_board": job.options["keep_board"],
                          "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
     try:
         progress = json.loads((job.folder / "progress.json").read_text())
