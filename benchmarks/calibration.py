@@ -40,10 +40,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import results_io  # noqa: E402
 
-from augment.board import Board  # noqa: E402
-from augment.calibrate import (CalibrationError, calibrate_file, calibrate_photo, camera_profile,  # noqa: E402
-                               detect_board, exif_intrinsics)
-from augment.gl import Renderer  # noqa: E402
+from augment.camera.board import Board  # noqa: E402
+from augment.camera.detect import detect_board  # noqa: E402
+from augment.camera.calibrate import calibrate_file, calibrate_photo, camera_profile, exif_intrinsics
+from augment.errors import CalibrationError
+from augment.render.gl import Renderer  # noqa: E402
 from augment.synth import render_sample  # noqa: E402
 
 REAL = Path(__file__).resolve().parents[1] / "tests" / "data" / "opencv-chessboard"

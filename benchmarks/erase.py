@@ -9,7 +9,7 @@ Each render of the synthetic photographer (seeds ``[--seed, i]``, 960 x 720, fur
 rooms none, cartons allowed) is drawn twice from one random stream, with and without the
 board: the second is the floor under the board, the truth. The photo is calibrated from
 the board with the true focal length (as EXIF gives it), segmented by the pipeline's
-own floor model, and the board erased (``augment.erase.erase_board``). Beside it, the
+own floor model, and the board erased (``augment.render.erase.erase_board``). Beside it, the
 plain answer: OpenCV's Telea inpainting of the same pixels in the photo.
 
 Measured over the pixels the board changed (more than 8 levels of 255 from the truth):
@@ -39,11 +39,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from results_io import RESULTS, machine, write  # noqa: E402
 
-from augment.board import Board  # noqa: E402
-from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics, read_photo  # noqa: E402
-from augment.erase import erase_board  # noqa: E402
-from augment.gl import Renderer  # noqa: E402
-from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor  # noqa: E402
+from augment.camera.board import Board  # noqa: E402
+from augment.camera.calibrate import calibrate_photo, exif_intrinsics  # noqa: E402
+from augment.errors import CalibrationError  # noqa: E402
+from augment.photo.io import read_photo  # noqa: E402
+from augment.render.erase import erase_board  # noqa: E402
+from augment.render.gl import Renderer  # noqa: E402
+from augment.floor.model import DEFAULT_MODEL, FloorModel  # noqa: E402
+from augment.floor.segment import segment_floor  # noqa: E402
 from augment.synth import render_sample  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
 

@@ -41,13 +41,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import results_io  # noqa: E402
 
 import augment.synth.camera as synth_camera  # noqa: E402
-from augment.board import Board  # noqa: E402
-from augment.calibrate import (Calibration, CalibrationError, calibrate_file, calibrate_photo,  # noqa: E402
-                               exif_intrinsics)
-from augment.gl import Renderer  # noqa: E402
-from augment.height import measure_height  # noqa: E402
-from augment.overlay_height import height_overlay  # noqa: E402
-from augment.segment import FloorModel, segment_floor  # noqa: E402
+from augment.camera.board import Board  # noqa: E402
+from augment.camera.calibrate import exif_intrinsics  # noqa: E402
+from augment.camera.calibrate import calibrate_file, calibrate_photo
+from augment.camera.calibration import Calibration
+from augment.errors import CalibrationError
+from augment.render.gl import Renderer  # noqa: E402
+from augment.room.height import measure_height  # noqa: E402
+from augment.draw.height import height_overlay  # noqa: E402
+from augment.floor.model import FloorModel  # noqa: E402
+from augment.floor.segment import segment_floor  # noqa: E402
 from augment.synth import CEILING, render_sample  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
 

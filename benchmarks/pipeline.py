@@ -34,7 +34,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import results_io  # noqa: E402
 
-from augment.board import Board  # noqa: E402
+from augment.camera.board import Board  # noqa: E402
 from augment.pipeline import furnish, write_outputs  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -65,7 +65,7 @@ def _command(photo: Path, numba_cache: str | None = None) -> float:
         env["NUMBA_CACHE_DIR"] = numba_cache
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "augment.cli", "furnish", str(photo), "--suggestions",
+        subprocess.run([sys.executable, "-m", "augment.app.cli", "furnish", str(photo), "--suggestions",
                         str(SUGGESTIONS), "--out", str(Path(tmp) / "out"), "--quiet"],
                        check=True, env=env, cwd=ROOT)
         return time.perf_counter() - t0

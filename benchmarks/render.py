@@ -5,14 +5,14 @@ Run by hand (from the repository root):
 * ``python benchmarks/render.py [--repeats 5]``: stages the four sample photos
   (``samples/photos/room_K.jpg``, calibrated from their board, floor mask from their
   ground truth) with two layouts each (presets bedroom, living room, living room,
-  office): one solved for the visible floor's polygon (``augment.floor.floor_polygon``),
+  office): one solved for the visible floor's polygon (``augment.floor.polygon.floor_polygon``),
   as the furnishing pipeline does, and a heavier one for the room's whole floor, at
   1280x960 and upscaled to 4032x3024, with one renderer for everything. Prints the median
   seconds per stage and writes ``results/render.{json,md}``. The first render of each photo builds its furniture and
   is reported apart ("cold"); the medians are of the renders after it, as for the second
   and later suggestions of a photo.
 * ``python benchmarks/render.py --gallery``: ``docs/furniture_gallery.png``, every catalog
-  kind rendered by :func:`augment.render.render_staged` on a plain studio floor (its style in
+  kind rendered by :func:`augment.render.staged.render_staged` on a plain studio floor (its style in
   brackets), and ``docs/render_rooms.jpg``, the four sample photos before and after staging.
 """
 from __future__ import annotations
@@ -33,12 +33,13 @@ from PIL import Image, ImageDraw, ImageFont
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import results_io  # noqa: E402
 
-from augment.board import Board  # noqa: E402
-from augment.calibrate import calibrate_photo, read_photo  # noqa: E402
-from augment.floor import floor_polygon  # noqa: E402
-from augment.furniture import PlacedItem, furniture_for, placed_items  # noqa: E402
-from augment.gl import Renderer  # noqa: E402
-from augment.render import Lighting, estimate_lighting, render_staged, write_jpeg, write_png  # noqa: E402
+from augment.camera.board import Board  # noqa: E402
+from augment.camera.calibrate import calibrate_photo  # noqa: E402
+from augment.photo.io import read_photo  # noqa: E402
+from augment.floor.polygon import floor_polygon  # noqa: E402
+from augment.render.furniture import PlacedItem, furniture_for, placed_items  # noqa: E402
+from augment.render.gl import Renderer  # noqa: E402
+from augment.render.staged import Lighting, estimate_lighting, render_staged, write_jpeg, write_png  # noqa: E402
 from layout.catalog import CATALOG  # noqa: E402
 from layout.spec import build, load_spec  # noqa: E402
 
@@ -51,7 +52,7 @@ BIG = (4032, 3024)
 
 def load_room(name: str, preset: str):
     """Photo, calibration (from its board), floor mask (its ground truth), the visible
-    floor's polygon (:func:`augment.floor.floor_polygon`) and a layout of ``preset`` on it,
+    floor's polygon (:func:`augment.floor.polygon.floor_polygon`) and a layout of ``preset`` on it,
     as the furnishing pipeline would make them."""
     image = read_photo(PHOTOS / f"{name}.jpg")
     calibration = calibrate_photo(image, Board())

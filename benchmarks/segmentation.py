@@ -35,12 +35,14 @@ from tqdm import tqdm
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from augment.board import Board  # noqa: E402
-from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics  # noqa: E402
-from augment.floor import floor_polygon  # noqa: E402
-from augment.gl import Renderer  # noqa: E402
-from augment.segment import (DEFAULT_MODEL, DISPUTED_SHARE_WARN, MAX_FLOOR_DISTANCE_M, FloorModel,  # noqa: E402
-                             segment_floor)
+from augment.camera.board import Board  # noqa: E402
+from augment.camera.calibrate import calibrate_photo, exif_intrinsics  # noqa: E402
+from augment.errors import CalibrationError  # noqa: E402
+from augment.floor.polygon import floor_polygon  # noqa: E402
+from augment.render.gl import Renderer  # noqa: E402
+from augment.floor.segment import segment_floor  # noqa: E402
+from augment.floor.model import DEFAULT_MODEL, FloorModel
+from augment.floor.segment import DISPUTED_SHARE_WARN, MAX_FLOOR_DISTANCE_M
 from augment.synth import render_sample  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
 

@@ -30,11 +30,15 @@ from tqdm import tqdm
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from augment.board import Board  # noqa: E402
-from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics  # noqa: E402
-from augment.floor import floor_overlay, floor_polygon  # noqa: E402
-from augment.gl import Renderer  # noqa: E402
-from augment.segment import DEFAULT_MODEL, FloorModel, SegmentationError, patch_middle, segment_floor  # noqa: E402
+from augment.camera.board import Board  # noqa: E402
+from augment.camera.calibrate import calibrate_photo, exif_intrinsics  # noqa: E402
+from augment.errors import CalibrationError  # noqa: E402
+from augment.draw.floor import floor_overlay  # noqa: E402
+from augment.floor.polygon import floor_polygon  # noqa: E402
+from augment.render.gl import Renderer  # noqa: E402
+from augment.errors import SegmentationError  # noqa: E402
+from augment.floor.model import DEFAULT_MODEL, FloorModel  # noqa: E402
+from augment.floor.segment import patch_middle, segment_floor  # noqa: E402
 from augment.synth import render_sample  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
 from segmentation import true_visible_area_m2  # noqa: E402

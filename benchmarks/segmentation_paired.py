@@ -39,10 +39,12 @@ from tqdm import tqdm
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from augment.board import Board  # noqa: E402
-from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics  # noqa: E402
-from augment.floor import floor_polygon  # noqa: E402
-from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor  # noqa: E402
+from augment.camera.board import Board  # noqa: E402
+from augment.camera.calibrate import calibrate_photo, exif_intrinsics  # noqa: E402
+from augment.errors import CalibrationError  # noqa: E402
+from augment.floor.polygon import floor_polygon  # noqa: E402
+from augment.floor.model import DEFAULT_MODEL, FloorModel  # noqa: E402
+from augment.floor.segment import segment_floor  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
 from segmentation import iou, true_visible_area_m2  # noqa: E402
 
@@ -50,7 +52,7 @@ TALL_BASEBOARD_M = (0.12, 0.20)
 
 
 def render(seeds: list[int], count: int, cache: Path, tall: bool, hue: bool = False) -> None:
-    from augment.gl import Renderer
+    from augment.render.gl import Renderer
     from augment.synth import render_sample
 
     cache.mkdir(parents=True, exist_ok=True)

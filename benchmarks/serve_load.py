@@ -132,7 +132,7 @@ class MemorySampler(threading.Thread):
 
 
 def start_server(port: int, workers: int, jobs_dir: Path, log_path: Path) -> subprocess.Popen:
-    code = "import sys\nfrom augment.cli import main\nsys.argv[0] = 'stage'\nsys.exit(main())"
+    code = "import sys\nfrom augment.app.cli import main\nsys.argv[0] = 'stage'\nsys.exit(main())"
     log = open(log_path, "wb")
     proc = subprocess.Popen([sys.executable, "-c", code, "serve", "--host", "127.0.0.1", "--port", str(port),
                              "--workers", str(workers), "--jobs", str(jobs_dir)],

@@ -30,7 +30,6 @@ from ._codes import (
     ARC,
     BOX,
     DECAY,
-    EQ,
     FACE,
     GROW,
     ITEM,

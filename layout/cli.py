@@ -12,7 +12,6 @@ unexpected failure (a bug: the traceback is printed).
 from __future__ import annotations
 
 import sys
-import tomllib
 from pathlib import Path
 
 from .command import EXIT_OK, Parser, dispatch, parse, run as run_command, seed_arg
@@ -149,11 +148,7 @@ def main(argv=None) -> int:
     if isinstance(args, int):
         return args
     commands = {"solve": _solve, "kinds": _kinds, "presets": _presets}
-    return dispatch(commands[args.command], args, "layout", [
-        (LayoutError, str),
-        (tomllib.TOMLDecodeError, lambda e: f"invalid TOML: {e}"),
-        (FileNotFoundError, lambda e: f"{e.filename}: no such file"),
-    ])
+    return dispatch(commands[args.command], args, "layout")
 
 
 def run() -> None:

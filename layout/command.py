@@ -15,14 +15,12 @@ import sys
 import threading
 import time
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import NoReturn
 
+from .errors import StagerError, UsageError
+
 EXIT_OK, EXIT_BUG, EXIT_INPUT = 0, 1, 2
-
-
-class UsageError(Exception):
-    """A command-line usage error (argparse would otherwise exit by itself)."""
 
 
 class Parser(argparse.ArgumentParser):
@@ -41,6 +39,20 @@ def seed_arg(text: str) -> int:
     return value
 
 
+def arg_type(parse_text: Callable[[str], object]) -> Callable[[str], object]:
+    """An argparse ``type`` from a parser that raises ``ValueError`` with a message:
+    argparse shows that message (of a plain ``ValueError`` it says only "invalid value")."""
+
+    def convert(text: str):
+        try:
+            return parse_text(text)
+        except ValueError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+
+    convert.__name__ = parse_text.__name__
+    return convert
+
+
 def parse(parser: argparse.ArgumentParser, argv) -> argparse.Namespace | int:
     """Parsed arguments, or the exit status when parsing ends the run (a usage error,
     reported on stderr, or ``--help``)."""
@@ -53,13 +65,11 @@ def parse(parser: argparse.ArgumentParser, argv) -> argparse.Namespace | int:
         return int(e.code or 0)
 
 
-def dispatch(command: Callable[[argparse.Namespace], int], args: argparse.Namespace, program: str,
-             input_errors: Sequence[tuple[type | tuple[type, ...], Callable[[Exception], str]]]) -> int:
+def dispatch(command: Callable[[argparse.Namespace], int], args: argparse.Namespace, program: str) -> int:
     """Run ``command(args)`` and return its exit status.
 
-    ``input_errors`` pairs exception types that mean bad input with how to word them;
-    the first match is printed as one ``error:`` line (status 2). Anything else is a bug
-    in ``program``: its traceback is printed (status 1).
+    Bad input (a :class:`~layout.errors.StagerError`) is printed as one ``error:`` line
+    (status 2). Anything else is a bug in ``program``: its traceback is printed (status 1).
     """
     t0 = time.perf_counter()
     interrupted = []
@@ -85,10 +95,9 @@ def dispatch(command: Callable[[argparse.Namespace], int], args: argparse.Namesp
     except Exception as e:  # noqa: BLE001 - sorted into interruptions, bad input and bugs below
         if interrupted:
             return _interrupted(t0)
-        for types, describe in input_errors:
-            if isinstance(e, types):
-                print(f"error: {describe(e)}", file=sys.stderr)
-                return EXIT_INPUT
+        if isinstance(e, StagerError):
+            print(f"error: {e}", file=sys.stderr)
+            return EXIT_INPUT
         traceback.print_exc()
         print(f"error: unexpected failure (a bug in {program}); please report the traceback above",
               file=sys.stderr)

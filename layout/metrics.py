@@ -12,7 +12,7 @@ import cv2
 import numba
 import numpy as np
 
-from layout.geometry import polygon_area
+from .geometry import access_box_corners, box_corners, polygon_area
 
 # Vertical intervals must overlap by more than this to count as a 3-D collision, so
 # that an item standing exactly on top of another does not collide with it.
@@ -519,3 +519,59 @@ def traversability(
         origin_m=origin,
         resolution_m=resolution_m,
     )
+
+
+# Overlaps smaller than this (m²) are contacts of touching boxes, not collisions.
+MIN_OVERLAP_M2 = 1e-4
+
+
+def item_geometry(layout):
+    """The layout's items: indices, footprint corners (n, 4, 2), z ranges (n, 2), access
+    zones and depths per side."""
+    m = layout.model
+    items = m.items
+    size = m.particle_size_m[items]
+    pos = layout.position_m[items]
+    yaw = layout.yaw_rad[items]
+    corners = box_corners(pos[:, :2], yaw, size[:, 0], size[:, 1])
+    z = np.stack([pos[:, 2] - 0.5 * size[:, 2], pos[:, 2] + 0.5 * size[:, 2]], axis=1)
+    depth = m.particle_access_depth_m[items]
+    access = access_box_corners(pos[:, :2], yaw, size[:, 0], size[:, 1], depth)
+    return items, corners, z, access, depth
+
+
+def _shared_sides(model, items, corners, access, depth):
+    """Access sides taken by a member of the same group (a chair at its table): the
+    solver lets group mates stand there, so walkability does not ask for them."""
+    parent = model.particle_parent[items]
+    center = corners.mean(axis=1)
+    reach = np.linalg.norm(corners[:, 0] - center, axis=1) + depth.max(axis=1)
+    collides = model.particle_collides[items]
+    owner, mate = [], []  # pairs of group mates close enough to matter
+    for g in np.unique(parent[parent >= 0]):
+        members = np.flatnonzero(parent == g)
+        owners = members[depth[members].max(axis=1) > 0]
+        mates = members[collides[members]]
+        dist = np.linalg.norm(center[owners][:, None] - center[mates][None], axis=-1)
+        near = (dist < reach[owners][:, None] + reach[mates][None]) & (owners[:, None] != mates[None])
+        a, b = np.nonzero(near)
+        owner.append(owners[a])
+        mate.append(mates[b])
+    taken = np.zeros(depth.shape, bool)
+    if owner:
+        owner, mate = np.concatenate(owner), np.concatenate(mate)
+        pair, k = np.nonzero(depth[owner] > 0)
+        a, b = owner[pair], mate[pair]
+        area = pairwise_intersection_area(access[a, k], corners[b])
+        taken[a[area > MIN_OVERLAP_M2], k[area > MIN_OVERLAP_M2]] = True
+    return taken
+
+
+def walkability(layout) -> Traversability:
+    """Henderson et al.'s traversability of a layout (see :func:`layout.metrics.traversability`),
+    not asking for access sides that a group mate stands in."""
+    m = layout.model
+    items, corners, _, access, depth = item_geometry(layout)
+    doors = layout.corners_m(m.door_particles) if len(m.door_particles) else np.zeros((0, 4, 2))
+    required = np.where(_shared_sides(m, items, corners, access, depth), 0.0, depth)
+    return traversability(m.floor_polygon_m, corners, m.particle_collides[items], access, required, doors)

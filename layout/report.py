@@ -16,65 +16,14 @@ import numpy as np
 from . import metrics, plot
 from .errors import LayoutError
 from .fileio import replaced_input, staged_folder
-from .geometry import SIDE_NAMES, access_box_corners, box_corners
+from .geometry import SIDE_NAMES
+from .metrics import MIN_OVERLAP_M2, item_geometry, walkability
 from .solver import ACCESS_CLEAR_M, clearance_intrusions
 
-# Overlaps smaller than this (m²) are contacts of touching boxes, not collisions.
-MIN_OVERLAP_M2 = 1e-4
 # Area outside the floor below this (m²) is rounding, not a misplaced item.
 MIN_OUTSIDE_M2 = 1e-4
 # Clearance intrusions listed by evaluate: shallower ones are the solver's tolerance.
 MIN_INTRUSION_M = 0.01
-
-
-def _item_geometry(layout):
-    m = layout.model
-    items = m.items
-    size = m.particle_size_m[items]
-    pos = layout.position_m[items]
-    yaw = layout.yaw_rad[items]
-    corners = box_corners(pos[:, :2], yaw, size[:, 0], size[:, 1])
-    z = np.stack([pos[:, 2] - 0.5 * size[:, 2], pos[:, 2] + 0.5 * size[:, 2]], axis=1)
-    depth = m.particle_access_depth_m[items]
-    access = access_box_corners(pos[:, :2], yaw, size[:, 0], size[:, 1], depth)
-    return items, corners, z, access, depth
-
-
-def _shared_sides(model, items, corners, access, depth):
-    """Access sides taken by a member of the same group (a chair at its table): the
-    solver lets group mates stand there, so walkability does not ask for them."""
-    parent = model.particle_parent[items]
-    center = corners.mean(axis=1)
-    reach = np.linalg.norm(corners[:, 0] - center, axis=1) + depth.max(axis=1)
-    collides = model.particle_collides[items]
-    owner, mate = [], []  # pairs of group mates close enough to matter
-    for g in np.unique(parent[parent >= 0]):
-        members = np.flatnonzero(parent == g)
-        owners = members[depth[members].max(axis=1) > 0]
-        mates = members[collides[members]]
-        dist = np.linalg.norm(center[owners][:, None] - center[mates][None], axis=-1)
-        near = (dist < reach[owners][:, None] + reach[mates][None]) & (owners[:, None] != mates[None])
-        a, b = np.nonzero(near)
-        owner.append(owners[a])
-        mate.append(mates[b])
-    taken = np.zeros(depth.shape, bool)
-    if owner:
-        owner, mate = np.concatenate(owner), np.concatenate(mate)
-        pair, k = np.nonzero(depth[owner] > 0)
-        a, b = owner[pair], mate[pair]
-        area = metrics.pairwise_intersection_area(access[a, k], corners[b])
-        taken[a[area > MIN_OVERLAP_M2], k[area > MIN_OVERLAP_M2]] = True
-    return taken
-
-
-def walkability(layout) -> metrics.Traversability:
-    """Henderson et al.'s traversability of a layout (see :func:`layout.metrics.traversability`),
-    not asking for access sides that a group mate stands in."""
-    m = layout.model
-    items, corners, _, access, depth = _item_geometry(layout)
-    doors = layout.corners_m(m.door_particles) if len(m.door_particles) else np.zeros((0, 4, 2))
-    required = np.where(_shared_sides(m, items, corners, access, depth), 0.0, depth)
-    return metrics.traversability(m.floor_polygon_m, corners, m.particle_collides[items], access, required, doors)
 
 
 def evaluate(layout) -> dict:
@@ -105,7 +54,7 @@ def evaluate(layout) -> dict:
     :func:`layout.builder.LayoutBuilder.add_group`).
     """
     m = layout.model
-    items, corners, z, access, depth = _item_geometry(layout)
+    items, corners, z, access, depth = item_geometry(layout)
     ids = [m.names[i] for i in items]
     collides = m.particle_collides[items]
     pairs, area = metrics.box_overlaps(corners, z, collides, min_area_m2=MIN_OVERLAP_M2)
@@ -199,7 +148,7 @@ def output_files(layouts, reports=None, title=""):
         data["energy_by_kind"] = dict(lay.energy_by_kind)
         files[f"layout_{k}.json"] = (json.dumps(_finite(data), indent=2, allow_nan=False) + "\n").encode()
         m = lay.model
-        items, corners, _, access, depth = _item_geometry(lay)
+        items, corners, _, access, depth = item_geometry(lay)
         index = {name: n for n, name in enumerate(m.names[i] for i in items)}
         overlap = [[index[a], index[b]] for a, b, _ in rep["overlaps"]["pairs"]]
         doors = lay.corners_m(m.door_particles) if len(m.door_particles) else None
@@ -212,7 +161,7 @@ def output_files(layouts, reports=None, title=""):
             window_segments_m=m.window_segments_m, lanes_m=lane_segments(m, lay),
             overlap_pairs=overlap, access_corners_m=access, access_depth_m=depth,
             kinds=[m.kinds[i] for i in items], open_edges=np.flatnonzero(~m.floor_edge_wall),
-            title=(f"{title}suggestion {k}: E = {lay.energy:.3g}, "
+            title=(f"{title}suggestion {k}: rule energy {lay.energy:.3g} (0 = every rule met), "
                    f"{rep['overlaps']['count']} overlaps, {verdict}"),
         ))
     traces = {f"suggestion {k}": lay.trace[np.isfinite(lay.trace)] for k, lay in enumerate(layouts, 1)}

@@ -17,6 +17,7 @@ from . import _codes as codes
 from . import _kernels as K
 from .errors import LayoutError
 from .geometry import box_corners, polygon_area
+from .metrics import walkability
 from .model import Model, State
 
 # Thesis Table 5.1: which constraints are projected in each of six interleaved
@@ -351,7 +352,7 @@ class Solver:
         """Solve from a random start drawn with ``seed`` (or from ``state``).
 
         When the best layout of a run still collides, leaves the floor, is not
-        walkable (:func:`layout.report.walkability`) or has an item more than
+        walkable (:func:`layout.metrics.walkability`) or has an item more than
         ``ACCESS_CLEAR_M`` inside another's clearance, the solver starts again from a
         fresh random start of the same generator, up to ``restarts`` times, and
         returns the best run: clean first, then walkable, then clear, then lowest
@@ -436,8 +437,6 @@ def compiled() -> bool:
 
 
 def _walkable(model, pos, yaw) -> bool:
-    from .report import walkability  # report draws plans; import it only when needed
-
     probe = Layout.from_state(model, pos, yaw, {}, np.zeros(0), 0, 0, None, 0.0)
     return walkability(probe).ok
 

@@ -3,7 +3,7 @@
 The skirting trim (``augment/skirting.py``) cuts a strip off the top of the floor mask
 where a board seems to stand. Often the mask already ends at the floor line and the strip
 it would cut is floor: this model says, per image column, whether the mask's edge is a
-board's top edge. It reads what :func:`augment.skirting.board_profiles` gives (the
+board's top edge. It reads what :func:`augment.floor.skirting.board_profiles` gives (the
 column's colours from 10 cm above the mask's edge to 30 cm below it, in meters through
 the calibration), and learns from renders of the synthetic photographer whose floor line
 is known: segmented by the shipped pipeline without the trim, so the model sees the
@@ -57,7 +57,7 @@ from torch import nn
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from augment.skirting import board_profiles, working_view  # noqa: E402
+from augment.floor.skirting import board_profiles, working_view  # noqa: E402
 
 # A column's mask edge is a board's top when the floor line lies this far below it or
 # more; columns between this and the first value are anti-aliasing, left out, and so
@@ -83,10 +83,12 @@ def render_columns(seed: int, count: int, flavour: str = "") -> dict:
     """Render ``count`` rooms of ``seed`` (with the render options of ``FLAVOURS[flavour]``),
     segment each without the trim and return every wall column's profile, scalars and
     true floor-line offset (m, NaN: no floor)."""
-    from augment.board import Board
-    from augment.calibrate import CalibrationError, calibrate_photo, exif_intrinsics
-    from augment.gl import Renderer
-    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
+    from augment.camera.board import Board
+    from augment.camera.calibrate import calibrate_photo, exif_intrinsics
+    from augment.errors import CalibrationError
+    from augment.render.gl import Renderer
+    from augment.floor.model import DEFAULT_MODEL, FloorModel
+    from augment.floor.segment import segment_floor
     from augment.synth import render_sample
 
     model = FloorModel(DEFAULT_MODEL)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from augment.gl import Renderer
+from augment.render.gl import Renderer
 from augment.synth import render_sample, write_sample
 
 SEED = 2026

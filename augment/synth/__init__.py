@@ -19,8 +19,8 @@ import numpy as np
 
 from layout.fileio import write_atomic
 
-from ..board import CHARUCO_DICTIONARY, Board
-from ..gl import Renderer, pyrender
+from ..camera.board import CHARUCO_DICTIONARY, Board
+from ..render.gl import Renderer, pyrender
 from .camera import Shot, place_board, random_handling, random_shot, random_size
 from .photo import degrade
 from .rooms import BASEBOARD_M, Clutter, Room, add_clutter, add_furniture, random_room

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..board import Board
+from ..camera.board import Board
 from .rooms import Room, contains
 
 CAMERA_HEIGHT_M = (1.0, 1.8)

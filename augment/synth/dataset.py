@@ -18,7 +18,7 @@ _worker = {}
 
 def init_worker(options: dict) -> None:
     # Each process owns one GL context; it is made here, after the fork/spawn.
-    from ..gl import Renderer
+    from ..render.gl import Renderer
 
     _worker["renderer"] = Renderer()
     _worker["options"] = options

@@ -247,7 +247,7 @@ def add_furniture(rng: np.random.Generator, room: Room, keep_out: list[np.ndarra
     """Add 1 to ``max_items`` pieces of furniture (catalog kinds at their sizes, give or
     take 15 %), most with their backs to a wall, the rest anywhere, clear of the board's
     sight lines, the door swings and each other. They are ``Clutter`` whose ``kind`` is
-    a catalog kind; the scene builds them with :mod:`augment.furniture`."""
+    a catalog kind; the scene builds them with :mod:`augment.render.furniture`."""
     from layout.catalog import CATALOG
 
     poly = room.polygon_m

@@ -12,10 +12,10 @@ import numpy as np
 
 from layout.geometry import triangulate_polygon
 
-from ..board import Board
-from ..furniture import PlacedItem, item_mesh
-from ..gl import Scene as GLScene
-from ..gl import gl_from_cv_pose, pyrender, pyrender_camera
+from ..camera.board import Board
+from ..render.furniture import PlacedItem, item_mesh
+from ..render.gl import Scene as GLScene
+from ..render.gl import gl_from_cv_pose, pyrender, pyrender_camera
 from . import textures
 from .camera import Shot
 from .rooms import BASEBOARD_M, FURNITURE_KINDS, Room, contains, inward_normal, wall_ends

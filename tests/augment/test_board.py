@@ -1,4 +1,4 @@
-"""The board (augment.board): the ChArUco pattern is OpenCV's, and its corner numbers land
+"""The board (augment.camera.board): the ChArUco pattern is OpenCV's, and its corner numbers land
 where the board frame says, on the printed page and in the texture the photographer uses."""
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from augment.board import CHARUCO_DICTIONARY, Board, charuco_board
+from augment.camera.board import CHARUCO_DICTIONARY, Board, charuco_board
 
 
 @pytest.mark.parametrize("cols, rows, px", [(7, 5, 32), (5, 3, 64), (9, 6, 40)])

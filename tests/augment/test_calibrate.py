@@ -10,14 +10,16 @@ import cv2
 import numpy as np
 import pytest
 
-from augment import calibrate
-from augment.board import Board
-from augment.calibrate import (CalibrationError, _find_chessboard, _focal_from_homography, _saddle_refine,
-                               calibrate_file, calibrate_photo, camera_profile, detect_board, exif_intrinsics,
-                               exif_focal_px, exif_orientation, load_profile, read_photo,
-                               single_view_intrinsics, tilt_readings)
-from augment.gl import Renderer
-from augment.segment import floor_distance_m
+from augment.camera import calibrate, detect
+from augment.camera.calibration import _distortion_reach, turn_points
+from augment.camera.board import Board
+from augment.camera.calibrate import _focal_from_homography, calibrate_file, calibrate_photo, camera_profile, exif_intrinsics, load_profile, single_view_intrinsics, tilt_readings
+from augment.camera.detect import _find_chessboard, _saddle_refine, detect_board
+from augment.errors import CalibrationError
+from augment.photo.exif import exif_focal_px, exif_orientation
+from augment.photo.io import read_photo
+from augment.render.gl import Renderer
+from augment.floor.segment import floor_distance_m
 from augment.synth import render_sample
 from augment.synth.camera import look_pose
 
@@ -100,12 +102,12 @@ def test_the_lens_model_maps_pixels_only_as_far_as_its_distortion_grows():
     k1, k2 = -0.25247767, -0.1303127
     r2 = (-3 * k1 - np.sqrt(9 * k1 ** 2 - 20 * k2)) / (10 * k2)
     reach = np.sqrt(r2) * (1 + k1 * r2 + k2 * r2 ** 2)
-    assert calibrate._distortion_reach(np.array([k1, k2, 0, 0, 0])) == pytest.approx(reach, abs=1e-3)
+    assert _distortion_reach(np.array([k1, k2, 0, 0, 0])) == pytest.approx(reach, abs=1e-3)
     assert reach == pytest.approx(0.639, abs=1e-3)
-    assert calibrate._distortion_reach(np.array([-0.26637, -0.03859, 0.001783, -0.000281, 0.23839])) == np.inf
-    assert calibrate._distortion_reach(np.zeros(5)) == np.inf
+    assert _distortion_reach(np.array([-0.26637, -0.03859, 0.001783, -0.000281, 0.23839])) == np.inf
+    assert _distortion_reach(np.zeros(5)) == np.inf
     # OpenCV's rational model, k4 alone: r / (1 + 0.5 r^2) peaks at r^2 = 2, at sqrt(2) / 2.
-    assert calibrate._distortion_reach(np.array([0, 0, 0, 0, 0, 0.5, 0, 0])) == pytest.approx(np.sqrt(0.5), abs=1e-3)
+    assert _distortion_reach(np.array([0, 0, 0, 0, 0, 0.5, 0, 0])) == pytest.approx(np.sqrt(0.5), abs=1e-3)
     c = calibrate_file(DATA / "left13.jpg", OPENCV)
     assert c.intrinsics.distortion[:2] == pytest.approx([k1, k2], abs=0.02)
     f, (cx, cy) = c.intrinsics.K[0, 0], c.intrinsics.K[:2, 2]
@@ -131,7 +133,7 @@ def test_a_turned_calibration_maps_the_turned_pixels_to_the_same_floor(renders):
     pts = np.array([[10.0, h - 5], [w / 2, h - 1], [w - 3, 0.8 * h]])
     for c in (cal, bent):
         for k in range(4):
-            turned, q = c.turned(k), calibrate.turn_points(pts, k, (w, h))
+            turned, q = c.turned(k), turn_points(pts, k, (w, h))
             assert turned.size_px == ((w, h) if k % 2 == 0 else (h, w))
             np.testing.assert_allclose(turned.floor_from_pixels(q), c.floor_from_pixels(pts), atol=1e-6)
             np.testing.assert_allclose(turned.pixels_from_floor(c.floor_from_pixels(pts)), q, atol=1e-4)
@@ -140,7 +142,7 @@ def test_a_turned_calibration_maps_the_turned_pixels_to_the_same_floor(renders):
             # np.rot90 turns the photo a quarter counter-clockwise: a quarter less to level.
             assert (turned.roll_deg - (c.roll_deg - 90 * k) + 180) % 360 == pytest.approx(180)
     np.testing.assert_allclose(cal.turned(4).image_from_floor, cal.image_from_floor, atol=1e-12)
-    np.testing.assert_allclose(calibrate.turn_points([[0, 0], [w - 1, 0]], 1, (w, h)), [[0, w - 1], [0, 0]])
+    np.testing.assert_allclose(turn_points([[0, 0], [w - 1, 0]], 1, (w, h)), [[0, w - 1], [0, 0]])
     # The photo itself turned: calibrated as it is, it says where the floor is.
     assert not any("turned" in warning for warning in cal.warnings)
     for k, side in ((1, "left"), (2, "top"), (3, "right")):
@@ -254,10 +256,10 @@ def test_a_whole_board_does_not_go_on():
     for path in LEFT:
         gray = cv2.cvtColor(read_photo(path), cv2.COLOR_RGB2GRAY)
         found = detect_board(read_photo(path), OPENCV)
-        assert found is not None and not calibrate.board_goes_on(gray, found.corners_px, OPENCV), path.name
+        assert found is not None and not detect.board_goes_on(gray, found.corners_px, OPENCV), path.name
     gray = cv2.cvtColor(read_photo(LEFT[0]), cv2.COLOR_RGB2GRAY)
     corners = detect_board(read_photo(LEFT[0]), OPENCV).corners_px.reshape(6, 9, 2)
-    assert calibrate.board_goes_on(gray, corners[:5, 1:-1].reshape(-1, 2), Board(7, 5, 25))
+    assert detect.board_goes_on(gray, corners[:5, 1:-1].reshape(-1, 2), Board(7, 5, 25))
 
 
 def test_profile_scales_to_another_resolution_and_refuses_another_aspect(tmp_path):
@@ -470,7 +472,7 @@ def test_a_far_squashed_board_is_found_on_a_rectified_view():
 
 
 def _unmended(gray, corners, *args):
-    """Stands in for ``calibrate._mend_outliers``: corners as the saddle search left them."""
+    """Stands in for ``detect._mend_outliers``: corners as the saddle search left them."""
     return corners
 
 
@@ -508,13 +510,13 @@ def test_mending_leaves_good_corners_alone(monkeypatch):
     truth = sample.truth["board"]["corners_px"]
     assert _corner_errors_px(detection.corners_px, detection.ids, truth).max() < 0.3
     gray = cv2.cvtColor(sample.image, cv2.COLOR_RGB2GRAY)
-    spacing = calibrate.corner_spacing_px(detection.corners_px, detection.ids, Board())
+    spacing = detect.corner_spacing_px(detection.corners_px, detection.ids, Board())
     moved = detection.corners_px.copy()
     moved[12] += 0.3 * spacing * np.array([0.6, 0.8])
-    mended = calibrate._mend_outliers(gray, moved, detection.ids, Board(), spacing, round(0.4 * spacing))
+    mended = detect._mend_outliers(gray, moved, detection.ids, Board(), spacing, round(0.4 * spacing))
     assert _corner_errors_px(mended, detection.ids, truth)[12] < 0.2
     assert np.array_equal(np.delete(mended, 12, axis=0), np.delete(detection.corners_px, 12, axis=0))
-    monkeypatch.setattr(calibrate, "_mend_outliers", _unmended)
+    monkeypatch.setattr(detect, "_mend_outliers", _unmended)
     as_found = [detect_board(cv2.imread(str(path)), OPENCV).corners_px for path in LEFT]
     monkeypatch.undo()
     for path, corners in zip(LEFT, as_found):
@@ -532,9 +534,9 @@ def test_a_grid_whose_squares_do_not_alternate_is_not_taken():
         sample = render_sample([937, 61], renderer)
     t = sample.truth
     gray = cv2.cvtColor(sample.image, cv2.COLOR_RGB2GRAY)
-    found, corners = cv2.findChessboardCornersSB(gray, (7, 5), flags=calibrate._SB_FLAGS)
+    found, corners = cv2.findChessboardCornersSB(gray, (7, 5), flags=detect._SB_FLAGS)
     assert found and _corner_errors_px(corners.reshape(-1, 2), np.arange(35), t["board"]["corners_px"]).max() > 10
-    assert not calibrate.squares_alternate(gray, corners, Board())
+    assert not detect.squares_alternate(gray, corners, Board())
     _assert_found_and_posed(sample, "sb crop")
 
 
@@ -570,17 +572,17 @@ def test_square_contrast_by_hand():
     photo = cv2.warpPerspective(sheet, H, (640, 480), borderValue=120.0)
     gray = np.clip(cv2.GaussianBlur(photo, (0, 0), 1.0), 0, 255).astype(np.uint8)
     project = lambda p: cv2.perspectiveTransform(p.reshape(-1, 1, 2), H).reshape(-1, 2)  # noqa: E731
-    contrast = calibrate.square_contrast(gray, project(on_sheet), board)
+    contrast = detect.square_contrast(gray, project(on_sheet), board)
     assert np.median(contrast) == pytest.approx(1, abs=0.05) and contrast[1:-1, 1:-1].min() > 0.5
-    assert calibrate.squares_alternate(gray, project(on_sheet), board)
+    assert detect.squares_alternate(gray, project(on_sheet), board)
     first_column_out = on_sheet - np.where(i == 0, px, 0)[:, None] * [1, 0]
-    assert not calibrate.squares_alternate(gray, project(first_column_out), board)
-    assert not calibrate.squares_alternate(gray, project(on_sheet + [px / 2, px / 2]), board)
-    assert calibrate.squares_alternate(gray, project(on_sheet - [px, 0]), board)
+    assert not detect.squares_alternate(gray, project(first_column_out), board)
+    assert not detect.squares_alternate(gray, project(on_sheet + [px / 2, px / 2]), board)
+    assert detect.squares_alternate(gray, project(on_sheet - [px, 0]), board)
     for path in LEFT:
         photo = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-        found, corners = cv2.findChessboardCornersSB(photo, (OPENCV.cols, OPENCV.rows), flags=calibrate._SB_FLAGS)
-        assert not found or calibrate.squares_alternate(photo, corners, OPENCV), path.name
+        found, corners = cv2.findChessboardCornersSB(photo, (OPENCV.cols, OPENCV.rows), flags=detect._SB_FLAGS)
+        assert not found or detect.squares_alternate(photo, corners, OPENCV), path.name
 
 
 # --------------------------------------------------------------------------- ChArUco
@@ -684,7 +686,7 @@ def as_detected(monkeypatch):
     boards below then have one corner 6.7 and 8.2 px off, and their two tilts fit alike,
     as a far board's can with exact corners (the planar pose ambiguity) - what the
     vertical edges and the refusals are for."""
-    monkeypatch.setattr(calibrate, "_mend_outliers", _unmended)
+    monkeypatch.setattr(detect, "_mend_outliers", _unmended)
 
 
 def _normal_error_deg(calibration, truth) -> float:
@@ -763,7 +765,8 @@ def test_a_board_of_many_corners_is_looked_for_in_bounded_memory():
     import sys
 
     root = Path(__file__).resolve().parents[2]
-    code = ("from augment.board import Board; from augment.calibrate import calibrate_file, CalibrationError\n"
+    code = ("from augment.camera.board import Board; from augment.camera.calibrate import calibrate_file\n"
+            "from augment.errors import CalibrationError\n"
             "try:\n    calibrate_file('samples/photos/room_4.jpg', Board(100, 100, 45))\n"
             "except CalibrationError as error:\n    print(error)")
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from augment import cli
+from augment.app import cli
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples" / "photos"
 PHOTO = SAMPLES / "room_4.jpg"
@@ -124,7 +124,7 @@ def test_segment_refusals_name_the_problem(tmp_path, capsys):
 def test_segment_loads_neither_the_solver_nor_matplotlib(tmp_path):
     # Finding the floor needs no layout solver (numba kernels) and no plots: importing
     # them cost `stage segment` about a second of its 2.5 s.
-    code = ("import sys; from augment import cli; "
+    code = ("import sys; from augment.app import cli; "
             f"assert cli.main(['segment', {str(PHOTO)!r}, '--out', {str(tmp_path / 'f.png')!r}, '-q']) == 0; "
             "print(sorted(m for m in ('numba', 'matplotlib', 'layout.builder', 'augment.pipeline') "
             "if m in sys.modules))")
@@ -220,7 +220,7 @@ def test_a_floor_mask_is_read_upright_alpha_and_all(tmp_path, monkeypatch):
     # 16-bit grey mask's floor, whose mid greys count at half of 65535, not of 255.
     from PIL import Image
 
-    from augment.segment import read_floor_mask
+    from augment.floor.segment import read_floor_mask
 
     stored = np.zeros((60, 80), np.uint8)
     stored[:, :20] = 255
@@ -282,7 +282,7 @@ def _inside_point(region):
 
 
 def test_segment_with_clicks_records_and_marks_them(tmp_path, capsys):
-    from augment.floor import CLICK_COLORS
+    from augment.draw.floor import CLICK_COLORS
 
     truth = truth_mask()
     fx, fy = _inside_point(truth)
@@ -355,9 +355,9 @@ def test_floor_mask_white_above_the_horizon(tmp_path, capsys):
     """No floor shows above the horizon (room_1's crosses the photo near its top): white
     there is left out with a warning where a brush spilled over, and a mask white over
     the walls up to there is refused."""
-    from augment.board import Board
-    from augment.calibrate import calibrate_file
-    from augment.segment import below_horizon
+    from augment.camera.board import Board
+    from augment.camera.calibrate import calibrate_file
+    from augment.floor.segment import below_horizon
 
     photo = SAMPLES / "room_1.jpg"
     truth = cv2.imread(str(SAMPLES / "room_1_floor.png"), cv2.IMREAD_GRAYSCALE) > 127
@@ -391,8 +391,8 @@ def test_a_board_printed_at_another_scale_is_said(tmp_path, capsys):
     camera 1.0-1.8 m up, which brackets the true 45 mm."""
     import re
 
-    from augment.board import Board
-    from augment.calibrate import calibrate_file
+    from augment.camera.board import Board
+    from augment.camera.calibrate import calibrate_file
 
     photo = SAMPLES / "room_3.jpg"
     height_m = calibrate_file(photo, Board()).camera_height_m

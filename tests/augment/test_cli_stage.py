@@ -1,4 +1,4 @@
-"""The ``stage`` command line (augment.cli) and the calibration overlay (augment.overlay)."""
+"""The ``stage`` command line (augment.app.cli) and the calibration overlay (augment.draw.calibration)."""
 from __future__ import annotations
 
 import json
@@ -11,11 +11,12 @@ import cv2
 import numpy as np
 import pytest
 
-from augment import cli
-from augment.board import Board
-from augment.calibrate import calibrate_file, read_photo
-from augment.gl import Renderer
-from augment.overlay import calibration_overlay
+from augment.app import cli
+from augment.camera.board import Board, parse_board
+from augment.camera.calibrate import calibrate_file
+from augment.photo.io import read_photo
+from augment.render.gl import Renderer
+from augment.draw.calibration import calibration_overlay
 from augment.synth import render_sample, write_sample
 
 OPENCV_DATA = Path(__file__).resolve().parents[1] / "data" / "opencv-chessboard"
@@ -66,14 +67,14 @@ def test_board_writes_the_paper_sized_pdf(tmp_path, capsys, paper, expected_pt):
 
 
 def test_console_script_exits_with_the_command_status(tmp_path):
-    # `stage` runs through augment.cli.run (which skips the interpreter's last garbage
+    # `stage` runs through augment.app.cli.run (which skips the interpreter's last garbage
     # collections): the status and the output must be what main gives.
     out = tmp_path / "board.pdf"
-    ok = subprocess.run([sys.executable, "-m", "augment.cli", "board", "--out", str(out)],
+    ok = subprocess.run([sys.executable, "-m", "augment.app.cli", "board", "--out", str(out)],
                         capture_output=True, text=True)
     assert ok.returncode == 0, ok.stderr
     assert out.read_bytes().startswith(b"%PDF") and "--square 45" in ok.stdout
-    bad = subprocess.run([sys.executable, "-m", "augment.cli", "board", "--paper", "A4", "--square", "60",
+    bad = subprocess.run([sys.executable, "-m", "augment.app.cli", "board", "--paper", "A4", "--square", "60",
                           "--out", str(tmp_path / "b.pdf")], capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.startswith("error:")
 
@@ -303,9 +304,9 @@ def test_bad_board_kind(tmp_path, capsys, text, named):
 
 
 def test_parse_board():
-    assert cli.parse_board("7x5") == (7, 5, "chessboard")
-    assert cli.parse_board(" ChArUco : 9X6 ") == (9, 6, "charuco")
-    assert cli.parse_board("checkerboard:7x5") == (7, 5, "chessboard")
+    assert parse_board("7x5") == (7, 5, "chessboard")
+    assert parse_board(" ChArUco : 9X6 ") == (9, 6, "charuco")
+    assert parse_board("checkerboard:7x5") == (7, 5, "chessboard")
 
 
 def test_unwritable_out(synth_photo, tmp_path, capsys):

@@ -1,4 +1,4 @@
-"""The board erased from the photo (augment.erase), against the same render drawn
+"""The board erased from the photo (augment.render.erase), against the same render drawn
 without the board: the floor that lies under it."""
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import cv2
 import numpy as np
 import pytest
 
-from augment.board import Board
-from augment.calibrate import calibrate_photo, exif_intrinsics
-from augment.erase import ErasedBoard, erase_board, layer_over_photo
-from augment.gl import Renderer
+from augment.camera.board import Board
+from augment.camera.calibrate import calibrate_photo, exif_intrinsics
+from augment.render.erase import ErasedBoard, erase_board, layer_over_photo
+from augment.render.gl import Renderer
 from augment.synth import render_sample
 
 SIZE = (640, 480)

@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 
 import augment.synth.camera as synth_camera
-from augment import height as H
-from augment.board import Board
-from augment.calibrate import calibrate_file
-from augment.gl import Renderer
-from augment.overlay_height import height_overlay
+from augment.camera import lines as L
+from augment.room import height as H
+from augment.camera.board import Board
+from augment.camera.calibrate import calibrate_file
+from augment.render.gl import Renderer
+from augment.draw.height import height_overlay
 from augment.synth import render_sample
 from augment.synth.camera import look_pose
 
@@ -95,7 +96,7 @@ def test_top_off_the_vertical_is_measured_along_it():
     feet = np.array([[3.0, 0.5]])
     base = project(np.column_stack([feet, [0.0]]))
     top = project(np.column_stack([feet, [2.5]]))
-    vp = H.vertical_vanishing_point(K, CAMERA_FROM_FLOOR)
+    vp = L.vertical_vanishing_point(K, CAMERA_FROM_FLOOR)
     along = vp[:2] - top[0] * vp[2]
     across = np.array([-along[1], along[0]]) / np.linalg.norm(along)
     heights, _ = H.segment_heights(base, top + 3.0 * across, K, CAMERA_FROM_FLOOR)
@@ -104,7 +105,7 @@ def test_top_off_the_vertical_is_measured_along_it():
 
 def test_vertical_vanishing_point_is_where_verticals_meet():
     seg = verticals([[2.0, -1.0], [4.0, 1.5], [3.0, 0.2]], 0.0, 2.0)
-    vp = H.vertical_vanishing_point(K, CAMERA_FROM_FLOOR)
+    vp = L.vertical_vanishing_point(K, CAMERA_FROM_FLOOR)
     for s in seg:
         line = np.cross([*s[:2], 1.0], [*s[2:], 1.0])
         assert abs(line @ vp) / np.linalg.norm(line[:2]) < 1e-6
@@ -150,10 +151,10 @@ def test_tilted_segments_are_not_vertical():
     lo = project(np.column_stack([feet, np.zeros(3)]))
     hi = project(np.column_stack([feet + [0.0, lean], np.full(3, 2.5)]))
     tilted = np.hstack([lo, hi])
-    cos_3d, angle_deg, _ = H.vertical_alignment(tilted, K, CAMERA_FROM_FLOOR)
-    assert np.all(cos_3d < H.MIN_VERTICAL_COS) and np.all(cos_3d > 0.9)
+    cos_3d, angle_deg, _ = L.vertical_alignment(tilted, K, CAMERA_FROM_FLOOR)
+    assert np.all(cos_3d < L.MIN_VERTICAL_COS) and np.all(cos_3d > 0.9)
     assert np.all(angle_deg > 0.5)
-    upright, _, dist = H.vertical_alignment(verticals(feet, 0.0, 2.5), K, CAMERA_FROM_FLOOR)
+    upright, _, dist = L.vertical_alignment(verticals(feet, 0.0, 2.5), K, CAMERA_FROM_FLOOR)
     np.testing.assert_allclose(upright, 1.0, atol=1e-9)
     assert np.all(dist < 1e-6)
     result = H.height_from_segments(tilted, K, CAMERA_FROM_FLOOR, SIZE)
@@ -240,7 +241,7 @@ def _truth_pose(truth: dict) -> np.ndarray:
 def test_synthetic_render_height(level_renders, index):
     sample = level_renders[index]
     truth = sample.truth
-    seg = H.detect_segments(sample.image)
+    seg = L.detect_segments(sample.image)
     result = H.height_from_segments(seg, np.array(truth["K"]), _truth_pose(truth), SIZE, sample.floor_mask,
                                     image=sample.image)
     assert not result.fallback, result.reason
@@ -251,7 +252,7 @@ def test_synthetic_render_height(level_renders, index):
 def test_synthetic_render_without_ceiling_falls_back(level_renders):
     sample = level_renders[0]
     truth = sample.truth
-    seg = H.detect_segments(sample.image)
+    seg = L.detect_segments(sample.image)
     result = H.height_from_segments(seg, np.array(truth["K"]), _truth_pose(truth), SIZE, sample.floor_mask,
                                     image=sample.image)
     assert result.fallback and "assuming" in result.reason

@@ -15,12 +15,22 @@ import numpy as np
 import pytest
 import trimesh
 
-from augment import cli, pipeline, segment
-from augment.board import Board
-from augment.calibrate import calibrate_file, read_photo
-from augment.floor import DOOR_COLOR, FloorPolygon
-from augment.pipeline import (REPORT_KEYS, FurnishError, contact_sheet, fit_spec, furnish, inset_polygon,
-                              open_edges, scene_glb, write_outputs)
+from augment import pipeline
+from augment.app import cli
+from augment.floor import segment
+from augment.room import doors as room_doors
+from augment.room import fit
+from augment.camera.board import Board
+from augment.camera.calibrate import calibrate_file
+from augment.photo.io import read_photo
+from augment.draw.floor import DOOR_COLOR
+from augment.floor.polygon import FloorPolygon
+from augment.draw.sheet import SHEET_GAP_PX, contact_sheet
+from augment.errors import FurnishError
+from augment.pipeline import REPORT_KEYS, furnish, write_outputs
+from augment.render.gltf import scene_glb
+from augment.room.doors import open_edges
+from augment.room.fit import fit_spec, inset_polygon
 from layout.geometry import edge_distances, polygon_area
 from layout.solver import ACCESS_CLEAR_M
 from layout.spec import load_spec
@@ -206,7 +216,7 @@ def test_something_on_the_board_is_said(tmp_path):
     writes it): the erasure keeps the carton and says so."""
     from PIL import Image
 
-    from augment.gl import Renderer
+    from augment.render.gl import Renderer
     from augment.synth import render_sample
 
     board = Board(kind="charuco")
@@ -567,16 +577,16 @@ def test_fit_spec_caps_the_summed_footprint(square_spec):
     small = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], float)
     fitted, dropped = fit_spec(square_spec, small, 2.5)
     area = sum(i.kind.size_m[0] * i.kind.size_m[1] for i in fitted.items)
-    assert area <= pipeline.TOL.max_fill * 4.0 + 1e-9
+    assert area <= fit.TOL.max_fill * 4.0 + 1e-9
     assert [i.id for i in fitted.items] == ["table", "chair_1", "chair_2"]
     assert [d["id"] for d in dropped] == ["lamp", "rack"] and all("no room left" in d["reason"] for d in dropped)
 
 
 def test_rect_fits_diagonally():
     square = np.array([[0, 0], [2.5, 0], [2.5, 2.5], [0, 2.5]], float)
-    assert pipeline._rect_fits(square, 3.0, 0.3)      # only along the diagonal (3.54 m)
-    assert not pipeline._rect_fits(square, 3.7, 0.2)  # longer than the diagonal
-    assert not pipeline._rect_fits(square, 2.6, 2.6)
+    assert fit._rect_fits(square, 3.0, 0.3)      # only along the diagonal (3.54 m)
+    assert not fit._rect_fits(square, 3.7, 0.2)  # longer than the diagonal
+    assert not fit._rect_fits(square, 2.6, 2.6)
 
 
 def test_inset_polygon():
@@ -618,7 +628,7 @@ def test_furniture_goes_against_walls_not_the_photos_edge(roomy):
 def test_contact_sheet_layout(rng):
     images = [rng.integers(0, 255, (120, 160, 3), dtype=np.uint8) for _ in range(4)]
     sheet = contact_sheet(images)
-    gap = pipeline.TOL.sheet_gap_px
+    gap = SHEET_GAP_PX
     assert sheet.shape == (2 * 120 + 3 * gap, 2 * 160 + 3 * gap, 3)
     assert contact_sheet(images[:3]).shape == (120 + 2 * gap, 3 * 160 + 4 * gap, 3)
 
@@ -634,11 +644,11 @@ def test_a_repeated_suggestion_is_solved_again_from_another_seed(monkeypatch):
     def run(twin_seeds):
         monkeypatch.setattr(Solver, "solve", lambda self, model, seed=None, state=None:
                             real(self, model, seed=0 if seed in twin_seeds else seed))
-        _, layouts, _ = pipeline._solve(spec, 2, 0, 20.0, [], pipeline._Progress(False, 2), pipeline.TOL)
+        _, layouts, _ = fit.solve_suggestions(spec, 2, 0, 20.0, [], pipeline._Progress(False, 2), fit.TOL)
         return layouts
 
     first, second = run({1})
-    assert diversity([first, second]) >= pipeline.TOL.min_difference_m
+    assert diversity([first, second]) >= fit.TOL.min_difference_m
     np.testing.assert_array_equal(second.position_m, real(Solver(**{**spec.solver.__dict__}), first.model,
                                                           seed=1 + 2).position_m)
     first, second = run({1, 3, 5})  # every try for suggestion 2 repeats suggestion 1
@@ -701,7 +711,7 @@ def test_a_marked_door_is_kept_clear(tmp_path, capsys):
     for k in (1, 2):
         layout = json.loads((out / f"layout_{k}.json").read_text())
         assert len(layout["room"]["doors_m"]) == 1
-        assert layout["metrics"]["door_clearance_m2"][0] <= pipeline.DOOR_GRAZE_M2
+        assert layout["metrics"]["door_clearance_m2"][0] <= room_doors.DOOR_GRAZE_M2
     out.mkdir(exist_ok=True)
     for value, words in (("1193,280,1196,281", "apart on the floor, and a door is 0.5-2.5 m wide"),
                          ("1193,280,99999,219", "outside the photo (1280 x 960 px)"),
@@ -712,4 +722,4 @@ def test_a_marked_door_is_kept_clear(tmp_path, capsys):
     # Above room_1's horizon (about 48 px from its top) there is no floor to stand a door on.
     cal = calibrate_file(ROOMY.with_name("room_1.jpg"), Board())
     with pytest.raises(FurnishError, match="above the horizon"):
-        pipeline.doors_on_floor([[600, 10, 700, 10]], cal, np.array([[0, 0], [4, 0], [4, 4], [0, 4.0]]))
+        room_doors.doors_on_floor([[600, 10, 700, 10]], cal, np.array([[0, 0], [4, 0], [4, 4], [0, 4.0]]))

@@ -12,16 +12,9 @@ import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-from augment import printable
-from augment.board import PAPER_MM, Board
-from augment.printable import (
-    DEFAULT_SQUARE_BY_PAPER_MM,
-    PRINTER_MARGIN_MM,
-    QUIET_ZONE_MM,
-    board_figure,
-    board_for_paper,
-    write_board_pdf,
-)
+from augment.camera import printable
+from augment.camera.board import PAPER_MM, Board
+from augment.camera.printable import DEFAULT_SQUARE_BY_PAPER_MM, PRINTER_MARGIN_MM, QUIET_ZONE_MM, board_figure, board_for_paper, write_board_pdf
 
 MM_PER_PT = 25.4 / 72.0
 
@@ -371,7 +364,7 @@ def test_printed_charuco_page_is_detected_where_the_board_frame_says():
     """The page as a printer would put it on paper (rasterized at 60 dpi), read by the
     ChArUco detector: all 35 corners, each where Board.corners_m puts it on the sheet (board
     x to the right, y up the page, origin at the squares' center)."""
-    from augment.calibrate import detect_board
+    from augment.camera.detect import detect_board
 
     board = board_for_paper("A4", kind="charuco")
     fig = board_figure(board, "A4")

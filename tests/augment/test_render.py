@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 import trimesh
 
-from augment.board import Board
-from augment.calibrate import Calibration, Intrinsics, read_photo
-from augment.furniture import (BUILDERS, FIT_SLACK_M, Part, PlacedItem, build_furniture, furniture_from_asset,
-                               item_mesh, load_asset, placed_items)
-from augment.gl import Renderer
-from augment.render import Lighting, estimate_lighting, render_staged, write_jpeg
+from augment.camera.board import Board
+from augment.camera.calibration import Calibration, Intrinsics
+from augment.photo.io import read_photo
+from augment.render.furniture import BUILDERS, FIT_SLACK_M, Part, PlacedItem, build_furniture, furniture_from_asset, item_mesh, load_asset, placed_items
+from augment.render.gl import Renderer
+from augment.render.staged import Lighting, estimate_lighting, render_staged, write_jpeg
 from layout.catalog import CATALOG
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -67,7 +67,7 @@ def _box_parts():
     box.apply_translation((0, 0, 0.5))
     v = box.vertices[box.faces].reshape(-1, 3)
     n = np.repeat(box.face_normals, 3, axis=0)
-    from augment.furniture import Material
+    from augment.render.furniture import Material
     return (Part(v, n, np.arange(len(v)).reshape(-1, 3), Material("grey", (0.4, 0.4, 0.4), 0.8)),)
 
 

@@ -12,14 +12,17 @@ import numpy as np
 import pytest
 from skimage.measure import points_in_poly
 
-from augment import calibrate, segment
-from augment.board import Board
-from augment.calibrate import calibrate_photo, exif_intrinsics
-from augment.floor import (BRIDGE_M, DISPUTED_COLOR, _bridge, floor_area_m2, floor_overlay,
-                           floor_polygon)
-from augment.gl import Renderer
-from augment.segment import (DEFAULT_MODEL, GRABCUT_LONG_PX, FloorModel, ModelSpec, SegmentationError,
-                            below_horizon, disputed_floor, floor_parts, segment_floor)
+from augment.camera.calibration import turn_points
+from augment.floor import segment
+from augment.floor.upright import Upright
+from augment.camera.board import Board
+from augment.camera.calibrate import calibrate_photo, exif_intrinsics
+from augment.draw.floor import DISPUTED_COLOR, floor_overlay
+from augment.floor.polygon import BRIDGE_M, _bridge, floor_area_m2, floor_polygon
+from augment.render.gl import Renderer
+from augment.errors import SegmentationError
+from augment.floor.model import DEFAULT_MODEL, FloorModel, ModelSpec
+from augment.floor.segment import GRABCUT_LONG_PX, below_horizon, disputed_floor, floor_parts, segment_floor
 from augment.synth import render_sample
 from layout.geometry import polygon_area, self_intersection
 
@@ -407,7 +410,7 @@ def test_a_part_kept_inside_the_photo_is_in_the_polygon(held_out):
     or painted in a mask) is kept by the clean-up only when clicked, and then counts in
     the polygon: bridged on by a narrow corridor labelled a boundary (it crosses the thing
     between), the polygon still simple, the area within 1 % of the three parts'."""
-    from augment.segment import _clean
+    from augment.floor.segment import _clean
 
     _, cal = held_out[0]
     mask, left, right, island = _split_floor(cal)
@@ -429,7 +432,7 @@ def test_floors_in_many_parts_give_simple_polygons_of_their_area(held_out):
     within 6 % (the median within 0.2 %). Traced with the parts as one outline joined by
     pixel seams, 2 of these 30 polygons crossed themselves, one mesh 43 % over, and the
     median was 0.3 %."""
-    from augment.pipeline import _floor_mesh
+    from augment.render.gltf import _floor_mesh
 
     _, cal = held_out[0]
     errors, several = [], 0
@@ -459,7 +462,7 @@ def test_a_floor_with_narrow_necks_gives_simple_polygons(held_out):
     such polygons cross themselves: the refitted corners on the two sides of a neck
     passing each other, a corner dropped as a notch, and Douglas-Peucker's own chords
     across a long strip (seeds 83 and 178 here, after the first was mended)."""
-    from augment.pipeline import _floor_mesh
+    from augment.render.gltf import _floor_mesh
 
     _, cal = held_out[0]
     cols, rows = cal.size_px
@@ -555,7 +558,7 @@ def test_thin_spurs_far_from_the_models_floor_are_dropped():
     edge up a wall), and keeps what GrabCut rightly adds past the model: a sliver near its
     floor's edge (behind a carton at a far wall), a region (shade), and any line the user
     clicked as floor."""
-    from augment.segment import SPUR_REACH_PX, SPUR_WIDTH_PX, _clean
+    from augment.floor.segment import SPUR_REACH_PX, SPUR_WIDTH_PX, _clean
 
     floor = np.zeros((480, 640), bool)
     floor[300:] = True
@@ -601,7 +604,7 @@ def test_a_windows_shadow_on_a_wall_is_not_floor(model):
 def test_grabcut_alone_keeps_only_the_boards_region(held_out):
     """The clean-up keeps a part cut off at the photo's edge only on the model's word:
     with GrabCut alone (no probabilities) the board's region is the floor."""
-    from augment.segment import _clean
+    from augment.floor.segment import _clean
 
     _, cal = held_out[0]
     mask, left, right, island = _split_floor(cal)
@@ -692,8 +695,8 @@ class _Blind:
     def __init__(self, model, patch, p):
         self.model, self.patch, self.p, self.spec = model, patch, p, model.spec
 
-    def floor_probability(self, image, size_px=None, quarter_turns=0):
-        prob = self.model.floor_probability(image, size_px, quarter_turns)
+    def floor_probability(self, image, size_px=None):
+        prob = self.model.floor_probability(image, size_px)
         patch = cv2.resize(self.patch.astype(np.float32), prob.shape[::-1], interpolation=cv2.INTER_AREA) > 0.5
         return np.where(patch, np.float32(self.p), prob)
 
@@ -749,7 +752,7 @@ def test_a_clicks_region_reaches_half_a_meter_over_the_floor(held_out):
     max_px = segment.CLICK_REGION_MAX_REACH * GRABCUT_LONG_PX
     for distance_m in (2.0, 6.0):
         x, y = cal.pixels_from_floor((cam - distance_m * cam / np.linalg.norm(cam))[None])[0]
-        floor, other, _ = segment._click_regions(small, scale, cal, np.array([[x, y, 1.0]]))
+        floor, other, _ = segment._click_regions(small, scale, cal, np.array([[x, y, 1.0, x, y]]))
         assert not other.any()
         ys, xs = np.nonzero(floor)
         col, row = round(x * scale), round(y * scale)
@@ -917,8 +920,9 @@ def test_a_board_click_settles_the_band_the_trim_cut_above_it():
     # In a photo that shows the room turned, the column runs up the room's way, as the
     # trim cut: the same band, turned.
     for k in (1, 2, 3):
-        click = np.column_stack([calibrate.turn_points([[50.0, 28.0]], k, (200, 100)), [0.0]])
-        np.testing.assert_array_equal(segment._cut_clicked(np.rot90(cut, k), click, (-k) % 4),
+        click = np.column_stack([turn_points([[50.0, 28.0]], k, (200, 100)), [0.0]])
+        up = Upright((-k) % 4, (200, 100) if k % 2 == 0 else (100, 200), None)
+        np.testing.assert_array_equal(up.back(segment._cut_clicked(up.image(np.rot90(cut, k)), up.points(click))),
                                       np.rot90(settled, k))
 
 

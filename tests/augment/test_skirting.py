@@ -4,10 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from augment import calibrate, skirting
-from augment.board import Board
-from augment.calibrate import Calibration, Intrinsics
-from augment.skirting import board_clicks, extend_to_floor_line, trim_skirting
+from augment.camera.calibration import turn_points
+from augment.floor import skirting
+from augment.floor.upright import Upright
+from augment.camera.board import Board
+from augment.camera.calibration import Calibration, Intrinsics
+from augment.floor.skirting import board_clicks, extend_to_floor_line, trim_skirting
 
 WALL_Y_M = 4.0
 SIZE = (960, 720)
@@ -187,7 +189,7 @@ def test_mask_already_at_the_floor_line_is_left_alone(depth_m, factor):
 def test_board_profiles_measure_in_meters_against_the_floor():
     """The board model's input, checked by hand: the mask's edge at the board's top, a
     12 cm board 200 px per meter tall, the floor below."""
-    from augment.skirting import PROFILE_FROM_M, PROFILE_STEP_M, board_profiles
+    from augment.floor.skirting import PROFILE_FROM_M, PROFILE_STEP_M, board_profiles
 
     image = np.zeros((400, 3, 3), np.uint8)
     image[:100] = (200, 200, 200)  # wall
@@ -209,7 +211,7 @@ def test_the_working_view_holds_every_row_the_profiles_read():
     """A wall seen square-on: every column's edge is on one row, so the rows 10 cm above
     it (the profiles' top) and 30 cm below it (their floor reference) must come from the
     photo, not the black the rest of the view is left as."""
-    from augment.skirting import PROFILE_FROM_M, PROFILE_TO_M, working_view
+    from augment.floor.skirting import PROFILE_FROM_M, PROFILE_TO_M, working_view
 
     image, truth, _, calibration = _room(0.0)
     _, small_image, small_mask, _, cols, rows, px_per_m = working_view(image, truth, calibration)
@@ -224,9 +226,10 @@ def test_the_working_view_holds_every_row_the_profiles_read():
 def _render_untrimmed(seed: int, index: int):
     """A render of the synthetic photographer, its calibration from the board, and the
     floor mask from the model and GrabCut before the trim."""
-    from augment.calibrate import calibrate_photo, exif_intrinsics
-    from augment.gl import Renderer
-    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
+    from augment.camera.calibrate import calibrate_photo, exif_intrinsics
+    from augment.render.gl import Renderer
+    from augment.floor.model import DEFAULT_MODEL, FloorModel
+    from augment.floor.segment import segment_floor
     from augment.synth import render_sample
 
     with Renderer() as renderer:
@@ -271,7 +274,7 @@ def test_a_board_in_dashes_is_cut_whole_where_the_board_model_sees_it():
     6 cm) in columns 0-9 and 60-69 only, too few to cut the whole stretch and 50 columns
     apart. The gap is cut, at heights interpolated between the dashes, where the board
     model sees the board, and nowhere past the last dash."""
-    from augment.skirting import GAP_PX, _bridge
+    from augment.floor.skirting import GAP_PX, _bridge
 
     cols, rows = np.arange(100), np.full(100, 40)
     height = np.full(100, np.nan)
@@ -305,7 +308,7 @@ def test_the_mask_edge_is_split_into_walls_at_corners_and_jumps():
     to a corner at column 80, another rising 0.25 px a column after it, and a carton from
     column 150 on that lifts the edge by 20 px. Three walls, split at the corner (within
     the rounding of the rows to whole pixels) and at the carton."""
-    from augment.skirting import _walls
+    from augment.floor.skirting import _walls
 
     cols = np.arange(200)
     rows = np.where(cols <= 80, 100 + 0.5 * cols, 140 - 0.25 * (cols - 80)).round().astype(int)
@@ -324,7 +327,7 @@ def test_a_board_on_one_wall_is_cut_when_the_other_walls_show_none(monkeypatch):
     The polygon's area, 7 % over the true mask's untrimmed, comes within 2 % of it
     (0.7 % when written), and the cut follows the floor line: under 2 px of floor go
     with the board per column cut (1.3 px when written, along 447 columns)."""
-    from augment.floor import floor_polygon
+    from augment.floor.polygon import floor_polygon
 
     sample, calibration, mask = _render_untrimmed(916, 78)
     truth = sample.floor_mask
@@ -409,10 +412,10 @@ def test_the_trim_says_where_a_board_it_left_may_be_and_a_click_there_trims_it(m
 
 
 def test_a_room_turned_is_trimmed_as_upright(monkeypatch):
-    """The trim reads each column up from the floor to the wall: in a photo turned a
-    quarter or a half (its orientation lost) it turns the room upright first, so the same
-    board is cut, the same height found, and a click on it, turned, is still a board
-    click. (Before, it read the turned columns: across the board, or along the wall.)"""
+    """The trim reads each column up from the floor to the wall: a photo turned a
+    quarter or a half (its orientation lost) is turned upright first (``Upright``, as the
+    floor stage does), so the same board is cut, the same height found, and a click on
+    it, turned, is still a board click."""
     image, truth, mask, calibration = _room(0.10)
     band = mask & ~truth
     trimmed, height_m, _ = trim_skirting(image, mask, calibration)
@@ -421,12 +424,13 @@ def test_a_room_turned_is_trimmed_as_upright(monkeypatch):
     on_strip = (cols.min() + 40, int(np.median(rows[cols == cols.min() + 40])))
     h, w = mask.shape
     for k in (1, 2, 3):
-        turned = calibration.turned(k)
-        got, got_m, _ = trim_skirting(np.rot90(image, k), np.rot90(mask, k), turned)
+        up = Upright.of(calibration.turned(k), (w, h) if k % 2 == 0 else (h, w))
+        photo, shown = up.image(np.rot90(image, k)), up.image(np.rot90(mask, k))
+        got, got_m, _ = trim_skirting(photo, shown, up.calibration)
         assert got_m == pytest.approx(height_m, abs=0.005), k
-        assert (np.rot90(got, -k) != trimmed).sum() < 0.002 * truth.sum(), k
-        point = calibrate.turn_points([on_strip], k, (w, h))
-        assert board_clicks(np.rot90(image, k), np.rot90(mask, k), turned, point).all(), k
+        assert (np.rot90(up.back(got), -k) != trimmed).sum() < 0.002 * truth.sum(), k
+        point = turn_points([on_strip], k, (w, h))
+        assert board_clicks(photo, shown, up.calibration, up.points(point)).all(), k
 
 
 def test_a_click_on_the_strip_at_a_walls_foot_is_a_board_click():
@@ -458,8 +462,9 @@ def test_floor_below_a_boards_shadow_is_brought_back():
     short of the floor line; far away those rows are 6 % of the floor's area. No board is
     in the mask, so nothing is trimmed; the gap model moves the edge up to the floor
     line. The truth is the render's floor mask, its polygon through the same calibration."""
-    from augment.floor import floor_polygon
-    from augment.segment import DEFAULT_MODEL, FloorModel, segment_floor
+    from augment.floor.polygon import floor_polygon
+    from augment.floor.model import DEFAULT_MODEL, FloorModel
+    from augment.floor.segment import segment_floor
 
     sample, calibration, mask = _render_untrimmed(930, 69)
     truth = sample.floor_mask
@@ -492,7 +497,7 @@ def test_shade_at_the_foot_of_a_wall_seen_square_on_is_brought_back(depth_m):
     the mask's highest row, so the rows above it must be in the working view for the
     gap model to see the wall there. The band is as many rows as ``depth_m`` of the wall
     would be (the scale the model measures in): far more of the floor's depth."""
-    from augment.skirting import working_view
+    from augment.floor.skirting import working_view
 
     image, truth, _, calibration = _room(0.0)
     *_, px_per_m = working_view(image, truth, calibration)

@@ -7,9 +7,9 @@ import cv2
 import numpy as np
 import pytest
 
-from augment.board import Board
+from augment.camera.board import Board
 from layout.geometry import self_intersection
-from augment.gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
+from augment.render.gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from augment.synth import CEILING, FLOOR, render_labels, render_sample, write_sample
 from augment.synth.__main__ import main as synth_main
 from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, ROLL_DEG, look_pose,

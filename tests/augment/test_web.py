@@ -21,7 +21,8 @@ with warnings.catch_warnings():
     warnings.filterwarnings("ignore", "Using `httpx` with `starlette.testclient` is deprecated")
     from fastapi.testclient import TestClient  # noqa: E402
 
-from augment.web import create_app, retry_after_s  # noqa: E402
+from augment.app.jobs import retry_after_s  # noqa: E402
+from augment.app.web import create_app  # noqa: E402
 
 PHOTO = Path(__file__).resolve().parents[2] / "samples" / "photos" / "room_4.jpg"
 
@@ -181,7 +182,8 @@ def test_heic_uploads_are_accepted(finished):
     import pillow_heif
     from PIL import Image
 
-    from augment.web import UploadError, check_photo
+    from augment.app.web import check_photo
+    from augment.errors import UploadError
 
     pillow_heif.register_heif_opener()
     buffer = io.BytesIO()

@@ -191,7 +191,7 @@ def test_ctrl_c_reads_as_an_interruption_whatever_it_turns_into(capsys):
     # leaves it ignored: give the test the handler an interactive run has.
     inherited = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
-        assert dispatch(command, None, "stage", []) == 130
+        assert dispatch(command, None, "stage") == 130
         assert capsys.readouterr().err.startswith("error: interrupted after ")
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # put back
     finally:
@@ -200,7 +200,7 @@ def test_ctrl_c_reads_as_an_interruption_whatever_it_turns_into(capsys):
     def broken(args):
         raise TypeError("a real bug")
 
-    assert dispatch(broken, None, "stage", []) == 1
+    assert dispatch(broken, None, "stage") == 1
     assert "unexpected failure (a bug in stage)" in capsys.readouterr().err
 
 

@@ -24,7 +24,7 @@ the floor (mask, overlay, and the floor polygon in meters when the board is foun
 ``furnish`` goes on to lay out furniture (a room preset, default living_room, or a spec
 file) on the measured floor and renders each suggestion into the photo
 (:mod:`augment.pipeline` lists the files it writes); ``serve`` runs the web app
-(:mod:`augment.web`) that does what ``furnish`` does from a browser.
+(:mod:`augment.app.web`) that does what ``furnish`` does from a browser.
 
 Exit status: 0 success, 2 bad input (one ``error:`` line on stderr saying what and
 where, and what would work: an unreadable photo, no board, no floor, a floor too small
@@ -42,52 +42,16 @@ import os
 import re
 import sys
 from pathlib import Path
-from typing import NamedTuple
 
-from layout.command import EXIT_INPUT, EXIT_OK, Parser, dispatch, parse, run as run_command, seed_arg
+from layout.command import EXIT_INPUT, EXIT_OK, Parser, arg_type, dispatch, parse, run as run_command, seed_arg
+from layout.errors import StagerError, UsageError
 from layout.presets import PRESETS
 
-from .board import (BOARD_KINDS, CHARUCO_DICTIONARY, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM,
-                    MIN_SQUARE_MM, PAPER_MM)
+from ..camera.board import (CHARUCO_DICTIONARY, DEFAULT_BOARD, DEFAULT_INNER_CORNERS, DEFAULT_PAPER,
+                            DEFAULT_SQUARE_MM, MIN_SQUARE_MM, PAPER_MM, parse_board)
 
 DEFAULT_PROFILE = "profile.json"
 DEFAULT_BOARD_PDF = "board.pdf"
-
-
-class StageError(Exception):
-    """Bad input: the message names the file, flag or value and says what would work."""
-
-
-class BoardSpec(NamedTuple):
-    """A ``--board`` value: inner corners per row and per column, and the board's kind."""
-
-    cols: int
-    rows: int
-    kind: str = "chessboard"
-
-
-DEFAULT_BOARD = BoardSpec(*DEFAULT_INNER_CORNERS)
-_KIND_NAMES = {"chessboard": "chessboard", "checkerboard": "chessboard", "charuco": "charuco"}
-
-
-def parse_board(text: str) -> BoardSpec:
-    """``"7x5"`` -> ``BoardSpec(7, 5, "chessboard")``, ``"charuco:7x5"`` ->
-    ``BoardSpec(7, 5, "charuco")``: inner corners per row and per column."""
-    match = re.fullmatch(r"\s*(?:([A-Za-z]+)\s*:\s*)?(\d+)\s*[xX]\s*(\d+)\s*", text)
-    counting = ("it counts inner corners, where four squares meet, not squares: "
-                "a board of 8 x 6 squares is --board 7x5")
-    if match is None:
-        raise argparse.ArgumentTypeError(
-            f"{text!r} is not COLSxROWS like 7x5 (a checkerboard) or charuco:7x5 (a ChArUco board); {counting}")
-    kind = _KIND_NAMES.get((match[1] or "chessboard").lower())
-    if kind is None:
-        raise argparse.ArgumentTypeError(
-            f"{text!r}: unknown board kind {match[1]!r}; write COLSxROWS for a checkerboard or "
-            f"charuco:COLSxROWS for a ChArUco board ({', '.join(BOARD_KINDS)})")
-    cols, rows = int(match[2]), int(match[3])
-    if cols < 2 or rows < 2:
-        raise argparse.ArgumentTypeError(f"{text!r}: needs at least 2x2 inner corners; {counting}")
-    return BoardSpec(cols, rows, kind)
 
 
 def _square_mm(text: str) -> float:
@@ -173,13 +137,13 @@ def _click_flag(click) -> str:
 def _check_clicks_with_mask(args) -> None:
     """Clicks correct the floor Stager finds; a user's mask is taken as it is."""
     if args.clicks and args.floor_mask is not None:
-        raise StageError(f"{_click_flag(args.clicks[0])}: clicks correct the floor Stager finds, and "
+        raise UsageError(f"{_click_flag(args.clicks[0])}: clicks correct the floor Stager finds, and "
                          f"--floor-mask {args.floor_mask} is used as it is; paint the correction into the mask, "
                          "or leave --floor-mask out")
 
 
 def _add_board_args(p, square_help=None):
-    p.add_argument("--board", type=parse_board, default=DEFAULT_BOARD, metavar="[charuco:]COLSxROWS",
+    p.add_argument("--board", type=arg_type(parse_board), default=DEFAULT_BOARD, metavar="[charuco:]COLSxROWS",
                    help="inner corners per row and column, where four squares meet (default %dx%d: "
                         "a checkerboard of 8 x 6 squares); charuco:COLSxROWS for a ChArUco board, "
                         "which may be partly hidden" % DEFAULT_INNER_CORNERS)
@@ -327,7 +291,7 @@ def _parser():
                    help="print nothing but errors and warnings (no progress bar either)")
 
     s = sub.add_parser("serve", help="run the web app: upload a photo in a browser, get staged images",
-                       description="Serve the web page and its API (augment.web; OpenAPI page at /docs) until "
+                       description="Serve the web page and its API (augment.app.web; OpenAPI page at /docs) until "
                                    "interrupted. Photos are furnished in worker processes; finished jobs and "
                                    "their files are deleted after an hour.")
     s.add_argument("--host", default="127.0.0.1",
@@ -359,7 +323,7 @@ def _port(text: str) -> int:
 
 
 def _size_px(text: str) -> tuple[int, int]:
-    from .segment import MAX_INPUT_PX
+    from ..floor.model import MAX_INPUT_PX
 
     match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
     if match is None or not all(16 <= int(v) <= MAX_INPUT_PX for v in match.groups()):
@@ -383,40 +347,40 @@ def _classes(text: str) -> tuple[int, ...]:
 
 
 def _board(args, square_default=DEFAULT_SQUARE_MM):
-    from .board import Board
+    from ..camera.board import Board
 
     cols, rows, kind = args.board
     square = square_default if args.square is None else args.square
     try:
         return Board(cols, rows, square, kind=kind)
     except ValueError as error:
-        raise StageError(str(error)) from None
+        raise UsageError(str(error)) from None
 
 
 def _prepare_file_out(out: Path, example: str) -> None:
     """Refuse an output file path that cannot be one (a folder, a name whose suffix is not
     ``example``'s), before any work is done."""
     if out.is_dir():
-        raise StageError(f"--out {out}: is a folder; give a file name, e.g. {out / example}")
+        raise UsageError(f"--out {out}: is a folder; give a file name, e.g. {out / example}")
     suffix = Path(example).suffix
     if out.suffix.lower() != suffix:
         # A PDF written to board.txt opens as text; a mask named floor.jpg would be a PNG.
-        raise StageError(f"--out {out}: it is written as {suffix[1:].upper()}; give a name ending in {suffix}, "
+        raise UsageError(f"--out {out}: it is written as {suffix[1:].upper()}; give a name ending in {suffix}, "
                          f"e.g. {out.with_suffix(suffix) if out.name else example}")
     for parent in out.parents:
         if parent.exists():
             if not parent.is_dir():
-                raise StageError(f"--out {out}: {parent} is a file, not a folder")
+                raise UsageError(f"--out {out}: {parent} is a file, not a folder")
             break
 
 
 def _prepare_dir_out(out: Path, flag: str = "--out") -> None:
     if out.exists() and not out.is_dir():
-        raise StageError(f"{flag} {out}: exists and is not a folder; give a folder for the outputs")
+        raise UsageError(f"{flag} {out}: exists and is not a folder; give a folder for the outputs")
     for parent in out.parents:
         if parent.exists():
             if not parent.is_dir():
-                raise StageError(f"{flag} {out}: {parent} is a file, not a folder")
+                raise UsageError(f"{flag} {out}: {parent} is a file, not a folder")
             break
 
 
@@ -424,7 +388,7 @@ def _mkdir(folder: Path, flag: str, shown: Path) -> None:
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as error:
-        raise StageError(f"{flag} {shown}: cannot create folder {folder} ({error.strerror or error})") from None
+        raise UsageError(f"{flag} {shown}: cannot create folder {folder} ({error.strerror or error})") from None
 
 
 def _write(path: Path, data, flag: str, shown: Path) -> None:
@@ -433,12 +397,12 @@ def _write(path: Path, data, flag: str, shown: Path) -> None:
     try:
         write_atomic(path, data)
     except OSError as error:
-        raise StageError(f"{flag} {shown}: cannot write {path} ({error.strerror or error}); "
+        raise UsageError(f"{flag} {shown}: cannot write {path} ({error.strerror or error}); "
                          "choose a folder you can write to") from None
 
 
 def _board_cmd(args):
-    from .printable import DEFAULT_SQUARE_BY_PAPER_MM, board_for_paper, write_board_pdf
+    from ..camera.printable import DEFAULT_SQUARE_BY_PAPER_MM, board_for_paper, write_board_pdf
 
     _prepare_file_out(args.out, DEFAULT_BOARD_PDF)
     cols, rows, kind = args.board
@@ -447,12 +411,12 @@ def _board_cmd(args):
     except ValueError as error:
         square = DEFAULT_SQUARE_BY_PAPER_MM[args.paper] if args.square is None else args.square
         spec = f"{cols}x{rows}" if kind == "chessboard" else f"{kind}:{cols}x{rows}"
-        raise StageError(f"--paper {args.paper} --board {spec} --square {square:g}: {error}") from None
+        raise UsageError(f"--paper {args.paper} --board {spec} --square {square:g}: {error}") from None
     _mkdir(args.out.parent, "--out", args.out)
     try:
         write_board_pdf(args.out, board, args.paper)
     except OSError as error:
-        raise StageError(f"--out {args.out}: cannot write it ({error.strerror or error}); "
+        raise UsageError(f"--out {args.out}: cannot write it ({error.strerror or error}); "
                          "choose a folder you can write to") from None
     if not args.quiet:
         what = "checkerboard" if board.kind == "chessboard" else f"ChArUco board (markers {CHARUCO_DICTIONARY})"
@@ -464,14 +428,14 @@ def _board_cmd(args):
 
 
 def _expand_shots(paths: list[Path]) -> list[Path]:
-    from .imageio import PHOTO_SUFFIXES
+    from ..photo.io import PHOTO_SUFFIXES
 
     shots = []
     for path in paths:
         if path.is_dir():
             found = sorted(p for p in path.iterdir() if p.suffix.lower() in PHOTO_SUFFIXES and p.is_file())
             if not found:
-                raise StageError(f"folder {path} holds no photos ({', '.join(PHOTO_SUFFIXES)})")
+                raise UsageError(f"folder {path} holds no photos ({', '.join(PHOTO_SUFFIXES)})")
             shots += found
         else:
             shots.append(path)
@@ -479,7 +443,7 @@ def _expand_shots(paths: list[Path]) -> list[Path]:
 
 
 def _calibrate_cmd(args):
-    from .calibrate import camera_profile
+    from ..camera.calibrate import camera_profile
 
     board = _board(args)
     _prepare_file_out(args.out, DEFAULT_PROFILE)
@@ -514,7 +478,7 @@ def _calibrate_cmd(args):
 def _check_floor_mask(path) -> None:
     """A ``--floor-mask`` that is not there is named before any work is done."""
     if path is not None and not path.is_file():
-        raise StageError(f"--floor-mask {path}: no such file; give the floor.png `stage segment` wrote "
+        raise UsageError(f"--floor-mask {path}: no such file; give the floor.png `stage segment` wrote "
                          "(white = floor), corrected by hand")
 
 
@@ -532,13 +496,13 @@ def _check_input_file(flag: str, path: Path | None, hint: str) -> None:
     not one, saying what it is instead."""
     if path is not None and not path.is_file():
         what = "is a folder" if path.is_dir() else "is not a file" if path.exists() else "no such file"
-        raise StageError(f"{flag}{'' if flag.endswith('=') else ' '}{path}: {what}; {hint}")
+        raise UsageError(f"{flag}{'' if flag.endswith('=') else ' '}{path}: {what}; {hint}")
 
 
 def _check_cmd(args):
-    from .calibrate import calibrate_file, read_photo
-    from .imageio import encode_image
-    from .overlay import calibration_overlay
+    from ..camera.calibrate import calibrate_file
+    from ..draw.calibration import calibration_overlay
+    from ..photo.io import encode_image, read_photo
 
     board = _board(args)
     out = args.out if args.out is not None else Path("out") / args.photo.stem
@@ -573,23 +537,25 @@ def _load_model(path, **spec_overrides):
     fields replaced."""
     from dataclasses import replace
 
-    from .segment import DEFAULT_MODEL, FloorModel, ModelSpec
+    from ..floor.model import DEFAULT_MODEL, FloorModel, ModelSpec
 
     path = path if path is not None else DEFAULT_MODEL
     if not path.is_file():
         hint = "use --method grabcut" if path != DEFAULT_MODEL else \
             "the repository's models/floor_segnet.onnx is missing; reinstall, or use --method grabcut"
-        raise StageError(f"--model {path}: no such file; {hint}")
+        raise UsageError(f"--model {path}: no such file; {hint}")
     sidecar = path.with_suffix(".json")
     spec = ModelSpec.from_json(sidecar) if sidecar.is_file() else ModelSpec()
     return FloorModel(path, spec=replace(spec, **spec_overrides))
 
 
 def _segment_cmd(args):
-    from .calibrate import CalibrationError, calibrate_file, read_photo
-    from .floor import floor_overlay, floor_polygon
-    from .imageio import encode_image
-    from .segment import segment_floor
+    from ..camera.calibrate import calibrate_file
+    from ..draw.floor import floor_overlay
+    from ..errors import CalibrationError
+    from ..floor.polygon import floor_polygon
+    from ..floor.segment import segment_floor
+    from ..photo.io import encode_image, read_photo
 
     board = _board(args)
     out = args.out if args.out is not None else Path("out") / args.photo.stem / "floor.png"
@@ -600,7 +566,7 @@ def _segment_cmd(args):
                  if getattr(args, k) is not None}
     if args.method == "grabcut" and (args.model is not None or overrides):
         flag = "--model" if args.model is not None else "--" + next(iter(overrides)).replace("_", "-")
-        raise StageError(f"{flag}: no model is used with --method grabcut (GrabCut alone, seeded by the board); "
+        raise UsageError(f"{flag}: no model is used with --method grabcut (GrabCut alone, seeded by the board); "
                          f"leave out one of the two")
     model = _load_model(args.model, **overrides) if args.method == "onnx" else None
     warnings = []
@@ -609,7 +575,7 @@ def _segment_cmd(args):
         warnings += calibration.warnings  # the polygon's meters rest on it
     except CalibrationError as error:
         if args.method == "grabcut":
-            raise StageError(f"--method grabcut needs the board to seed the floor: {error}") from None
+            raise UsageError(f"--method grabcut needs the board to seed the floor: {error}") from None
         calibration = None
         warnings.append(f"no calibration ({error}); the floor is found without the board and horizon, "
                         "and no floor polygon is made")
@@ -625,10 +591,7 @@ def _segment_cmd(args):
     files = {out: encode_image(seg.mask.astype("uint8") * 255, ".png"),
              out.with_name(out.stem + "_overlay.png"): encode_image(overlay, ".png")}
     if polygon is not None:
-        report = {"photo": str(args.photo), "method": seg.method, "floor_fraction": float(seg.mask.mean()),
-                  "skirting_m": seg.skirting_m, "disputed_m2": seg.disputed_m2, "disputed_share": seg.disputed_share,
-                  "clicks": seg.clicks_json(), "doubt": seg.doubt_json(), "floor": polygon.to_json(),
-                  "warnings": warnings}
+        report = {"photo": str(args.photo), **seg.to_json(), "floor": polygon.to_json(), "warnings": warnings}
         files[out.with_suffix(".json")] = json.dumps(report, indent=2) + "\n"
     _write_all(files, out.parent, [args.photo, args.camera, args.model])
     if not args.quiet:
@@ -643,16 +606,8 @@ def _segment_cmd(args):
 
 
 def _measure_cmd(args):
-    import time
-
-    from . import __version__
-    from .calibrate import calibrate_file, read_photo
-    from .floor import floor_overlay, floor_polygon
-    from .height import measure_height
-    from .imageio import encode_image
-    from .overlay import calibration_overlay
-    from .overlay_height import height_overlay
-    from .segment import read_floor_mask, segment_floor
+    from ..photo.io import encode_image
+    from ..pipeline import measure, measure_report, overlays
 
     board = _board(args)
     out = args.out if args.out is not None else Path("out") / args.photo.stem
@@ -661,58 +616,25 @@ def _measure_cmd(args):
     _check_clicks_with_mask(args)
     if args.photo.is_file():
         _check_floor_mask(args.floor_mask)
-    timings = {}
-    start = time.perf_counter()
-    image = read_photo(args.photo)
-    calibration = calibrate_file(args.photo, board, profile=args.camera)
-    timings["calibrate_s"] = time.perf_counter() - start
-    start = time.perf_counter()
-    if args.floor_mask is None:
-        seg = segment_floor(image, _load_model(args.model), calibration, clicks=args.clicks)
-    else:
-        seg = read_floor_mask(args.floor_mask, (image.shape[1], image.shape[0]), calibration)
-    warnings = list(calibration.warnings) + list(seg.warnings)
-    if not seg.mask.any():
-        raise StageError(f"photo {args.photo}: no floor found; the floor must show around the board")
-    try:
-        polygon = floor_polygon(seg.mask, calibration, seg.floor_clicks_px)
-    except ValueError as error:
-        if args.floor_mask is None:
-            raise StageError(f"photo {args.photo}: no floor outline ({error}); the floor must show around "
-                             "the board") from None
-        raise StageError(f"--floor-mask {args.floor_mask}: no floor outline ({error}); paint the floor "
-                         "around the board white, in a patch, not a line") from None
-    timings["segment_s"] = time.perf_counter() - start
-    start = time.perf_counter()
-    height = measure_height(image, calibration, floor_mask=seg.mask)
-    timings["height_s"] = time.perf_counter() - start
-    if height.fallback:
-        warnings.append(f"wall height not measured: {height.reason}")
-    report = {"photo": str(args.photo), "stager_version": __version__,
-              "calibration": calibration.to_json(),
-              "floor": {"method": seg.method, "skirting_m": seg.skirting_m, "disputed_m2": seg.disputed_m2,
-                        "disputed_share": seg.disputed_share, "clicks": seg.clicks_json(),
-                        "doubt": seg.doubt_json(), **polygon.to_json()},
-              "height": height.to_json(),
-              "timings": {k: round(v, 3) for k, v in timings.items()},
-              "warnings": warnings}
-    files = {out / "report.json": json.dumps(report, indent=2) + "\n",
-             out / "overlay_calibration.png": encode_image(calibration_overlay(image, calibration), ".png"),
-             out / "overlay_floor.png": encode_image(floor_overlay(image, seg.mask, polygon, calibration,
-                                                                  seg.doubted, seg.clicks, seg.doubt_px), ".png"),
-             out / "overlay_height.png": encode_image(height_overlay(image, calibration, height), ".png")}
+    m = measure(args.photo, board, camera=args.camera, floor_mask=args.floor_mask, clicks=args.clicks,
+                model=_load_model(args.model) if args.floor_mask is None else None)
+    files = {out / "report.json": json.dumps(measure_report(m), indent=2) + "\n",
+             **{out / name: encode_image(image, ".png") for name, image in overlays(m).items()}}
     _write_all(files, out, [args.photo, args.camera, args.model, args.floor_mask])
     if not args.quiet:
+        calibration, polygon, height = m.calibration, m.floor, m.height
         i = calibration.intrinsics
         print(f"focal       {i.K[0, 0]:.1f} px \u00b1 {100 * i.focal_uncertainty:.1f} % from {i.source}")
         print(f"camera      {calibration.camera_height_m:.3f} m above the floor, RMS {calibration.rms_px:.2f} px")
-        print(f"floor       {polygon.area_m2:.2f} m\u00b2 visible, {len(polygon.polygon_m)} corners ({seg.method})")
+        print(f"floor       {polygon.area_m2:.2f} m\u00b2 visible, {len(polygon.polygon_m)} corners "
+              f"({m.segmentation.method})")
         if polygon.caveat:
             print(f"note        {polygon.caveat}")
         state = "assumed (fallback)" if height.fallback else f"confidence {height.confidence:.2f}"
         print(f"walls       {height.height_m:.2f} m high, {state}")
         print(f"wrote {out}/report.json and overlay_calibration.png, overlay_floor.png, overlay_height.png")
-    _print_warnings(warnings, seg, "give a floor mask of your own with --floor-mask (stage segment writes one)")
+    _print_warnings(m.warnings, m.segmentation,
+                    "give a floor mask of your own with --floor-mask (stage segment writes one)")
     return EXIT_OK
 
 
@@ -727,7 +649,7 @@ def _asset(text: str) -> tuple[str, Path]:
 def _furnish_cmd(args):
     from layout.solver import COMPILE_NOTE, compiled
 
-    from .pipeline import furnish, write_outputs
+    from ..pipeline import furnish, write_outputs
 
     photos = args.photo
     board = _board(args)
@@ -736,7 +658,7 @@ def _furnish_cmd(args):
         stems = [p.stem for p in photos]
         twice = sorted({stem for stem in stems if stems.count(stem) > 1})
         if twice:
-            raise StageError(f"several photos are named {', '.join(twice)}: each photo's files go to "
+            raise UsageError(f"several photos are named {', '.join(twice)}: each photo's files go to "
                              "--out/<photo name>/; give them different names")
         parent = args.out if args.out is not None else Path("out")
         outs = [parent / p.stem for p in photos]
@@ -747,14 +669,14 @@ def _furnish_cmd(args):
         # The files are made in a folder beside out, then moved in: both places must take them.
         for folder in ([out] if out.is_dir() else []) + [next(p for p in out.parents if p.exists())]:
             if not os.access(folder, os.W_OK | os.X_OK):
-                raise StageError(f"--out {out}: cannot write in {folder}; choose a folder you can write to")
+                raise UsageError(f"--out {out}: cannot write in {folder}; choose a folder you can write to")
     if batch and args.floor_mask is not None:
-        raise StageError(f"--floor-mask {args.floor_mask}: a mask is of one photo; give one photo with it, "
+        raise UsageError(f"--floor-mask {args.floor_mask}: a mask is of one photo; give one photo with it, "
                          "or leave --floor-mask out to find each photo's floor")
     if batch and args.clicks:
-        raise StageError(f"{_click_flag(args.clicks[0])}: a click is on one photo; give one photo with it")
+        raise UsageError(f"{_click_flag(args.clicks[0])}: a click is on one photo; give one photo with it")
     if batch and args.door:
-        raise StageError(f"--door {','.join(f'{v:g}' for v in args.door[0])}: a door is in one photo; give one "
+        raise UsageError(f"--door {','.join(f'{v:g}' for v in args.door[0])}: a door is in one photo; give one "
                          "photo with it")
     _check_clicks_with_mask(args)
     if any(p.is_file() for p in photos):
@@ -768,11 +690,11 @@ def _furnish_cmd(args):
     kinds = [kind for kind, _ in args.asset]
     if len(set(kinds)) < len(kinds):
         twice = sorted({k for k in kinds if kinds.count(k) > 1})
-        raise StageError(f"--asset: {', '.join(twice)} given more than once; give one model per kind")
+        raise UsageError(f"--asset: {', '.join(twice)} given more than once; give one model per kind")
     shared = {}
     if batch:
         # Loaded once for every photo: the floor model's session and the GL context.
-        from .gl import Renderer
+        from ..render.gl import Renderer
 
         shared = {"model": _load_model(args.model), "renderer": Renderer()}
     if not args.quiet and sys.stderr.isatty() and not compiled():  # said where a progress bar shows
@@ -789,7 +711,7 @@ def _furnish_cmd(args):
                                  progress=not args.quiet and sys.stderr.isatty())
                 paths = write_outputs(result, out, inputs=[photo, args.floor_mask, args.spec, args.camera,
                                                             args.model, *dict(args.asset).values()])
-            except _input_errors() as error:
+            except StagerError as error:
                 if not batch:
                     raise
                 print(f"error: {error}", file=sys.stderr)
@@ -812,7 +734,7 @@ def _furnish_cmd(args):
 
 def _print_furnished(result, out: Path, paths: list, quiet: bool, photo: Path | None) -> None:
     """What ``stage furnish`` says of one photo; ``photo`` names it when there are several."""
-    from .pipeline import dropped_summary
+    from ..room.fit import dropped_summary
 
     if not quiet:
         if photo is not None:
@@ -867,7 +789,7 @@ def _serve_cmd(args):
     try:
         from .web import serve
     except ImportError as error:
-        raise StageError(f"the web app needs {error.name}: pip install fastapi uvicorn python-multipart") from None
+        raise UsageError(f"the web app needs {error.name}: pip install fastapi uvicorn python-multipart") from None
     _prepare_dir_out(args.jobs, "--jobs")
     _check_listen(args.host, args.port)
     _mkdir(args.jobs, "--jobs", args.jobs)
@@ -886,7 +808,7 @@ def _check_listen(host: str, port: int) -> None:
             probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as uvicorn binds
             probe.bind(address)
     except OSError as error:
-        raise StageError(f"--host {host} --port {port}: cannot listen there ({error.strerror or error}); choose "
+        raise UsageError(f"--host {host} --port {port}: cannot listen there ({error.strerror or error}); choose "
                          "another port (e.g. --port 8001) or an address of this machine") from None
 
 
@@ -895,7 +817,7 @@ def _keep_inputs(outputs, inputs) -> None:
     from layout.fileio import replaced_input
 
     if (clash := replaced_input(outputs, inputs)) is not None:
-        raise StageError(f"--out {clash[0]}: is the input {clash[1]}, which Stager never overwrites; "
+        raise UsageError(f"--out {clash[0]}: is the input {clash[1]}, which Stager never overwrites; "
                          "write the outputs to another file or folder")
 
 
@@ -911,7 +833,7 @@ def _write_all(files: dict, folder: Path, inputs) -> None:
             for path, data in files.items():
                 (staging / path.name).write_bytes(data.encode("utf-8") if isinstance(data, str) else data)
     except OSError as error:
-        raise StageError(f"--out {folder}: cannot write there ({error.strerror or error}); nothing was "
+        raise UsageError(f"--out {folder}: cannot write there ({error.strerror or error}); nothing was "
                          "changed in it; choose a folder you can write to") from None
 
 
@@ -929,18 +851,7 @@ def main(argv=None) -> int:
         return EXIT_OK
     commands = {"board": _board_cmd, "calibrate": _calibrate_cmd, "check": _check_cmd, "segment": _segment_cmd,
                 "measure": _measure_cmd, "furnish": _furnish_cmd, "serve": _serve_cmd}
-    return dispatch(commands[args.command], args, "stage", [(_input_errors(), str)])
-
-
-def _input_errors() -> tuple:
-    """The exceptions that mean bad input (one ``error:`` line, status 2), not a bug."""
-    from layout.errors import LayoutError
-
-    from .calibrate import CalibrationError
-    from .errors import FurnishError
-    from .segment import SegmentationError
-
-    return StageError, CalibrationError, SegmentationError, LayoutError, FurnishError
+    return dispatch(commands[args.command], args, "stage")
 
 
 def run() -> None:

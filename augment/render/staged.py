@@ -1,11 +1,11 @@
 """Render a furnished layout back into the photo it was measured from.
 
-:func:`render_staged` takes the photo, its :class:`~augment.calibrate.Calibration` and the
+:func:`render_staged` takes the photo, its :class:`~augment.camera.calibration.Calibration` and the
 placed items of a layout (floor frame: the board's, z up, meters) and returns the staged
 photo at full resolution, with an optional RGBA layer of furniture and shadows.
 
-How. The furniture (:mod:`augment.furniture`) is drawn with pyrender through
-:mod:`augment.gl` with the calibrated intrinsics and pose (lens distortion applied by
+How. The furniture (:mod:`augment.render.furniture`) is drawn with pyrender through
+:mod:`augment.render.gl` with the calibrated intrinsics and pose (lens distortion applied by
 warping the render), only over the part of the frame it and its shadows can reach,
 antialiased by the renderer's 4x multisampling and by supersampling where the pixel
 budget allows. The light is estimated from the photo (:func:`estimate_lighting`):
@@ -48,7 +48,7 @@ from layout.fileio import write_atomic
 
 from .furniture import furniture_for, placed_items, world_from_item
 from .gl import ZNEAR_M, Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
-from .imageio import JPEG_QUALITY, encode_image
+from ..photo.io import JPEG_QUALITY, encode_image
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 PAPER_ALBEDO = 0.85         # the board's white squares: office paper
@@ -187,7 +187,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     image : (h, w, 3) uint8
         The photo, RGB. Not modified.
     calibration : Calibration
-        Of this photo (:func:`augment.calibrate.calibrate_photo`): its board gives the
+        Of this photo (:func:`augment.camera.calibrate.calibrate_photo`): its board gives the
         exposure (white paper on the floor).
     floor_mask : (h, w) bool, optional
         Visible floor; else the floor is taken below the horizon, within 8 m.
@@ -796,7 +796,7 @@ def _wall_occluders(walls_m, rays_floor, cam_xy):
 
 def wall_segments(floor_polygon) -> np.ndarray:
     """Wall segments (k, 2, 2) of a floor polygon: every edge of an (n, 2) array, or the
-    ``"boundary"`` edges of a :class:`~augment.floor.FloorPolygon` (its ``"image"`` and
+    ``"boundary"`` edges of a :class:`~augment.floor.polygon.FloorPolygon` (its ``"image"`` and
     ``"far"`` edges are not walls)."""
     poly = np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon), dtype=np.float64)
     if poly.ndim != 2 or poly.shape[1] != 2 or len(poly) < 3:
@@ -929,7 +929,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         Of this photo (``size_px`` must be ``(w, h)``): intrinsics (K, distortion) and
         ``camera_from_floor``. The items are in its floor frame (meters, z up).
     items : sequence of PlacedItem, a Layout, or a layout dict (``layout_K.json``)
-        What to render (:func:`augment.furniture.placed_items`).
+        What to render (:func:`augment.render.furniture.placed_items`).
     renderer : Renderer
         The GL context, reused for every render.
     floor_mask : (h, w) bool, optional
@@ -945,7 +945,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         Picks each item's style and materials, with the item's id: an item looks the same
         in every suggestion.
     assets : dict, optional
-        Kind -> GLB/OBJ path, or parts from :func:`augment.furniture.load_asset`.
+        Kind -> GLB/OBJ path, or parts from :func:`augment.render.furniture.load_asset`.
     supersample : float, optional
         Rendered pixels per photo pixel along each axis. Default: as many as
         ``tol.render_budget_px`` allows over the region furniture and shadows reach, up

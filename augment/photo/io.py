@@ -13,6 +13,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ..errors import CalibrationError
+
 # The ISO base-media brands of HEIF stills: HEIC is what iPhones save by default.
 _HEIF_BRANDS = (b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"mif1", b"msf1")
 
@@ -88,7 +90,7 @@ def pillow_open(source):
 
     Pillow warns above 89 MP and refuses above 179 MP, where phones take 108 and 200 MP
     photos. Stager decodes photos with OpenCV, which has no such guard, and the web app
-    refuses large uploads by their header itself (:func:`augment.web.check_photo`), so
+    refuses large uploads by their header itself (:func:`augment.app.web.check_photo`), so
     here the guard would only stop a real photo's EXIF or a mask drawn at its size.
     """
     from PIL import Image
@@ -180,3 +182,28 @@ def decode_image(data: bytes) -> np.ndarray | None:
         return np.asarray(heif.to_pillow().convert("RGB"))
     except (ValueError, RuntimeError, OSError, SyntaxError):
         return None
+
+
+def read_photo(path) -> np.ndarray:
+    """An RGB photo (h, w, 3) uint8 from ``path``.
+
+    Raises
+    ------
+    CalibrationError
+        When the file is missing, not an image Stager can decode, or of a size that will not
+        do (too small, or a panorama).
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise CalibrationError(f"photo {path} is a folder; give a photo file, e.g. {path / 'room.jpg'}")
+    if not path.is_file():
+        raise CalibrationError(f"photo {path} does not exist; check the path")
+    data, problem = read_user_file(path)
+    if problem is not None:
+        raise CalibrationError(f"photo {path} {problem}")
+    image = decode_image(data)
+    if image is None:
+        raise CalibrationError(f"photo {path} {decode_problem(data)}")
+    if (problem := size_problem(image.shape[1], image.shape[0])) is not None:
+        raise CalibrationError(f"photo {path} {problem}")
+    return image

@@ -66,11 +66,11 @@ import cv2
 import numpy as np
 from scipy.ndimage import median_filter
 
-from .calibrate import turn_points
+from .model import MODELS_DIR
 
-BOARD_MODEL = Path(__file__).resolve().parent.parent / "models" / "skirting_board.onnx"
-GAP_MODEL = Path(__file__).resolve().parent.parent / "models" / "skirting_gap.onnx"
-DEPTH_MODEL = Path(__file__).resolve().parent.parent / "models" / "skirting_depth.onnx"
+BOARD_MODEL = MODELS_DIR / "skirting_board.onnx"
+GAP_MODEL = MODELS_DIR / "skirting_gap.onnx"
+DEPTH_MODEL = MODELS_DIR / "skirting_depth.onnx"
 
 # Work at this long side at most (the board is 10 px or more there at 4 m).
 WORK_LONG_PX = 1280
@@ -445,9 +445,6 @@ def extend_to_floor_line(image: np.ndarray, mask: np.ndarray, calibration) -> np
     mask : (rows, cols) bool
         The mask with the strips of floor below the walls added, or the same values.
     """
-    turns = calibration.upright_turns
-    if turns:
-        return np.rot90(extend_to_floor_line(*_upright(image, mask, calibration, turns)), -turns).copy()
     view = working_view(image, mask, calibration)
     if view is None:
         return mask.copy()
@@ -479,14 +476,6 @@ def _extended(mask: np.ndarray, view, profiles) -> np.ndarray:
     if scale < 1.0:
         add = cv2.resize(add, mask.shape[::-1], interpolation=cv2.INTER_NEAREST)
     return mask | (add > 0)
-
-
-def _upright(image: np.ndarray, mask: np.ndarray, calibration, turns: int):
-    """The photo, mask and calibration turned ``turns`` quarters (``np.rot90``), the room
-    upright: the rules and models read each column up from the floor to the wall, as in
-    a photo taken with the camera held level."""
-    return (np.ascontiguousarray(np.rot90(image, turns)), np.ascontiguousarray(np.rot90(mask, turns)),
-            calibration.turned(turns))
 
 
 def working_view(image: np.ndarray, mask: np.ndarray, calibration):
@@ -627,15 +616,6 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
         "not floor" click there (``board_at``) trims that wall.
     """
     rows_px, cols_px = mask.shape
-    turns = calibration.upright_turns
-    if turns:
-        at = None if board_at is None else turn_points(np.asarray(board_at, np.float64)[:, :2], turns,
-                                                       (cols_px, rows_px))
-        trimmed, height_m, doubt_px = trim_skirting(*_upright(image, mask, calibration, turns), board_at=at,
-                                                    extend=extend)
-        if doubt_px is not None:
-            doubt_px = tuple(int(v) for v in turn_points([doubt_px], -turns, trimmed.shape[::-1])[0])
-        return np.rot90(trimmed, -turns).copy(), height_m, doubt_px
     view = working_view(image, mask, calibration)
     if view is None:
         return mask.copy(), None, None
@@ -706,10 +686,6 @@ def board_clicks(image: np.ndarray, mask: np.ndarray, calibration, points) -> np
         the mask's top edge there down by a board's greatest height (``MAX_HEIGHT_M``).
     """
     points = np.asarray(points, np.float64).reshape(-1, 2)
-    turns = calibration.upright_turns
-    if turns:
-        return board_clicks(*_upright(image, mask, calibration, turns),
-                            turn_points(points, turns, mask.shape[::-1]))
     out = np.zeros(len(points), bool)
     view = working_view(image, mask, calibration) if mask.any() and len(points) else None
     if view is None:

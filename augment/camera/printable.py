@@ -7,7 +7,7 @@ trusts that a square on paper is ``square_mm`` wide. So the page is drawn in mil
 is a common default), plus a caption with the command-line flags matching the print.
 
 Page layout. The squares are centered on the landscape sheet, top-left square black, as
-in :meth:`augment.board.Board.printed_image`; a ChArUco board's markers sit in the white
+in :meth:`augment.camera.board.Board.printed_image`; a ChArUco board's markers sit in the white
 squares, drawn bit by bit. The ruler and the caption go into the margins around
 the squares, never closer than :data:`PRINTER_MARGIN_MM` to the paper edge (most printers
 cannot print there) nor than :data:`QUIET_ZONE_MM` to the squares (the corner detector
@@ -29,9 +29,10 @@ from matplotlib.patches import PathPatch
 from matplotlib.path import Path as MplPath
 from matplotlib.textpath import TextToPath
 
-from augment.board import (CHARUCO_BITS_PER_SQUARE, CHARUCO_DICTIONARY, CHARUCO_MARKER_BITS, DEFAULT_INNER_CORNERS,
-                           MIN_SQUARE_MM, PAPER_MM, Board)
 from layout.fileio import atomic_path
+
+from .board import (CHARUCO_BITS_PER_SQUARE, CHARUCO_DICTIONARY, CHARUCO_MARKER_BITS, DEFAULT_INNER_CORNERS,
+                    MIN_SQUARE_MM, PAPER_MM, Board)
 
 DEFAULT_SQUARE_BY_PAPER_MM = {"A3": 45.0, "A4": 30.0}
 
@@ -84,7 +85,7 @@ def board_for_paper(paper: str, cols: int | None = None, rows: int | None = None
         Side of one square, millimeters; default the paper's entry in
         :data:`DEFAULT_SQUARE_BY_PAPER_MM` (45 mm on A3, 30 mm on A4).
     kind : str
-        ``"chessboard"`` or ``"charuco"`` (see :class:`augment.board.Board`).
+        ``"chessboard"`` or ``"charuco"`` (see :class:`augment.camera.board.Board`).
 
     Returns
     -------

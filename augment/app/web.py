@@ -24,7 +24,7 @@ described on the app's OpenAPI page (``/docs``):
 =================================== ==================================================
 
 Jobs run in a pool of worker processes (one per core by default), each with one GL
-context reused for all its jobs (:class:`augment.gl.Renderer`); at most ``workers +
+context reused for all its jobs (:class:`augment.render.gl.Renderer`); at most ``workers +
 max_queued`` jobs are waiting or running, beyond that ``POST /api/jobs`` answers 503 with
 ``Retry-After``. Safety: the upload's size is limited (413); its header is read before it
 is decoded, so more than :data:`MAX_PIXELS` pixels (a decompression bomb) is refused
@@ -45,23 +45,18 @@ import asyncio
 import io
 import json
 import math
-import multiprocessing
 import os
-import shutil
-import statistics
-import time
-import uuid
 import warnings
 import zipfile
-from concurrent.futures import Future, ProcessPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
 from contextlib import asynccontextmanager
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated
 
 from fastapi import FastAPI, File, Form, HTTPException, Request, UploadFile
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response
+
+from ..errors import UploadError
+from .jobs import STAGES, Job, JobQueue, job_state
 
 MAX_PIXELS = 50_000_000
 MAX_PROFILE_BYTES = 1 << 20
@@ -69,156 +64,33 @@ MAX_SPEC_BYTES = 256 << 10
 MAX_SUGGESTIONS = 12
 MAX_CLICKS = 100  # corrections per photo; more is a job for a floor mask
 MAX_DOORS = 10
-# A busy server says when to come back: about when a worker frees up, from the recent
-# jobs' times (this default until one is done), within these bounds.
-DEFAULT_JOB_S = 20.0
-RETRY_AFTER_BOUNDS_S = (2, 60)
 DEFAULT_JOBS_DIR = Path("out") / "jobs"
-STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene", "overlays",
-          "plans", "write")
 STATIC_DIR = Path(__file__).with_name("web_static")
-# Kinds of user error: the class name in the worker, the key in a job's "error".
-_USER_ERRORS = {"CalibrationError": "calibration", "SegmentationError": "segmentation",
-                "LayoutError": "layout", "FurnishError": "furnish"}
 # The format PIL reads from the header -> the photo's stored suffix.
 _SUFFIXES = {"JPEG": ".jpg", "MPO": ".jpg", "PNG": ".png", "TIFF": ".tif", "WEBP": ".webp", "BMP": ".bmp",
              "HEIF": ".heic"}
 
 
 # --------------------------------------------------------------------------------------
-# The worker process
-# --------------------------------------------------------------------------------------
-
-_renderer = None          # one GL context per worker process, made on its first job
-_progress_path = None     # the running job's progress.json
-
-
-class _FileProgress:
-    """``furnish``'s progress reporter in a worker: the current stage and the steps
-    done, written to the job's ``progress.json`` (replaced atomically)."""
-
-    def __init__(self, total: int):
-        self.total, self.done, self.current, self.finished = int(total), 0, None, []
-        self._write()
-
-    def stage(self, name: str) -> None:
-        if self.current is not None and self.current != name and self.current not in self.finished:
-            self.finished.append(self.current)
-        self.current = name
-        self._write()
-
-    def step(self, n: int = 1) -> None:
-        self.done += n
-        self._write()
-
-    def grow(self, n: int) -> None:
-        self.total += n
-        self._write()
-
-    def close(self) -> None:
-        pass
-
-    def _write(self) -> None:
-        _write_progress({"stage": self.current, "finished": self.finished, "done": self.done,
-                         "total": self.total + 1})  # + 1: writing the files
-
-
-def _write_progress(state: dict) -> None:
-    tmp = _progress_path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(state))
-    os.replace(tmp, _progress_path)
-
-
-def _run_job(job_dir: str, options: dict) -> dict:
-    """Furnish one job's photo into ``job_dir/out`` (in a worker process).
-
-    Returns ``{"files": [...], "warnings": [...], "doubt": ...}`` (``doubt``:
-    ``Segmentation.doubt_json``), or ``{"error": {"kind", "message"}}``
-    for bad input (the errors of :func:`augment.pipeline.furnish`). A bug raises.
-    """
-    global _renderer, _progress_path
-    from layout.errors import LayoutError
-
-    start = time.perf_counter()
-
-    from . import pipeline
-    from .board import Board
-    from .calibrate import CalibrationError
-    from .errors import FurnishError
-    from .gl import Renderer
-    from .segment import SegmentationError
-
-    job = Path(job_dir)
-    _progress_path = job / "progress.json"
-    if _renderer is None:
-        _renderer = Renderer()
-    photo = job / "input" / options["photo"]
-    camera = job / "input" / options["camera"] if options.get("camera") else None
-    spec = job / "input" / options["spec"] if options.get("spec") else None
-    floor_mask = job / "input" / options["floor_mask"] if options.get("floor_mask") else None
-    clicks = options.get("clicks") or None
-    doors = options.get("doors") or None
-    try:
-        result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
-                                  room=None if spec is not None else options["room"], spec=spec,
-                                  suggestions=options["suggestions"], seed=options["seed"], camera=camera,
-                                  floor_mask=floor_mask, clicks=clicks, doors=doors,
-                                  keep_board=options["keep_board"], reporter=_FileProgress,
-                                  renderer=_renderer)
-        state = json.loads(_progress_path.read_text())
-        _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
-        paths = pipeline.write_outputs(result, job / "out")
-    except (CalibrationError, SegmentationError, LayoutError, FurnishError) as error:
-        message = str(error).replace(str(photo), "the photo")
-        for path, name in ((camera, "the camera profile"), (spec, "the spec file"), (floor_mask, "the floor mask")):
-            if path is not None:
-                # "floor mask PATH: ..." reads "the floor mask: ...", not "floor mask the floor mask".
-                message = message.replace(f"{name[4:]} {path}", name).replace(str(path), name)
-        return {"error": {"kind": _USER_ERRORS[type(error).__name__], "message": message},
-                "seconds": time.perf_counter() - start}
-    state = json.loads(_progress_path.read_text())
-    _write_progress(dict(state, stage=None, finished=list(STAGES), done=state["total"]))
-    return {"files": [p.name for p in paths], "warnings": list(result.warnings),
-            "doubt": result.segmentation.doubt_json(), "seconds": time.perf_counter() - start}
-
-
-def retry_after_s(job_seconds, workers: int) -> int:
-    """Seconds until a worker is likely free: the median of the last (up to 10) job
-    times over the worker count, within ``RETRY_AFTER_BOUNDS_S``."""
-    recent = list(job_seconds)[-10:]
-    typical = statistics.median(recent) if recent else DEFAULT_JOB_S
-    lo, hi = RETRY_AFTER_BOUNDS_S
-    return int(min(hi, max(lo, math.ceil(typical / max(1, workers)))))
-
-
-# --------------------------------------------------------------------------------------
 # Upload checks
 # --------------------------------------------------------------------------------------
-
-class UploadError(ValueError):
-    """An upload refused before any work: ``status`` is the HTTP code to answer."""
-
-    def __init__(self, status: int, message: str):
-        super().__init__(message)
-        self.status = status
-
 
 def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
     """Check an uploaded photo; returns the suffix to store it under (``".jpg"``, ...).
 
     The header's size is read first (PIL, without decoding the pixels), so a small file
     that claims a huge image is refused before it can fill the memory; then it is
-    decoded as the pipeline will (:func:`augment.imageio.decode_image`).
+    decoded as the pipeline will (:func:`augment.photo.io.decode_image`).
 
     Raises
     ------
     UploadError
         415 when it is not an image Stager can decode, 413 when it has more than
-        ``max_pixels`` pixels, 422 when its size will not do (:func:`augment.imageio.size_problem`).
+        ``max_pixels`` pixels, 422 when its size will not do (:func:`augment.photo.io.size_problem`).
     """
     from PIL import Image, UnidentifiedImageError
 
-    from .imageio import PHOTO_FORMATS, decode_image, decode_problem, register_heif, size_problem
+    from ..photo.io import PHOTO_FORMATS, decode_image, decode_problem, register_heif, size_problem
 
     register_heif()
 
@@ -296,16 +168,14 @@ def _check_doors(text: str) -> list[list[float]]:
 
 
 def _check_options(board: str, square: float, room: str, suggestions: int, seed: int = 0) -> tuple:
-    import argparse
 
     from layout.presets import PRESETS
 
-    from .board import MIN_SQUARE_MM, Board
-    from .cli import parse_board
+    from ..camera.board import MIN_SQUARE_MM, Board, parse_board
 
     try:
         spec = parse_board(board)
-    except argparse.ArgumentTypeError as error:
+    except ValueError as error:
         raise UploadError(422, f"board {error}") from None
     if not MIN_SQUARE_MM <= square < 1000:
         raise UploadError(422, f"square {square:g}: the side of one printed square in millimeters, "
@@ -326,56 +196,6 @@ def _check_options(board: str, square: float, room: str, suggestions: int, seed:
 # --------------------------------------------------------------------------------------
 # Jobs
 # --------------------------------------------------------------------------------------
-
-@dataclass
-class Job:
-    id: str
-    folder: Path
-    options: dict
-    created: float = field(default_factory=time.time)
-    future: Future | None = None
-    finished: float | None = None
-    result: dict | None = None
-    delete_when_done: bool = False
-
-
-def _job_state(job: Job) -> dict:
-    board = f"{job.options['board'][0]}x{job.options['board'][1]}"
-    if job.options["kind"] != "chessboard":
-        board = f"{job.options['kind']}:{board}"
-    state = {"id": job.id, "status": "queued", "stage": None, "stages": {s: "pending" for s in STAGES},
-             "progress": 0.0, "error": None, "files": [], "warnings": [], "doubt": None,
-             "options": {"board": board, "square": job.options["square"], "room": job.options["room"],
-                         "spec": job.options.get("spec") is not None,
-                         "floor_mask": job.options.get("floor_mask") is not None,
-                         "clicks": len(job.options.get("clicks") or ()),
-                         "doors": len(job.options.get("doors") or ()),
-                         "keep_board": job.options["keep_board"],
-                         "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
-    try:
-        progress = json.loads((job.folder / "progress.json").read_text())
-    except (FileNotFoundError, json.JSONDecodeError):
-        progress = None
-    if progress is not None:
-        state["status"] = "running"
-        for name in progress["finished"]:
-            state["stages"][name] = "done"
-        if progress["stage"] is not None:
-            state["stages"][progress["stage"]] = "running"
-        state["stage"] = progress["stage"]
-        state["progress"] = round(min(1.0, progress["done"] / max(progress["total"], 1)), 3)
-    if job.result is not None:
-        if "error" in job.result:
-            state["status"] = "failed"
-            state["error"] = job.result["error"]
-            if state["stage"] is not None:
-                state["stages"][state["stage"]] = "failed"
-        else:
-            state.update(status="done", progress=1.0, stage=None, files=job.result["files"],
-                         warnings=job.result["warnings"], doubt=job.result["doubt"],
-                         stages={s: "done" for s in STAGES})
-    return state
-
 
 def _board_hint(job: Job) -> dict:
     """What to print when the board was not found: the board asked for and its PDF."""
@@ -426,51 +246,28 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
         raise ValueError(f"workers = {workers}: at least 1")
     max_queued = 2 * workers if max_queued is None else int(max_queued)
     max_bytes = int(max_upload_mb * 1e6)
-    keep_s = float(keep_minutes) * 60
-    jobs: dict[str, Job] = {}
-    pool: dict = {}
-
-    def forget(job: Job) -> None:
-        """The job, and its folder with the photo and every file made from it, deleted."""
-        jobs.pop(job.id, None)
-        shutil.rmtree(job.folder, ignore_errors=True)
-
-    def sweep(now: float | None = None) -> list[str]:
-        """Delete finished jobs older than keep_minutes, and leftover job folders."""
-        now = time.time() if now is None else now
-        gone = [j.id for j in jobs.values() if j.finished is not None and now - j.finished > keep_s]
-        for job_id in gone:
-            forget(jobs[job_id])
-        for folder in jobs_dir.iterdir():
-            if folder.name not in jobs and _is_uuid(folder.name) and now - folder.stat().st_mtime > keep_s:
-                shutil.rmtree(folder, ignore_errors=True)
-                gone.append(folder.name)
-        return gone
+    queue = JobQueue(jobs_dir, workers, keep_minutes, max_queued)
 
     async def sweeper():
         while True:
-            await asyncio.sleep(max(1.0, min(60.0, keep_s / 4)))
-            sweep()
-
-    def new_pool():
-        # spawn: a fresh interpreter per worker, no GL or numba thread state forked.
-        return ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+            await asyncio.sleep(max(1.0, min(60.0, queue.keep_s / 4)))
+            queue.sweep()
 
     @asynccontextmanager
     async def lifespan(app):
-        pool["executor"] = new_pool()
+        queue.start()
         task = asyncio.create_task(sweeper())
         try:
             yield
         finally:
             task.cancel()
-            pool.pop("executor").shutdown(wait=True, cancel_futures=True)
+            queue.close()
 
     app = FastAPI(title="Stager", version=_version(), lifespan=lifespan,
                   description="Furnish a photo of an empty room. Upload a photo with the printed board on its "
                               "floor to POST /api/jobs, poll GET /api/jobs/{id}, then fetch its files.")
-    app.state.sweep = sweep
-    app.state.jobs = jobs
+    app.state.sweep = queue.sweep
+    app.state.jobs = queue.jobs
 
     @app.exception_handler(UploadError)
     async def upload_error(request, error: UploadError):
@@ -557,15 +354,12 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
             if corrections:
                 raise UploadError(422, "clicks correct the floor Stager finds, and a floor mask is used as it "
                                        "is: paint the correction into the mask, or leave the mask out")
-        active = sum(j.result is None for j in jobs.values())
-        if active >= workers + max_queued:
-            wait = retry_after_s([j.result["seconds"] for j in sorted(jobs.values(), key=lambda j: j.finished or 0)
-                                  if j.result is not None and "seconds" in j.result], workers)
+        wait = queue.busy_s()
+        if wait is not None:
+            active = sum(j.result is None for j in queue.jobs.values())
             raise HTTPException(503, f"the server is busy ({active} photos in progress); try again in "
                                      f"{wait} s", headers={"Retry-After": str(wait)})
-        job_id = str(uuid.uuid4())
-        folder = jobs_dir / job_id
-        (folder / "input").mkdir(parents=True)
+        job_id, folder = queue.new_folder()
         (folder / "input" / f"photo{suffix}").write_bytes(data)
         if profile is not None:
             (folder / "input" / "camera.json").write_bytes(profile)
@@ -580,26 +374,18 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                    "board": (board_spec.cols, board_spec.rows), "kind": board_spec.kind, "square": float(square),
                    "room": None if layout_spec is not None else room, "suggestions": int(suggestions),
                    "seed": int(seed), "keep_board": bool(keep_board)}
-        job = jobs[job_id] = Job(job_id, folder, options)
-        try:
-            job.future = pool["executor"].submit(_run_job, str(folder), options)
-        except BrokenProcessPool:
-            # A worker died (its jobs failed as internal errors); start a fresh pool.
-            pool["executor"].shutdown(wait=False)
-            pool["executor"] = new_pool()
-            job.future = pool["executor"].submit(_run_job, str(folder), options)
         loop = asyncio.get_running_loop()
-        job.future.add_done_callback(lambda future: finished(job, future, loop))
+
+        def done(job: Job) -> None:
+            if job.delete_when_done:
+                # A pool thread: the jobs dict is the event loop's to change.
+                loop.call_soon_threadsafe(queue.forget, job)
+
+        queue.submit(job_id, folder, options, done)
         return {"id": job_id}
 
-    def finished(job: Job, future: Future, loop) -> None:
-        _finish(job, future)
-        if job.delete_when_done:
-            # A pool thread: the jobs dict is the event loop's to change.
-            loop.call_soon_threadsafe(forget, job)
-
     def get_job(job_id: str) -> Job:
-        job = jobs.get(job_id)
+        job = queue.jobs.get(job_id)
         if job is None:
             raise HTTPException(404, f"no job {job_id[:60]!r}: it never existed or was deleted (finished jobs are "
                                      f"kept {keep_minutes:g} minutes)")
@@ -611,7 +397,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
         floor is most in doubt (``doubt``: x_px, y_px and whether it is now floor) when it
         is uncertain, or where a skirting board may be left in it."""
         job = get_job(job_id)
-        state = _job_state(job)
+        state = job_state(job)
         if state["error"] is not None and state["error"]["kind"] == "calibration" \
                 and state["error"]["message"].startswith("no "):
             state["error"]["board"] = _board_hint(job)
@@ -622,12 +408,11 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
         """Delete the job and every file of it (the photo too) now, rather than
         ``keep_minutes`` after it finishes; a running job's are deleted as it finishes."""
         job = get_job(job_id)
-        if job.result is None and not job.future.cancel() and not job.future.done():
-            job.delete_when_done = True
+        if not queue.cancel(job):
             return JSONResponse({"id": job_id, "deleted": False,
                                  "detail": "the photo is being furnished; it and its files are deleted as soon "
                                            "as that is done"}, status_code=202)
-        forget(job)
+        queue.forget(job)
         return {"id": job_id, "deleted": True}
 
     @app.get("/api/jobs/{job_id}/files/{name}")
@@ -645,7 +430,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
         """Every output file of a finished job, in one zip."""
         job = get_job(job_id)
         if job.result is None or "files" not in job.result:
-            raise HTTPException(409, f"job {job_id} has no files: it is {_job_state(job)['status']}")
+            raise HTTPException(409, f"job {job_id} has no files: it is {job_state(job)['status']}")
         buffer = io.BytesIO()
         with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
             for name in job.result["files"]:
@@ -663,36 +448,19 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
 
 
 def _board_pdf(board: str, square: float | None, paper: str) -> bytes:
-    import argparse
     import tempfile
 
-    from .cli import parse_board
-    from .printable import board_for_paper, write_board_pdf
+    from ..camera.board import parse_board
+    from ..camera.printable import board_for_paper, write_board_pdf
 
     try:
         cols, rows, kind = parse_board(board)
         printed = board_for_paper(paper, cols, rows, square, kind)
-    except (argparse.ArgumentTypeError, ValueError) as error:
+    except ValueError as error:
         raise UploadError(422, f"board {board}, square {square}, paper {paper}: {error}") from None
     with tempfile.TemporaryDirectory() as folder:
         path = write_board_pdf(Path(folder) / "board.pdf", printed, paper.upper())
         return path.read_bytes()
-
-
-def _finish(job: Job, future: Future) -> None:
-    """A worker is done with ``job`` (a pool thread): keep its result, or the bug."""
-    job.finished = time.time()
-    error = future.exception() if not future.cancelled() else None
-    if future.cancelled():
-        job.result = {"error": {"kind": "cancelled", "message": "the server stopped before this photo was done"}}
-    elif error is not None:
-        import traceback
-
-        traceback.print_exception(error)
-        job.result = {"error": {"kind": "internal", "message": f"internal error ({type(error).__name__}: "
-                                                               f"{error}); this is a bug in Stager"}}
-    else:
-        job.result = future.result()
 
 
 def _too_large(n_bytes: int, max_bytes: int) -> str:
@@ -700,15 +468,8 @@ def _too_large(n_bytes: int, max_bytes: int) -> str:
             "photo")
 
 
-def _is_uuid(name: str) -> bool:
-    try:
-        return str(uuid.UUID(name)) == name
-    except ValueError:
-        return False
-
-
 def _version() -> str:
-    from . import __version__
+    from .. import __version__
 
     return __version__
 

@@ -1,9 +1,7 @@
-"""Where the floor is: an ONNX segmentation model, GrabCut refinement, the floor polygon.
+"""Where the floor is: the floor model's mask refined by GrabCut, and the user's corrections.
 
-Thesis Appendix C.3.1: a segmentation network's floor class seeds GrabCut. Here the
-network is Stager's own (``models/floor_segnet.onnx``, trained on synthetic rooms by
-``models/train_floor.py``), or any ONNX segmentation model a user points at, described
-by a :class:`ModelSpec`. GrabCut refines the model's edges against the photo's colours;
+Thesis Appendix C.3.1: a segmentation network's floor class seeds GrabCut (the network:
+:mod:`augment.floor.model`). GrabCut refines the model's edges against the photo's colours;
 the board (it lies on the floor) and the horizon (nothing above it is floor) pin it down.
 Without a model, GrabCut alone starts from the calibration's geometry. Where the model
 and the refined mask disagree is measured and, when large, said (:func:`disputed_floor`);
@@ -14,20 +12,19 @@ Images are RGB ``(rows, cols, 3)`` uint8; masks are ``(rows, cols)`` bool; point
 """
 from __future__ import annotations
 
-import json
-import math
-import numbers
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import NamedTuple
 
 import cv2
 import numpy as np
 
-from .calibrate import turn_points
-from .imageio import size_problem
+from ..errors import SegmentationError
+from ..photo.io import decode_grey, decode_problem, read_user_file
+from .model import PRESHRINK_LONG_PX, FloorModel, check_image, shrink_to, working_scale
 from .skirting import board_clicks, trim_skirting
+from .upright import Upright
 
-DEFAULT_MODEL = Path(__file__).resolve().parent.parent / "models" / "floor_segnet.onnx"
 # GrabCut's cost grows with the pixel count; edges it can fix are a few pixels wide at
 # this size, and the mask is scaled back up with the model's smooth probabilities.
 GRABCUT_LONG_PX = 400
@@ -86,254 +83,6 @@ CLICK_REGION_REACH, CLICK_REACH = 0.05, 0.15
 CLICK_CANNY = (10, 30)
 
 
-# Larger photos are shrunk to this long side once, before the smaller working sizes of
-# the model and GrabCut are made from it: shrinking a 12 MP photo costs more than the model.
-PRESHRINK_LONG_PX = 2048
-MAX_INPUT_PX = 4096  # a model input side: larger would take seconds and gigabytes on a CPU
-# The input element types a model may take (as onnxruntime names them): exports for phones
-# often take bytes, or half floats.
-INPUT_TYPES = {"tensor(float)": np.float32, "tensor(float16)": np.float16, "tensor(double)": np.float64,
-               "tensor(uint8)": np.uint8}
-
-
-class SegmentationError(ValueError):
-    """Bad input or no floor: the message says what and what would work."""
-
-
-def _numbers(value) -> tuple[float, ...] | None:
-    """``value`` (a number or a list of them) as finite floats; None when it is not that."""
-    items = tuple(value) if isinstance(value, (list, tuple, np.ndarray)) else (value,)
-    if not all(isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) for v in items):
-        return None
-    return tuple(float(v) for v in items)
-
-
-@dataclass(frozen=True)
-class ModelSpec:
-    """How to feed an ONNX segmentation model and read its floor class.
-
-    Attributes
-    ----------
-    input_size : (rows, cols) or None
-        A fixed input size; None for a fully convolutional model, fed the photo scaled so
-        its long side is ``input_long_px``, each side a multiple of ``multiple_px``.
-    input_long_px : int or tuple of int
-        With several long sides the model runs at each and the floor probabilities are
-        averaged (the shipped model: its training size and one a little larger, which
-        finds more of the floor in dark corners and under tables of real rooms).
-    channel_order : "RGB" or "BGR"
-    scale, mean, std : float, (3,), (3,)
-        Input = (pixel * scale - mean) / std, per channel in ``channel_order``.
-    floor_class : tuple of int
-        Output channels whose probabilities add up to "floor" (e.g. SUN RGB-D floor = 2,
-        or ADE20K floor and rug).
-    output : "logits" or "probabilities"
-        Whether the model's output still needs a softmax over the class axis (a sigmoid
-        for one channel). A model whose output is one integer class per pixel (its
-        argmax) is read as such, whatever this says.
-    layout : "NCHW" or "NHWC"
-    """
-
-    input_size: tuple[int, int] | None = None
-    input_long_px: int | tuple[int, ...] = 256
-    multiple_px: int = 32
-    channel_order: str = "RGB"
-    scale: float = 1 / 255
-    mean: tuple[float, float, float] = (0.485, 0.456, 0.406)
-    std: tuple[float, float, float] = (0.229, 0.224, 0.225)
-    floor_class: tuple[int, ...] = (1,)
-    output: str = "logits"
-    layout: str = "NCHW"
-
-    def __post_init__(self):
-        # Fields come from a sidecar JSON or the command line: check each by name, so a
-        # wrong one is one clear error rather than a TypeError deep in inference.
-        def wholes(name, lo, hi, count=None, example=""):
-            values = _numbers(getattr(self, name))
-            if (values is None or not values or (count is not None and len(values) != count)
-                    or any(v != int(v) or not lo <= v <= hi for v in values)):
-                raise SegmentationError(f"model {name} {getattr(self, name)!r}: need "
-                                        f"{'one or more' if count is None else count} whole number"
-                                        f"{'s' * (count != 1)} from {lo} to {hi}{example}")
-            object.__setattr__(self, name, tuple(int(v) for v in values))
-
-        wholes("multiple_px", 1, 1024, 1)
-        object.__setattr__(self, "multiple_px", self.multiple_px[0])
-        wholes("input_long_px", self.multiple_px, MAX_INPUT_PX, example=", e.g. 256 or [256, 320]")
-        if self.input_size is not None:
-            wholes("input_size", 16, MAX_INPUT_PX, 2, example=" (rows, cols)")
-        wholes("floor_class", 0, 100_000, example=", the output channels that are floor, e.g. [1] or [3, 28]")
-        # A class named twice would count its probability twice.
-        object.__setattr__(self, "floor_class", tuple(dict.fromkeys(self.floor_class)))
-        for name, count in (("scale", 1), ("mean", 3), ("std", 3)):
-            values = _numbers(getattr(self, name))
-            if values is None or len(values) != count or (name != "mean" and min(values) <= 0):
-                raise SegmentationError(f"model {name} {getattr(self, name)!r}: need {count} finite number"
-                                        f"{'s' * (count > 1)}{'' if name == 'mean' else ' > 0'}; the input is "
-                                        "(pixel * scale - mean) / std, e.g. scale 1/255 with ImageNet's mean "
-                                        "and std")
-            object.__setattr__(self, name, values[0] if count == 1 else values)
-        for name, choices in (("channel_order", ("RGB", "BGR")), ("output", ("logits", "probabilities")),
-                              ("layout", ("NCHW", "NHWC"))):
-            if getattr(self, name) not in choices:
-                raise SegmentationError(f"model {name} {getattr(self, name)!r}: use {' or '.join(choices)}")
-
-    @classmethod
-    def from_json(cls, path) -> "ModelSpec":
-        """Read the spec from a model's sidecar JSON (unknown keys, like training notes, are ignored)."""
-        path = Path(path)
-        try:
-            data = json.loads(path.read_text())
-        except (OSError, ValueError, RecursionError) as error:
-            raise SegmentationError(f"model spec {path}: cannot read it as JSON ({error})") from None
-        if not isinstance(data, dict):
-            raise SegmentationError(f"model spec {path}: holds a JSON {type(data).__name__}, not an object of "
-                                    "fields (input_size, mean, std, floor_class, ...)")
-        try:
-            return cls(**{f: data[f] for f in cls.__dataclass_fields__ if f in data})
-        except SegmentationError as error:
-            raise SegmentationError(f"model spec {path}: {str(error).removeprefix('model ')}") from None
-
-
-class FloorModel:
-    """An ONNX segmentation model loaded in onnxruntime, with its :class:`ModelSpec`.
-
-    Parameters
-    ----------
-    path : path-like
-        The ``.onnx`` file. Its spec is read from ``path`` with suffix ``.json`` when that
-        exists, else the defaults; ``spec`` overrides both.
-    spec : ModelSpec, optional
-    threads : int, optional
-        onnxruntime intra-op threads (default: its own choice).
-    """
-
-    def __init__(self, path=DEFAULT_MODEL, spec: ModelSpec | None = None, threads: int | None = None):
-        import onnxruntime as ort  # loaded lazily: GrabCut-only runs need none of it
-
-        self.path = Path(path)
-        if not self.path.is_file():
-            raise SegmentationError(f"model {self.path}: no such file; train one with models/train_floor.py "
-                                    "or use --method grabcut")
-        sidecar = self.path.with_suffix(".json")
-        self.spec = spec if spec is not None else (ModelSpec.from_json(sidecar) if sidecar.is_file() else ModelSpec())
-        options = ort.SessionOptions()
-        options.log_severity_level = 3
-        if threads is not None:
-            options.intra_op_num_threads = threads
-        try:
-            self.session = ort.InferenceSession(str(self.path), options, providers=["CPUExecutionProvider"])
-        except Exception as error:  # onnxruntime raises its own types for a corrupt file
-            raise SegmentationError(f"model {self.path}: onnxruntime cannot load it ({error})") from None
-        inputs = self.session.get_inputs()
-        if len(inputs) != 1:
-            raise SegmentationError(f"model {self.path}: expected one input, found {len(inputs)}")
-        self.input_name = inputs[0].name
-        self.input_dtype = INPUT_TYPES.get(inputs[0].type)
-        if self.input_dtype is None:
-            raise SegmentationError(f"model {self.path}: its input {self.input_name} is {inputs[0].type}; Stager "
-                                    f"feeds images as {', '.join(INPUT_TYPES)}")
-        shape = list(inputs[0].shape)
-        if len(shape) != 4:
-            raise SegmentationError(f"model {self.path}: its input {self.input_name} is {shape}; expected an image "
-                                    "batch (1, 3, rows, cols), or (1, rows, cols, 3) with layout NHWC")
-        spatial = shape[2:4] if self.spec.layout == "NCHW" else shape[1:3]
-        channels = shape[1] if self.spec.layout == "NCHW" else shape[3]
-        if isinstance(channels, int) and channels != 3:
-            raise SegmentationError(f"model {self.path}: its input is {shape}, {channels} channels where Stager "
-                                    f"feeds 3 (RGB or BGR); is its layout not {self.spec.layout}? (the layout "
-                                    "field of its JSON)")
-        if all(isinstance(v, int) and v > 0 for v in spatial):
-            # A model exported for one size says so; fed another, onnxruntime refuses it.
-            if self.spec.input_size is None:
-                self.spec = replace(self.spec, input_size=tuple(spatial))
-            elif tuple(self.spec.input_size) != tuple(spatial):
-                raise SegmentationError(f"model {self.path}: takes {spatial[1]}x{spatial[0]} px (its input is "
-                                        f"{shape}), not the {self.spec.input_size[1]}x{self.spec.input_size[0]} "
-                                        f"asked for; give --input-size {spatial[1]}x{spatial[0]} or leave it out")
-
-    def input_shapes(self, rows: int, cols: int) -> list[tuple[int, int]]:
-        """The (rows, cols) the model is fed for a photo of ``rows`` x ``cols``, one per
-        input size of the spec."""
-        s = self.spec
-        if s.input_size is not None:
-            return [tuple(s.input_size)]
-        m = s.multiple_px
-        return [(max(m, round(rows * long / max(rows, cols) / m) * m),
-                 max(m, round(cols * long / max(rows, cols) / m) * m)) for long in s.input_long_px]
-
-    def floor_probability(self, image: np.ndarray, size_px: tuple[int, int] | None = None,
-                          quarter_turns: int = 0) -> np.ndarray:
-        """Floor probability float32 in [0, 1], ``(rows, cols)`` of the image or of
-        ``size_px = (width, height)`` when given (cheaper than resizing twice); the mean
-        over the spec's input sizes. With ``quarter_turns`` k the model sees the image
-        turned as ``np.rot90(image, k)`` (the room upright, as it learned rooms:
-        ``Calibration.upright_turns``) and its answer is turned back."""
-        image = _check_image(image)
-        rows, cols = image.shape[:2]
-        if size_px is not None:
-            cols, rows = int(size_px[0]), int(size_px[1])
-        k = int(quarter_turns) % 4
-        if k % 2:
-            rows, cols = cols, rows
-        shapes = self.input_shapes(rows, cols)
-        image = np.rot90(_shrink_to(image, PRESHRINK_LONG_PX), k)
-        p = sum(self._probability(image, shape, (cols, rows)) for shape in shapes)
-        return np.ascontiguousarray(np.rot90(np.clip(p / len(shapes), 0, 1), -k))
-
-    def _probability(self, image: np.ndarray, in_shape: tuple[int, int], size_px: tuple[int, int]) -> np.ndarray:
-        s = self.spec
-        in_rows, in_cols = in_shape
-        x = cv2.resize(image, (in_cols, in_rows), interpolation=cv2.INTER_AREA)
-        if s.channel_order == "BGR":
-            x = x[..., ::-1]
-        if self.input_dtype != np.uint8:
-            # A model that takes bytes takes the pixels as they are, and scales them itself.
-            x = (x.astype(np.float32) * np.float32(s.scale) - np.float32(s.mean)) / np.float32(s.std)
-        x = x.transpose(2, 0, 1)[None] if s.layout == "NCHW" else x[None]
-        out = self.session.run(None, {self.input_name: np.ascontiguousarray(x, self.input_dtype)})[0][0]
-        if np.issubdtype(out.dtype, np.floating):
-            out = out.astype(np.float32)
-        if out.ndim == 2 and np.issubdtype(out.dtype, np.integer):
-            # A model that gives its argmax, a class per pixel: floor where it is a floor class.
-            p = np.isin(out, s.floor_class).astype(np.float32)
-            return cv2.resize(p, size_px, interpolation=cv2.INTER_LINEAR)
-        if s.layout == "NHWC" and out.ndim == 3:
-            out = out.transpose(2, 0, 1)
-        if out.ndim != 3 or max(s.floor_class) >= out.shape[0]:
-            raise SegmentationError(f"model {self.path}: output shape {out.shape} has no class "
-                                    f"{max(s.floor_class)}; check floor_class and layout")
-        if s.output == "logits" and out.shape[0] == 1:
-            # One channel: a floor-or-not model's logit (a softmax over one class is 1).
-            out = 1.0 / (1.0 + np.exp(-out))
-        elif s.output == "logits":
-            out = np.exp(out - out.max(axis=0, keepdims=True))
-            out /= out.sum(axis=0, keepdims=True)
-        p = out[list(s.floor_class)].sum(axis=0).astype(np.float32)
-        return cv2.resize(p, size_px, interpolation=cv2.INTER_LINEAR)
-
-
-def _shrink_to(image: np.ndarray, long_px: int) -> np.ndarray:
-    scale = _working_scale(image.shape[:2], long_px)
-    if scale == 1.0:
-        return image
-    size = (round(image.shape[1] * scale), round(image.shape[0] * scale))
-    return cv2.resize(image, size, interpolation=cv2.INTER_AREA)
-
-
-def _check_image(image: np.ndarray) -> np.ndarray:
-    image = np.asarray(image)
-    if image.ndim == 2:
-        image = np.repeat(image[..., None], 3, axis=2)
-    if image.ndim != 3 or image.shape[2] not in (3, 4):
-        raise SegmentationError(f"image of shape {image.shape}: expected (rows, cols, 3) RGB")
-    if image.dtype != np.uint8:
-        raise SegmentationError(f"image dtype {image.dtype}: expected uint8")
-    if (problem := size_problem(image.shape[1], image.shape[0])) is not None:
-        raise SegmentationError(f"the image {problem}")
-    return np.ascontiguousarray(image[..., :3])
-
-
 # ----------------------------------------------------------------------------- geometry seeds
 
 def below_horizon(shape: tuple[int, int], horizon: np.ndarray, margin_px: float = 0.0) -> np.ndarray:
@@ -353,7 +102,7 @@ def board_polygon_px(calibration, grow: float = 1.0) -> np.ndarray:
 def floor_distance_m(shape: tuple[int, int], calibration) -> np.ndarray:
     """Horizontal distance (rows, cols) from the camera to each pixel's floor point; inf
     at and above the horizon, and beyond the lens model's reach
-    (:meth:`~augment.calibrate.Calibration.lens_maps`)."""
+    (:meth:`~augment.camera.calibration.Calibration.lens_maps`)."""
     rows, cols = shape
     y, x = np.mgrid[0:rows, 0:cols].astype(np.float64)
     pts = np.column_stack([x.ravel(), y.ravel()])
@@ -474,7 +223,7 @@ class Segmentation:
     warnings : tuple of str
     skirting_m : float or None
         Height of the skirting board trimmed from the mask's top edge
-        (:func:`augment.skirting.trim_skirting`), when one was.
+        (:func:`augment.floor.skirting.trim_skirting`), when one was.
     disputed : (r, c) bool or None
         Where the mask and the model disagree, at the probability's size
         (:func:`disputed_floor`), when a model ran and the photo is calibrated.
@@ -487,7 +236,7 @@ class Segmentation:
         When the floor is :attr:`uncertain`: the middle of the disputed patch with the
         most floor area, in photo pixels, where a look (and maybe a click) is best spent.
         Otherwise, when the skirting trim may have left a board
-        (:func:`augment.skirting.trim_skirting`): a point on that board, where a "not
+        (:func:`augment.floor.skirting.trim_skirting`): a point on that board, where a "not
         floor" click trims it.
     """
 
@@ -502,6 +251,12 @@ class Segmentation:
     clicks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     doubt_px: tuple[int, int] | None = None
 
+    def to_json(self) -> dict:
+        """How the floor was found, as every report gives it."""
+        return {"method": self.method, "floor_fraction": float(self.mask.mean()), "skirting_m": self.skirting_m,
+                "disputed_m2": self.disputed_m2, "disputed_share": self.disputed_share,
+                "clicks": self.clicks_json(), "doubt": self.doubt_json()}
+
     def clicks_json(self) -> list[dict]:
         """The clicks as the reports list them."""
         return [{"x_px": float(x), "y_px": float(y), "floor": bool(f)} for x, y, f in self.clicks]
@@ -509,7 +264,7 @@ class Segmentation:
     @property
     def floor_clicks_px(self) -> np.ndarray:
         """(k, 2) float: the clicks that said floor, (x, y) px, for
-        :func:`augment.floor.floor_polygon`'s ``keep_px``."""
+        :func:`augment.floor.polygon.floor_polygon`'s ``keep_px``."""
         return self.clicks[self.clicks[:, 2] > 0, :2]
 
     @property
@@ -529,10 +284,6 @@ class Segmentation:
         """The disputed region when the floor is uncertain (what the floor overlay hatches),
         else None."""
         return self.disputed if self.uncertain else None
-
-
-def _working_scale(shape, long_px) -> float:
-    return min(1.0, long_px / max(shape))
 
 
 def _grabcut(image_small, trimap, iterations):
@@ -651,14 +402,14 @@ def _click_regions(small, scale, calibration, clicks):
     lab = cv2.cvtColor(cv2.medianBlur(small, 5), cv2.COLOR_RGB2LAB)
     grey = cv2.cvtColor(cv2.GaussianBlur(small, (3, 3), 0), cv2.COLOR_RGB2GRAY)
     edges = cv2.dilate(cv2.Canny(grey, *CLICK_CANNY), np.ones((2, 2), np.uint8))
-    for x, y, is_floor in clicks:
+    for x, y, is_floor, x_given, y_given in clicks:
         # One working pixel for the click, both for its refusal and its region.
         col, row = min(shape[1] - 1, round(x * scale)), min(shape[0] - 1, round(y * scale))
         if is_floor and below is not None and not below[row, col]:
-            raise SegmentationError(f"floor at {x:g},{y:g}: above the horizon the board gives, where no "
+            raise SegmentationError(f"floor at {x_given:g},{y_given:g}: above the horizon the board gives, where no "
                                     "floor can be; click floor below the far walls' feet")
         if not is_floor and board is not None and board[row, col]:
-            raise SegmentationError(f"not floor at {x:g},{y:g}: on the board, which lies on the floor; "
+            raise SegmentationError(f"not floor at {x_given:g},{y_given:g}: on the board, which lies on the floor; "
                                     "click the thing wrongly taken for floor")
         region, reach = _click_region(lab, edges, col, row, floor_m)
         near |= reach
@@ -697,7 +448,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     model : FloorModel, optional
         Needed for ``method="onnx"``.
     calibration : Calibration, optional
-        From :func:`augment.calibrate.calibrate_photo`; its board and horizon seed GrabCut,
+        From :func:`augment.camera.calibrate.calibrate_photo`; its board and horizon seed GrabCut,
         and its horizon says which way is up: the model and the skirting trim see a room
         that the photo shows turned (``Calibration.upright_turns``) turned upright.
     method : {"onnx", "grabcut"}
@@ -716,7 +467,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         the rest, and within a floor click's reach the skirting trim cuts nothing; a "not
         floor" click on the strip at a wall's foot makes that wall's strip a skirting
         board for the trim, and marks no colour region (which of them are, a first pass
-        without the "not floor" clicks tells: :func:`augment.skirting.board_clicks`).
+        without the "not floor" clicks tells: :func:`augment.floor.skirting.board_clicks`).
 
     Returns
     -------
@@ -728,7 +479,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         Bad image, or a click outside the photo, floor above the horizon, or the board
         marked not floor.
     """
-    image = _check_image(image)
+    image = check_image(image)
     if method not in ("onnx", "grabcut"):
         raise SegmentationError(f"method {method!r}: use onnx or grabcut")
     if method == "onnx" and model is None:
@@ -738,15 +489,60 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
                                 "the horizon bounds it); photograph the board on the floor, or use a model")
     rows, cols = image.shape[:2]
     clicks = _check_clicks(clicks, (rows, cols))
+    up = Upright.of(calibration, (cols, rows))
+    # Each click as the upright view shows it, and as the user gave it (for messages).
+    found = _find(up.image(image), model, up.calibration, method, refine, skirting,
+                  np.column_stack([up.points(clicks), clicks[:, :2]]))
+    mask = up.back(found.mask)
+    disputed = up.back(found.disputed)
+    board_doubt = up.point_back(found.board_doubt_px)
+    warnings = () if found.any_floor else ("no floor found",)
+    seg = Segmentation(mask, up.back(found.probability), found.method, warnings, found.skirting_m, disputed,
+                       found.disputed_m2, found.disputed_share, clicks)
+    if seg.uncertain:
+        x, y = up.point_back(_largest_patch_px(found.disputed, up.calibration, found.mask.shape))
+        # Where the model calls much floor that the mask leaves out, the patches in doubt
+        # can outgrow the floor found.
+        share = (f"{100 * seg.disputed_share:.0f} % of the floor found" if seg.disputed_share <= 1 else
+                 f"{seg.disputed_share:.1f} times the floor found")
+        seg = replace(seg, doubt_px=(x, y), warnings=seg.warnings + (
+            f"the floor found is uncertain: the floor model and GrabCut disagree on {seg.disputed_m2:.1f} m\u00b2 "
+            f"({share}, hatched magenta in the floor overlay); the largest patch in "
+            f"doubt is around {x},{y} (ringed there), now {'floor' if mask[y, x] else 'not floor'}: check it, and "
+            "correct the floor where it is wrong",))
+    elif board_doubt is not None and mask[board_doubt[1], board_doubt[0]]:
+        x, y = board_doubt
+        seg = replace(seg, doubt_px=(x, y), warnings=seg.warnings + (
+            f"a skirting board may be left in the floor along the wall around {x},{y} (ringed in the floor "
+            "overlay; most often a board of the floor's own colour): if the photo shows one there, mark it not "
+            "floor there to trim it along that wall",))
+    return seg
+
+
+class _Found(NamedTuple):
+    """What :func:`_find` found, in the upright view."""
+
+    mask: np.ndarray
+    probability: np.ndarray | None
+    method: str
+    skirting_m: float | None
+    disputed: np.ndarray | None
+    disputed_m2: float | None
+    disputed_share: float | None
+    board_doubt_px: tuple[int, int] | None
+    any_floor: bool
+
+
+def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found:
+    """:func:`segment_floor` on the photo turned upright (:mod:`augment.floor.upright`).
+    ``clicks`` (n, 5): x, y in this view, 1 floor or 0 not, and x, y as the user gave them."""
+    rows, cols = image.shape[:2]
     trims = skirting and calibration is not None and (method == "grabcut" or refine)
-    scale = _working_scale((rows, cols), GRABCUT_LONG_PX)
+    scale = working_scale((rows, cols), GRABCUT_LONG_PX)
     size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
-    work = _shrink_to(image, PRESHRINK_LONG_PX)
+    work = shrink_to(image, PRESHRINK_LONG_PX)
     small = _hide_board(cv2.resize(work, size_small, interpolation=cv2.INTER_AREA), calibration, scale)
-    probability = None
-    if method == "onnx":
-        turns = 0 if calibration is None else calibration.upright_turns
-        probability = model.floor_probability(work, size_small, quarter_turns=turns)
+    probability = model.floor_probability(work, size_small) if method == "onnx" else None
 
     def found(wand):
         return _refined(small, scale, probability, calibration, method, refine, wand)
@@ -769,9 +565,6 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
     # and the first pass is the floor.
     mask_small, name, clicked_floor, clicked_other, clicked_near = (
         first if first is not None and len(wand) == len(floor_clicks) else found(wand))
-    warnings = []
-    if not mask_small.any():
-        warnings.append("no floor found")
     mask = _full_size(mask_small, (cols, rows))
     skirting_m = board_doubt = None
     board_cut = np.zeros((rows, cols), bool)
@@ -779,13 +572,13 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         # The refined mask's top edge sits on the skirting boards; the floor ends below.
         # Where it holds none, its edge may instead stop short of the floor line.
         trimmed, skirting_m, board_doubt = trim_skirting(image, mask, calibration,
-                                                         board_at=clicks[clicks[:, 2] == 0], extend=True)
+                                                         board_at=clicks[clicks[:, 2] == 0, :3], extend=True)
         # A strip the trim took for a board is floor within reach of a floor click there:
         # the user's word is the last.
         reach = np.zeros((rows, cols), np.uint8)
-        for x, y, _ in clicks[clicks[:, 2] > 0]:
+        for x, y in clicks[clicks[:, 2] > 0, :2]:
             cv2.circle(reach, (round(x), round(y)), round(CLICK_REACH * max(rows, cols)), 1, -1)
-        board_cut = _cut_clicked(mask & ~trimmed, board_marks, calibration.upright_turns)
+        board_cut = _cut_clicked(mask & ~trimmed, board_marks)
         mask = trimmed | (mask & (reach > 0))
         if board_doubt is not None and reach[board_doubt[1], board_doubt[0]]:
             board_doubt = None
@@ -798,25 +591,7 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         settled = clicked_near | (cv2.resize(board_cut.astype(np.uint8), size_small,
                                              interpolation=cv2.INTER_AREA) > 0)
         disputed = disputed_floor(mask, probability, calibration, settled=settled)
-    seg = Segmentation(mask, probability, name, tuple(warnings), skirting_m, *disputed, clicks)
-    if seg.uncertain:
-        x, y = _largest_patch_px(seg.disputed, calibration, (rows, cols))
-        # Where the model calls much floor that the mask leaves out, the patches in doubt
-        # can outgrow the floor found.
-        share = (f"{100 * seg.disputed_share:.0f} % of the floor found" if seg.disputed_share <= 1 else
-                 f"{seg.disputed_share:.1f} times the floor found")
-        seg = replace(seg, doubt_px=(x, y), warnings=seg.warnings + (
-            f"the floor found is uncertain: the floor model and GrabCut disagree on {seg.disputed_m2:.1f} m\u00b2 "
-            f"({share}, hatched magenta in the floor overlay); the largest patch in "
-            f"doubt is around {x},{y} (ringed there), now {'floor' if mask[y, x] else 'not floor'}: check it, and "
-            "correct the floor where it is wrong",))
-    elif board_doubt is not None and mask[board_doubt[1], board_doubt[0]]:
-        x, y = board_doubt
-        seg = replace(seg, doubt_px=(x, y), warnings=seg.warnings + (
-            f"a skirting board may be left in the floor along the wall around {x},{y} (ringed in the floor "
-            "overlay; most often a board of the floor's own colour): if the photo shows one there, mark it not "
-            "floor there to trim it along that wall",))
-    return seg
+    return _Found(mask, probability, name, skirting_m, *disputed, board_doubt, bool(mask_small.any()))
 
 
 def _full_size(mask_small: np.ndarray, size_px: tuple[int, int]) -> np.ndarray:
@@ -861,24 +636,20 @@ def _refined(small, scale, probability, calibration, method, refine, clicks):
     return mask_small, name, clicked_floor, clicked_other, clicked_near
 
 
-def _cut_clicked(cut: np.ndarray, marks: np.ndarray, turns: int = 0) -> np.ndarray:
+def _cut_clicked(cut: np.ndarray, marks: np.ndarray) -> np.ndarray:
     """The parts of ``cut`` (rows, cols) bool, what the skirting trim took, that hold a
-    board click of ``marks`` (n, 3): the nearest cut pixels at or above it in its column,
-    as the cut runs down from the mask's top edge in the room turned upright by ``turns``
-    quarters (``Calibration.upright_turns``), as the trim cut it."""
+    board click of ``marks`` (n, 2+): the nearest cut pixels at or above it in its column,
+    as the trim cut down from the mask's top edge (the room upright)."""
     out = np.zeros(cut.shape, bool)
     if not len(marks) or not cut.any():
         return out
-    points = turn_points(np.asarray(marks, np.float64)[:, :2], turns, cut.shape[::-1])
-    upright = np.rot90(cut, turns)
-    _, labels = cv2.connectedComponents(upright.astype(np.uint8), connectivity=8)
-    hits = np.zeros(upright.shape, bool)
-    for x, y in points:
-        column = labels[:min(upright.shape[0] - 1, round(y)) + 1, min(upright.shape[1] - 1, round(x))]
+    _, labels = cv2.connectedComponents(cut.astype(np.uint8), connectivity=8)
+    for x, y in np.asarray(marks, np.float64)[:, :2]:
+        column = labels[:min(cut.shape[0] - 1, round(y)) + 1, min(cut.shape[1] - 1, round(x))]
         hit = column[column > 0]
         if len(hit):
-            hits |= labels == hit[-1]
-    return np.rot90(hits, -turns)
+            out |= labels == hit[-1]
+    return out
 
 
 def _largest_patch_px(region: np.ndarray, calibration, shape: tuple[int, int]) -> tuple[int, int]:
@@ -991,8 +762,6 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
         The file is missing or unreadable, its size does not fit the photo, it shows no
         floor, or the board is not on its floor.
     """
-    from .imageio import decode_grey, decode_problem, read_user_file
-
     path = Path(path)
     if not path.is_file():
         raise SegmentationError(f"floor mask {path}: no such file; give the mask `stage segment` wrote "

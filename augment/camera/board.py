@@ -20,8 +20,10 @@ are 30 mm. The synthetic photographer and every ``stage`` command share these de
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
@@ -217,3 +219,41 @@ class Board:
         pad_x = int(round((self.sheet_mm[0] / 2 - (self.cols + 1) * self.square_mm / 2) * px_per_mm))
         pad_y = int(round((self.sheet_mm[1] / 2 - (self.rows + 1) * self.square_mm / 2) * px_per_mm))
         return np.pad(pattern, ((pad_y, pad_y), (pad_x, pad_x)), constant_values=255)
+
+
+class BoardSpec(NamedTuple):
+    """A ``--board`` value: inner corners per row and per column, and the board's kind."""
+
+    cols: int
+    rows: int
+    kind: str = "chessboard"
+
+
+DEFAULT_BOARD = BoardSpec(*DEFAULT_INNER_CORNERS)
+_KIND_NAMES = {"chessboard": "chessboard", "checkerboard": "chessboard", "charuco": "charuco"}
+
+
+def parse_board(text: str) -> BoardSpec:
+    """``"7x5"`` -> ``BoardSpec(7, 5, "chessboard")``, ``"charuco:7x5"`` ->
+    ``BoardSpec(7, 5, "charuco")``: inner corners per row and per column.
+
+    Raises
+    ------
+    ValueError
+        Text that is not such a board; the message says how to write one.
+    """
+    match = re.fullmatch(r"\s*(?:([A-Za-z]+)\s*:\s*)?(\d+)\s*[xX]\s*(\d+)\s*", text)
+    counting = ("it counts inner corners, where four squares meet, not squares: "
+                "a board of 8 x 6 squares is --board 7x5")
+    if match is None:
+        raise ValueError(
+            f"{text!r} is not COLSxROWS like 7x5 (a checkerboard) or charuco:7x5 (a ChArUco board); {counting}")
+    kind = _KIND_NAMES.get((match[1] or "chessboard").lower())
+    if kind is None:
+        raise ValueError(
+            f"{text!r}: unknown board kind {match[1]!r}; write COLSxROWS for a checkerboard or "
+            f"charuco:COLSxROWS for a ChArUco board ({', '.join(BOARD_KINDS)})")
+    cols, rows = int(match[2]), int(match[3])
+    if cols < 2 or rows < 2:
+        raise ValueError(f"{text!r}: needs at least 2x2 inner corners; {counting}")
+    return BoardSpec(cols, rows, kind)

@@ -18,7 +18,7 @@ become ovals when an item's width and depth differ).
 position and yaw.
 
 Colours are linear RGB (what a renderer multiplies with light); palettes are written in
-sRGB and converted with the 2.2 power of :mod:`augment.gl`'s renderer.
+sRGB and converted with the 2.2 power of :mod:`augment.render.gl`'s renderer.
 """
 from __future__ import annotations
 
@@ -31,6 +31,8 @@ import numpy as np
 import trimesh
 
 from layout.catalog import CATALOG
+
+from ..errors import FurnishError
 
 # The assembled parts may miss the box by this much before the fit (per side, meters); a
 # builder that misses it by more has a bug (checked in the tests).
@@ -2027,3 +2029,27 @@ def furniture_for(item: PlacedItem, seed: int = 0, assets: dict | None = None, c
 def item_mesh(item: PlacedItem, seed: int = 0, assets: dict | None = None) -> trimesh.Trimesh:
     """One placed item as a coloured ``trimesh.Trimesh`` in the floor frame (meters, z up)."""
     return furniture_for(item, seed, assets).to_trimesh(world_from_item(item))
+
+
+def load_assets(assets) -> dict:
+    """Kind -> parts of each of the user's models: a GLB, glTF or OBJ path per kind, or
+    its parts already loaded (:func:`load_asset`); checked now, before any layout is solved."""
+    if not assets:
+        return {}
+    loaded = {}
+    for kind, source in dict(assets).items():
+        if not isinstance(kind, str) or not kind.strip():
+            raise FurnishError(f"asset kind {kind!r}: name a furniture kind (`layout kinds` lists them)")
+        if not isinstance(source, (str, Path)):
+            loaded[kind] = tuple(source)
+            continue
+        path = Path(source)
+        if path.suffix.lower() not in (".glb", ".gltf", ".obj"):
+            raise FurnishError(f"asset for {kind}: {path} is not a GLB, glTF or OBJ file")
+        try:
+            loaded[kind] = load_asset(path)
+            if kind in CATALOG:  # refused now, not after the layouts are solved
+                furniture_from_asset(kind, CATALOG[kind].size_m, loaded[kind])
+        except ValueError as error:
+            raise FurnishError(f"asset for {kind}: {error}") from None
+    return loaded

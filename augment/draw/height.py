@@ -10,7 +10,7 @@
   height and its confidence, or the fallback and why.
 
 Conventions: images are RGB ``(h, w, 3)`` uint8 arrays; colors below are RGB. Points in a
-:class:`~augment.height.HeightResult` are undistorted pixels; they are bent by the lens
+:class:`~augment.room.height.HeightResult` are undistorted pixels; they are bent by the lens
 distortion before drawing, like the photo's own lines.
 """
 from __future__ import annotations
@@ -19,9 +19,9 @@ import cv2
 import numpy as np
 from PIL import Image, ImageDraw
 
-from .calibrate import Calibration
-from .height import HeightResult
-from .overlay import overlay_font
+from ..camera.calibration import Calibration
+from ..room.height import HeightResult
+from .fonts import overlay_font
 
 EDGE_RGB = (60, 220, 90)          # inlier vertical edges
 CEILING_RGB = (40, 200, 255)      # inlier wall--ceiling lines (drawn from their base to their top)
@@ -52,7 +52,7 @@ def height_overlay(image: np.ndarray, calibration: Calibration, result: HeightRe
     calibration : Calibration
         The photo's calibration (for the lens distortion); ``size_px`` must match.
     result : HeightResult
-        From :func:`augment.height.measure_height`.
+        From :func:`augment.room.height.measure_height`.
 
     Returns
     -------

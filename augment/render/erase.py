@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .segment import below_horizon
+from ..floor.segment import below_horizon
 
 # The floor shown around the sheet on each side, as a share of the sheet's longer side:
 # the places the texture may be taken from.
@@ -61,6 +61,8 @@ FEATHER_PX = 1.0
 MAX_SPLITS = 2
 # The coarse grid on which the view's pixel maps are computed, then interpolated.
 MAP_STEP_PX = 4
+# Share of the sheet covered by a thing standing on it above which the user is warned.
+COVERED_WARN = 0.02
 
 
 @dataclass(frozen=True)
@@ -98,6 +100,15 @@ class ErasedBoard:
     source_m: np.ndarray
     covered: float = 0.0
 
+    @property
+    def warning(self) -> str | None:
+        """What to tell the user when something stands on much of the board."""
+        if self.covered <= COVERED_WARN:
+            return None
+        return (f"something stands on {100 * self.covered:.0f} % of the board: it is kept in the staged photos, "
+                "but where it overhangs the paper it may be painted over with floor; --keep-board leaves the "
+                "board as it is")
+
     def full_alpha(self) -> np.ndarray:
         """(h, w) float32: :attr:`alpha` at the photo's size (0 outside the box)."""
         out = np.zeros(self.image.shape[:2], np.float32)
@@ -114,10 +125,10 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     image : (h, w, 3) uint8
         The photo the board was found in (RGB), not modified.
     calibration : Calibration
-        Of this photo (:func:`augment.calibrate.calibrate_photo`): the board's pose and
+        Of this photo (:func:`augment.camera.calibrate.calibrate_photo`): the board's pose and
         the floor plane.
     floor_mask : (h, w) bool, optional
-        The floor found (:func:`augment.segment.segment_floor`): texture is taken from
+        The floor found (:func:`augment.floor.segment.segment_floor`): texture is taken from
         floor only, and only floor pixels are replaced (a thing standing on the board
         stays). Without it, every pixel below the horizon counts as floor.
 

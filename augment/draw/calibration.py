@@ -23,14 +23,13 @@ Conventions: images are RGB ``(h, w, 3)`` uint8 arrays; colors below are RGB.
 """
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import cv2
 import numpy as np
-from PIL import Image, ImageDraw, ImageFont
+from PIL import Image, ImageDraw
 
-from .calibrate import Calibration, corner_spacing_px
+from ..camera.calibration import Calibration
+from ..camera.detect import corner_spacing_px
+from .fonts import overlay_font
 
 GRID_STEP_M = 1.0
 GRID_HALF_SPAN_M = 6.0
@@ -52,17 +51,6 @@ SQUARES_RGB = (0, 225, 255)
 FIRST_CORNER_RGB = (255, 40, 220)
 CAPTION_BOX_RGBA = (0, 0, 0, 160)
 TEXT_RGB = (255, 255, 255)
-
-
-def overlay_font(size_px: int) -> ImageFont.ImageFont:
-    """DejaVu Sans (shipped with matplotlib, as the printed board uses), else PIL's own."""
-    spec = importlib.util.find_spec("matplotlib")  # found without importing matplotlib (slow)
-    for folder in (spec.submodule_search_locations or []) if spec else []:
-        try:
-            return ImageFont.truetype(str(Path(folder) / "mpl-data" / "fonts" / "ttf" / "DejaVuSans.ttf"), size_px)
-        except OSError:
-            continue
-    return ImageFont.load_default(size=size_px)
 
 
 def _fixed(points: np.ndarray) -> np.ndarray:

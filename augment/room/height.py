@@ -53,29 +53,22 @@ board's center); camera axes are OpenCV's. Public functions never modify their i
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
 from layout.geometry import point_segment_distances
 
-if TYPE_CHECKING:  # calibrate uses the vertical-edge test below to settle a board's tilt
-    from .calibrate import Calibration
+from ..camera.calibration import Calibration
+from ..camera.lines import (FLOOR_SHARE, VP_DISTANCE_FRACTION, as_camera, as_segments, detect_raw, floor_share,
+                            is_vertical, prepare_lines, sample_image, shrink_factor, to_full, to_gray, to_small,
+                            toward_vanishing_point)
 
 # Tolerances and limits, in one place.
 FALLBACK_HEIGHT_M = 2.5
 # Plausible wall heights. Doors are 2.0-2.1 m and habitable rooms at least 2.2 m high, so
 # door frames, which stand on the floor too, fall below the range.
 MIN_HEIGHT_M, MAX_HEIGHT_M = 2.2, 5.0
-LINE_SIDE_PX = 1280                        # lines are found on a copy shrunk by a whole factor to about this
-MIN_SEGMENT_FRACTION = 0.015               # detected segments shorter than this x the longer side are dropped
-# FastLineDetector's Canny thresholds: low, since a wall and its ceiling may differ by 6
-# gray levels; a 3 px Gaussian first quiets floor texture (and halves the time on wood).
-CANNY_LOW, CANNY_HIGH = 10, 20
-LINE_BLUR_PX = 3
-MIN_VERTICAL_COS = np.cos(np.radians(1.5))  # 3D: angle between the floor normal and the interpretation plane
-VP_DISTANCE_FRACTION = 0.0015              # endpoint distance from the midpoint--vanishing-point line (x longer side)
 MERGE_GAP_FRACTION = 0.015                 # pieces of one edge merge across gaps up to this x side,
 BRIDGE_GAP_FRACTION = 0.12                 # ... and up to this where the image shows the edge in the gap
 BRIDGE_CONTRAST = 2.0                      # ... as a gradient across it this many times the wall's beside it
@@ -88,11 +81,7 @@ FLOOR_BAND_FRACTION = 0.02                 # the mask is searched this far (x lo
 FLOOR_BAND_EDGE = 0.08                     # ... or this x the edge's length if more (a baseboard's height)
 WALL_STRAIGHTNESS = 0.02                   # feet of one wall lie this close to a line (x their distance)
 SPAN_PROBE_FRACTION = np.array([0.05, 0.08, 0.11])  # probed beyond a junction's ends (x longer side)
-FLOOR_RING_M = (0.35, 0.6)                 # without a mask, the floor's color is read this far from the board
-FLOOR_COLOR_SLACK = np.array([4.0, 2.0, 2.0])  # ... with at least this spread (Lab)
-FLOOR_COLOR_Z = np.array([6.0, 3.0, 3.0])  # ... and a pixel is floor-colored within this many spreads
 FLOOR_COLOR_BELOW = (0.03, 0.15)           # ... read this far below a foot (x the edge's length)
-FLOOR_SHARE = 0.8                          # floor on one side of a foot: at least this share of samples
 AGAINST_WALL_M = 0.15                      # radiators and the like stand this close to their wall
 FLOOR_RUN_PX = 5                           # the floor begins where this many floor pixels follow
 TRACE_FRACTION = 0.06                      # edge ends are followed at most this x the longer side
@@ -168,28 +157,6 @@ def _as_points(points, name: str) -> np.ndarray:
     return p
 
 
-def _as_segments(segments_px) -> np.ndarray:
-    s = np.ascontiguousarray(segments_px, dtype=np.float64)
-    if s.ndim != 2 or s.shape[1] != 4:
-        raise ValueError(f"segments_px of shape {s.shape}: expected (n, 4) rows x1, y1, x2, y2")
-    if not np.all(np.isfinite(s)):
-        raise ValueError("segments_px holds non-finite values")
-    return s
-
-
-def _as_camera(K, camera_from_floor) -> tuple[np.ndarray, np.ndarray]:
-    K = np.ascontiguousarray(K, dtype=np.float64)
-    pose = np.ascontiguousarray(camera_from_floor, dtype=np.float64)
-    if K.shape != (3, 3) or not np.all(np.isfinite(K)) or K[2, 2] == 0:
-        raise ValueError(f"K of shape {K.shape} is not a finite 3x3 camera matrix")
-    if pose.shape != (4, 4) or not np.all(np.isfinite(pose)):
-        raise ValueError(f"camera_from_floor of shape {pose.shape}: expected a finite 4x4 pose")
-    R = pose[:3, :3]
-    if not np.allclose(R.T @ R, np.eye(3), atol=1e-6):
-        raise ValueError("camera_from_floor's rotation block is not orthonormal")
-    return K / K[2, 2], pose
-
-
 def _as_mask(floor_mask, size_px: tuple[int, int]) -> np.ndarray | None:
     if floor_mask is None:
         return None
@@ -200,176 +167,12 @@ def _as_mask(floor_mask, size_px: tuple[int, int]) -> np.ndarray | None:
     return mask if mask.dtype == bool else mask != 0
 
 
-def _gray(image: np.ndarray) -> np.ndarray:
-    image = np.asarray(image)
-    if image.ndim == 3 and image.shape[2] in (3, 4):
-        image = cv2.cvtColor(np.ascontiguousarray(image[..., :3]), cv2.COLOR_RGB2GRAY)
-    elif image.ndim != 2:
-        raise ValueError(f"image of shape {image.shape}: expected (h, w) gray or (h, w, 3) RGB")
-    if image.dtype != np.uint8:
-        raise ValueError(f"image of dtype {image.dtype}: expected uint8")
-    return image
-
-
 # ---------------------------------------------------------------------------------------
 # 1. Line segments
 
 
-def _factor(shape: tuple[int, ...], side_px: int = LINE_SIDE_PX) -> int:
-    """The whole factor that shrinks an image of ``shape`` to about ``side_px`` across."""
-    return max(1, round(max(shape[:2]) / side_px))
-
-
-def _downscale(image: np.ndarray, k: int) -> np.ndarray:
-    """``image`` shrunk by the whole factor ``k`` (area average; the last ``< k`` rows and
-    columns are dropped, so the scale is exact and OpenCV's fast path applies)."""
-    if k == 1:
-        return image
-    h, w = image.shape[:2]
-    cropped = image[: h - h % k, : w - w % k]
-    return cv2.resize(cropped, (w // k, h // k), interpolation=cv2.INTER_AREA)
-
-
-def _to_full(points: np.ndarray, k: int) -> np.ndarray:
-    """Pixel coordinates (..., 2m) in a copy shrunk by ``k`` to the full image (pixel centers at integers)."""
-    return (np.asarray(points, dtype=np.float64) + 0.5) * k - 0.5
-
-
-def _to_small(points: np.ndarray, k: int) -> np.ndarray:
-    return (np.asarray(points, dtype=np.float64) + 0.5) / k - 0.5
-
-
-def _prepare(image: np.ndarray, gray: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None, int]:
-    """The gray copy lines are found on (area-averaged), for an RGB photo a color copy at
-    the same size (only for color statistics: sampled, not averaged, which is faster), and
-    the factor they are shrunk by. ``gray`` is the photo in gray when already at hand."""
-    image = np.asarray(image)
-    k = _factor(image.shape)
-    small = _downscale(_gray(image) if gray is None else gray, k)
-    color = None
-    if image.ndim == 3:
-        color = cv2.resize(np.ascontiguousarray(image[..., :3]), (small.shape[1], small.shape[0]),
-                           interpolation=cv2.INTER_LINEAR)
-    return small, color, k
-
-
-def _detect(small: np.ndarray, method: str) -> np.ndarray:
-    """Segments (n, 4) in the pixels of ``small``."""
-    min_len = max(8, int(MIN_SEGMENT_FRACTION * max(small.shape)))
-    if method == "fld":
-        detector = cv2.ximgproc.createFastLineDetector(min_len, 1.414, CANNY_LOW, CANNY_HIGH, 3, True)
-        found = detector.detect(cv2.GaussianBlur(small, (LINE_BLUR_PX, LINE_BLUR_PX), 0) if LINE_BLUR_PX > 1 else small)
-    else:
-        found = cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD).detect(small)[0]
-    if found is None:
-        return np.zeros((0, 4))
-    seg = found.reshape(-1, 4).astype(np.float64)
-    return seg[np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) >= min_len]
-
-
-def detect_segments(image: np.ndarray, *, side_px: int = LINE_SIDE_PX, method: str = "fld") -> np.ndarray:
-    """Straight line segments of a photo.
-
-    Parameters
-    ----------
-    image : (h, w) or (h, w, 3) uint8
-        Gray or RGB photo. Not modified.
-    side_px : int
-        Lines are found on a copy shrunk by the whole factor that brings the longer side
-        closest to this (area-averaged), which bounds the time on large photos;
-        coordinates are scaled back.
-    method : {"fld", "lsd"}
-        OpenCV's FastLineDetector (Canny edges, then line fitting; default) or the LSD
-        line segment detector.
-
-    Returns
-    -------
-    segments_px : (n, 4) float64
-        Rows ``x1, y1, x2, y2`` in full-resolution pixels.
-    """
-    gray = _gray(image)
-    if method not in ("fld", "lsd"):
-        raise ValueError(f"method {method!r}: expected 'fld' or 'lsd'")
-    if side_px < 64:
-        raise ValueError(f"side_px {side_px} is too small to find lines (at least 64)")
-    k = _factor(gray.shape, side_px)
-    return _to_full(_detect(_downscale(gray, k), method), k)
-
-
 # ---------------------------------------------------------------------------------------
 # 2. The vertical direction and 3. vertical segments
-
-
-def vertical_vanishing_point(K: np.ndarray, camera_from_floor: np.ndarray) -> np.ndarray:
-    """The image of the floor normal: where vertical edges converge.
-
-    Parameters
-    ----------
-    K : (3, 3) float64
-        Camera matrix, pixels.
-    camera_from_floor : (4, 4) float64
-        Floor frame (meters, z up) to camera frame (OpenCV axes).
-
-    Returns
-    -------
-    vp : (3,) float64
-        Homogeneous pixel ``K R [0, 0, 1]`` of the *upward* direction, unit norm. Its third
-        coordinate is 0 for a level camera (vertical edges parallel in the image); it is
-        negative when the camera looks down (then the upward direction points behind the
-        camera and the edges converge below the image).
-    """
-    K, pose = _as_camera(K, camera_from_floor)
-    vp = K @ pose[:3, 2]
-    return vp / np.linalg.norm(vp)
-
-
-def toward_vanishing_point(points_px: np.ndarray, vp: np.ndarray) -> np.ndarray:
-    """Unit directions (n, 2) in the image from each of ``points_px`` (n, 2) toward the
-    homogeneous image point ``vp`` (3,), a vanishing point at infinity included."""
-    toward = vp[:2] - np.asarray(points_px, dtype=np.float64) * vp[2]
-    return toward / np.linalg.norm(toward, axis=1, keepdims=True)
-
-
-def vertical_alignment(segments_px: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """How well each segment could be the image of a vertical 3D edge.
-
-    Parameters
-    ----------
-    segments_px : (n, 4) float64
-        Rows ``x1, y1, x2, y2``, undistorted pixels.
-    K : (3, 3) float64
-    camera_from_floor : (4, 4) float64
-
-    Returns
-    -------
-    cos_3d : (n,) float64
-        The paper's cosine, in 3D: the largest cosine between the floor normal and any 3D
-        direction the segment can be the image of (those in its interpretation plane,
-        spanned by the segment and the camera center). 1 for a vertical edge.
-    angle_to_vp_deg : (n,) float64
-        Image angle between the segment and the line from its midpoint to the vertical
-        vanishing point, degrees in [0, 90].
-    vp_distance_px : (n,) float64
-        The larger distance of the two endpoints from that line, pixels.
-    """
-    seg = _as_segments(segments_px)
-    K, pose = _as_camera(K, camera_from_floor)
-    up_camera = pose[:3, 2]
-    p1 = np.column_stack([seg[:, :2], np.ones(len(seg))])
-    p2 = np.column_stack([seg[:, 2:], np.ones(len(seg))])
-    normals = np.cross(p1, p2) @ K  # K^T l: the interpretation planes' normals, camera frame
-    norm = np.linalg.norm(normals, axis=1)
-    sin = np.abs(normals @ up_camera) / np.where(norm > 0, norm, 1.0)
-    cos_3d = np.where(norm > 0, np.sqrt(np.clip(1 - sin ** 2, 0, 1)), 0.0)
-    mid = (seg[:, :2] + seg[:, 2:]) / 2
-    toward = toward_vanishing_point(mid, K @ up_camera)
-    direction = seg[:, 2:] - seg[:, :2]
-    length = np.linalg.norm(direction, axis=1)
-    along = np.abs(np.sum(direction * toward, axis=1)) / np.where(length > 0, length, 1.0)
-    angle = np.degrees(np.arccos(np.clip(along, 0, 1)))
-    half = np.abs(direction[:, 0] * toward[:, 1] - direction[:, 1] * toward[:, 0]) / 2
-    return cos_3d, angle, half
 
 
 # ---------------------------------------------------------------------------------------
@@ -406,7 +209,7 @@ def segment_heights(bases_px: np.ndarray, tops_px: np.ndarray, K: np.ndarray, ca
     tops = _as_points(tops_px, "tops_px")
     if bases.shape != tops.shape:
         raise ValueError(f"bases_px {bases.shape} and tops_px {tops.shape} differ in shape")
-    K, pose = _as_camera(K, camera_from_floor)
+    K, pose = as_camera(K, camera_from_floor)
     R, t = pose[:3, :3], pose[:3, 3]
     H = K @ np.column_stack([R[:, 0], R[:, 1], t])
     floor = np.column_stack([bases, np.ones(len(bases))]) @ np.linalg.inv(H).T
@@ -479,16 +282,6 @@ def _merge_vertical(seg: np.ndarray, vp: np.ndarray, tol_px: float, gap_px: floa
     return [np.array(g) for g in groups.values()]
 
 
-def _sample(image: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Nearest-pixel values of ``image`` at points (..., 2), clipped to the frame."""
-    h, w = image.shape[:2]
-    x = (points[..., 0] + 0.5).astype(np.intp)      # floor(x + 0.5) for x >= 0; clipped below
-    y = (points[..., 1] + 0.5).astype(np.intp)
-    np.minimum(np.maximum(x, 0, out=x), w - 1, out=x)
-    np.minimum(np.maximum(y, 0, out=y), h - 1, out=y)
-    return image[y, x]
-
-
 def _gradients(small: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return cv2.Sobel(small, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(small, cv2.CV_32F, 0, 1, ksize=3)
 
@@ -501,7 +294,7 @@ def _across(gx: np.ndarray, gy: np.ndarray, p: np.ndarray, q: np.ndarray, offset
     normal = np.array([-along[1], along[0]])
     ks = np.arange(0.0, length + 1)
     pts = p + ks[None, :, None] * along + offsets[:, None, None] * normal
-    return np.abs(_sample(gx, pts) * normal[0] + _sample(gy, pts) * normal[1])
+    return np.abs(sample_image(gx, pts) * normal[0] + sample_image(gy, pts) * normal[1])
 
 
 def _bridge_test(grads: tuple[np.ndarray, np.ndarray], k: int):
@@ -512,7 +305,7 @@ def _bridge_test(grads: tuple[np.ndarray, np.ndarray], k: int):
     gx, gy = grads
 
     def bridge(p, q):
-        p, q = _to_small(p, k), _to_small(q, k)
+        p, q = to_small(p, k), to_small(q, k)
         on = np.median(_across(gx, gy, p, q, np.array([-1.0, 0.0, 1.0])).max(axis=0))
         beside = np.median(_across(gx, gy, p, q, np.array([-6.0, -5.0, 5.0, 6.0])))
         return on >= BRIDGE_CONTRAST * max(beside, 1.0)
@@ -554,28 +347,6 @@ def _trace(grads: tuple[np.ndarray, np.ndarray], starts: np.ndarray, ends: np.nd
     return starts, ends
 
 
-def is_vertical(segments_px: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray, side_px: int) -> np.ndarray:
-    """Which segments can be images of vertical edges.
-
-    Parameters
-    ----------
-    segments_px : (n, 4) float64
-        Rows ``x1, y1, x2, y2``, undistorted pixels.
-    K : (3, 3) float64
-    camera_from_floor : (4, 4) float64
-    side_px : int
-        The photo's longer side, pixels (the vanishing-point tolerance scales with it).
-
-    Returns
-    -------
-    (n,) bool
-        3D cosine at least ``MIN_VERTICAL_COS`` and both ends within
-        ``VP_DISTANCE_FRACTION * side_px`` of the line to the vertical vanishing point.
-    """
-    cos_3d, _, vp_dist = vertical_alignment(segments_px, K, camera_from_floor)
-    return (cos_3d >= MIN_VERTICAL_COS) & (vp_dist <= VP_DISTANCE_FRACTION * side_px)
-
-
 def _merge_edges(vseg: np.ndarray, K: np.ndarray, pose: np.ndarray, side: int, bridge=None
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Vertical segments merged into edges: lower ends (n, 2) and upper ends (n, 2), both on
@@ -612,7 +383,7 @@ def _snap_to_floor(bases: np.ndarray, tops: np.ndarray, floor_mask: np.ndarray, 
         reach = int(np.ceil(band_px[i]))
         run = max(3, reach // 4)
         ks = np.arange(-reach - run, reach + run + 1)
-        floor = _sample(floor_mask, bases[i] + ks[:, None] * down).astype(float)
+        floor = sample_image(floor_mask, bases[i] + ks[:, None] * down).astype(float)
         csum = np.concatenate([[0.0], np.cumsum(floor)])
         j = np.arange(run, len(ks) - run)                        # candidate boundary positions
         below = (csum[j + run] - csum[j]) / run                  # mean over [k, k + run)
@@ -658,7 +429,7 @@ def _first_floor(starts: np.ndarray, down: np.ndarray, floor_mask: np.ndarray, k
     h, w = floor_mask.shape
     pts = starts[:, None, :] + ks[None, :, None] * down[:, None, :]
     inside = (pts[..., 0] >= 0) & (pts[..., 0] <= w - 1) & (pts[..., 1] >= 0) & (pts[..., 1] <= h - 1)
-    floor = _sample(floor_mask, pts) & inside
+    floor = sample_image(floor_mask, pts) & inside
     n = len(ks) - run + 1
     if n <= 0:
         return np.full(len(starts), np.nan)
@@ -757,7 +528,7 @@ def _stops_mid_wall(line, K, pose, floor_mask, size_px, k, grads, center, normal
     direction = (line[2:] - line[:2]) / length
     ref = None
     if grads is not None:
-        ref = np.median(_across(*grads, _to_small(line[:2], k), _to_small(line[2:], k), np.array([-1.0, 0.0, 1.0]))
+        ref = np.median(_across(*grads, to_small(line[:2], k), to_small(line[2:], k), np.array([-1.0, 0.0, 1.0]))
                         .max(axis=0))
     for end, sign in ((line[:2], -1.0), (line[2:], 1.0)):
         beyond = end + sign * np.outer(SPAN_PROBE_FRACTION * max(size_px), direction)
@@ -775,7 +546,7 @@ def _stops_mid_wall(line, K, pose, floor_mask, size_px, k, grads, center, normal
             continue
         if ref is not None and ref > 0:
             far = beyond[inside][hit][-1]
-            edge = _across(*grads, _to_small(end, k), _to_small(far, k), np.array([-1.0, 0.0, 1.0])).max(axis=0)
+            edge = _across(*grads, to_small(end, k), to_small(far, k), np.array([-1.0, 0.0, 1.0])).max(axis=0)
             if np.mean(edge >= TRACE_RATIO * ref) >= 0.6:
                 continue                # the line itself goes on: a piece of a longer junction
         return True
@@ -833,60 +604,6 @@ def _blocked_above(tops: np.ndarray, K: np.ndarray, pose: np.ndarray, lines: np.
     return np.array([_crossed(starts[i:i + 1], ends[i:i + 1], lines[far[i]])[0] for i in range(len(tops))])
 
 
-def _floor_share(color: np.ndarray, k: int, shape: tuple[int, int], points_px: np.ndarray, K: np.ndarray,
-                 pose: np.ndarray) -> np.ndarray | None:
-    """Share of each row of ``points_px`` (n, m, 2), full-size pixels, whose colour is the
-    floor's around the board (the floor frame's origin): Lab, the floor's from a ring of
-    floor points ``FLOOR_RING_M`` around the origin, within ``FLOOR_COLOR_Z`` spreads.
-    None when too little of that ring is in view to say. (n,) float."""
-    lab = cv2.cvtColor(cv2.GaussianBlur(color, (5, 5), 0), cv2.COLOR_RGB2LAB).astype(np.float64)
-    angles = np.linspace(0, 2 * np.pi, 48, endpoint=False)
-    radii = np.linspace(*FLOOR_RING_M, 5)
-    ring = np.column_stack([np.outer(radii, np.cos(angles)).ravel(), np.outer(radii, np.sin(angles)).ravel()])
-    R, t = pose[:3, :3], pose[:3, 3]
-    cam = ring @ R[:, :2].T + t
-    px = cam @ K.T
-    px = px[:, :2] / px[:, 2:3]
-    h, w = shape
-    ok = (cam[:, 2] > 0) & (px[:, 0] >= 0) & (px[:, 0] <= w - 1) & (px[:, 1] >= 0) & (px[:, 1] <= h - 1)
-    if ok.sum() < 20:
-        return None
-    ref = _sample(lab, _to_small(px[ok], k))
-    center = np.median(ref, axis=0)
-    scale = 1.4826 * np.median(np.abs(ref - center), axis=0) + FLOOR_COLOR_SLACK
-    z = np.abs(_sample(lab, _to_small(points_px, k)) - center) / scale
-    return np.all(z < FLOOR_COLOR_Z, axis=-1).mean(axis=1)
-
-
-def floor_colored(image: np.ndarray, points_px: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray
-                  ) -> np.ndarray:
-    """Whether each group of points looks like the floor around the board.
-
-    Parameters
-    ----------
-    image : (h, w, 3) uint8
-        RGB photo.
-    points_px : (n, m, 2) float64
-        n groups of m points, pixels.
-    K : (3, 3) float64
-    camera_from_floor : (4, 4) float64
-
-    Returns
-    -------
-    (n,) bool
-        At least ``FLOOR_SHARE`` of the group's points have the floor's colour (Lab, read
-        on a ring ``FLOOR_RING_M`` around the board); all False when too little of that
-        ring is in view to say. A weak test: walls and floors can share a colour.
-    """
-    _, color, k = _prepare(image)
-    points = np.asarray(points_px, dtype=np.float64)
-    if color is None:
-        return np.zeros(len(points), bool)
-    K, pose = _as_camera(K, camera_from_floor)
-    share = _floor_share(color, k, image.shape[:2], points, K, pose)
-    return np.zeros(len(points), bool) if share is None else share >= FLOOR_SHARE
-
-
 def _floor_like_below(color: np.ndarray, k: int, shape: tuple[int, int], bases: np.ndarray, tops: np.ndarray,
                       K: np.ndarray, pose: np.ndarray) -> np.ndarray:
     """Without a floor mask: does the image just below each base look like the floor around
@@ -897,7 +614,7 @@ def _floor_like_below(color: np.ndarray, k: int, shape: tuple[int, int], bases: 
     down /= np.maximum(length, 1e-12)
     ks = np.linspace(*FLOOR_COLOR_BELOW, 12)
     pts = bases[:, None, :] + (ks[None, :, None] * length[:, :, None]) * down[:, None, :]
-    share = _floor_share(color, k, shape, pts, K, pose)
+    share = floor_share(color, k, shape, pts, K, pose)
     return np.ones(len(bases), bool) if share is None else share >= FLOOR_SHARE
 
 
@@ -907,13 +624,13 @@ def _edge_candidates(seg: np.ndarray, vertical: np.ndarray, K: np.ndarray, pose:
     """Vertical edges: merged, followed in the image, their feet checked against the floor."""
     width, height = size_px
     side = max(size_px)
-    k = _factor((height, width))
+    k = shrink_factor((height, width))
     bridge = None if grads is None else _bridge_test(grads, k)
     bases, tops = _merge_edges(seg[vertical], K, pose, side, bridge)
     if grads is not None and len(bases):
         # Follow each edge beyond its detected ends, then merge edges that now meet.
-        b, t = _trace(grads, _to_small(bases, k), _to_small(tops, k), TRACE_FRACTION * max(small.shape))
-        bases, tops = _merge_edges(np.hstack([_to_full(b, k), _to_full(t, k)]), K, pose, side)
+        b, t = _trace(grads, to_small(bases, k), to_small(tops, k), TRACE_FRACTION * max(small.shape))
+        bases, tops = _merge_edges(np.hstack([to_full(b, k), to_full(t, k)]), K, pose, side)
     on_floor = np.ones(len(bases), bool)
     if floor_mask is not None and len(bases):
         band = np.maximum(FLOOR_BAND_FRACTION * side, FLOOR_BAND_EDGE * np.linalg.norm(tops - bases, axis=1))
@@ -932,7 +649,7 @@ def _candidates(seg: np.ndarray, K: np.ndarray, pose: np.ndarray, size_px: tuple
     vertical edges, then (with a floor mask) wall--ceiling lines."""
     width, height = size_px
     side = max(size_px)
-    k = _factor((height, width))
+    k = shrink_factor((height, width))
     grads = None if small is None else _gradients(small)
     vertical = is_vertical(seg, K, pose, side)
     c = _edge_candidates(seg, vertical, K, pose, size_px, floor_mask, small, color, grads)
@@ -942,9 +659,9 @@ def _candidates(seg: np.ndarray, K: np.ndarray, pose: np.ndarray, size_px: tuple
     lines = seg[~vertical]
     lines = lines[np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1]) >= MIN_JUNCTION_FRACTION * side]
     if grads is not None and len(lines):
-        b, t = _trace(grads, _to_small(lines[:, 2:], k), _to_small(lines[:, :2], k),
+        b, t = _trace(grads, to_small(lines[:, 2:], k), to_small(lines[:, :2], k),
                       TRACE_FRACTION * max(small.shape))
-        lines = np.hstack([_to_full(t, k), _to_full(b, k)])
+        lines = np.hstack([to_full(t, k), to_full(b, k)])
     if floor_mask is not None and len(lines):
         cb, ct, _, clen = _ceiling_candidates(lines, K, pose, floor_mask, size_px, k, grads)
         c = {key: np.concatenate([c[key], extra]) for key, extra in (
@@ -1060,8 +777,8 @@ def height_from_segments(segments_px: np.ndarray, K: np.ndarray, camera_from_flo
     -------
     HeightResult
     """
-    seg = _as_segments(segments_px)
-    K, pose = _as_camera(K, camera_from_floor)
+    seg = as_segments(segments_px)
+    K, pose = as_camera(K, camera_from_floor)
     width, height = (int(v) for v in size_px)
     if width < 16 or height < 16:
         raise ValueError(f"size_px {size_px}: expected (width, height) of a photo")
@@ -1070,7 +787,7 @@ def height_from_segments(segments_px: np.ndarray, K: np.ndarray, camera_from_flo
     if image is not None:
         if np.asarray(image).shape[:2] != (height, width):
             raise ValueError(f"image of shape {np.asarray(image).shape}: expected {(height, width)} like size_px")
-        small, color, _ = _prepare(image)
+        small, color, _ = prepare_lines(image)
     return _measure(seg, K, pose, (width, height), floor_mask, small, color)
 
 
@@ -1104,7 +821,7 @@ def measure_height(image: np.ndarray, calibration: Calibration, floor_mask: np.n
     image : (h, w) or (h, w, 3) uint8
         The photo (gray or RGB) the calibration was made from. Not modified.
     calibration : Calibration
-        From :func:`augment.calibrate.calibrate_photo`; ``size_px`` must match the image.
+        From :func:`augment.camera.calibrate.calibrate_photo`; ``size_px`` must match the image.
     floor_mask : (h, w) bool, optional
         The floor segmentation. Not modified. When given, only edges whose foot lies where
         the floor begins count (window frames, which end at their sill, do not), and
@@ -1123,16 +840,16 @@ def measure_height(image: np.ndarray, calibration: Calibration, floor_mask: np.n
     distortion the steps that read the photo along a line (following edges, the color
     check) are skipped, since its lines are not straight there.
     """
-    gray = _gray(image)
+    gray = to_gray(image)
     width, height = calibration.size_px
     if gray.shape != (height, width):
         raise ValueError(f"image of {gray.shape[1]}x{gray.shape[0]} px but the calibration is for "
                          f"{width}x{height} px")
     floor_mask = _as_mask(floor_mask, (width, height))
-    small, color, k = _prepare(image, gray)
-    seg = _to_full(_detect(small, "fld"), k)
+    small, color, k = prepare_lines(image, gray)
+    seg = to_full(detect_raw(small, "fld"), k)
     intr = calibration.intrinsics
-    K, pose = _as_camera(intr.K, calibration.camera_from_floor)
+    K, pose = as_camera(intr.K, calibration.camera_from_floor)
     if np.any(intr.distortion):
         if len(seg):
             seg = cv2.undistortPoints(seg.reshape(-1, 1, 2), intr.K, intr.distortion, P=intr.K).reshape(-1, 4)

@@ -1,0 +1,312 @@
+"""The web app's job queue: photos furnished in a pool of worker processes.
+
+:class:`JobQueue` keeps the jobs, hands them to the workers (``spawn``: a fresh
+interpreter each, no GL or numba state forked), and deletes finished jobs and their
+files after ``keep_minutes``. Each worker holds one GL context for all its jobs and
+writes a job's progress to ``<job>/progress.json`` as its stages finish; the routes of
+:mod:`augment.app.web` read it from there.
+
+Layout of ``jobs_dir``: one folder per job, ``<id>/input/`` (the photo, the camera
+profile, the spec), ``<id>/out/`` (the files of :func:`augment.pipeline.write_outputs`),
+``<id>/progress.json``.
+"""
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing
+import os
+import shutil
+import statistics
+import time
+import uuid
+from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from layout.errors import StagerError
+
+# A busy server says when to come back: about when a worker frees up, from the recent
+# jobs' times (this default until one is done), within these bounds.
+DEFAULT_JOB_S = 20.0
+RETRY_AFTER_BOUNDS_S = (2, 60)
+STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene", "overlays",
+          "plans", "write")
+
+
+# --------------------------------------------------------------------------------------
+# The worker process
+# --------------------------------------------------------------------------------------
+
+_renderer = None          # one GL context per worker process, made on its first job
+_progress_path = None     # the running job's progress.json
+
+
+class _FileProgress:
+    """``furnish``'s progress reporter in a worker: the current stage and the steps
+    done, written to the job's ``progress.json`` (replaced atomically)."""
+
+    def __init__(self, total: int):
+        self.total, self.done, self.current, self.finished = int(total), 0, None, []
+        self._write()
+
+    def stage(self, name: str) -> None:
+        if self.current is not None and self.current != name and self.current not in self.finished:
+            self.finished.append(self.current)
+        self.current = name
+        self._write()
+
+    def step(self, n: int = 1) -> None:
+        self.done += n
+        self._write()
+
+    def grow(self, n: int) -> None:
+        self.total += n
+        self._write()
+
+    def close(self) -> None:
+        pass
+
+    def _write(self) -> None:
+        _write_progress({"stage": self.current, "finished": self.finished, "done": self.done,
+                         "total": self.total + 1})  # + 1: writing the files
+
+
+def _write_progress(state: dict) -> None:
+    tmp = _progress_path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(state))
+    os.replace(tmp, _progress_path)
+
+
+def _run_job(job_dir: str, options: dict) -> dict:
+    """Furnish one job's photo into ``job_dir/out`` (in a worker process).
+
+    Returns ``{"files": [...], "warnings": [...], "doubt": ...}`` (``doubt``:
+    ``Segmentation.doubt_json``), or ``{"error": {"kind", "message"}}``
+    for bad input (a :class:`~augment.errors.StagerError`). A bug raises.
+    """
+    global _renderer, _progress_path
+    from .. import pipeline
+    from ..camera.board import Board
+    from ..render.gl import Renderer
+
+    start = time.perf_counter()
+    job = Path(job_dir)
+    _progress_path = job / "progress.json"
+    if _renderer is None:
+        _renderer = Renderer()
+    photo = job / "input" / options["photo"]
+    camera = job / "input" / options["camera"] if options.get("camera") else None
+    spec = job / "input" / options["spec"] if options.get("spec") else None
+    floor_mask = job / "input" / options["floor_mask"] if options.get("floor_mask") else None
+    clicks = options.get("clicks") or None
+    doors = options.get("doors") or None
+    try:
+        result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
+                                  room=None if spec is not None else options["room"], spec=spec,
+                                  suggestions=options["suggestions"], seed=options["seed"], camera=camera,
+                                  floor_mask=floor_mask, clicks=clicks, doors=doors,
+                                  keep_board=options["keep_board"], reporter=_FileProgress,
+                                  renderer=_renderer)
+        state = json.loads(_progress_path.read_text())
+        _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
+        paths = pipeline.write_outputs(result, job / "out")
+    except StagerError as error:
+        message = str(error).replace(str(photo), "the photo")
+        for path, name in ((camera, "the camera profile"), (spec, "the spec file"), (floor_mask, "the floor mask")):
+            if path is not None:
+                # "floor mask PATH: ..." reads "the floor mask: ...", not "floor mask the floor mask".
+                message = message.replace(f"{name[4:]} {path}", name).replace(str(path), name)
+        return {"error": {"kind": error.kind, "message": message},
+                "seconds": time.perf_counter() - start}
+    state = json.loads(_progress_path.read_text())
+    _write_progress(dict(state, stage=None, finished=list(STAGES), done=state["total"]))
+    return {"files": [p.name for p in paths], "warnings": list(result.warnings),
+            "doubt": result.segmentation.doubt_json(), "seconds": time.perf_counter() - start}
+
+
+# --------------------------------------------------------------------------------------
+# The queue (in the server process)
+# --------------------------------------------------------------------------------------
+
+def retry_after_s(job_seconds, workers: int) -> int:
+    """Seconds until a worker is likely free: the median of the last (up to 10) job
+    times over the worker count, within ``RETRY_AFTER_BOUNDS_S``."""
+    recent = list(job_seconds)[-10:]
+    typical = statistics.median(recent) if recent else DEFAULT_JOB_S
+    lo, hi = RETRY_AFTER_BOUNDS_S
+    return int(min(hi, max(lo, math.ceil(typical / max(1, workers)))))
+
+
+@dataclass
+class Job:
+    """One photo to furnish: its folder, options and, once done, its result."""
+
+    id: str
+    folder: Path
+    options: dict
+    created: float = field(default_factory=time.time)
+    future: Future | None = None
+    finished: float | None = None
+    result: dict | None = None
+    delete_when_done: bool = False
+
+
+def job_state(job: Job) -> dict:
+    """What ``GET /api/jobs/{id}`` answers: status, per-stage progress, error, files."""
+    board = f"{job.options['board'][0]}x{job.options['board'][1]}"
+    if job.options["kind"] != "chessboard":
+        board = f"{job.options['kind']}:{board}"
+    state = {"id": job.id, "status": "queued", "stage": None, "stages": {s: "pending" for s in STAGES},
+             "progress": 0.0, "error": None, "files": [], "warnings": [], "doubt": None,
+             "options": {"board": board, "square": job.options["square"], "room": job.options["room"],
+                         "spec": job.options.get("spec") is not None,
+                         "floor_mask": job.options.get("floor_mask") is not None,
+                         "clicks": len(job.options.get("clicks") or ()),
+                         "doors": len(job.options.get("doors") or ()),
+                         "keep_board": job.options["keep_board"],
+                         "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
+    try:
+        progress = json.loads((job.folder / "progress.json").read_text())
+    except (FileNotFoundError, json.JSONDecodeError):
+        progress = None
+    if progress is not None:
+        state["status"] = "running"
+        for name in progress["finished"]:
+            state["stages"][name] = "done"
+        if progress["stage"] is not None:
+            state["stages"][progress["stage"]] = "running"
+        state["stage"] = progress["stage"]
+        state["progress"] = round(min(1.0, progress["done"] / max(progress["total"], 1)), 3)
+    if job.result is not None:
+        if "error" in job.result:
+            state["status"] = "failed"
+            state["error"] = job.result["error"]
+            if state["stage"] is not None:
+                state["stages"][state["stage"]] = "failed"
+        else:
+            state.update(status="done", progress=1.0, stage=None, files=job.result["files"],
+                         warnings=job.result["warnings"], doubt=job.result["doubt"],
+                         stages={s: "done" for s in STAGES})
+    return state
+
+
+class JobQueue:
+    """The server's jobs and the worker pool that runs them.
+
+    Parameters
+    ----------
+    jobs_dir : Path
+        Where jobs keep their files (exists).
+    workers : int
+        Worker processes.
+    keep_minutes : float
+        Finished jobs and their files are deleted this long after they finish.
+    max_queued : int
+        Jobs that may wait for a free worker; beyond, :meth:`busy_s` says how long to wait.
+    """
+
+    def __init__(self, jobs_dir: Path, workers: int, keep_minutes: float, max_queued: int):
+        self.jobs_dir = Path(jobs_dir)
+        self.workers = int(workers)
+        self.keep_s = float(keep_minutes) * 60
+        self.max_queued = int(max_queued)
+        self.jobs: dict[str, Job] = {}
+        self._pool: ProcessPoolExecutor | None = None
+
+    def start(self) -> None:
+        self._pool = self._new_pool()
+
+    def close(self) -> None:
+        """Stop the workers; queued jobs are cancelled, running ones finish first."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+    def _new_pool(self) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"))
+
+    def busy_s(self) -> int | None:
+        """Seconds to wait before submitting when every worker and queue place is taken,
+        else None."""
+        active = sum(j.result is None for j in self.jobs.values())
+        if active < self.workers + self.max_queued:
+            return None
+        done = sorted((j for j in self.jobs.values() if j.result is not None and "seconds" in j.result),
+                      key=lambda j: j.finished or 0)
+        return retry_after_s([j.result["seconds"] for j in done], self.workers)
+
+    def new_folder(self) -> tuple[str, Path]:
+        """A fresh job id and its folder, with ``input/`` made."""
+        job_id = str(uuid.uuid4())
+        folder = self.jobs_dir / job_id
+        (folder / "input").mkdir(parents=True)
+        return job_id, folder
+
+    def submit(self, job_id: str, folder: Path, options: dict, on_done) -> Job:
+        """Queue a job whose inputs are in ``folder/input``; ``on_done(job)`` is called
+        from a pool thread when it finishes."""
+        job = self.jobs[job_id] = Job(job_id, folder, options)
+        try:
+            job.future = self._pool.submit(_run_job, str(folder), options)
+        except BrokenProcessPool:
+            # A worker died (its jobs failed as internal errors); start a fresh pool.
+            self._pool.shutdown(wait=False)
+            self._pool = self._new_pool()
+            job.future = self._pool.submit(_run_job, str(folder), options)
+
+        def done(future: Future) -> None:
+            _finish(job, future)
+            on_done(job)
+
+        job.future.add_done_callback(done)
+        return job
+
+    def cancel(self, job: Job) -> bool:
+        """Whether the job is not running (cancelled or finished); a running job is
+        marked to be deleted when it finishes."""
+        if job.result is None and not job.future.cancel() and not job.future.done():
+            job.delete_when_done = True
+            return False
+        return True
+
+    def forget(self, job: Job) -> None:
+        """The job, and its folder with the photo and every file made from it, deleted."""
+        self.jobs.pop(job.id, None)
+        shutil.rmtree(job.folder, ignore_errors=True)
+
+    def sweep(self, now: float | None = None) -> list[str]:
+        """Delete finished jobs older than ``keep_minutes``, and leftover job folders."""
+        now = time.time() if now is None else now
+        gone = [j.id for j in self.jobs.values() if j.finished is not None and now - j.finished > self.keep_s]
+        for job_id in gone:
+            self.forget(self.jobs[job_id])
+        for folder in self.jobs_dir.iterdir():
+            if folder.name not in self.jobs and is_uuid(folder.name) and now - folder.stat().st_mtime > self.keep_s:
+                shutil.rmtree(folder, ignore_errors=True)
+                gone.append(folder.name)
+        return gone
+
+
+def is_uuid(name: str) -> bool:
+    try:
+        return str(uuid.UUID(name)) == name
+    except ValueError:
+        return False
+
+
+def _finish(job: Job, future: Future) -> None:
+    """A worker is done with ``job`` (a pool thread): keep its result, or the bug."""
+    job.finished = time.time()
+    error = future.exception() if not future.cancelled() else None
+    if future.cancelled():
+        job.result = {"error": {"kind": "cancelled", "message": "the server stopped before this photo was done"}}
+    elif error is not None:
+        import traceback
+
+        traceback.print_exception(error)
+        job.result = {"error": {"kind": "internal", "message": f"internal error ({type(error).__name__}: "
+                                                               f"{error}); this is a bug in Stager"}}
+    else:
+        job.result = future.result()
