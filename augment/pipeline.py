@@ -84,7 +84,7 @@ from .photo.io import encode_image, read_photo
 from .render.erase import erase_board, layer_over_photo
 from .render.furniture import load_assets
 from .render.gltf import scene_glb
-from .room.fit import TOL, Tolerances, dropped_summary, furniture_for_floor, furniture_source, solve_suggestions
+from .room.fit import dropped_summary, furniture_for_floor, furniture_source, solve_suggestions
 from .room.height import measure_height
 
 DEFAULT_SUGGESTIONS = 4
@@ -437,7 +437,7 @@ def report_dict(result: FurnishResult) -> dict:
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
             seed: int = 0, camera=None, model=None, floor_mask=None, clicks=None, doors=None,
             assets: dict | None = None, layers: bool = False, keep_board: bool = False, progress: bool = False,
-            reporter=None, renderer=None, tol: Tolerances = TOL) -> FurnishResult:
+            reporter=None, renderer=None) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
     Parameters
@@ -526,11 +526,10 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         with clock("furniture"):
             fitted, dropped = furniture_for_floor(source, m.floor, room_height, photo, doors=doors,
                                                   calibration=m.calibration, asset_kinds=user_models,
-                                                  warnings=warnings, tol=tol)
+                                                  warnings=warnings)
         bar.step()
         with clock("layout"):
-            fitted, layouts, reports = solve_suggestions(fitted, suggestions, seed, m.floor.area_m2, dropped, bar,
-                                                         tol)
+            fitted, layouts, reports = solve_suggestions(fitted, suggestions, seed, m.floor.area_m2, dropped, bar)
         if dropped:
             warnings.append(f"left out {len(dropped)} item(s) that do not fit the measured floor: "
                             + dropped_summary(dropped))

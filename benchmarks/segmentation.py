@@ -42,7 +42,7 @@ from augment.floor.polygon import floor_polygon  # noqa: E402
 from augment.render.gl import Renderer  # noqa: E402
 from augment.floor.segment import segment_floor  # noqa: E402
 from augment.floor.model import DEFAULT_MODEL, FloorModel
-from augment.floor.segment import DISPUTED_SHARE_WARN, MAX_FLOOR_DISTANCE_M
+from augment.floor.settings import FLOOR  # noqa: E402
 from augment.synth import render_sample  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
 
@@ -70,7 +70,7 @@ def true_visible_area_m2(truth_mask, truth) -> float:
     w = pts[:, 2]
     floor = pts[:, :2] / w[:, None]
     cam = np.linalg.inv(camera_from_world)[:2, 3]
-    near = np.hypot(*(floor - cam).T) <= MAX_FLOOR_DISTANCE_M
+    near = np.hypot(*(floor - cam).T) <= FLOOR.segment.max_floor_distance_m
     return float(np.abs(np.linalg.det(H) / w[near] ** 3).sum())
 
 
@@ -241,7 +241,8 @@ def main(argv=None) -> int:
                   f"(from the true mask, through the same calibration: {summary['truth_mask_within_5pct']})"]
     u = summary["uncertain"]
     lines += ["", f"\"floor uncertain\" warnings (model and GrabCut disagree on more than "
-                  f"{DISPUTED_SHARE_WARN:.0%} of the floor): {u['warned']} of {len(col(synth_rows, 'area_error'))}; "
+                  f"{FLOOR.segment.disputed_share_warn:.0%} of the floor): {u['warned']} of "
+                  f"{len(col(synth_rows, 'area_error'))}; "
                   f"{u['off_warned']} of the {u['off']} polygons more than 5 % off are among them"]
     if real_rows:
         lines += ["", "| real room (furnished; never trained on) | IoU onnx | IoU onnx+grabcut |", "|---|---|---|"]

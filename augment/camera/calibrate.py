@@ -25,45 +25,11 @@ from ..photo.exif import exif_focal_px, exif_orientation
 from ..photo.io import read_photo
 from .board import Board
 from .calibration import Calibration, Intrinsics, board_json, quarter_turn
-from .detect import MIN_CHARUCO_CORNERS, BoardDetection, detect_board, suggest_board
-from .lines import LINE_SIDE_PX, detect_segments, floor_colored, is_vertical, toward_vanishing_point
+from .detect import BoardDetection, detect_board, suggest_board
+from .lines import detect_segments, floor_colored, is_vertical, toward_vanishing_point
+from .settings import CAMERA
 
-MIN_BOARD_EXTENT_PX = 60       # smaller boards give too few pixels for a pose
-MAX_RMS_PX = 2.0               # worse reprojection means a bent, moved or mis-sized board
-# Single-view focal needs perspective: the board's normal must be tilted from the optical
-# axis (a fronto-parallel board says nothing about f) but not so far that it is a sliver.
-MIN_TILT_DEG = 15.0
-MAX_TILT_DEG = 85.0
-MAX_SINGLE_VIEW_UNCERTAINTY = 0.05   # relative focal uncertainty allowed before refusing
-# Where people hold a phone to photograph a room: crouching to arms raised. Outside, the
-# board's printed scale is the likelier mistake (a print scaled to fit the page, another
-# board's --square): every length scales with it, the camera's height too.
-CAMERA_HEIGHT_M = (0.3, 2.5)
-USUAL_CAMERA_HEIGHT_M = (1.0, 1.8)  # standing, as most photos of a room are taken
-# A crop keeps the whole frame's EXIF focal length (as do phones' modes that crop the
-# sensor, when the maker does not restate it), which then does not fit the photo. Where
-# the board's own view rules the EXIF value out by this many standard deviations of the
-# two together, the board's is used. On 1,132 renders with their true focal length as
-# EXIF the largest gap was 2.0 of them (a board's estimate 8.7 % off), on OpenCV's 26
-# photos 1.5; OpenCV's photos cropped a quarter off their sides give 4-9 of them.
-EXIF_GAP_SIGMAS = 3.0
-# The focal length's deviation scales with the corners' noise, which the fit estimates from
-# its residuals; with few corners (a partly hidden board) the fit absorbs much of the noise
-# and the estimate comes out low. The noise is taken to be at least the corner accuracy the
-# detectors reach on the synthetic renders (benchmarks/calibration.py): about 0.05 px RMS
-# for checkerboard saddle points, 0.2 px for ChArUco corners (smaller windows, markers near).
-CORNER_NOISE_FLOOR_PX = {"chessboard": 0.05, "charuco": 0.2}
-# A small or far board is a nearly affine view of a plane, which two tilts explain about
-# equally well (the planar pose ambiguity): on the synthetic renders the wrong one fit a
-# little better in 1 of 857, and both were within 2x of each other's RMS in 18. Within
-# this ratio the photo's vertical edges decide: the right tilt sends them to its vertical
-# vanishing point (together at least this many photo sides long, twice the other's), and
-# the pose is refit to the board and those edges together.
-AMBIGUOUS_RMS_RATIO = 2.0
-MIN_VERTICAL_SUPPORT = 0.25
-VERTICAL_SUPPORT_RATIO = 2.0
-LINE_NOISE_PX = 0.5            # least noise of a detected segment's end, in the detector's copy
-FLOOR_SIDE_FRACTION = 0.004    # a segment's sides are read this far off it (x the longer side)
+
 def _focal_from_homography(H: np.ndarray) -> float | None:
     """Closed-form f from a plane homography whose image coordinates are centered on the
     principal point, assuming square pixels and no skew (Zhang's two constraints).
@@ -99,12 +65,14 @@ def single_view_intrinsics(corners_px: np.ndarray, board: Board, size_px: tuple[
     with the pose (``calibrateCameraExtended``). When the lens bends straight lines (the
     fit without distortion leaves more than 0.5 px of error and a radial model removes a
     third of it) the radial terms k1 and k2 are fit too: without them a barrel lens biases
-    f by tens of percent, and k1 alone leaves a few percent (OpenCV's photos: the largest
-    focal error falls from 5.3 to 4.6 %).
+    f by tens of percent, and k1 alone leaves a few percent.
 
-    The uncertainty combines the fit's standard deviation (its corner noise at least
-    ``CORNER_NOISE_FLOOR_PX``) with the change in f when the principal point moves by 2 % of
-    the image (phones are not exactly centered).
+    The uncertainty combines the fit's standard deviation with the change in f when the
+    principal point moves by 2 % of the image (phones are not exactly centered). The
+    deviation scales with the corners' noise, which the fit estimates from its residuals;
+    with few corners (a partly hidden board) it absorbs much of the noise and the estimate
+    comes out low, so the noise is taken to be at least
+    ``CAMERA.calibrate.corner_noise_floor_px``, what the detectors reach.
 
     Parameters
     ----------
@@ -120,6 +88,7 @@ def single_view_intrinsics(corners_px: np.ndarray, board: Board, size_px: tuple[
     CalibrationError
         When the board is seen nearly face-on or nearly edge-on, or f is too uncertain.
     """
+    settings = CAMERA.calibrate
     width, height = size_px
     center = np.array([(width - 1) / 2, (height - 1) / 2])
     corners_px = np.asarray(corners_px, dtype=np.float64).reshape(-1, 2)
@@ -135,7 +104,7 @@ def single_view_intrinsics(corners_px: np.ndarray, board: Board, size_px: tuple[
         affine, _ = cv2.estimateAffine2D(obj[:, :2].astype(np.float32), corners_px.astype(np.float32))
         ratio = np.linalg.svd(affine[:, :2], compute_uv=False) if affine is not None else np.ones(2)
         tilt_deg = float(np.degrees(np.arccos(min(1.0, ratio[1] / ratio[0]))))
-        if tilt_deg >= MIN_TILT_DEG:
+        if tilt_deg >= settings.min_tilt_deg:
             extent = corners_px.max(axis=0) - corners_px.min(axis=0)
             raise CalibrationError(
                 f"the board is too small in the photo ({extent.max():.0f} px across a {max(size_px)} px photo) "
@@ -154,21 +123,21 @@ def single_view_intrinsics(corners_px: np.ndarray, board: Board, size_px: tuple[
     rms, K, dist, R, f_std = fit
     f = float(K[0, 0])
     tilt_deg = float(np.degrees(np.arccos(min(1.0, abs(R[2, 2])))))
-    if tilt_deg < MIN_TILT_DEG or tilt_deg > MAX_TILT_DEG:
-        what = "almost face-on" if tilt_deg < MIN_TILT_DEG else "almost edge-on"
+    if tilt_deg < settings.min_tilt_deg or tilt_deg > settings.max_tilt_deg:
+        what = "almost face-on" if tilt_deg < settings.min_tilt_deg else "almost edge-on"
         raise CalibrationError(
-            f"the board is seen {what} (tilted {tilt_deg:.0f} degrees from the view direction; "
-            f"a single photo needs {MIN_TILT_DEG:.0f}-{MAX_TILT_DEG:.0f}) to measure the focal length. {advice}")
+            f"the board is seen {what} (tilted {tilt_deg:.0f} degrees from the view direction; a single photo "
+            f"needs {settings.min_tilt_deg:.0f}-{settings.max_tilt_deg:.0f}) to measure the focal length. {advice}")
     shifted = []
     for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)):
         c = center + 0.02 * np.array([dx * width, dy * height])
         shifted.append(abs(_fit_focal(obj, corners_px, size_px, f, c, use_radial)[1][0, 0] - f) / f)
-    f_std *= max(1.0, CORNER_NOISE_FLOOR_PX[board.kind] / max(rms, 1e-12))
+    f_std *= max(1.0, settings.corner_noise_floor_px[board.kind] / max(rms, 1e-12))
     uncertainty = float(np.hypot(f_std / f if np.isfinite(f_std) else np.inf, max(shifted)))
-    if not uncertainty <= MAX_SINGLE_VIEW_UNCERTAINTY:
+    if not uncertainty <= settings.max_single_view_uncertainty:
         raise CalibrationError(
             f"the focal length from this single view is uncertain by {100 * uncertainty:.0f} % "
-            f"(at most {100 * MAX_SINGLE_VIEW_UNCERTAINTY:.0f} % is accepted). {advice}")
+            f"(at most {100 * settings.max_single_view_uncertainty:.0f} % is accepted). {advice}")
     note = f"board tilted {tilt_deg:.0f} degrees; principal point assumed at the image center"
     if use_radial:
         note += f"; lens distortion k1 = {dist[0]:.3f}, k2 = {dist[1]:.3f} fit from the board"
@@ -378,7 +347,7 @@ def _on_the_floor(image: np.ndarray, segments_px: np.ndarray, K: np.ndarray, pos
     direction = (end - start)[:, 0]
     across = np.column_stack([-direction[:, 1], direction[:, 0]])
     across /= np.maximum(np.linalg.norm(across, axis=1, keepdims=True), 1e-12)
-    offset = (FLOOR_SIDE_FRACTION * max(np.asarray(image).shape[:2])) * across[:, None, :]
+    offset = (CAMERA.calibrate.floor_side_fraction * max(np.asarray(image).shape[:2])) * across[:, None, :]
     return floor_colored(image, np.concatenate([points - offset, points + offset], axis=1), K, pose)
 
 
@@ -403,10 +372,11 @@ def _level_with_verticals(image: np.ndarray, obj_m: np.ndarray, corners_px: np.n
     Where the board cannot fix the tilt well (its two readings fit nearly alike), a few
     long vertical edges can. The edges are reselected under each refit. Each residual is
     divided by its noise: the corners' from their fit, the edges' from theirs, at least
-    ``LINE_NOISE_PX`` of the detector's shrunk copy.
+    ``CAMERA.calibrate.line_noise_px`` of the detector's shrunk copy.
     """
-    corner_sigma = max(_pose_rms(obj_m, corners_px, pose, intrinsics), CORNER_NOISE_FLOOR_PX["chessboard"])
-    line_floor = LINE_NOISE_PX * max(1.0, side_px / LINE_SIDE_PX)
+    settings = CAMERA.calibrate
+    corner_sigma = max(_pose_rms(obj_m, corners_px, pose, intrinsics), settings.corner_noise_floor_px["chessboard"])
+    line_floor = settings.line_noise_px * max(1.0, side_px / CAMERA.lines.side_px)
     line_sigma = corner_sigma  # first refit: edges weigh like corners
     on_floor = _on_the_floor(image, segments_px, intrinsics.K, pose)
     for _ in range(4):
@@ -422,15 +392,23 @@ def _level_with_verticals(image: np.ndarray, obj_m: np.ndarray, corners_px: np.n
 def _settle_tilt(image: np.ndarray, corners_px: np.ndarray, obj_m: np.ndarray, intrinsics: Intrinsics,
                  pose: np.ndarray, warnings: list) -> np.ndarray:
     """``pose``, unless the board's fit cannot tell its two tilts apart: then the tilt the
-    photo's vertical edges side with, refit to them and the board together."""
+    photo's vertical edges side with, refit to them and the board together.
+
+    A small or far board is a nearly affine view of a plane, which two tilts explain
+    about equally well (the planar pose ambiguity). Within
+    ``CAMERA.calibrate.ambiguous_rms_ratio`` of each other's RMS the photo's vertical
+    edges decide: the right tilt sends them to its vertical vanishing point.
+    """
+    settings = CAMERA.calibrate
     readings = tilt_readings(corners_px, obj_m, intrinsics)
-    if len(readings) < 2 or readings[1][1] > AMBIGUOUS_RMS_RATIO * max(readings[0][1], 1e-6):
+    if len(readings) < 2 or readings[1][1] > settings.ambiguous_rms_ratio * max(readings[0][1], 1e-6):
         return pose
     segments = detect_segments(image)
     side = max(np.asarray(image).shape[:2])
     support = vertical_support(segments, intrinsics.K, [r[0] for r in readings], side)
     best = int(np.argmax(support))
-    if support[best] >= MIN_VERTICAL_SUPPORT and support[best] >= VERTICAL_SUPPORT_RATIO * support[1 - best]:
+    if (support[best] >= settings.min_vertical_support
+            and support[best] >= settings.vertical_support_ratio * support[1 - best]):
         return _level_with_verticals(image, obj_m, corners_px, intrinsics, readings[best][0], segments, side)
     (_, rms0), (_, rms1) = readings
     warnings.append(f"the board is too small in the photo to fix the floor's tilt for sure: two tilts fit it "
@@ -459,6 +437,7 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
         No board, a board too small, a view that cannot give the focal length, or a fit
         too poor to trust; the message says what to change.
     """
+    settings = CAMERA.calibrate
     height, width = np.asarray(image).shape[:2]
     size_px = (width, height)
     detection = detect_board(image, board)
@@ -468,7 +447,8 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
             hint = f" The photo shows a board that --board {other} finds: use --board {other}."
         elif board.kind == "charuco":
             hint = (f" Check --board: it counts inner corners (where four squares meet), not squares, and "
-                    f"at least {MIN_CHARUCO_CORNERS} corners with their markers must be visible and sharp.")
+                    f"at least {CAMERA.detect.min_charuco_corners} corners with their markers must be visible "
+                    "and sharp.")
         else:
             hint = (" Check --board: it counts inner corners (where four squares meet), "
                     "not squares; a board of 8 x 6 squares is --board 7x5.")
@@ -480,10 +460,10 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
         raise CalibrationError(f"no {board.describe()} found in {where} (tried {tried}).{hint} "
                                "It must lie flat and not be glared.")
     extent = detection.corners_px.max(axis=0) - detection.corners_px.min(axis=0)
-    if extent.max() < MIN_BOARD_EXTENT_PX:
+    if extent.max() < settings.min_board_extent_px:
         raise CalibrationError(
-            f"the board in {where} is only {extent.max():.0f} px across (at least {MIN_BOARD_EXTENT_PX} needed): "
-            "move the board closer to the camera or use a larger board")
+            f"the board in {where} is only {extent.max():.0f} px across (at least {settings.min_board_extent_px} "
+            "needed): move the board closer to the camera or use a larger board")
     warnings = []
     exif_ruled_out = False
     if intrinsics is None:
@@ -495,10 +475,10 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
     corners = detection.corners_px
     camera_from_floor = _settle_tilt(image, corners, board.corners_m()[ids], intrinsics, camera_from_floor, warnings)
     rms = _pose_rms(board.corners_m()[ids], corners, camera_from_floor, intrinsics)
-    if rms > MAX_RMS_PX:
+    if rms > settings.max_rms_px:
         raise CalibrationError(
-            f"the board in {where} fits its model with an RMS of {rms:.2f} px (at most {MAX_RMS_PX} accepted): "
-            "the board may be bent or not flat on the floor, or --square/--board may not match the print"
+            f"the board in {where} fits its model with an RMS of {rms:.2f} px (at most {settings.max_rms_px} "
+            "accepted): the board may be bent or not flat on the floor, or --square/--board may not match the print"
             + (f"; or the photo's EXIF focal length ({intrinsics.K[0, 0]:.0f} px) does not fit it: a cropped "
                "photo keeps the whole frame's; give the photo as the camera took it"
                if intrinsics.source == "exif" else ""))
@@ -513,13 +493,14 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
     center = corners.mean(axis=0)
     if horizon @ [center[0], center[1], 1.0] < 0:
         horizon = -horizon
-    if not CAMERA_HEIGHT_M[0] <= d <= CAMERA_HEIGHT_M[1]:
-        low, high = (board.square_mm * h / d for h in USUAL_CAMERA_HEIGHT_M)
+    if not settings.camera_height_m[0] <= d <= settings.camera_height_m[1]:
+        usual = settings.usual_camera_height_m
+        low, high = (board.square_mm * h / d for h in usual)
         warnings.append(f"the camera comes out {d:.2f} m above the floor, by the board's squares of "
                         f"{board.square_mm:g} mm: if it was not, the printed squares are another size (a print "
                         "scaled to fit the page has smaller ones) and every length is off by as much; measure "
-                        f"one and give it as --square (with the camera {USUAL_CAMERA_HEIGHT_M[0]:g}-"
-                        f"{USUAL_CAMERA_HEIGHT_M[1]:g} m up, they would be {low:.0f}-{high:.0f} mm)")
+                        f"one and give it as --square (with the camera {usual[0]:g}-"
+                        f"{usual[1]:g} m up, they would be {low:.0f}-{high:.0f} mm)")
     if intrinsics.source == "single-view" and not exif_ruled_out:  # its own warning says why
         warnings.append("focal length estimated from the board alone (no EXIF, no camera profile): "
                         f"uncertain by about {100 * intrinsics.focal_uncertainty:.1f} %")
@@ -541,13 +522,17 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
 
 def _exif_or_board(exif: Intrinsics, detection, board: Board, size_px, where: str, warnings: list) -> Intrinsics:
     """The EXIF intrinsics, or the board's own (:func:`single_view_intrinsics`) where its
-    view rules them out (``EXIF_GAP_SIGMAS``), with a warning in ``warnings``."""
+    view rules them out (``CAMERA.calibrate.exif_gap_sigmas`` standard deviations of the
+    two together), with a warning in ``warnings``.
+
+    A crop keeps the whole frame's EXIF focal length (as do phones' modes that crop the
+    sensor, when the maker does not restate it), which then does not fit the photo."""
     try:
         seen = single_view_intrinsics(detection.corners_px, board, size_px, detection.ids)
     except CalibrationError:  # a view that cannot tell the focal length cannot contradict it
         return exif
     gap = exif.K[0, 0] / seen.K[0, 0] - 1
-    if abs(gap) <= EXIF_GAP_SIGMAS * np.hypot(exif.focal_uncertainty, seen.focal_uncertainty):
+    if abs(gap) <= CAMERA.calibrate.exif_gap_sigmas * np.hypot(exif.focal_uncertainty, seen.focal_uncertainty):
         return exif
     warnings.append(f"the EXIF focal length of {where} ({exif.K[0, 0]:.0f} px) and the board's view "
                     f"({seen.K[0, 0]:.0f} px \u00b1 {100 * seen.focal_uncertainty:.1f} %) disagree by "

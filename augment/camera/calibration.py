@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import CalibrationError
 from .board import CHARUCO_DICTIONARY, Board
+from .settings import CAMERA
 
 
 @dataclass(frozen=True)
@@ -37,11 +38,6 @@ def turn_points(points_px, quarter_turns: int, size_px: tuple[int, int]) -> np.n
         pts = np.column_stack([pts[:, 1], w - 1 - pts[:, 0]])
         w, h = h, w
     return pts
-
-
-# How far out, as a share of the radius where the lens model's distortion stops growing,
-# a pixel is mapped to the floor: near that radius the mapping stretches without bound.
-LENS_REACH_SHARE = 0.98
 
 
 def _distortion_reach(distortion: np.ndarray) -> float:
@@ -160,14 +156,15 @@ class Calibration:
 
     def lens_maps(self, points_px: np.ndarray) -> np.ndarray:
         """(k,) bool: pixels (k, 2) the lens model undistorts, those nearer the principal
-        point than where its radial distortion stops growing outward. A model fit from
-        the board alone holds near the board and can turn back before the photo's corners
-        (OpenCV's left13: k1 -0.25, k2 -0.13 turn at 0.64 focal lengths, the corners lie
-        at 0.74); undistorting a pixel beyond gives a point anywhere."""
+        point than where its radial distortion stops growing outward (a share
+        ``CAMERA.calibrate.lens_reach_share`` of that radius: near it the mapping
+        stretches without bound). A model fit from the board alone holds near the board
+        and can turn back before the photo's corners; undistorting a pixel beyond gives a
+        point anywhere."""
         pts = np.asarray(points_px, dtype=np.float64).reshape(-1, 2)
         K = self.intrinsics.K
         radius = np.hypot((pts[:, 0] - K[0, 2]) / K[0, 0], (pts[:, 1] - K[1, 2]) / K[1, 1])
-        return radius < LENS_REACH_SHARE * _distortion_reach(self.intrinsics.distortion)
+        return radius < CAMERA.calibrate.lens_reach_share * _distortion_reach(self.intrinsics.distortion)
 
     def floor_from_pixels(self, points_px: np.ndarray) -> np.ndarray:
         """Floor coordinates (k, 2) meters of pixels (k, 2), distortion removed first

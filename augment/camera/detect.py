@@ -16,87 +16,11 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from .board import Board, charuco_board
-
-# Tolerances and limits, in one place.
-DETECT_MAX_SIDE_PX = 1280      # look for a checkerboard in a copy no larger than this
-
-
-MIN_CHARUCO_CORNERS = 6        # a partly hidden ChArUco board needs this many corners, not in a line
-
-
-# Corners are refined to the saddle point of the intensity in a window of this fraction of
-# the corner spacing: 0.4 stays inside the squares next to a checkerboard corner; a
-# ChArUco marker begins 1/8 of a square from each corner, so its window is smaller.
-SADDLE_WINDOW = {"chessboard": 0.4, "charuco": 0.15}
-
-
-MAX_SADDLE_RADIUS_PX = 24
-
-
-# Now and then a detector puts a corner of a small board a quarter to two thirds of a
-# square off, 2-8 px (25 of 837 renders of seeds 903-906, 930-936 and 960-961 had one over
-# 2 px), and the saddle search started there does not reach the true corner; one such
-# corner tipped the floor of seed 960 render 34 to the wrong tilt (area +340 %). Each
-# corner is checked against where its neighbours put it (those up to OUTLIER_REACH
-# corners away, through a homography: local, so that lens distortion does not matter);
-# the worst one more than OUTLIER_SQUARES of the corner spacing off (and 1 px) is searched
-# again from there, or else moved there, and the check repeats. On OpenCV's
-# barrel-distorted photos the worst is 0.053 of a square.
-OUTLIER_SQUARES, OUTLIER_REACH = 0.25, 2
-
-
-# A detector can return a grid of the right size that is not the board's: on a small,
-# blurred board SB once took the paper's edge for a row of corners at both ends, partly a
-# square or two off (seed 937 render 61: 13.6 px; each corner consistent with its
-# neighbours, so the mend above cannot see it, and the floor's tilt came out 31 degrees
-# wrong). The squares such a grid outlines do not alternate dark and light as printed.
-# Each square's middle (the middle half each way, through the homography of all corners)
-# is compared with its neighbours: every inner square (between the inner corners) must
-# differ from them the printed way by at least MIN_SQUARE_CONTRAST of the median inner
-# difference. Over 320 renders the true grids' worst inner square reads 0.46 (a board
-# partly behind a carton), the next 0.69; OpenCV's photos' 0.66; 937/61's grid -2.8.
-# The ring of squares outside the inner corners is not judged: a carton over the board's
-# edge hides it while the detector still finds every corner (seed [7, 60], 5 % hidden).
-MIN_SQUARE_CONTRAST = 0.3
-
-
-# A grid is a patch of a larger board when this share of the squares along a side of the
-# next ring out alternates as printed (the side's end squares left out: they border the
-# paper). Not all: a lens's distortion two squares past the grid, where the grid's
-# homography is extrapolated, puts a square or two off.
-GOES_ON_SHARE = 0.75
-
-
-# When the whole photo yields no checkerboard, the strongest saddle points are grouped and
-# the detectors rerun on crops around the largest groups (a small board in a big, busy
-# photo is found far more often on its own), enlarged twice when its squares are small.
-CROP_CANDIDATES = 3
-
-
-CROP_MARGIN = 0.3              # of the group's extent, on each side
-
-
-CROP_ZOOM_BELOW_PX = 16        # corner spacing under which a crop is also tried enlarged 2x
-
-
-# A board far away or seen low is squashed along the view and often blurred, and then
-# neither detector finds it on the crop (46 of 640 renders with the whole board in view,
-# boards up to 180 px across). The group's saddle points show the squash: an affine map
-# that makes their spread round undoes most of it, and the detectors run once more on
-# that view, its corners this far apart (the first; the others where it fails: the
-# detectors' luck turns with the scale on boards whose rows are 6-9 px apart).
-RECTIFIED_SPACINGS_PX = (28.0, 20.0, 40.0)
-
+from .settings import CAMERA
 
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 40, 1e-3)
-
-
 _SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE
-
-
 _CLASSIC_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
-
-
 # Board sizes people print; tried only to suggest a fix when the given size is not found.
 _COMMON_SIZES = ((9, 6), (8, 6), (7, 5), (7, 6), (6, 4), (8, 5), (10, 7), (6, 9), (5, 7))
 
@@ -113,7 +37,7 @@ class BoardDetection:
         Which corner of the board each one is: the row of :meth:`Board.corners_m`. A
         checkerboard gives all ``cols * rows`` in the detector's order (which may read the
         board mirrored: :func:`calibrate_photo` settles that from the pose); a ChArUco
-        board gives the corners it shows, at least ``MIN_CHARUCO_CORNERS``.
+        board gives the corners it shows, at least ``CAMERA.detect.min_charuco_corners``.
     detector : str
         ``"sb"`` or ``"classic"`` (OpenCV's checkerboard detectors), with ``" crop"`` when
         found only on a crop around the board, ``" rectified"`` when only on a view of it
@@ -173,9 +97,8 @@ def _saddle_refine(gray: np.ndarray, corners: np.ndarray, radius: int) -> tuple[
     radius) to a ``2 radius + 1`` window resampled centered on the current estimate, and
     the estimate moved to the surface's saddle point until it stops moving. The window is
     symmetric about the corner, so the blur and the tone curve of a photo, both symmetric
-    about an X-junction, do not bias it; on the synthetic renders and OpenCV's photos it
-    lands closer to the truth than ``cornerSubPix`` (whose 0.1-0.4 px errors on small,
-    foreshortened boards cost several percent of focal length).
+    about an X-junction, do not bias it: it lands closer to the truth than ``cornerSubPix``,
+    whose errors on small, foreshortened boards cost several percent of focal length.
 
     Returns
     -------
@@ -213,8 +136,9 @@ def _saddle_refine(gray: np.ndarray, corners: np.ndarray, radius: int) -> tuple[
 def _refine(gray: np.ndarray, corners: np.ndarray, ids: np.ndarray, board: Board) -> np.ndarray:
     """Full-resolution corners: saddle points; a checkerboard corner where no saddle
     converges falls back to ``cornerSubPix`` (ChArUco corners come refined by OpenCV)."""
+    settings = CAMERA.detect
     spacing = corner_spacing_px(corners, ids, board)
-    radius = int(np.clip(round(SADDLE_WINDOW[board.kind] * spacing), 2, MAX_SADDLE_RADIUS_PX))
+    radius = int(np.clip(round(settings.saddle_window[board.kind] * spacing), 2, settings.max_saddle_radius_px))
     refined, converged = _saddle_refine(gray, corners, radius)
     if board.kind == "chessboard" and not converged.all():
         # The search window must stay inside one square, or a neighbouring corner pulls.
@@ -226,14 +150,15 @@ def _refine(gray: np.ndarray, corners: np.ndarray, ids: np.ndarray, board: Board
 
 
 def _neighbours_say(corners: np.ndarray, ids: np.ndarray, board: Board) -> np.ndarray:
-    """(n, 2): where each corner's neighbours on the board (up to ``OUTLIER_REACH``
-    corners away, the corner itself left out) put it through a homography; NaN where
-    fewer than 6 are detected."""
+    """(n, 2): where each corner's neighbours on the board (up to
+    ``CAMERA.detect.outlier_reach`` corners away, the corner itself left out) put it
+    through a homography; NaN where fewer than 6 are detected."""
+    reach = CAMERA.detect.outlier_reach
     grid = np.column_stack(np.divmod(ids, board.cols))
     on_board = board.corners_m()[ids][:, :2]
     out = np.full((len(ids), 2), np.nan)
     for i in range(len(ids)):
-        near = np.abs(grid - grid[i]).max(axis=1) <= OUTLIER_REACH
+        near = np.abs(grid - grid[i]).max(axis=1) <= reach
         near[i] = False
         if near.sum() < 6:
             continue
@@ -246,9 +171,15 @@ def _neighbours_say(corners: np.ndarray, ids: np.ndarray, board: Board) -> np.nd
 def _mend_outliers(gray: np.ndarray, corners: np.ndarray, ids: np.ndarray, board: Board, spacing: float,
                    radius: int) -> np.ndarray:
     """``corners`` with those far from where their neighbours put them searched again
-    from there (``OUTLIER_SQUARES``), worst first."""
+    from there (``CAMERA.detect.outlier_squares``), worst first, or else moved there.
+
+    Now and then a detector puts a corner of a small board a good part of a square off,
+    where the saddle search does not reach the true corner, and one such corner can tip
+    the floor's tilt. The neighbours' homography is local, so lens distortion does not
+    matter.
+    """
     corners = corners.copy()
-    limit = max(OUTLIER_SQUARES * spacing, 1.0)
+    limit = max(CAMERA.detect.outlier_squares * spacing, 1.0)
     mended = set()
     while len(mended) < len(ids) // 4:
         said = _neighbours_say(corners, ids, board)
@@ -308,22 +239,29 @@ def square_contrast(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> n
 
 def squares_alternate(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> bool:
     """Whether the squares between a checkerboard's detected corners alternate as printed
-    (``MIN_SQUARE_CONTRAST``): False for a grid a detector fit partly to something else.
-    A grid read a whole square along everywhere still alternates, and passes."""
-    return bool((square_contrast(gray, corners_px, board)[1:-1, 1:-1] >= MIN_SQUARE_CONTRAST).all())
+    (``CAMERA.detect.min_square_contrast``): False for a grid a detector fit partly to
+    something else, such as a blurred board's paper edge taken for a row of corners,
+    which the mend of outliers cannot see (each corner agrees with its neighbours). A
+    grid read a whole square along everywhere still alternates, and passes."""
+    # The ring of squares outside the inner corners is not judged: an object over the
+    # board's edge hides it while the detector still finds every corner.
+    return bool((square_contrast(gray, corners_px, board)[1:-1, 1:-1] >= CAMERA.detect.min_square_contrast).all())
 
 
 def board_goes_on(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> bool:
     """Whether the checkerboard goes on past the squares around the detected corners:
-    along some side, most squares of the next ring out (``GOES_ON_SHARE``) alternate as
-    printed (``MIN_SQUARE_CONTRAST``). Then the grid is a patch of a larger board (a 9x6 board
-    given as 7x5, which the detectors find in it), not the board."""
+    along some side, most squares of the next ring out (``CAMERA.detect.goes_on_share``)
+    alternate as printed (``CAMERA.detect.min_square_contrast``). Then the grid is a patch
+    of a larger board (a 9x6 board given as 7x5, which the detectors find in it), not the
+    board. Not all of them: a lens's distortion two squares past the grid, where its
+    homography is extrapolated, puts a square or two off."""
     H, _ = cv2.findHomography(board.corners_m()[:, :2], np.asarray(corners_px, np.float64).reshape(-1, 2), 0)
     wider = Board(board.cols + 2, board.rows + 2, board.square_mm)  # its paper does not matter here
     wider_px = cv2.perspectiveTransform(wider.corners_m()[None, :, :2], H)[0]
-    ring = square_contrast(gray, wider_px, wider) >= MIN_SQUARE_CONTRAST
+    ring = square_contrast(gray, wider_px, wider) >= CAMERA.detect.min_square_contrast
+    # The sides' end squares are left out: they border the paper.
     sides = (ring[0, 2:-2], ring[-1, 2:-2], ring[2:-2, 0], ring[2:-2, -1])
-    return any(side.mean() >= GOES_ON_SHARE for side in sides)
+    return any(side.mean() >= CAMERA.detect.goes_on_share for side in sides)
 
 
 def _is_the_board(gray: np.ndarray, corners, board: Board) -> bool:
@@ -390,20 +328,23 @@ def _board_candidates(gray: np.ndarray, board: Board) -> list[tuple[np.ndarray, 
         if len(members) >= n // 2:
             groups.append((float(strength[members].sum()), points[members], float(np.median(nearest[members]))))
     groups.sort(key=lambda g: -g[0])
-    return [(p, spacing) for _, p, spacing in groups[:CROP_CANDIDATES]]
+    return [(p, spacing) for _, p, spacing in groups[:CAMERA.detect.crop_candidates]]
 
 
 def _find_in_crops(gray: np.ndarray, small: np.ndarray, scale: float, board: Board):
-    """Corners found on crops of ``gray`` around the board candidates seen in ``small``."""
+    """Corners found on crops of ``gray`` around the board candidates seen in ``small``:
+    a small board in a big, busy photo is found far more often on its own, enlarged
+    twice when its squares are small."""
+    settings = CAMERA.detect
     height, width = gray.shape
     for points, spacing in _board_candidates(small, board):
         points = (points + 0.5) / scale - 0.5
         lo, hi = points.min(axis=0), points.max(axis=0)
-        margin = CROP_MARGIN * (hi - lo).max() + 4
+        margin = settings.crop_margin * (hi - lo).max() + 4
         x0, y0 = np.maximum(np.floor(lo - margin), 0).astype(int)
         x1, y1 = np.minimum(np.ceil(hi + margin), [width - 1, height - 1]).astype(int)
         crop = gray[y0:y1 + 1, x0:x1 + 1]
-        zooms = (1, 2) if spacing / scale < CROP_ZOOM_BELOW_PX else (1,)
+        zooms = (1, 2) if spacing / scale < settings.crop_zoom_below_px else (1,)
         for zoom in zooms:
             view = crop if zoom == 1 else cv2.resize(crop, None, fx=zoom, fy=zoom, interpolation=cv2.INTER_CUBIC)
             corners, detector = _find_chessboard(view, board)
@@ -422,11 +363,14 @@ def _find_rectified(gray: np.ndarray, points: np.ndarray, board: Board, box: tup
     larger board (9x6 given as 7x5) shows a 7x5 patch of whole squares, which the
     detectors take for the board.
 
-    A grid of cols x rows corners a unit apart spreads (cols^2 - 1) / 12 and
-    (rows^2 - 1) / 12 along its sides; the view gives each direction the mean of the two,
-    at each of ``RECTIFIED_SPACINGS_PX`` a unit in turn, so its squares come out within a
-    factor of about 1.5 of square whatever the squash. The map is symmetric and positive:
-    no mirror.
+    A board far away or seen low is squashed along the view and often blurred, and then
+    neither detector finds it on the crop; an affine map that makes its saddle points'
+    spread round undoes most of the squash. A grid of cols x rows corners a unit apart
+    spreads (cols^2 - 1) / 12 and (rows^2 - 1) / 12 along its sides; the view gives each
+    direction the mean of the two, at each of ``CAMERA.detect.rectified_spacings_px`` a
+    unit in turn (the detectors' luck turns with the scale on boards whose rows are a few
+    pixels apart), so its squares come out within a factor of about 1.5 of square
+    whatever the squash. The map is symmetric and positive: no mirror.
     """
     center = points.mean(axis=0)
     spread, axes = np.linalg.eigh(np.cov((points - center).T))
@@ -436,7 +380,7 @@ def _find_rectified(gray: np.ndarray, points: np.ndarray, board: Board, box: tup
     x0, y0, x1, y1 = box
     corners_box = (np.array([[x0, y0], [x1, y0], [x0, y1], [x1, y1]]) - center) @ even.T
     around = int(np.median(gray[y0:y1 + 1, x0:x1 + 1]))  # what the view shows past the crop
-    for spacing in RECTIFIED_SPACINGS_PX:
+    for spacing in CAMERA.detect.rectified_spacings_px:
         A = even * spacing
         lo, hi = corners_box.min(axis=0) * spacing, corners_box.max(axis=0) * spacing
         to_view = np.hstack([A, (-lo - A @ center)[:, None]])
@@ -451,7 +395,7 @@ def _find_rectified(gray: np.ndarray, points: np.ndarray, board: Board, box: tup
 
 
 def _detect_chessboard(gray: np.ndarray, board: Board) -> BoardDetection | None:
-    scale = min(1.0, DETECT_MAX_SIDE_PX / max(gray.shape))
+    scale = min(1.0, CAMERA.detect.max_side_px / max(gray.shape))
     small = gray if scale == 1.0 else cv2.resize(gray, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
     corners, detector = _find_chessboard(small, board)
     if corners is not None:
@@ -476,7 +420,7 @@ def _charuco_detector(board: Board):
 def _detect_charuco(gray: np.ndarray, board: Board) -> BoardDetection | None:
     # Full resolution: marker bits are small, and reading them is cheap.
     corners, charuco_ids, _, _ = _charuco_detector(board).detectBoard(gray)
-    if charuco_ids is None or len(charuco_ids) < MIN_CHARUCO_CORNERS:
+    if charuco_ids is None or len(charuco_ids) < CAMERA.detect.min_charuco_corners:
         return None
     if charuco_board(board.cols, board.rows).checkCharucoCornersCollinear(charuco_ids):
         return None
@@ -490,14 +434,14 @@ def _detect_charuco(gray: np.ndarray, board: Board) -> BoardDetection | None:
 def detect_board(image: np.ndarray, board: Board) -> BoardDetection | None:
     """Find the board's inner corners.
 
-    A checkerboard is looked for in a copy at most ``DETECT_MAX_SIDE_PX`` on its long side
-    (OpenCV's SB detector, then the classic one); when neither finds it, on crops around
-    the strongest groups of saddle points, at full resolution and enlarged (small,
-    foreshortened boards in large photos). A checkerboard grid whose inner squares do not
-    alternate as printed (:func:`squares_alternate`) is passed over. A ChArUco board's
-    markers are read at full resolution; any ``MIN_CHARUCO_CORNERS`` corners not in a line
-    will do. Corners are then refined at full resolution to the saddle point of the
-    intensity.
+    A checkerboard is looked for in a copy at most ``CAMERA.detect.max_side_px`` on its
+    long side (OpenCV's SB detector, then the classic one); when neither finds it, on
+    crops around the strongest groups of saddle points, at full resolution and enlarged
+    (small, foreshortened boards in large photos). A checkerboard grid whose inner squares
+    do not alternate as printed (:func:`squares_alternate`) is passed over. A ChArUco
+    board's markers are read at full resolution; any ``CAMERA.detect.min_charuco_corners``
+    corners not in a line will do. Corners are then refined at full resolution to the
+    saddle point of the intensity.
 
     Parameters
     ----------

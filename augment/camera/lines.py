@@ -8,36 +8,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-LINE_SIDE_PX = 1280                        # lines are found on a copy shrunk by a whole factor to about this
-
-
-MIN_SEGMENT_FRACTION = 0.015               # detected segments shorter than this x the longer side are dropped
-
-
-# FastLineDetector's Canny thresholds: low, since a wall and its ceiling may differ by 6
-# gray levels; a 3 px Gaussian first quiets floor texture (and halves the time on wood).
-CANNY_LOW, CANNY_HIGH = 10, 20
-
-
-LINE_BLUR_PX = 3
-
-
-MIN_VERTICAL_COS = np.cos(np.radians(1.5))  # 3D: angle between the floor normal and the interpretation plane
-
-
-VP_DISTANCE_FRACTION = 0.0015              # endpoint distance from the midpoint--vanishing-point line (x longer side)
-
-
-FLOOR_RING_M = (0.35, 0.6)                 # without a mask, the floor's color is read this far from the board
-
-
-FLOOR_COLOR_SLACK = np.array([4.0, 2.0, 2.0])  # ... with at least this spread (Lab)
-
-
-FLOOR_COLOR_Z = np.array([6.0, 3.0, 3.0])  # ... and a pixel is floor-colored within this many spreads
-
-
-FLOOR_SHARE = 0.8                          # floor on one side of a foot: at least this share of samples
+from .settings import CAMERA
 
 
 def as_segments(segments_px) -> np.ndarray:
@@ -73,8 +44,10 @@ def to_gray(image: np.ndarray) -> np.ndarray:
     return image
 
 
-def shrink_factor(shape: tuple[int, ...], side_px: int = LINE_SIDE_PX) -> int:
-    """The whole factor that shrinks an image of ``shape`` to about ``side_px`` across."""
+def shrink_factor(shape: tuple[int, ...], side_px: int | None = None) -> int:
+    """The whole factor that shrinks an image of ``shape`` to about ``side_px`` across
+    (default ``CAMERA.lines.side_px``)."""
+    side_px = CAMERA.lines.side_px if side_px is None else side_px
     return max(1, round(max(shape[:2]) / side_px))
 
 
@@ -113,10 +86,12 @@ def prepare_lines(image: np.ndarray, gray: np.ndarray | None = None) -> tuple[np
 
 def detect_raw(small: np.ndarray, method: str) -> np.ndarray:
     """Segments (n, 4) in the pixels of ``small``."""
-    min_len = max(8, int(MIN_SEGMENT_FRACTION * max(small.shape)))
+    settings = CAMERA.lines
+    min_len = max(8, int(settings.min_segment_fraction * max(small.shape)))
     if method == "fld":
-        detector = cv2.ximgproc.createFastLineDetector(min_len, 1.414, CANNY_LOW, CANNY_HIGH, 3, True)
-        found = detector.detect(cv2.GaussianBlur(small, (LINE_BLUR_PX, LINE_BLUR_PX), 0) if LINE_BLUR_PX > 1 else small)
+        detector = cv2.ximgproc.createFastLineDetector(min_len, 1.414, settings.canny_low, settings.canny_high, 3, True)
+        blur = settings.blur_px
+        found = detector.detect(cv2.GaussianBlur(small, (blur, blur), 0) if blur > 1 else small)
     else:
         found = cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD).detect(small)[0]
     if found is None:
@@ -125,17 +100,17 @@ def detect_raw(small: np.ndarray, method: str) -> np.ndarray:
     return seg[np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) >= min_len]
 
 
-def detect_segments(image: np.ndarray, *, side_px: int = LINE_SIDE_PX, method: str = "fld") -> np.ndarray:
+def detect_segments(image: np.ndarray, *, side_px: int | None = None, method: str = "fld") -> np.ndarray:
     """Straight line segments of a photo.
 
     Parameters
     ----------
     image : (h, w) or (h, w, 3) uint8
         Gray or RGB photo. Not modified.
-    side_px : int
+    side_px : int, optional
         Lines are found on a copy shrunk by the whole factor that brings the longer side
         closest to this (area-averaged), which bounds the time on large photos;
-        coordinates are scaled back.
+        coordinates are scaled back. Default ``CAMERA.lines.side_px``.
     method : {"fld", "lsd"}
         OpenCV's FastLineDetector (Canny edges, then line fitting; default) or the LSD
         line segment detector.
@@ -146,6 +121,7 @@ def detect_segments(image: np.ndarray, *, side_px: int = LINE_SIDE_PX, method: s
         Rows ``x1, y1, x2, y2`` in full-resolution pixels.
     """
     gray = to_gray(image)
+    side_px = CAMERA.lines.side_px if side_px is None else side_px
     if method not in ("fld", "lsd"):
         raise ValueError(f"method {method!r}: expected 'fld' or 'lsd'")
     if side_px < 64:
@@ -251,22 +227,26 @@ def is_vertical(segments_px: np.ndarray, K: np.ndarray, camera_from_floor: np.nd
     Returns
     -------
     (n,) bool
-        3D cosine at least ``MIN_VERTICAL_COS`` and both ends within
-        ``VP_DISTANCE_FRACTION * side_px`` of the line to the vertical vanishing point.
+        3D cosine at least ``CAMERA.lines.min_vertical_cos`` and both ends within
+        ``CAMERA.lines.vp_distance_fraction * side_px`` of the line to the vertical
+        vanishing point.
     """
+    settings = CAMERA.lines
     cos_3d, _, vp_dist = vertical_alignment(segments_px, K, camera_from_floor)
-    return (cos_3d >= MIN_VERTICAL_COS) & (vp_dist <= VP_DISTANCE_FRACTION * side_px)
+    return (cos_3d >= settings.min_vertical_cos) & (vp_dist <= settings.vp_distance_fraction * side_px)
 
 
 def floor_share(color: np.ndarray, k: int, shape: tuple[int, int], points_px: np.ndarray, K: np.ndarray,
                  pose: np.ndarray) -> np.ndarray | None:
     """Share of each row of ``points_px`` (n, m, 2), full-size pixels, whose colour is the
     floor's around the board (the floor frame's origin): Lab, the floor's from a ring of
-    floor points ``FLOOR_RING_M`` around the origin, within ``FLOOR_COLOR_Z`` spreads.
-    None when too little of that ring is in view to say. (n,) float."""
+    floor points ``CAMERA.lines.floor_ring_m`` around the origin, within
+    ``CAMERA.lines.floor_color_z`` spreads. None when too little of that ring is in view
+    to say. (n,) float."""
+    settings = CAMERA.lines
     lab = cv2.cvtColor(cv2.GaussianBlur(color, (5, 5), 0), cv2.COLOR_RGB2LAB).astype(np.float64)
     angles = np.linspace(0, 2 * np.pi, 48, endpoint=False)
-    radii = np.linspace(*FLOOR_RING_M, 5)
+    radii = np.linspace(*settings.floor_ring_m, 5)
     ring = np.column_stack([np.outer(radii, np.cos(angles)).ravel(), np.outer(radii, np.sin(angles)).ravel()])
     R, t = pose[:3, :3], pose[:3, 3]
     cam = ring @ R[:, :2].T + t
@@ -278,9 +258,9 @@ def floor_share(color: np.ndarray, k: int, shape: tuple[int, int], points_px: np
         return None
     ref = sample_image(lab, to_small(px[ok], k))
     center = np.median(ref, axis=0)
-    scale = 1.4826 * np.median(np.abs(ref - center), axis=0) + FLOOR_COLOR_SLACK
+    scale = 1.4826 * np.median(np.abs(ref - center), axis=0) + settings.floor_color_slack
     z = np.abs(sample_image(lab, to_small(points_px, k)) - center) / scale
-    return np.all(z < FLOOR_COLOR_Z, axis=-1).mean(axis=1)
+    return np.all(z < settings.floor_color_z, axis=-1).mean(axis=1)
 
 
 def floor_colored(image: np.ndarray, points_px: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray
@@ -299,9 +279,10 @@ def floor_colored(image: np.ndarray, points_px: np.ndarray, K: np.ndarray, camer
     Returns
     -------
     (n,) bool
-        At least ``FLOOR_SHARE`` of the group's points have the floor's colour (Lab, read
-        on a ring ``FLOOR_RING_M`` around the board); all False when too little of that
-        ring is in view to say. A weak test: walls and floors can share a colour.
+        At least ``CAMERA.lines.floor_share`` of the group's points have the floor's
+        colour (Lab, read on a ring ``CAMERA.lines.floor_ring_m`` around the board); all
+        False when too little of that ring is in view to say. A weak test: walls and
+        floors can share a colour.
     """
     _, color, k = prepare_lines(image)
     points = np.asarray(points_px, dtype=np.float64)
@@ -309,4 +290,4 @@ def floor_colored(image: np.ndarray, points_px: np.ndarray, K: np.ndarray, camer
         return np.zeros(len(points), bool)
     K, pose = as_camera(K, camera_from_floor)
     share = floor_share(color, k, image.shape[:2], points, K, pose)
-    return np.zeros(len(points), bool) if share is None else share >= FLOOR_SHARE
+    return np.zeros(len(points), bool) if share is None else share >= CAMERA.lines.floor_share

@@ -6,11 +6,11 @@
   first corner ringed in white (where the board frame starts); a ChArUco board shows the
   corners it was seen by, and the caption says how many of all;
 * the outline of the printed squares where the calibration puts them;
-* a 1 m grid on the floor (``GRID_HALF_SPAN_M`` around the board), only where the floor
-  is in front of the camera and below the horizon, bent by the lens distortion like
-  the photo's own straight lines;
+* a 1 m grid on the floor (``DRAW.calibration.grid_half_span_m`` around the board), only
+  where the floor is in front of the camera and below the horizon, bent by the lens
+  distortion like the photo's own straight lines;
 * the floor axes at the board's origin: x red, y green (along the floor), z blue (up),
-  each ``AXIS_M`` long;
+  each ``DRAW.calibration.axis_m`` long;
 * the horizon (the floor's vanishing line) dashed, when it crosses the frame;
 * a caption box in the corner farthest from the board: where the focal length came from
   and how sure it is, the camera's height, the board's reprojection RMS.
@@ -19,7 +19,8 @@ A right calibration shows the grid lying flat on the floor, parallel to the boar
 edges, converging on the horizon where the floor meets the far wall, and the blue axis
 standing upright like the room's vertical edges.
 
-Conventions: images are RGB ``(h, w, 3)`` uint8 arrays; colors below are RGB.
+Conventions: images are RGB ``(h, w, 3)`` uint8 arrays; colors are RGB
+(:mod:`augment.draw.settings`).
 """
 from __future__ import annotations
 
@@ -30,27 +31,10 @@ from PIL import Image, ImageDraw
 from ..camera.calibration import Calibration
 from ..camera.detect import corner_spacing_px
 from .fonts import overlay_font
+from .settings import DRAW
 
-GRID_STEP_M = 1.0
-GRID_HALF_SPAN_M = 6.0
-GRID_SAMPLE_M = 0.01          # grid lines are sampled this densely before projection
-AXIS_M = 0.5
-MIN_DEPTH_M = 0.05            # floor points nearer the camera plane than this are not drawn
-INSET_BELOW_SPACING_PX = 14   # boards with corners closer than this get a magnified inset
-INSET_WIDTH = 0.3             # of the image's width
 _SHIFT = 4                    # fixed-point bits for subpixel drawing
 _ONE = 1 << _SHIFT
-
-GRID_RGB = (255, 255, 255)
-# The grid fades from GRID_OPACITY[0] to [1] between these floor distances from the camera.
-GRID_FADE_M = (3.0, 9.0)
-GRID_OPACITY = (0.65, 0.22)
-AXIS_RGB = {"x": (235, 45, 45), "y": (40, 205, 60), "z": (50, 110, 255)}
-HORIZON_RGB = (255, 175, 0)
-SQUARES_RGB = (0, 225, 255)
-FIRST_CORNER_RGB = (255, 40, 220)
-CAPTION_BOX_RGBA = (0, 0, 0, 160)
-TEXT_RGB = (255, 255, 255)
 
 
 def _fixed(points: np.ndarray) -> np.ndarray:
@@ -125,16 +109,17 @@ class _Style:
     """Line widths, radii and font sizes scaled to the image."""
 
     def __init__(self, size_px):
+        settings = DRAW.calibration
         w, h = size_px
-        self.s = max(w, h) / 1280.0
-        self.grid = max(1, round(1.5 * self.s))
-        self.axis = max(2, round(4 * self.s))
-        self.thin = max(1, round(1.0 * self.s))
-        self.halo = max(1, round(1.5 * self.s))
+        self.s = max(w, h) / settings.style_long_px
+        self.grid = max(1, round(settings.grid_width_px * self.s))
+        self.axis = max(2, round(settings.axis_width_px * self.s))
+        self.thin = max(1, round(settings.thin_width_px * self.s))
+        self.halo = max(1, round(settings.halo_width_px * self.s))
         self.font_px = max(11, round(0.022 * min(w, h) * max(1.0, w / h) ** 0.5))
         self.label_px = max(10, round(0.9 * self.font_px))
-        self.dash = 18 * self.s
-        self.gap = 11 * self.s
+        self.dash = settings.dash_px * self.s
+        self.gap = settings.dash_gap_px * self.s
 
 
 def _polyline(image, points, color, thickness, closed=False):
@@ -161,7 +146,7 @@ def _floor_curves(calibration: Calibration, lens: _Lens, lines_m: list[np.ndarra
     safe = np.where(np.abs(w) > 1e-12, w, 1e-12)
     undistorted = h[:, :2] / safe[:, None]
     a, b, c = calibration.horizon
-    keep = ((_camera_depth(calibration, points) > MIN_DEPTH_M)
+    keep = ((_camera_depth(calibration, points) > DRAW.calibration.min_depth_m)
             & (a * undistorted[:, 0] + b * undistorted[:, 1] + c > 0)
             & lens.keep(undistorted))
     # Only the kept points go through the lens model (the others may be anywhere).
@@ -178,8 +163,10 @@ def _floor_curves(calibration: Calibration, lens: _Lens, lines_m: list[np.ndarra
 
 
 def _grid_lines_m() -> list[np.ndarray]:
-    ticks = np.arange(-GRID_HALF_SPAN_M, GRID_HALF_SPAN_M + 1e-9, GRID_STEP_M)
-    along = np.linspace(-GRID_HALF_SPAN_M, GRID_HALF_SPAN_M, int(round(2 * GRID_HALF_SPAN_M / GRID_SAMPLE_M)) + 1)
+    settings = DRAW.calibration
+    half, step = settings.grid_half_span_m, settings.grid_step_m
+    ticks = np.arange(-half, half + 1e-9, step)
+    along = np.linspace(-half, half, int(round(2 * half / settings.grid_sample_m)) + 1)
     lines = [np.column_stack([np.full_like(along, v), along]) for v in ticks]
     lines += [np.column_stack([along, np.full_like(along, v)]) for v in ticks]
     return lines
@@ -199,7 +186,7 @@ def _grid_opacity(calibration: Calibration, size_px) -> np.ndarray:
     floor = rays[..., :2] / np.where(np.abs(wz) > 1e-12, wz, 1e-12)[..., None]
     foot = calibration.world_from_camera[:2, 3]
     d = np.where(ok, np.hypot(*(floor - foot).transpose(2, 0, 1)), np.inf)
-    lo, hi, (a_near, a_far) = *GRID_FADE_M, GRID_OPACITY
+    lo, hi, (a_near, a_far) = *DRAW.calibration.grid_fade_m, DRAW.calibration.grid_opacity
     alpha = a_near + (a_far - a_near) * np.clip((d - lo) / (hi - lo), 0, 1)
     alpha = cv2.resize(alpha.astype(np.float32), None, fx=step, fy=step, interpolation=cv2.INTER_LINEAR)
     return alpha[:h, :w, None]
@@ -213,7 +200,7 @@ def _draw_grid(out, calibration, lens, style):
     for curve in curves:
         _polyline(layer, curve, (0, 0, 0), style.grid + 2 * style.halo)
     for curve in curves:
-        _polyline(layer, curve, GRID_RGB, style.grid)
+        _polyline(layer, curve, DRAW.calibration.grid_rgb, style.grid)
     # Blend only where lines were drawn: a 12 MP photo has few such pixels.
     rows, cols = np.nonzero(np.any(layer != out, axis=2))
     alpha = _grid_opacity(calibration, calibration.size_px)[rows, cols]
@@ -233,7 +220,7 @@ def _squares_outline_m(calibration: Calibration) -> np.ndarray:
 
 def _draw_squares_outline(out, calibration, lens, style):
     for curve in _floor_curves(calibration, lens, [_squares_outline_m(calibration)]):
-        _polyline(out, curve, SQUARES_RGB, style.thin)
+        _polyline(out, curve, DRAW.calibration.squares_rgb, style.thin)
 
 
 def _horizon_px(calibration: Calibration, lens: _Lens) -> np.ndarray | None:
@@ -277,7 +264,7 @@ def _draw_horizon(out, calibration, lens, style) -> np.ndarray | None:
         return None
     for piece in _dashes(px, style.dash, style.gap):
         _polyline(out, piece, (0, 0, 0), style.thin + 2 * style.halo)
-        _polyline(out, piece, HORIZON_RGB, style.thin + 1)
+        _polyline(out, piece, DRAW.calibration.horizon_rgb, style.thin + 1)
     return px
 
 
@@ -292,26 +279,28 @@ def _horizon_label(px, size_px, style, boxes):
         if rect[0] < gap or rect[1] < 0 or rect[3] > h:
             continue
         if all(rect[2] < b[0] or rect[0] > b[2] or rect[3] < b[1] or rect[1] > b[3] for b in boxes):
-            return (right, y - gap), "horizon", HORIZON_RGB, "rb"
+            return (right, y - gap), "horizon", DRAW.calibration.horizon_rgb, "rb"
     return None
 
 
 def _draw_axes(out, calibration, style, labels):
-    t = np.linspace(0, AXIS_M, 26)[:, None]
+    settings = DRAW.calibration
+    t = np.linspace(0, settings.axis_m, 26)[:, None]
     zero = np.zeros_like(t)
     axes = {"x": np.hstack([t, zero, zero]), "y": np.hstack([zero, t, zero]), "z": np.hstack([zero, zero, t])}
     w, h = calibration.size_px
     origin_px = None
     for name in ("z", "x", "y"):  # z first: the floor axes are drawn over its foot
         pts = axes[name]
-        if np.any(_camera_depth(calibration, pts) <= MIN_DEPTH_M):
+        if np.any(_camera_depth(calibration, pts) <= settings.min_depth_m):
             continue
         px = calibration.pixels_from_floor(pts)
         if not np.all(np.isfinite(px)) or np.abs(px).max() > 4 * max(w, h):
             continue
         origin_px = px[0]
         _polyline(out, px, (0, 0, 0), style.axis + 2 * style.halo)
-        _polyline(out, px, AXIS_RGB[name], style.axis)
+        rgb = settings.axis_rgb[name]
+        _polyline(out, px, rgb, style.axis)
         tip, back = px[-1], px[-4]
         d = tip - back
         norm = float(np.hypot(*d))
@@ -321,8 +310,8 @@ def _draw_axes(out, calibration, style, labels):
             base = tip - d * size
             normal = np.array([-d[1], d[0]])
             head = np.array([tip + d * 0.3 * size, base + normal * 0.5 * size, base - normal * 0.5 * size])
-            cv2.fillConvexPoly(out, _fixed(head), AXIS_RGB[name], cv2.LINE_AA, _SHIFT)
-            labels.append((tuple(tip + d * (size + 0.6 * style.label_px)), name, AXIS_RGB[name], "mm"))
+            cv2.fillConvexPoly(out, _fixed(head), rgb, cv2.LINE_AA, _SHIFT)
+            labels.append((tuple(tip + d * (size + 0.6 * style.label_px)), name, rgb, "mm"))
     if origin_px is not None:
         cv2.circle(out, tuple(_fixed(origin_px)), round(1.2 * style.axis * _ONE), (255, 255, 255), -1,
                    cv2.LINE_AA, _SHIFT)
@@ -375,21 +364,22 @@ def _draw_corners(out, calibration, style, transform=None, spacing=None, light=F
     big = max(radius * 1.6, 3.0 if light else 4.0)
     cv2.circle(out, first, round(big * _ONE), (0, 0, 0), thin + 3, cv2.LINE_AA, _SHIFT)
     cv2.circle(out, first, round(big * _ONE), (255, 255, 255), thin + 1, cv2.LINE_AA, _SHIFT)
-    cv2.circle(out, first, round(0.55 * big * _ONE), FIRST_CORNER_RGB, -1, cv2.LINE_AA, _SHIFT)
+    cv2.circle(out, first, round(0.55 * big * _ONE), DRAW.calibration.first_corner_rgb, -1, cv2.LINE_AA, _SHIFT)
 
 
 def _caption_lines(calibration: Calibration, horizon: bool) -> list[list[tuple[str, tuple]]]:
     i = calibration.intrinsics
     board = calibration.board
-    white = TEXT_RGB
+    settings = DRAW.calibration
+    white, axis_rgb = settings.text_rgb, settings.axis_rgb
     count = len(calibration.corner_ids)
     seen = f"{count} of {board.corner_count} corners, " if count < board.corner_count else ""
     return [
         [(f"focal {i.K[0, 0]:.0f} px \u00b1 {100 * i.focal_uncertainty:.1f} % ({i.source})", white)],
         [(f"camera {calibration.camera_height_m:.2f} m above the floor", white)],
         [(f"board {board.spec}, {board.square_mm:g} mm: " + seen + f"RMS {calibration.rms_px:.2f} px", white)],
-        [(f"grid {GRID_STEP_M:g} m, axes {AXIS_M:g} m: ", white), ("x ", AXIS_RGB["x"]), ("y ", AXIS_RGB["y"]),
-         ("z", AXIS_RGB["z"])] + ([("  horizon", HORIZON_RGB)] if horizon else []),
+        [(f"grid {settings.grid_step_m:g} m, axes {settings.axis_m:g} m: ", white), ("x ", axis_rgb["x"]),
+         ("y ", axis_rgb["y"]), ("z", axis_rgb["z"])] + ([("  horizon", settings.horizon_rgb)] if horizon else []),
     ]
 
 
@@ -432,7 +422,7 @@ class _Caption:
 
     def draw(self, base: Image.Image, draw: ImageDraw.ImageDraw) -> Image.Image:
         box = Image.new("RGBA", base.size, (0, 0, 0, 0))
-        ImageDraw.Draw(box).rounded_rectangle(self.rect, radius=self.pad, fill=CAPTION_BOX_RGBA)
+        ImageDraw.Draw(box).rounded_rectangle(self.rect, radius=self.pad, fill=DRAW.calibration.caption_box_rgba)
         base = Image.alpha_composite(base, box)
         for k, line in enumerate(self.lines):
             x = self.origin[0] + self.pad
@@ -477,7 +467,7 @@ def _inset(photo, calibration, lens, style, board_rect, width_px):
 
     thin = max(1, round(style.thin * 1.5))
     for curve in _floor_curves(calibration, lens, [_squares_outline_m(calibration)]):
-        _polyline(view, to_inset(curve), SQUARES_RGB, thin)
+        _polyline(view, to_inset(curve), DRAW.calibration.squares_rgb, thin)
     _draw_corners(view, calibration, style, transform=to_inset, spacing=_corner_spacing_px(calibration) * zoom)
     return view, zoom
 
@@ -514,7 +504,7 @@ def calibration_overlay(image: np.ndarray, calibration: Calibration) -> np.ndarr
     lens = _Lens(calibration)
     labels: list = []
     board_rect = _board_rect_px(calibration, lens)
-    small = _corner_spacing_px(calibration) < INSET_BELOW_SPACING_PX
+    small = _corner_spacing_px(calibration) < DRAW.calibration.inset_below_spacing_px
     _draw_grid(out, calibration, lens, style)
     _draw_squares_outline(out, calibration, lens, style)
     horizon = _draw_horizon(out, calibration, lens, style)
@@ -526,7 +516,7 @@ def calibration_overlay(image: np.ndarray, calibration: Calibration) -> np.ndarr
     grown = _grow(board_rect, 0.5)
     caption.origin = _place((w, h), caption.size, margin, [grown])
     if small:
-        view, zoom = _inset(image, calibration, lens, style, board_rect, round(INSET_WIDTH * w))
+        view, zoom = _inset(image, calibration, lens, style, board_rect, round(DRAW.calibration.inset_width * w))
         ih, iw = view.shape[:2]
         x, y = _place((w, h), (iw, ih), margin, [grown, _grow(caption.rect, 0.0, margin)])
         border = max(1, round(1.5 * style.s))
@@ -535,7 +525,7 @@ def calibration_overlay(image: np.ndarray, calibration: Calibration) -> np.ndarr
         out[y:y + ih, x:x + iw] = view
         inset_rect = (x, y, x + iw, y + ih)
         labels.append(((x + 0.5 * style.label_px, y + ih - 0.5 * style.label_px),
-                       f"board \u00d7{zoom:.2g}", TEXT_RGB, "lb"))
+                       f"board \u00d7{zoom:.2g}", DRAW.calibration.text_rgb, "lb"))
     boxes = [_grow(caption.rect, 0.0, margin)] + ([_grow(inset_rect, 0.0, margin)] if small else [])
     if horizon is not None:
         label = _horizon_label(horizon, (w, h), style, boxes)

@@ -9,20 +9,7 @@ from PIL import Image, ImageDraw
 
 from ..floor.polygon import FloorPolygon
 from .fonts import overlay_font
-
-EDGE_COLORS = {"boundary": (255, 210, 0), "image": (0, 200, 255), "far": (170, 170, 170)}
-
-
-FLOOR_TINT = np.array([40, 220, 90], np.float32)
-
-
-DISPUTED_COLOR = (255, 40, 200)  # magenta: apart from the tint and every edge colour
-
-
-CLICK_COLORS = {0: (230, 30, 30), 1: (0, 150, 40)}  # the user's "not floor" and "floor" marks
-
-
-DOOR_COLOR = (30, 90, 230)  # doors the user marked, as the web page marks them
+from .settings import DRAW
 
 
 def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | None = None,
@@ -55,14 +42,15 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
     -------
     (rows, cols, 3) uint8, or (rows, cols + rows, 3) with the plan beside it.
     """
+    settings = DRAW.floor
     out = np.asarray(image, dtype=np.uint8).copy()
     mask = np.asarray(mask, dtype=bool)
-    # Whole-image uint8 passes: on a 48 MP photo, floats per floor pixel took 1.9 GB.
-    tinted = cv2.addWeighted(out, 0.55, np.broadcast_to(np.uint8(FLOOR_TINT), out.shape).copy(), 0.45, 0.0)
+    # Whole-image uint8 passes: floats per floor pixel would take gigabytes on a large photo.
+    tinted = cv2.addWeighted(out, 0.55, np.broadcast_to(np.uint8(settings.tint), out.shape).copy(), 0.45, 0.0)
     np.copyto(out, tinted, where=mask[..., None])
     del tinted
     rows, cols = mask.shape
-    thick = max(2, round(max(rows, cols) / 500))
+    thick = max(2, round(max(rows, cols) / settings.px_per_line_width))
     edge = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_GRADIENT, np.ones((3, 3), np.uint8)) > 0
     out[edge] = (20, 120, 40)
     if disputed is not None:
@@ -70,30 +58,30 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
                            interpolation=cv2.INTER_LINEAR) > 127
         y, x = np.nonzero(doubt)
         hatch = (x + y) // (2 * thick) % 3 == 0
-        out[y[hatch], x[hatch]] = DISPUTED_COLOR
+        out[y[hatch], x[hatch]] = settings.disputed_color
     if polygon is not None and calibration is not None:
         n = len(polygon.polygon_m)
         for i in range(n):
             a, b = polygon.polygon_m[i], polygon.polygon_m[(i + 1) % n]
             pts = calibration.pixels_from_floor(np.linspace(a, b, 24)).round().astype(np.int32)
-            cv2.polylines(out, [pts], False, EDGE_COLORS[polygon.edge_kind[i]], thick, cv2.LINE_AA)
+            cv2.polylines(out, [pts], False, settings.edge_colors[polygon.edge_kind[i]], thick, cv2.LINE_AA)
     radius = 4 * thick
     if doubt_px is not None:
         center = (int(doubt_px[0]), int(doubt_px[1]))
         cv2.circle(out, center, 3 * radius, (255, 255, 255), 3 * thick, cv2.LINE_AA)
-        cv2.circle(out, center, 3 * radius, DISPUTED_COLOR, thick, cv2.LINE_AA)
+        cv2.circle(out, center, 3 * radius, settings.disputed_color, thick, cv2.LINE_AA)
     # The user's clicks and doors on top of everything: they are what the user looks for.
     for x1, y1, x2, y2 in np.asarray(doors_px if doors_px is not None else np.zeros((0, 4)), np.float64).reshape(-1, 4):
         feet = (int(round(x1)), int(round(y1))), (int(round(x2)), int(round(y2)))
         cv2.line(out, *feet, (255, 255, 255), 3 * thick, cv2.LINE_AA)
-        cv2.line(out, *feet, DOOR_COLOR, thick, cv2.LINE_AA)
+        cv2.line(out, *feet, settings.door_color, thick, cv2.LINE_AA)
         for foot in feet:
             cv2.circle(out, foot, radius // 2 + thick, (255, 255, 255), -1, cv2.LINE_AA)
-            cv2.circle(out, foot, radius // 2, DOOR_COLOR, -1, cv2.LINE_AA)
+            cv2.circle(out, foot, radius // 2, settings.door_color, -1, cv2.LINE_AA)
     for x, y, is_floor in np.asarray(clicks if clicks is not None else np.zeros((0, 3)), np.float64).reshape(-1, 3):
         center = (int(round(x)), int(round(y)))
         cv2.circle(out, center, radius + thick, (255, 255, 255), -1, cv2.LINE_AA)
-        cv2.circle(out, center, radius, CLICK_COLORS[int(bool(is_floor))], -1, cv2.LINE_AA)
+        cv2.circle(out, center, radius, settings.click_colors[int(bool(is_floor))], -1, cv2.LINE_AA)
         if not is_floor:
             d = round(0.6 * radius)
             for sign in (1, -1):
@@ -133,7 +121,7 @@ def _plan(side: int, polygon: FloorPolygon, calibration) -> np.ndarray:
     weight = max(1, side // 400)
     for i in range(len(poly_px)):
         cv2.line(panel, tuple(map(int, poly_px[i])), tuple(map(int, poly_px[(i + 1) % len(poly_px)])),
-                 tuple(int(c * 0.8) for c in EDGE_COLORS[polygon.edge_kind[i]]), 1 + weight, cv2.LINE_AA)
+                 tuple(int(c * 0.8) for c in DRAW.floor.edge_colors[polygon.edge_kind[i]]), 1 + weight, cv2.LINE_AA)
     cv2.fillPoly(panel, [to_px(calibration.board.outline_m()[:, :2])], (60, 60, 60))
     c = to_px(cam)[0]
     cv2.circle(panel, (int(c[0]), int(c[1])), 3 + 2 * weight, (200, 30, 30), -1, cv2.LINE_AA)

@@ -9,9 +9,10 @@
 * a caption box in a corner clear of the measured edges (top left when it can): the wall
   height and its confidence, or the fallback and why.
 
-Conventions: images are RGB ``(h, w, 3)`` uint8 arrays; colors below are RGB. Points in a
-:class:`~augment.room.height.HeightResult` are undistorted pixels; they are bent by the lens
-distortion before drawing, like the photo's own lines.
+Conventions: images are RGB ``(h, w, 3)`` uint8 arrays; colors are RGB
+(:mod:`augment.draw.settings`). Points in a :class:`~augment.room.height.HeightResult` are
+undistorted pixels; they are bent by the lens distortion before drawing, like the photo's
+own lines.
 """
 from __future__ import annotations
 
@@ -22,13 +23,7 @@ from PIL import Image, ImageDraw
 from ..camera.calibration import Calibration
 from ..room.height import HeightResult
 from .fonts import overlay_font
-
-EDGE_RGB = (60, 220, 90)          # inlier vertical edges
-CEILING_RGB = (40, 200, 255)      # inlier wall--ceiling lines (drawn from their base to their top)
-OTHER_RGB = (170, 170, 170)       # measured but not used
-FALLBACK_RGB = (255, 120, 60)     # caption accent when the fallback was used
-CAPTION_BOX_RGBA = (0, 0, 0, 170)
-TEXT_RGB = (255, 255, 255)
+from .settings import DRAW
 
 
 def _distorted(points: np.ndarray, calibration: Calibration) -> np.ndarray:
@@ -67,8 +62,9 @@ def height_overlay(image: np.ndarray, calibration: Calibration, result: HeightRe
     if (w, h) != tuple(calibration.size_px):
         raise ValueError(f"image of {w}x{h} px but the calibration is for "
                          f"{calibration.size_px[0]}x{calibration.size_px[1]} px")
+    settings = DRAW.height
     side = max(h, w)
-    thick = max(2, round(side / 320))
+    thick = max(2, round(side / settings.px_per_line_width))
     bases = _distorted(result.bases_px, calibration)
     tops = _distorted(result.tops_px, calibration)
     order = np.argsort(result.inliers, kind="stable")          # inliers drawn last, on top
@@ -76,7 +72,8 @@ def height_overlay(image: np.ndarray, calibration: Calibration, result: HeightRe
         if not (np.all(np.isfinite(bases[i])) and np.all(np.isfinite(tops[i]))):
             continue
         inlier = bool(result.inliers[i])
-        color = (CEILING_RGB if result.kinds[i] == "ceiling" else EDGE_RGB) if inlier else OTHER_RGB
+        color = ((settings.ceiling_rgb if result.kinds[i] == "ceiling" else settings.edge_rgb) if inlier
+                 else settings.other_rgb)
         b, t = tuple(np.round(bases[i]).astype(int)), tuple(np.round(tops[i]).astype(int))
         cv2.line(out, b, t, color, thick if inlier else max(1, thick // 2), cv2.LINE_AA)
         cv2.circle(out, b, thick * (2 if inlier else 1) + 1, color, -1, cv2.LINE_AA)
@@ -91,7 +88,7 @@ def height_overlay(image: np.ndarray, calibration: Calibration, result: HeightRe
         if np.all(np.isfinite(tops[i])) and np.isfinite(result.heights_m[i]):
             x = min(max(tops[i][0] + thick * 5, 0), w - 1)
             y = min(max(tops[i][1] - label_font.size / 2, 0), h - 1)
-            draw.text((x, y), f"{result.heights_m[i]:.2f} m", font=label_font, fill=TEXT_RGB,
+            draw.text((x, y), f"{result.heights_m[i]:.2f} m", font=label_font, fill=settings.text_rgb,
                       stroke_width=max(1, thick // 2), stroke_fill=(0, 0, 0))
     title = (f"wall height {result.height_m:.2f} m (fallback)" if result.fallback
              else f"wall height {result.height_m:.2f} m, confidence {result.confidence:.2f}")
@@ -101,9 +98,9 @@ def height_overlay(image: np.ndarray, calibration: Calibration, result: HeightRe
     box_w = pad * 2 + max(draw.textlength(s, font=font) for s in lines)
     box_h = pad * 2 + len(lines) * round(font.size * 1.25)
     x0, y0 = _caption_corner(w, h, box_w, box_h, pad, np.vstack([bases[result.inliers], tops[result.inliers]]))
-    draw.rectangle((x0, y0, x0 + box_w, y0 + box_h), fill=CAPTION_BOX_RGBA)
+    draw.rectangle((x0, y0, x0 + box_w, y0 + box_h), fill=settings.caption_box_rgba)
     for k, text in enumerate(lines):
-        fill = (FALLBACK_RGB if result.fallback else TEXT_RGB) if k == 0 else TEXT_RGB
+        fill = (settings.fallback_rgb if result.fallback else settings.text_rgb) if k == 0 else settings.text_rgb
         draw.text((x0 + pad, y0 + pad + k * round(font.size * 1.25)), text, font=font, fill=fill)
     return np.asarray(canvas).copy()
 

@@ -7,13 +7,11 @@ import cv2
 import numpy as np
 
 from .fonts import overlay_font
-
-SHEET_TILE_PX = 640   # width of one photo on the sheet
-SHEET_GAP_PX = 8
+from .settings import DRAW
 
 
-def contact_sheet(images: list, labels: list | None = None, tile_px: int = SHEET_TILE_PX,
-                  gap_px: int = SHEET_GAP_PX) -> np.ndarray:
+def contact_sheet(images: list, labels: list | None = None, tile_px: int | None = None,
+                  gap_px: int | None = None) -> np.ndarray:
     """The images side by side (two per row from four on), each scaled to
     ``tile_px`` wide and numbered from 1 (or labelled) in its top-left corner.
 
@@ -22,6 +20,8 @@ def contact_sheet(images: list, labels: list | None = None, tile_px: int = SHEET
     images : list of (h, w, 3) uint8
         Of one size.
     labels : list of str, optional
+    tile_px, gap_px : int, optional
+        Default ``DRAW.sheet.tile_px`` and ``DRAW.sheet.gap_px`` (:mod:`augment.draw.settings`).
 
     Returns
     -------
@@ -29,6 +29,8 @@ def contact_sheet(images: list, labels: list | None = None, tile_px: int = SHEET
     """
     from PIL import Image, ImageDraw
 
+    tile_px = DRAW.sheet.tile_px if tile_px is None else tile_px
+    gap_px = DRAW.sheet.gap_px if gap_px is None else gap_px
     n = len(images)
     if n == 0:
         raise ValueError("contact sheet of no images")

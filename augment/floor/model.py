@@ -17,15 +17,11 @@ import numpy as np
 
 from ..errors import SegmentationError
 from ..photo.io import size_problem
+from .settings import FLOOR
 
 # The repository's trained models (models/README.md has their cards).
 MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
 DEFAULT_MODEL = MODELS_DIR / "floor_segnet.onnx"
-
-
-# Larger photos are shrunk to this long side once, before the smaller working sizes of
-# the model and GrabCut are made from it: shrinking a 12 MP photo costs more than the model.
-PRESHRINK_LONG_PX = 2048
 
 
 MAX_INPUT_PX = 4096  # a model input side: larger would take seconds and gigabytes on a CPU
@@ -209,7 +205,8 @@ class FloorModel:
         if size_px is not None:
             cols, rows = int(size_px[0]), int(size_px[1])
         shapes = self.input_shapes(rows, cols)
-        image = shrink_to(image, PRESHRINK_LONG_PX)
+        # Shrunk once, before the smaller working sizes are made from it.
+        image = shrink_to(image, FLOOR.model.preshrink_long_px)
         p = sum(self._probability(image, shape, (cols, rows)) for shape in shapes)
         return np.ascontiguousarray(np.clip(p / len(shapes), 0, 1))
 

@@ -19,17 +19,9 @@ import numpy as np
 
 from layout.geometry import polygon_area, self_intersection
 
-from .segment import MAX_FLOOR_DISTANCE_M, border_pixels, floor_distance_m, floor_footprint_m2, floor_parts
+from .segment import border_pixels, floor_distance_m, floor_footprint_m2, floor_parts
+from .settings import FLOOR
 
-# Contour work happens at this size at most: enough to place a wall line within a
-# couple of centimeters at room distances, and fast for 12 MP photos.
-POLYGON_LONG_PX = 1024
-SIMPLIFY_M = 0.05        # how far the straightened outline may stray from the mask's
-NOTCH_AREA_M2 = 0.02     # vertices cutting off less than this are noise, not corners
-CORNER_MIN_DEG = 10.0    # edges meeting at less than this are one wall, not a corner
-BORDER_PX = 2            # a contour point this near the photo's edge is the photo's edge
-BRIDGE_M = 0.001         # width of the corridor joining a part of the floor on
-BRIDGE_TRIES = 50        # nearest corner pairs tried for a corridor
 EDGE_KINDS = ("boundary", "image", "far")
 
 
@@ -44,7 +36,7 @@ class FloorPolygon:
     edge_kind : tuple of str, length n
         Edge i runs from vertex i to vertex i+1: ``"boundary"`` (wall or object),
         ``"image"`` (the photo's edge cut the floor off) or ``"far"`` (beyond
-        ``MAX_FLOOR_DISTANCE_M``).
+        ``FLOOR.segment.max_floor_distance_m``).
     area_m2 : float
     caveat : str
         Empty when every edge is a boundary; else what the polygon leaves out.
@@ -62,7 +54,8 @@ class FloorPolygon:
 
 def _drop_notches(poly: np.ndarray, keep: np.ndarray) -> np.ndarray:
     """Indices of ``poly`` left after removing vertices whose triangle with their
-    neighbours is smaller than ``NOTCH_AREA_M2`` (smallest first, repeatedly)."""
+    neighbours is smaller than ``FLOOR.polygon.notch_area_m2`` (smallest first,
+    repeatedly)."""
     idx = list(range(len(poly)))
     while len(idx) > 3:
         p = poly[idx]
@@ -71,7 +64,7 @@ def _drop_notches(poly: np.ndarray, keep: np.ndarray) -> np.ndarray:
                            - (p[:, 1] - prev[:, 1]) * (nxt[:, 0] - prev[:, 0]))
         tri[keep[idx]] = np.inf
         i = int(np.argmin(tri))
-        if tri[i] >= NOTCH_AREA_M2:
+        if tri[i] >= FLOOR.polygon.notch_area_m2:
             break
         del idx[i]
     return np.asarray(idx)
@@ -82,7 +75,7 @@ def _pixel_edge(contour: np.ndarray) -> np.ndarray:
 
     A floor pixel is floor over its whole square, so the floor ends at the pixel's outer
     edge; an outline through the centers leaves out a half-pixel band all round, which
-    at a far wall is centimeters deep (on held-out renders, 0.7 % of the floor's area).
+    at a far wall is centimeters deep.
     A staircase of pixels at angle a to the rows reaches out 0.5 max(|cos a|, |sin a|)
     on average, hence the offset along the outward normal.
     """
@@ -134,10 +127,10 @@ def _fit_corners(outline: np.ndarray, vertex_idx: np.ndarray) -> np.ndarray:
     for i in range(n):
         (p, d), (q, e) = lines[i - 1], lines[i]
         cross = d[0] * e[1] - d[1] * e[0]
-        if abs(cross) < np.sin(np.radians(CORNER_MIN_DEG)):
+        if abs(cross) < np.sin(np.radians(FLOOR.polygon.corner_min_deg)):
             continue
         corner = p + d * ((q - p)[0] * e[1] - (q - p)[1] * e[0]) / cross
-        if np.linalg.norm(corner - poly[i]) <= 2 * SIMPLIFY_M:
+        if np.linalg.norm(corner - poly[i]) <= 2 * FLOOR.polygon.simplify_m:
             poly[i] = corner
     return poly
 
@@ -185,16 +178,16 @@ def floor_polygon(mask: np.ndarray, calibration, keep_px: np.ndarray | None = No
     if mask.shape != (rows, cols):
         raise ValueError(f"floor mask of {mask.shape[1]} x {mask.shape[0]} px does not match the "
                          f"calibrated photo's {cols} x {rows} px")
-    scale = min(1.0, POLYGON_LONG_PX / max(rows, cols))
+    scale = min(1.0, FLOOR.polygon.long_px / max(rows, cols))
     small_cal = calibration.scaled(scale)
     size = small_cal.size_px
     small = cv2.resize(mask.astype(np.uint8), size, interpolation=cv2.INTER_AREA) > 0 if scale < 1 else mask
     distance = floor_distance_m(small.shape, small_cal)
-    near = distance <= MAX_FLOOR_DISTANCE_M
+    near = distance <= FLOOR.segment.max_floor_distance_m
     region = (small & near).astype(np.uint8)
     # The outline is the floor's outer edge, holes and all; fill them first, or the opening
     # below breaks a thin rim of floor behind a carton at a far wall and the outline runs
-    # round the carton instead (seed 904 render 75: -11.2 % from the true mask, -0.3 % filled).
+    # round the carton instead.
     outer, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     cv2.drawContours(region, outer, -1, 1, -1)
     # Opening removes hair-thin spurs (a skirting board's shadow) before tracing.
@@ -203,7 +196,7 @@ def floor_polygon(mask: np.ndarray, calibration, keep_px: np.ndarray | None = No
     # someone kept it (a click on floor behind a carton, a painted mask).
     labels, main, parts = floor_parts(region, small_cal, distance_m=distance, reach_edge=False)
     if main == 0:
-        raise ValueError(f"no floor in the mask below the horizon and within {MAX_FLOOR_DISTANCE_M:g} m "
+        raise ValueError(f"no floor in the mask below the horizon and within {FLOOR.segment.max_floor_distance_m:g} m "
                          "once strips a pixel or two wide are dropped")
     if keep_px is not None and len(keep_px):
         x, y = np.round(np.asarray(keep_px, dtype=np.float64).reshape(-1, 2) * scale).astype(int).T
@@ -211,7 +204,7 @@ def floor_polygon(mask: np.ndarray, calibration, keep_px: np.ndarray | None = No
         clicked = set(labels[y[inside], x[inside]].tolist()) - {0, main, *parts}
         parts = [*parts, *sorted(clicked)]
     region = (labels == main).astype(np.uint8)
-    # Outline points next to floor beyond MAX_FLOOR_DISTANCE_M are "far" edges.
+    # Outline points next to floor beyond FLOOR.segment.max_floor_distance_m are "far" edges.
     far_ring = cv2.dilate((~near).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
     poly, edge_kind = _join_parts(region, [labels == k for k in parts], far_ring, scale, calibration)
     area = abs(polygon_area(poly))
@@ -228,11 +221,9 @@ def _join_parts(region: np.ndarray, parts: list[np.ndarray], far_ring: np.ndarra
     cut off inside the photo lies behind what stands between, so its corridor is a
     ``"boundary"``. A seam traced with the rest instead would put the two sides of a
     pixel-wide corridor within the simplification's reach of each other, and the
-    straightened polygon could cross itself there (from the true masks of seeds 901-917,
-    3 of 1146 polygons did; seed 926 render 70 after a click: -5.1 % and crossing,
-    -0.9 % bridged). A part so near that, simplified, it touches the region cannot be
-    bridged: it is joined to the region by a one-pixel seam where the two come nearest
-    and outlined with it, as one.
+    straightened polygon could cross itself there. A part so near that, simplified, it
+    touches the region cannot be bridged: it is joined to the region by a one-pixel seam
+    where the two come nearest and outlined with it, as one.
     """
     parts = list(parts)
     while True:
@@ -267,8 +258,9 @@ def _outline_polygon(region: np.ndarray, far_ring: np.ndarray, scale: float,
         return None
 
     h, w = region.shape
-    on_border = ((contour[:, 0] <= BORDER_PX - 1) | (contour[:, 0] >= w - BORDER_PX)
-                 | (contour[:, 1] <= BORDER_PX - 1) | (contour[:, 1] >= h - BORDER_PX))
+    border = FLOOR.polygon.border_px
+    on_border = ((contour[:, 0] <= border - 1) | (contour[:, 0] >= w - border)
+                 | (contour[:, 1] <= border - 1) | (contour[:, 1] >= h - border))
     ci, cj = contour[:, 1].astype(int), contour[:, 0].astype(int)
     at_far = far_ring[ci, cj] & ~on_border
     kind = np.where(on_border, 1, np.where(at_far, 2, 0))
@@ -276,7 +268,7 @@ def _outline_polygon(region: np.ndarray, far_ring: np.ndarray, scale: float,
     # Pixel centers of the scaled image map back to full-size pixel coordinates.
     outline_px = (_pixel_edge(contour) + 0.5) / scale - 0.5
     floor_m = calibration.floor_from_pixels(outline_px)
-    approx = cv2.approxPolyDP(floor_m.astype(np.float32).reshape(-1, 1, 2), SIMPLIFY_M, True)[:, 0, :]
+    approx = cv2.approxPolyDP(floor_m.astype(np.float32).reshape(-1, 1, 2), FLOOR.polygon.simplify_m, True)[:, 0, :]
     # approxPolyDP returns a subset of the input points: find their indices, in order.
     lookup = {tuple(p): i for i, p in enumerate(floor_m.astype(np.float32))}
     vertex_idx = np.array(sorted(lookup[tuple(p)] for p in approx))
@@ -304,7 +296,7 @@ def _outline_polygon(region: np.ndarray, far_ring: np.ndarray, scale: float,
             break
         poly = np.vstack([poly, floor_m[split]])[np.argsort(np.concatenate([vertex_idx, split]), kind="stable")]
         vertex_idx = np.sort(np.concatenate([vertex_idx, split]))
-    if len(poly) < 3 or abs(polygon_area(poly)) < NOTCH_AREA_M2:
+    if len(poly) < 3 or abs(polygon_area(poly)) < FLOOR.polygon.notch_area_m2:
         return None  # a strip too thin to hold anything straightens to a line
 
     edge_kind = []
@@ -326,19 +318,20 @@ def _bridge(poly: np.ndarray, kinds: list[str], part: np.ndarray,
     """One simple polygon of two disjoint counter-clockwise ones, ``poly`` and ``part``
     (each with the kinds of its edges), or None.
 
-    A corridor ``BRIDGE_M`` wide (its two sides edges of kind ``corridor``) runs between
-    the nearest pair of their corners that it joins into a simple polygon, and the
-    outline goes out along it, round ``part`` and back. Its area is negligible. None when
-    none of the ``BRIDGE_TRIES`` nearest pairs does (the two touch or overlap).
+    A corridor ``FLOOR.polygon.bridge_m`` wide (its two sides edges of kind ``corridor``)
+    runs between the nearest pair of their corners that it joins into a simple polygon,
+    and the outline goes out along it, round ``part`` and back. Its area is negligible.
+    None when none of the ``FLOOR.polygon.bridge_tries`` nearest pairs does (the two touch
+    or overlap).
     """
     gap = np.linalg.norm(poly[:, None, :] - part[None, :, :], axis=2)
-    for flat in np.argsort(gap, axis=None)[:BRIDGE_TRIES]:
+    for flat in np.argsort(gap, axis=None)[:FLOOR.polygon.bridge_tries]:
         i, j = np.unravel_index(flat, gap.shape)
         d = part[j] - poly[i]
-        if gap[i, j] <= BRIDGE_M:
+        if gap[i, j] <= FLOOR.polygon.bridge_m:
             continue
         # Going out, the floor is on the corridor's left; the outline keeps to its right.
-        right = 0.5 * BRIDGE_M * np.array([d[1], -d[0]]) / gap[i, j]
+        right = 0.5 * FLOOR.polygon.bridge_m * np.array([d[1], -d[0]]) / gap[i, j]
         out = np.vstack([poly[:i], poly[i] + right, part[j] + right, part[j + 1:], part[:j],
                          part[j] - right, poly[i] - right, poly[i + 1:]])
         if self_intersection(out) is None:
@@ -351,7 +344,8 @@ def _bridge(poly: np.ndarray, kinds: list[str], part: np.ndarray,
 def _caveat(poly: np.ndarray, edge_kind: list[str]) -> str:
     lengths = np.linalg.norm(np.roll(poly, -1, axis=0) - poly, axis=1)
     parts = []
-    for name, say in (("image", "the photo's edge"), ("far", f"{MAX_FLOOR_DISTANCE_M:g} m from the camera")):
+    far = f"{FLOOR.segment.max_floor_distance_m:g} m from the camera"
+    for name, say in (("image", "the photo's edge"), ("far", far)):
         sel = np.array([k == name for k in edge_kind])
         if sel.any():
             parts.append(f"{lengths[sel].sum():.2f} m of outline at {say}")

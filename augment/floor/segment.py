@@ -21,66 +21,10 @@ import numpy as np
 
 from ..errors import SegmentationError
 from ..photo.io import decode_grey, decode_problem, read_user_file
-from .model import PRESHRINK_LONG_PX, FloorModel, check_image, shrink_to, working_scale
+from .model import FloorModel, check_image, shrink_to, working_scale
+from .settings import FLOOR
 from .skirting import board_clicks, trim_skirting
 from .upright import Upright
-
-# GrabCut's cost grows with the pixel count; edges it can fix are a few pixels wide at
-# this size, and the mask is scaled back up with the model's smooth probabilities.
-GRABCUT_LONG_PX = 400
-GRABCUT_ITERATIONS = 3
-# Probabilities this sure are taken as given; GrabCut decides the rest. On floor in
-# shade (a carton's, a wall's) the model often says 0.01-0.03: taken as given there,
-# that floor is lost and it teaches GrabCut's background colours the floor's. Much
-# below 0.01 GrabCut leaks into walls of the floor's colour instead.
-SURE_FLOOR, SURE_OTHER = 0.97, 0.01
-# Floor farther than this from the camera is not believed: a room photo rarely shows
-# more, and near the horizon one pixel spans meters.
-MAX_FLOOR_DISTANCE_M = 15.0
-# A part of the floor cut off from the board's (floor_parts) smaller than these is more
-# often a leak or a sliver than floor. The share of the main region's pixels sits between
-# a strip of board the skirting trim cut loose (0.2 %) and floor behind a carton far away
-# (0.7 %), the two cases that set it.
-MIN_PART_M2, MIN_PART_SHARE = 0.05, 0.005
-# Above this share of the floor disputed between the model and the refined mask, the
-# floor is said to be uncertain (chosen on seeds 901-913: it flags 37 of the 68 polygons
-# more than 5 % off, and 84 of the 789 within).
-DISPUTED_SHARE_WARN = 0.10
-# GrabCut follows colour: a line of the floor's colour that touches the floor (a window's
-# shadow on a wall, the edge of a door) is taken in with it, a thin spur reaching far from
-# anything the model calls floor, and far up a wall one pixel is much floor. Parts of the
-# mask thinner than SPUR_WIDTH_PX and more than SPUR_REACH_PX from the model's floor (at
-# GrabCut's working size; floor the user clicked counts as the model's) are dropped.
-# Floor that GrabCut rightly finds past the model is near it (the foot of a wall, 10 px
-# or less) or a region, not a line; a sliver of floor behind a carton at a far wall lies
-# 10-25 px from the model's floor, which sets the reach (at 6 px the rule cut such slivers
-# in three renders of seeds 930-934, one of them past 5 % of area, and mended two more).
-SPUR_WIDTH_PX, SPUR_REACH_PX = 5, 25
-
-
-# A user's click says "floor here" or "not floor here" of the region around it: the
-# pixels of the clicked colour (within this Lab distance, on the working image blurred
-# a little) reached without crossing an edge of the photo, and within reach of the click.
-# Walls of the floor's colour often meet it without an edge, and a click on a thin strip
-# of floor lands on that line: the reach keeps such a leak small. Below the horizon it is
-# measured on the floor, CLICK_REGION_REACH_M around the clicked floor point, and within
-# CLICK_REGION_MAX_REACH of the long side: far away a wide, flat ellipse, along a far wall
-# rather than up it. Simulated clicks on the 30 misses of seeds 914-917 mend 19 with one
-# click and 28 with up to three, none left worse (0.5 m within 0.15 of the long side: 19
-# and 27; 0.7 m: 20 and 26, two worse; 1 m: 19 and 26, two worse), where a disc of
-# CLICK_REGION_REACH of the long side (still used above the horizon and without a
-# calibration) mends 15 and 28, and one of 0.15 19 and 25 and took half a wall of
-# samples/photos/room_3 (+96 %). Within CLICK_REACH the model's sure labels become
-# probable, so GrabCut can carry the clicked colour past them (over a plank joint, where
-# the region stops).
-CLICK_TOLERANCE = 12
-CLICK_REGION_REACH_M, CLICK_REGION_MAX_REACH = 0.5, 0.10
-CLICK_REGION_REACH, CLICK_REACH = 0.05, 0.15
-# Canny's thresholds for those edges: low, so that the faint line where a wall of the
-# floor's colour meets the floor stops the region (40/100 let it into the wall on two of
-# three renders where a click overshot; simulated clicks on seeds 914-917, the region
-# then reaching 15 %, fixed 19 of 30 misses with one click at 10/30, 16 at 40/100).
-CLICK_CANNY = (10, 30)
 
 
 # ----------------------------------------------------------------------------- geometry seeds
@@ -126,14 +70,14 @@ def floor_footprint_m2(points_px: np.ndarray, calibration) -> np.ndarray:
 
 
 def _believed_footprint_m2(shape: tuple[int, int], calibration, distance_m: np.ndarray | None = None) -> np.ndarray:
-    """Each pixel's floor area (m^2, :func:`floor_footprint_m2`), (rows, cols), zero
-    beyond ``MAX_FLOOR_DISTANCE_M`` (``distance_m``: :func:`floor_distance_m`, when known)."""
+    """Each pixel's floor area (m^2, :func:`floor_footprint_m2`), (rows, cols), zero beyond
+    ``FLOOR.segment.max_floor_distance_m`` (``distance_m``: :func:`floor_distance_m`, when known)."""
     rows, cols = shape
     y, x = np.mgrid[0:rows, 0:cols]
     footprint = floor_footprint_m2(np.column_stack([x.ravel(), y.ravel()]), calibration).reshape(rows, cols)
     if distance_m is None:
         distance_m = floor_distance_m(shape, calibration)
-    return footprint * (distance_m <= MAX_FLOOR_DISTANCE_M)
+    return footprint * (distance_m <= FLOOR.segment.max_floor_distance_m)
 
 
 def border_pixels(image: np.ndarray) -> np.ndarray:
@@ -148,10 +92,11 @@ def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | No
 
     A carton or a wall corner standing at the photo's edge cuts the visible floor in two;
     both are floor, and they meet beyond the edge. Such a part is kept when it reaches
-    the photo's edge and is substantial both on the floor (``MIN_PART_M2`` or more within
-    ``MAX_FLOOR_DISTANCE_M``) and in the photo (``MIN_PART_SHARE`` of the main region's
-    pixels or more: a far sliver, such as a strip of skirting board the trim cut loose,
-    spans many square meters in a few pixels), and, when a model's probabilities are
+    the photo's edge and is substantial both on the floor (``FLOOR.segment.min_part_m2``
+    or more within ``FLOOR.segment.max_floor_distance_m``) and in the photo
+    (``FLOOR.segment.min_part_share`` of the main region's pixels or more: a far sliver,
+    such as a strip of skirting board the trim cut loose, spans many square meters in a
+    few pixels), and, when a model's probabilities are
     given, the model calls it floor on average: GrabCut's leaks into the foot of a near
     wall or a carton's side also reach the photo's edge.
 
@@ -191,8 +136,8 @@ def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | No
     if n == 2:
         return labels, main, []
     footprint = _believed_footprint_m2(labels.shape, calibration, distance_m).ravel()
-    keep = np.bincount(labels.ravel(), footprint, minlength=n) >= MIN_PART_M2
-    keep &= stats[:, cv2.CC_STAT_AREA] >= MIN_PART_SHARE * stats[main, cv2.CC_STAT_AREA]
+    keep = np.bincount(labels.ravel(), footprint, minlength=n) >= FLOOR.segment.min_part_m2
+    keep &= stats[:, cv2.CC_STAT_AREA] >= FLOOR.segment.min_part_share * stats[main, cv2.CC_STAT_AREA]
     if reach_edge:
         edge = np.zeros(n, bool)
         edge[border_pixels(labels)] = True
@@ -217,7 +162,7 @@ class Segmentation:
         True on the floor (the board counts as floor), at the photo's size.
     probability : (r, c) float32 or None
         The model's floor probability at the working size (long side
-        ``GRABCUT_LONG_PX``), when a model ran.
+        ``FLOOR.segment.grabcut_long_px``), when a model ran.
     method : str
         ``"onnx+grabcut"``, ``"onnx"`` or ``"grabcut"``.
     warnings : tuple of str
@@ -269,8 +214,8 @@ class Segmentation:
 
     @property
     def uncertain(self) -> bool:
-        """Whether the disputed share is large enough to warn of (``DISPUTED_SHARE_WARN``)."""
-        return self.disputed_share is not None and self.disputed_share > DISPUTED_SHARE_WARN
+        """Whether the disputed share is large enough to warn of (``FLOOR.segment.disputed_share_warn``)."""
+        return self.disputed_share is not None and self.disputed_share > FLOOR.segment.disputed_share_warn
 
     def doubt_json(self) -> dict | None:
         """:attr:`doubt_px` as the reports give it, with what the mask says there."""
@@ -300,16 +245,12 @@ def _grabcut(image_small, trimap, iterations):
     return (mask == cv2.GC_FGD) | (mask == cv2.GC_PR_FGD)
 
 
-# The board lies on open floor: the paper and a margin around it are floor for sure.
-BOARD_MARGIN = 1.3
-
-
 def _seed_geometry(trimap, shape_small, scale, calibration):
     """Pin what the calibration knows: around the board is floor, above the horizon is not."""
     if calibration is None:
         return
     trimap[~below_horizon(shape_small, calibration.scaled(scale).horizon, 0.0)] = cv2.GC_BGD
-    board = (board_polygon_px(calibration, grow=BOARD_MARGIN) * scale).round().astype(np.int32)
+    board = (board_polygon_px(calibration, grow=FLOOR.segment.board_margin) * scale).round().astype(np.int32)
     cv2.fillPoly(trimap, [board], int(cv2.GC_FGD))
 
 
@@ -348,10 +289,10 @@ def _click_region(lab: np.ndarray, edges: np.ndarray, col: int, row: int,
                   floor_m: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """What a click on the working pixel ``(col, row)`` says: the region of the clicked colour
     (``lab``, the working image blurred a little, in Lab) reached from it without crossing
-    ``edges`` (a magic wand) and within reach of it; and the wider reach ``CLICK_REACH``
-    within which the model is not sure. ``floor_m`` (rows, cols, 2), the floor point of
-    each pixel (NaN above the horizon), measures the reach on the floor when the click is
-    below the horizon."""
+    ``edges`` (a magic wand) and within reach of it; and the wider reach
+    ``FLOOR.segment.click_reach`` within which the model is not sure. ``floor_m`` (rows,
+    cols, 2), the floor point of each pixel (NaN above the horizon), measures the reach
+    on the floor when the click is below the horizon."""
     rows, cols = lab.shape[:2]
     # Edges stop the fill where a wall of the floor's colour meets it; the click itself
     # may sit on one (a plank joint), so its neighbourhood is cleared.
@@ -363,18 +304,22 @@ def _click_region(lab: np.ndarray, edges: np.ndarray, col: int, row: int,
         cv2.circle(out, (col, row), max(2, round(share * max(rows, cols))), 1, -1)
         return out > 0
 
+    # Walls of the floor's colour often meet it without an edge, and a click on a thin
+    # strip of floor lands on that line: the reach keeps such a leak small. Measured on
+    # the floor it is, far away, a wide, flat ellipse: along a far wall rather than up it.
     if floor_m is not None and not np.isnan(floor_m[row, col, 0]):
         with np.errstate(invalid="ignore"):
-            on_floor = np.hypot(*(floor_m - floor_m[row, col]).transpose(2, 0, 1)) < CLICK_REGION_REACH_M
-        near = disc(CLICK_REGION_MAX_REACH) & on_floor
+            from_click_m = np.hypot(*(floor_m - floor_m[row, col]).transpose(2, 0, 1))
+            on_floor = from_click_m < FLOOR.segment.click_region_reach_m
+        near = disc(FLOOR.segment.click_region_max_reach) & on_floor
     else:
-        near = disc(CLICK_REGION_REACH)
+        near = disc(FLOOR.segment.click_region_reach)
     fill = np.ones((rows + 2, cols + 2), np.uint8)
     fill[1:-1, 1:-1] = (edges > 0) | ~near
-    tol = (CLICK_TOLERANCE,) * 3
+    tol = (FLOOR.segment.click_tolerance,) * 3
     cv2.floodFill(lab, fill, (col, row), 0, tol, tol,
                   4 | cv2.FLOODFILL_FIXED_RANGE | cv2.FLOODFILL_MASK_ONLY | (2 << 8))
-    return fill[1:-1, 1:-1] == 2, disc(CLICK_REACH)
+    return fill[1:-1, 1:-1] == 2, disc(FLOOR.segment.click_reach)
 
 
 def _click_regions(small, scale, calibration, clicks):
@@ -401,7 +346,7 @@ def _click_regions(small, scale, calibration, clicks):
     # The colours and edges the clicks' regions are found in, once for all of them.
     lab = cv2.cvtColor(cv2.medianBlur(small, 5), cv2.COLOR_RGB2LAB)
     grey = cv2.cvtColor(cv2.GaussianBlur(small, (3, 3), 0), cv2.COLOR_RGB2GRAY)
-    edges = cv2.dilate(cv2.Canny(grey, *CLICK_CANNY), np.ones((2, 2), np.uint8))
+    edges = cv2.dilate(cv2.Canny(grey, *FLOOR.segment.click_canny), np.ones((2, 2), np.uint8))
     for x, y, is_floor, x_given, y_given in clicks:
         # One working pixel for the click, both for its refusal and its region.
         col, row = min(shape[1] - 1, round(x * scale)), min(shape[0] - 1, round(y * scale))
@@ -463,11 +408,12 @@ def segment_floor(image: np.ndarray, model: FloorModel | None = None, calibratio
         is, 0 where something was wrongly taken for floor. Each marks the region of its
         colour around it (reached without crossing an edge) for GrabCut, a later click
         winning where two regions overlap, and lets GrabCut overrule the model within
-        ``CLICK_REACH`` of it; a region clicked as floor is kept even when cut off from
-        the rest, and within a floor click's reach the skirting trim cuts nothing; a "not
-        floor" click on the strip at a wall's foot makes that wall's strip a skirting
-        board for the trim, and marks no colour region (which of them are, a first pass
-        without the "not floor" clicks tells: :func:`augment.floor.skirting.board_clicks`).
+        ``FLOOR.segment.click_reach`` of it; a region clicked as floor is kept even when
+        cut off from the rest, and within a floor click's reach the skirting trim cuts
+        nothing; a "not floor" click on the strip at a wall's foot makes that wall's strip
+        a skirting board for the trim, and marks no colour region (which of them are, a
+        first pass without the "not floor" clicks tells:
+        :func:`augment.floor.skirting.board_clicks`).
 
     Returns
     -------
@@ -538,9 +484,9 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
     ``clicks`` (n, 5): x, y in this view, 1 floor or 0 not, and x, y as the user gave them."""
     rows, cols = image.shape[:2]
     trims = skirting and calibration is not None and (method == "grabcut" or refine)
-    scale = working_scale((rows, cols), GRABCUT_LONG_PX)
+    scale = working_scale((rows, cols), FLOOR.segment.grabcut_long_px)
     size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
-    work = shrink_to(image, PRESHRINK_LONG_PX)
+    work = shrink_to(image, FLOOR.model.preshrink_long_px)
     small = _hide_board(cv2.resize(work, size_small, interpolation=cv2.INTER_AREA), calibration, scale)
     probability = model.floor_probability(work, size_small) if method == "onnx" else None
 
@@ -577,7 +523,7 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
         # the user's word is the last.
         reach = np.zeros((rows, cols), np.uint8)
         for x, y in clicks[clicks[:, 2] > 0, :2]:
-            cv2.circle(reach, (round(x), round(y)), round(CLICK_REACH * max(rows, cols)), 1, -1)
+            cv2.circle(reach, (round(x), round(y)), round(FLOOR.segment.click_reach * max(rows, cols)), 1, -1)
         board_cut = _cut_clicked(mask & ~trimmed, board_marks)
         mask = trimmed | (mask & (reach > 0))
         if board_doubt is not None and reach[board_doubt[1], board_doubt[0]]:
@@ -613,11 +559,11 @@ def _refined(small, scale, probability, calibration, method, refine, clicks):
         # are a few input pixels soft, and they are what GrabCut is for.
         band = 5
         kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * band + 1, 2 * band + 1))
-        trimap[cv2.erode((probability > SURE_FLOOR).astype(np.uint8), kernel) > 0] = cv2.GC_FGD
-        trimap[cv2.erode((probability < SURE_OTHER).astype(np.uint8), kernel) > 0] = cv2.GC_BGD
+        trimap[cv2.erode((probability > FLOOR.segment.sure_floor).astype(np.uint8), kernel) > 0] = cv2.GC_FGD
+        trimap[cv2.erode((probability < FLOOR.segment.sure_other).astype(np.uint8), kernel) > 0] = cv2.GC_BGD
         _seed_geometry(trimap, shape_small, scale, calibration)
         _apply_clicks(trimap, clicked_floor, clicked_other, clicked_near)
-        small_mask = _grabcut(small, trimap, GRABCUT_ITERATIONS)
+        small_mask = _grabcut(small, trimap, FLOOR.segment.grabcut_iterations)
         name = "onnx+grabcut"
     elif method == "onnx":
         small_mask = probability > 0.5
@@ -668,9 +614,9 @@ def patch_middle(patch: np.ndarray) -> tuple[int, int]:
     """``(x, y)`` of the pixel of ``patch`` ((rows, cols) bool) farthest from its edge.
 
     The photo's edge counts as the patch's, so a patch cut off there has its middle
-    inside it. Distances are OpenCV's 5 x 5 approximation of Euclidean: on 2000 random
-    blobs its deepest pixel is at least 0.966 of the true deepest's depth (the 3 x 3
-    mask's 0.929)."""
+    inside it. Distances are OpenCV's 5 x 5 approximation of Euclidean, whose deepest
+    pixel is within a few percent of the true deepest's depth (closer than the 3 x 3
+    mask's)."""
     depth = cv2.distanceTransform(np.pad(patch, 1).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_5)[1:-1, 1:-1]
     y, x = np.unravel_index(int(np.argmax(depth)), depth.shape)
     return int(x), int(y)
@@ -681,9 +627,9 @@ def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration,
     """Where the final mask and the model (its probability cut at one half) disagree:
     what GrabCut and the skirting trim added or took away, and its floor area.
 
-    Over renders it tells floors likely to be off: of the fresh seeds 914-917 (289
-    renders), the 42 whose disputed share exceeds ``DISPUTED_SHARE_WARN`` hold 14 of the
-    30 polygons more than 5 % off the true area (see models/README.md).
+    It tells floors likely to be off: a disputed share above
+    ``FLOOR.segment.disputed_share_warn`` flags about half of the polygons far from the
+    true area, and few of the rest (models/README.md).
 
     Parameters
     ----------
@@ -701,7 +647,7 @@ def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration,
     region : (r, c) bool
         Where the two disagree, at the probability's size.
     disputed_m2 : float
-        Its floor area (m^2, within ``MAX_FLOOR_DISTANCE_M``).
+        Its floor area (m^2, within ``FLOOR.segment.max_floor_distance_m``).
     share : float
         ``disputed_m2`` over the mask's floor area (m^2, same limit).
     """
@@ -714,23 +660,6 @@ def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration,
     disputed_m2 = float(footprint[region].sum())
     floor_m2 = float(footprint[small].sum())
     return region, disputed_m2, disputed_m2 / max(floor_m2, 1e-9)
-
-
-# A mask painted on a resized copy of the photo is scaled back when its shape is the
-# photo's to within this (relative, width over height).
-MASK_ASPECT_TOLERANCE = 0.01
-
-
-# Share of a floor mask's pixels that may be mid-grey (32-223): a soft brush's or a
-# scaled mask's edges are a few percent; a photo's is most of it.
-MAX_MASK_GREY = 0.25
-
-# Share of a floor mask's white that may lie above the horizon, where no floor can show.
-# A brush spilling over the top of a wall far away leaves a little there, and is left out
-# with a word; a mask white over walls and ceiling (all white, or another photo's) is
-# refused: its floor would run through the walls to the polygon's 15 m limit.
-MASK_SKY_WARN = 0.005
-MAX_MASK_SKY = 0.10
 
 
 def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segmentation:
@@ -774,7 +703,7 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
         raise SegmentationError(f"floor mask {path} {decode_problem(data)} (a mask: PNG, white = floor)")
     sample = lightness[::4, ::4]  # plenty to tell a mask from a photo
     grey = float(((sample > 32) & (sample < 223)).mean())
-    if grey > MAX_MASK_GREY:
+    if grey > FLOOR.segment.max_mask_grey:
         # Thresholded at 127, a photo (the room's own, given by mistake, or one with the
         # floor painted over) would make its bright parts floor.
         raise SegmentationError(f"floor mask {path}: {grey:.0%} of its pixels are neither near black nor near "
@@ -783,7 +712,7 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
     cols, rows = int(size_px[0]), int(size_px[1])
     height, width = lightness.shape
     if (width, height) != (cols, rows):
-        if abs((width / height) / (cols / rows) - 1) > MASK_ASPECT_TOLERANCE:
+        if abs((width / height) / (cols / rows) - 1) > FLOOR.segment.mask_aspect_tolerance:
             turned = (" (turned a quarter: save it upright, as the photo shows)"
                       if (width, height) == (rows, cols) else "")
             raise SegmentationError(f"floor mask {path}: size {width} x {height} px does not fit the photo's "
@@ -801,15 +730,19 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
         if 0 <= row < rows and 0 <= col < cols and not mask[row, col]:
             raise SegmentationError(f"floor mask {path}: the board's center (pixel {col}, {row}) is not floor "
                                     "in it; white must be floor (is the mask inverted, or of another photo?)")
+        # A brush spilling over the top of a far wall leaves a little white above the
+        # horizon, left out with a word; a mask white over walls and ceiling (all white, or
+        # another photo's) is refused: its floor would run through the walls to the
+        # polygon's distance limit.
         below = below_horizon((rows, cols), calibration.horizon, 0.0)
         sky = float((mask & ~below).sum() / mask.sum())
-        if sky > MAX_MASK_SKY:
+        if sky > FLOOR.segment.max_mask_sky:
             raise SegmentationError(f"floor mask {path}: {sky:.0%} of its white lies above the horizon (the "
                                     "camera's eye level, which the board gives: dashed in the calibration "
                                     "overlay), where no floor can show, so it marks walls or the ceiling as "
                                     "floor; paint only the floor white")
         mask &= below
-        if sky > MASK_SKY_WARN:
+        if sky > FLOOR.segment.mask_sky_warn:
             warnings = (f"floor mask {path}: {sky:.1%} of its white lies above the horizon, where no floor can "
                         "show (a wall's top, painted over?); left out",)
     return Segmentation(mask, None, "user mask", warnings)
@@ -818,14 +751,14 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
 def _geometry_trimap(shape_small, scale, calibration) -> np.ndarray:
     """GrabCut's start without a model: floor no farther from the camera than the board
     is probably floor (people lay the board on open floor, in front of what they shoot),
-    floor beyond any room's reach is not, the board is, above the horizon is not.
-    (Measured on 32 held-out renders: mean IoU 0.907 with the board's distance as the
-    limit, 0.868 with 1.6 times it, 0.755 with the board alone as the seed.)"""
+    floor beyond any room's reach is not, the board is, above the horizon is not. (The
+    board's distance as the limit fits the floor better than a larger one, or the board
+    alone as the seed.)"""
     distance = floor_distance_m(shape_small, calibration.scaled(scale))
     board_distance_m = float(np.hypot(*np.linalg.inv(calibration.camera_from_floor)[:2, 3]))
     trimap = np.full(shape_small, cv2.GC_PR_BGD, np.uint8)
     trimap[distance < board_distance_m] = cv2.GC_PR_FGD
-    trimap[distance > MAX_FLOOR_DISTANCE_M] = cv2.GC_BGD
+    trimap[distance > FLOOR.segment.max_floor_distance_m] = cv2.GC_BGD
     _seed_geometry(trimap, shape_small, scale, calibration)
     return trimap
 
@@ -834,13 +767,19 @@ def _clean(mask: np.ndarray, calibration, scale, probability=None, clicked=None)
     """Keep the floor's region under the board (else the largest), the parts cut off
     from it at the photo's edge (:func:`floor_parts`) and the parts the user clicked as
     floor (``clicked``), close pinholes, drop specks and thin spurs far from the model's
-    floor (``SPUR_WIDTH_PX``, ``SPUR_REACH_PX``)."""
+    floor (``FLOOR.segment.spur_width_px``, ``FLOOR.segment.spur_reach_px``; floor the user
+    clicked counts as the model's)."""
     mask = mask.astype(np.uint8)
     mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     if probability is not None:
+        # GrabCut follows colour: a line of the floor's colour that touches the floor (a
+        # window's shadow on a wall, the edge of a door) is taken in with it, a thin spur
+        # reaching far from anything the model calls floor. Floor GrabCut rightly finds
+        # past the model is near it (the foot of a wall) or a region, not a line.
         known = probability > 0.5 if clicked is None else (probability > 0.5) | clicked
-        far = cv2.distanceTransform((~known).astype(np.uint8), cv2.DIST_L2, 5) > SPUR_REACH_PX
-        disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (SPUR_WIDTH_PX, SPUR_WIDTH_PX))
+        far = cv2.distanceTransform((~known).astype(np.uint8), cv2.DIST_L2, 5) > FLOOR.segment.spur_reach_px
+        width = FLOOR.segment.spur_width_px
+        disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (width, width))
         mask[far & (cv2.morphologyEx(mask, cv2.MORPH_OPEN, disc) == 0)] = 0
     labels, main, parts = floor_parts(mask, None if calibration is None else calibration.scaled(scale),
                                       probability)

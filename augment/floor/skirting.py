@@ -3,7 +3,7 @@
 A floor mask from the model and GrabCut usually ends at the top of the skirting board,
 not at the floor line below it. Seen from a camera 1.5 m up, a 10 cm board that counts
 as floor puts the wall 7 % farther away than it is, and the floor's area grows by more
-than that: on 37 held-out renders this strip caused most of the polygon area error.
+than that: this strip is most of the floor polygon's area error.
 
 :func:`trim_skirting` looks straight down from the mask's top edge in every image
 column. Where a wall stands on the floor, a board shows as a uniform strip that ends in
@@ -20,7 +20,7 @@ in the outline that puts the wall back at the board's top).
 Often GrabCut has already stopped at the floor line, and what lies below the mask's edge
 is floor: a plank along the wall, a band of light, a contact shadow, with a step at its
 far side just like a board's lower edge. Rules on colour cannot tell those from a board
-(24 of their 62 trims over 576 renders cut a band of floor), so a small learned model
+(many of their trims cut a band of floor), so a small learned model
 (``models/skirting_board.onnx``, trained by ``models/train_skirting.py`` on renders with
 known floor lines) looks at each column's colours across the mask's edge. The trim is
 skipped when it sees no board anywhere along the walls, and made when it is sure of one
@@ -54,8 +54,10 @@ height where the rules see no strip on them (a board of the floor's colour).
 
 A board of the floor's colour that the board model leans to without being sure of is
 left; :func:`trim_skirting` then says where it may be (``doubt_px``, on the wall left
-uncut with the highest mean probability, from ``DOUBT_P``), so that the user can look
-and, where a board is there, click it.
+uncut with the highest mean probability, from ``FLOOR.skirting.doubt_p``), so that the
+user can look and, where a board is there, click it.
+
+The thresholds and sizes are :data:`augment.floor.settings.FLOOR`'s ``skirting`` section.
 """
 from __future__ import annotations
 
@@ -67,81 +69,18 @@ import numpy as np
 from scipy.ndimage import median_filter
 
 from .model import MODELS_DIR
+from .settings import FLOOR
 
 BOARD_MODEL = MODELS_DIR / "skirting_board.onnx"
 GAP_MODEL = MODELS_DIR / "skirting_gap.onnx"
 DEPTH_MODEL = MODELS_DIR / "skirting_depth.onnx"
 
-# Work at this long side at most (the board is 10 px or more there at 4 m).
-WORK_LONG_PX = 1280
-# Boards between these heights are trimmed (lower: anti-aliasing at the mask's edge).
-MIN_HEIGHT_M, MAX_HEIGHT_M = 0.02, 0.20
-# Search down to this height above the floor.
-SEARCH_M = 0.25
-# Heights are grouped in bins this wide to find the most common; then each column looks
-# for its board's lower edge within this many pixels of that height.
-MODE_BIN_M = 0.01
-NEAR_PX = 2
-# A column counts as showing a board when the strip differs from the floor below it by
-# this much (RGB distance), several times either's own texture, and at least this
-# fraction of the change happens in one 3-pixel step.
-MIN_CONTRAST = 15.0
-SHARPNESS = 0.6
-# Strips darker than the floor below them by this ratio, and within this angle of its
-# colour (RGB direction), are the floor in the walls' shadow, not boards.
-SHADOW_RATIO = 0.8
-SHADOW_DEG = 8.0
-# The photo agrees on a board when this fraction of the wall columns shows one, with
-# an interquartile range of heights below this fraction of the median.
-MIN_AGREEING = 0.3
-MAX_SPREAD = 0.3
-# Columns between two that show the board, no more than this far apart (at the working
-# size) on one stretch of wall, are cut too.
-GAP_PX = 16
-# A stretch of wall where this fraction of the columns show the board is cut all along.
-STRETCH_AGREEING = 0.5
-# Neighbouring columns whose top floor pixels are more than this many rows apart are on
-# different walls (or either side of something standing on the floor).
-STEP_PX = 6
-# The board model reads each column from this far above the mask's edge to this far
-# below it, in steps of this many meters (upright, standing on the floor there), against
-# the floor's colour from this far down; with the mean of this many columns either side.
-PROFILE_FROM_M, PROFILE_TO_M, PROFILE_STEP_M = -0.10, 0.30, 0.005
-PROFILE_FLOOR_M = 0.22
-PROFILE_CONTEXT = 8
-# Below this mean board probability over the wall columns the photo shows no board in
-# the mask (it already ends at the floor line); above the second, it shows one, whatever
-# the rules above say; in between, the rules decide.
-NO_BOARD_P, BOARD_P = 0.15, 0.5
-# Below this mean board probability over the photo, a wall the board model alone is sure
-# of (the rules see no step on it) is not cut.
-ALONE_P = 0.3
-# A wall's rules' height stands within this of the depth model's; elsewhere the board's
-# lower edge is looked for this far either side of the depth model's height.
-RULES_NEAR_M, LEARNED_NEAR_M = 0.04, 0.02
-# A "not floor" click this far across (a share of the long side) from a wall's column,
-# on its strip, is a click on that wall's board.
-BOARD_CLICK_REACH = 0.10
-# A wall left uncut where the board model's mean probability reaches this may hold a
-# board (most often one the floor's colour): the trim says where, for a look and a click.
-DOUBT_P = 0.3
-# A column where the board model's probability reaches this shows the board.
-SEEN_P = 0.5
-# A wall's mask edge moves up to the floor line where the gap model's mean probability
-# over its columns reaches this, by each column's offset where its own does, smoothed
-# over this many columns (a lone column's reach is a spike in the outline).
-GAP_P = 0.5
-GAP_SMOOTH_COLUMNS = 9
-# The mask's top edge bends at a wall's corner by more than this (pixels at the working
-# size); a wall judged on its own needs this many columns.
-CORNER_PX = 3.0
-MIN_WALL_COLUMNS = 24
-
 
 def _wall_columns(mask: np.ndarray, calibration):
     """Columns whose top floor pixel meets something above it (not the image's top
     edge), that pixel's row, and how many pixels one meter upright there spans; only
-    columns where the board's search (``SEARCH_M`` upright) fits in the photo."""
+    columns where the board's search (``FLOOR.skirting.search_m`` upright) fits in the
+    photo."""
     top = np.argmax(mask, axis=0)
     cols = np.flatnonzero(mask[top, np.arange(mask.shape[1])] & (top > 0))
     rows = top[cols]
@@ -151,28 +90,30 @@ def _wall_columns(mask: np.ndarray, calibration):
     # Where the floor's pose puts an upright meter beyond the photo's height (or nowhere:
     # a pixel on the horizon, or a "floor" that is a board held up at the camera), no
     # board shows; each column's search would take a slice of that many rows.
-    fits = np.isfinite(px_per_m) & (px_per_m > 0) & (SEARCH_M * px_per_m < mask.shape[0])
+    fits = np.isfinite(px_per_m) & (px_per_m > 0) & (FLOOR.skirting.search_m * px_per_m < mask.shape[0])
     return cols[fits], rows[fits], px_per_m[fits]
 
 
 def _px_per_m(calibration, cols, rows) -> np.ndarray:
     """How many pixels one meter upright spans, standing on the floor at each pixel."""
     foot = calibration.floor_from_pixels(np.column_stack([cols, rows]).astype(np.float64))
-    head = calibration.pixels_from_floor(np.column_stack([foot, np.full(len(foot), SEARCH_M)]))
-    return np.hypot(head[:, 0] - cols, head[:, 1] - rows) / SEARCH_M
+    head = calibration.pixels_from_floor(np.column_stack([foot, np.full(len(foot), FLOOR.skirting.search_m)]))
+    return np.hypot(head[:, 0] - cols, head[:, 1] - rows) / FLOOR.skirting.search_m
 
 
-def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m, near_m=None, near_px=NEAR_PX):
+def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m, near_m=None, near_px=None):
     """Per column, the board's height in pixels below the mask's top edge: 0 where the
     column shows none, NaN where it cannot tell (too close to the photo's bottom, or
     the floor below the strip is not in the mask); and how the strip's colour compares
     with the floor's below it: brightness ratio, and angle between the RGB directions
     (degrees). With ``near_m`` (one height, or one per column), a column looks for the
-    board's lower edge only within ``near_px`` (one, or one per column) of that height,
-    and shows none where that window is outside its search."""
+    board's lower edge only within ``near_px`` (one, or one per column; default
+    ``FLOOR.skirting.near_px``) of that height, and shows none where that window is
+    outside its search."""
+    near_px = FLOOR.skirting.near_px if near_px is None else near_px
     h = image.shape[0]
-    span = np.ceil(SEARCH_M * px_per_m).astype(int)
-    first = np.maximum(4, np.ceil(MIN_HEIGHT_M * px_per_m).astype(int))
+    span = np.ceil(FLOOR.skirting.search_m * px_per_m).astype(int)
+    first = np.maximum(4, np.ceil(FLOOR.skirting.min_height_m * px_per_m).astype(int))
     # At least the rows a column too far off to tell (span under 4) is read in, below a
     # strip of the least height.
     length = max(int(span.max()), 4) + 8 if len(span) else 0
@@ -195,8 +136,8 @@ def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m, near_
     contrast = np.linalg.norm(strip_color - below_color, axis=1)
     below_noise = np.median(np.linalg.norm(below - below_color[:, None], axis=2), axis=1)
     strip_noise = _prefix_median(np.linalg.norm(c - strip_color[:, None], axis=2), t - 1)
-    board = ((contrast >= np.maximum(MIN_CONTRAST, np.maximum(4 * below_noise, 3 * strip_noise)))
-             & (step[k, best] >= SHARPNESS * contrast))
+    board = ((contrast >= np.maximum(FLOOR.skirting.min_contrast, np.maximum(4 * below_noise, 3 * strip_noise)))
+             & (step[k, best] >= FLOOR.skirting.sharpness * contrast))
     floor_below = mask[np.minimum(rows[:, None] + t[:, None] + np.arange(8)[None], h - 1), cols[:, None]].all(axis=1)
     out = np.where(board & allowed.any(axis=1), t, 0).astype(np.float64)
     unknown = (span < 4) | (rows + span + 8 >= h) | (board & ~floor_below)
@@ -208,8 +149,10 @@ def _board_rows(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m, near_
 
 
 def _mode(heights_m: np.ndarray) -> float:
-    """The most common height, from a histogram of ``MODE_BIN_M`` bins smoothed over three."""
-    bins = np.arange(0.0, MAX_HEIGHT_M + 2 * MODE_BIN_M, MODE_BIN_M)
+    """The most common height, from a histogram of ``FLOOR.skirting.mode_bin_m`` bins
+    smoothed over three."""
+    bin_m = FLOOR.skirting.mode_bin_m
+    bins = np.arange(0.0, FLOOR.skirting.max_height_m + 2 * bin_m, bin_m)
     counts, _ = np.histogram(heights_m, bins)
     smooth = np.convolve(counts, np.ones(3), mode="same")
     i = int(np.argmax(smooth))
@@ -230,28 +173,28 @@ def _prefix_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
 
 def _stretches(cols: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
     """Indices into ``cols`` per unbroken stretch of the mask's top edge: split where a
-    column is missing or the edge jumps by more than ``STEP_PX`` rows."""
-    breaks = np.flatnonzero((np.diff(cols) > 1) | (np.abs(np.diff(rows)) > STEP_PX)) + 1
+    column is missing or the edge jumps by more than ``FLOOR.skirting.step_px`` rows."""
+    breaks = np.flatnonzero((np.diff(cols) > 1) | (np.abs(np.diff(rows)) > FLOOR.skirting.step_px)) + 1
     return np.split(np.arange(len(cols)), breaks)
 
 
 def _bridge(cols: np.ndarray, rows: np.ndarray, height_m: np.ndarray, seen: np.ndarray) -> np.ndarray:
     """Board heights per column (NaN: no board seen) spread along each stretch of wall
     where enough columns saw it; elsewhere gaps between boards are filled where they are
-    up to ``GAP_PX`` columns wide, or where the board model ``seen`` (k,) bool sees the
-    board. 0 where no board is cut."""
+    up to ``FLOOR.skirting.gap_px`` columns wide, or where the board model ``seen`` (k,)
+    bool sees the board. 0 where no board is cut."""
     out = np.nan_to_num(height_m)
     for stretch in _stretches(cols, rows):
         found = stretch[~np.isnan(height_m[stretch])]
         if len(found) < 2:
             continue
         x = cols[found]
-        if len(found) >= STRETCH_AGREEING * len(stretch):
+        if len(found) >= FLOOR.skirting.stretch_agreeing * len(stretch):
             fill = stretch
         else:
             gap = stretch[(cols[stretch] > x[0]) & (cols[stretch] < x[-1])]
             right = np.searchsorted(x, cols[gap])
-            fill = gap[(x[right] - x[right - 1] <= GAP_PX) | seen[gap]]
+            fill = gap[(x[right] - x[right - 1] <= FLOOR.skirting.gap_px) | seen[gap]]
         out[fill] = np.interp(cols[fill], x, height_m[found])
     return out
 
@@ -261,28 +204,29 @@ def _walls(cols: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
 
     A wall's floor line is straight in the photo (a straight line on the floor stays
     straight), so the mask's top edge is split where it jumps (the stretches of
-    :func:`_stretches`) and where it bends by more than ``CORNER_PX``."""
+    :func:`_stretches`) and where it bends by more than ``FLOOR.skirting.corner_px``."""
     walls = []
     for stretch in _stretches(cols, rows):
         if len(stretch) < 3:
             walls.append(stretch)
             continue
         line = np.column_stack([cols[stretch], rows[stretch]]).astype(np.float32).reshape(-1, 1, 2)
-        corners = cv2.approxPolyDP(line, CORNER_PX, False)[1:-1, 0, 0]
+        corners = cv2.approxPolyDP(line, FLOOR.skirting.corner_px, False)[1:-1, 0, 0]
         walls.extend(np.split(stretch, np.searchsorted(cols[stretch], corners)))
     return walls
 
 
 def _walls_with_a_board(walls, p_board: np.ndarray, whole: np.ndarray) -> np.ndarray:
-    """(k,) bool: the columns of each of ``walls`` (:func:`_walls`) of ``MIN_WALL_COLUMNS``
-    or more where the board model's mean probability (over the columns whose window lies
-    in the photo, if any) reaches ``BOARD_P``."""
+    """(k,) bool: the columns of each of ``walls`` (:func:`_walls`) of
+    ``FLOOR.skirting.min_wall_columns`` or more where the board model's mean probability
+    (over the columns whose window lies in the photo, if any) reaches
+    ``FLOOR.skirting.board_p``."""
     judged = np.zeros(len(p_board), bool)
     for wall in walls:
-        if len(wall) < MIN_WALL_COLUMNS:
+        if len(wall) < FLOOR.skirting.min_wall_columns:
             continue
         inside = wall[whole[wall]]
-        if np.mean(p_board[inside if len(inside) else wall]) >= BOARD_P:
+        if np.mean(p_board[inside if len(inside) else wall]) >= FLOOR.skirting.board_p:
             judged[wall] = True
     return judged
 
@@ -303,17 +247,18 @@ def board_profiles(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
     Returns
     -------
     profile : (k, 7, n) float32
-        Per column, n samples from ``PROFILE_FROM_M`` to ``PROFILE_TO_M`` around the
-        mask's edge: log colour against the floor's far below (3), the same averaged over
-        ``PROFILE_CONTEXT`` columns either side (3), and 1 where the sample is inside the
-        photo (1).
+        Per column, n samples from ``FLOOR.skirting.profile_from_m`` to
+        ``FLOOR.skirting.profile_to_m`` around the mask's edge: log colour against the
+        floor's far below (3), the same averaged over ``FLOOR.skirting.profile_context``
+        columns either side (3), and 1 where the sample is inside the photo (1).
     scalars : (k, 2) float32
         log(pixels per meter) / 5, and the fraction of the 39 pixels below the edge that
         are floor in the mask.
     whole : (k,) bool
         Columns whose window lies inside the photo.
     """
-    offsets_m = np.arange(PROFILE_FROM_M, PROFILE_TO_M + PROFILE_STEP_M / 2, PROFILE_STEP_M)
+    sk = FLOOR.skirting
+    offsets_m = np.arange(sk.profile_from_m, sk.profile_to_m + sk.profile_step_m / 2, sk.profile_step_m)
     h = image.shape[0]
     y = rows[:, None] + offsets_m[None] * px_per_m[:, None]
     inside = (y >= 0) & (y <= h - 1)
@@ -323,7 +268,7 @@ def board_profiles(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
     f = (y - y0)[..., None]
     colour = image[y0, cols[:, None]].astype(np.float32) * (1 - f) + image[y1, cols[:, None]].astype(np.float32) * f
     log_colour = np.log1p(colour) * inside[..., None]
-    floor = inside & (offsets_m >= PROFILE_FLOOR_M)[None]
+    floor = inside & (offsets_m >= sk.profile_floor_m)[None]
     # Near a wall the window runs off the photo: its lowest samples stand in for the floor.
     last = inside.shape[1] - 1 - np.argmax(inside[:, ::-1], axis=1)
     index = np.arange(inside.shape[1])[None]
@@ -333,8 +278,8 @@ def board_profiles(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
     own = (log_colour - reference[:, None]) * inside[..., None]
     k = len(cols)
     summed = np.cumsum(np.concatenate([np.zeros((1,) + own.shape[1:], np.float32), own]), axis=0)
-    lo = np.maximum(np.arange(k) - PROFILE_CONTEXT, 0)
-    hi = np.minimum(np.arange(k) + PROFILE_CONTEXT + 1, k)
+    lo = np.maximum(np.arange(k) - sk.profile_context, 0)
+    hi = np.minimum(np.arange(k) + sk.profile_context + 1, k)
     context = (summed[hi] - summed[lo]) / (hi - lo)[:, None, None]
     profile = np.concatenate([own, context, inside[..., None].astype(np.float32)], axis=2).transpose(0, 2, 1)
     below = mask[np.clip(rows[:, None] + np.arange(1, 40)[None], 0, h - 1), cols[:, None]].mean(axis=1)
@@ -380,7 +325,7 @@ def board_depth_m(profile: np.ndarray, scalars: np.ndarray) -> np.ndarray:
     if len(profile) == 0:
         return np.zeros(0)
     out = _skirting_session(str(DEPTH_MODEL)).run(None, {"profile": profile, "scalars": scalars})[0]
-    return np.clip(out.reshape(-1).astype(np.float64) / 100.0, 0.0, MAX_HEIGHT_M)
+    return np.clip(out.reshape(-1).astype(np.float64) / 100.0, 0.0, FLOOR.skirting.max_height_m)
 
 
 def _cut_depth_px(view, walls, rules_px: np.ndarray, decided: np.ndarray, profiles) -> np.ndarray:
@@ -390,9 +335,10 @@ def _cut_depth_px(view, walls, rules_px: np.ndarray, decided: np.ndarray, profil
     is that edge, but on a grained floor or below a board's shadow the strongest step is
     often another, and a board the floor's colour shows them none. The depth model says
     about where the edge lies (within a centimeter or two): a wall whose rules' height
-    is within ``RULES_NEAR_M`` of it keeps the rules' cut (at their height in the
-    columns they leave); on any other, the step nearest the model's height (within
-    ``LEARNED_NEAR_M``) places it, one height along the wall, as boards have."""
+    is within ``FLOOR.skirting.rules_near_m`` of it keeps the rules' cut (at their height
+    in the columns they leave); on any other, the step nearest the model's height (within
+    ``FLOOR.skirting.learned_near_m``) places it, one height along the wall, as boards
+    have."""
     _, small_image, small_mask, _, cols, rows, px_per_m = view
     out = np.zeros(len(decided))
     if not decided.any():
@@ -409,12 +355,12 @@ def _cut_depth_px(view, walls, rules_px: np.ndarray, decided: np.ndarray, profil
         ruled = wall[rules_px[wall] > 0]
         if len(ruled):
             rules_m[wall] = np.median(rules_px[ruled] / px_per_m[ruled])
-    trusted = np.abs(rules_m - learned_m) <= RULES_NEAR_M
+    trusted = np.abs(rules_m - learned_m) <= FLOOR.skirting.rules_near_m
     t = np.zeros(len(cols))
     look = decided & ~trusted
     if look.any():
         t[look] = _board_rows(small_image, small_mask, cols[look], rows[look], px_per_m[look], learned_m[look],
-                              LEARNED_NEAR_M * px_per_m[look])[0]
+                              FLOOR.skirting.learned_near_m * px_per_m[look])[0]
     for wall in walls:
         cut = wall[decided[wall]]
         if not len(cut):
@@ -425,7 +371,7 @@ def _cut_depth_px(view, walls, rules_px: np.ndarray, decided: np.ndarray, profil
         found = cut[t[cut] > 0]
         height_m = np.median(t[found] / px_per_m[found]) if len(found) else learned_m[cut[0]]
         out[cut] = height_m * px_per_m[cut]
-    return out * (out >= MIN_HEIGHT_M * px_per_m)
+    return out * (out >= FLOOR.skirting.min_height_m * px_per_m)
 
 
 def extend_to_floor_line(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndarray:
@@ -464,11 +410,12 @@ def _extended(mask: np.ndarray, view, profiles) -> np.ndarray:
     profile, scalars, _ = profiles()
     p_gap, gap_m = floor_line_gap(profile, scalars)
     add = np.zeros(small_mask.shape, np.uint8)
+    sk = FLOOR.skirting
     for wall in _walls(cols, rows):
-        if len(wall) < MIN_WALL_COLUMNS or np.mean(p_gap[wall]) < GAP_P:
+        if len(wall) < sk.min_wall_columns or np.mean(p_gap[wall]) < sk.gap_p:
             continue
-        reach_px = median_filter(np.where(p_gap[wall] >= GAP_P, gap_m[wall] * px_per_m[wall], 0.0),
-                                 size=GAP_SMOOTH_COLUMNS, mode="nearest")
+        reach_px = median_filter(np.where(p_gap[wall] >= sk.gap_p, gap_m[wall] * px_per_m[wall], 0.0),
+                                 size=sk.gap_smooth_columns, mode="nearest")
         for col, row, n in zip(cols[wall], rows[wall], np.round(reach_px).astype(int)):
             add[max(0, row - n):row, col] = n > 0
     if not add.any():
@@ -486,7 +433,7 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
     px_per_m).
     """
     rows_px, cols_px = mask.shape
-    scale = min(1.0, WORK_LONG_PX / max(rows_px, cols_px))
+    scale = min(1.0, FLOOR.skirting.work_long_px / max(rows_px, cols_px))
     size = (round(cols_px * scale), round(rows_px * scale))
     small_mask = cv2.resize(mask.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 if scale < 1 else mask
     small_cal = calibration.scaled(scale)
@@ -495,8 +442,9 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
         return None
     # Only the band of rows the search and the profiles look at is needed at the working
     # size; a profile cut short reads black there, which the models would take for shade.
-    top = max(0, int(np.floor((rows + PROFILE_FROM_M * px_per_m).min())) - 2)
-    bottom = min(size[1], int(np.ceil((rows + max(SEARCH_M, PROFILE_TO_M) * px_per_m).max())) + 12)
+    sk = FLOOR.skirting
+    top = max(0, int(np.floor((rows + sk.profile_from_m * px_per_m).min())) - 2)
+    bottom = min(size[1], int(np.ceil((rows + max(sk.search_m, sk.profile_to_m) * px_per_m).max())) + 12)
     band = image[int(top / scale):min(rows_px, int(np.ceil(bottom / scale)) + 1)]
     small_image = np.zeros((size[1], size[0], 3), np.uint8)
     small_image[top:bottom] = cv2.resize(band, (size[0], bottom - top), interpolation=cv2.INTER_AREA)
@@ -506,17 +454,19 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
 
 def _strip_of_one_height(known, shown, height_m) -> bool:
     """Whether enough wall columns show a strip, of one height a board can have."""
-    if known.sum() < 0.3 * len(known) or shown.sum() < MIN_AGREEING * known.sum():
+    sk = FLOOR.skirting
+    if known.sum() < 0.3 * len(known) or shown.sum() < sk.min_agreeing * known.sum():
         return False
     median = float(np.median(height_m[shown]))
     q1, q3 = np.percentile(height_m[shown], [25, 75])
-    return MIN_HEIGHT_M <= median <= MAX_HEIGHT_M and q3 - q1 <= MAX_SPREAD * median
+    return sk.min_height_m <= median <= sk.max_height_m and q3 - q1 <= sk.max_spread * median
 
 
 def _rules_see_a_board(known, shown, height_m, brightness, hue_deg) -> bool:
     """Whether enough wall columns show a strip of one height that is not shade."""
     return _strip_of_one_height(known, shown, height_m) and not (
-        np.median(brightness[shown]) < SHADOW_RATIO and np.median(hue_deg[shown]) < SHADOW_DEG)
+        np.median(brightness[shown]) < FLOOR.skirting.shadow_ratio
+        and np.median(hue_deg[shown]) < FLOOR.skirting.shadow_deg)
 
 
 def _walls_clicked(walls, cols, rows, px_per_m, points, reach_px) -> np.ndarray:
@@ -525,11 +475,11 @@ def _walls_clicked(walls, cols, rows, px_per_m, points, reach_px) -> np.ndarray:
     (from the mask's top edge down by a board's greatest height)."""
     clicked = np.zeros(len(cols), bool)
     for wall in walls:
-        if len(wall) < MIN_WALL_COLUMNS:
+        if len(wall) < FLOOR.skirting.min_wall_columns:
             continue
         for x, y in points:
             if ((np.abs(cols[wall] - x) <= reach_px) & (y >= rows[wall] - 2)
-                    & (y <= rows[wall] + MAX_HEIGHT_M * px_per_m[wall] + 2)).any():
+                    & (y <= rows[wall] + FLOOR.skirting.max_height_m * px_per_m[wall] + 2)).any():
                 clicked[wall] = True
     return clicked
 
@@ -550,14 +500,14 @@ def _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, w
     # plank seam or a grout line in others: the heights' mode is the board, and each
     # column looks again for its step at that height.
     t_mode = None
-    if p_mean >= NO_BOARD_P:
+    if p_mean >= FLOOR.skirting.no_board_p:
         t_mode, brightness_mode, hue_mode = _board_rows(small_image, small_mask, cols, rows, px_per_m,
                                                         _mode(height_m[shown]))
         shown_mode = ~np.isnan(t_mode) & (t_mode > 0)
         # The rules judge both readings: on a grained floor the strongest steps spread too
         # widely for one height even where the board is plain to see at the mode.
         if not shown_mode.any() or not (
-                p_mean >= BOARD_P
+                p_mean >= FLOOR.skirting.board_p
                 or _rules_see_a_board(known, shown, height_m, brightness, hue_deg)
                 or _rules_see_a_board(~np.isnan(t_mode), shown_mode, t_mode / px_per_m, brightness_mode, hue_mode)):
             t_mode = None
@@ -580,7 +530,7 @@ def _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, w
     agree = shown & (height_m > 0.5 * median) & (height_m < 1.5 * median)
     # A board in dashes (its lower edge too faint for the rules in some columns, as on a
     # grained floor) is cut whole where the board model sees it between the dashes.
-    return _bridge(cols, rows, np.where(agree, height_m, np.nan), p_board >= SEEN_P) * px_per_m * judged
+    return _bridge(cols, rows, np.where(agree, height_m, np.nan), p_board >= FLOOR.skirting.seen_p) * px_per_m * judged
 
 
 def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
@@ -612,8 +562,8 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
         The board's height when it was trimmed.
     doubt_px : (x, y) int or None
         Where a board may have been left: on the strip of a wall left uncut that the board
-        model leans to a board on (``DOUBT_P``), most often a board the floor's colour. A
-        "not floor" click there (``board_at``) trims that wall.
+        model leans to a board on (``FLOOR.skirting.doubt_p``), most often a board the
+        floor's colour. A "not floor" click there (``board_at``) trims that wall.
     """
     rows_px, cols_px = mask.shape
     view = working_view(image, mask, calibration)
@@ -632,13 +582,13 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     clicked = np.zeros(len(cols), bool)
     if board_at is not None and len(board_at):
         clicked = _walls_clicked(walls, cols, rows, px_per_m, np.asarray(board_at, np.float64)[:, :2] * scale,
-                                 BOARD_CLICK_REACH * max(small_mask.shape))
+                                 FLOOR.skirting.board_click_reach * max(small_mask.shape))
     rules_px = _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, whole, walls, clicked)
     # A board the floor's colour shows the rules no step to cut at, in some columns or in
     # all: where the board model is sure of a wall's board, that wall is cut too, unless
     # the photo as a whole leans to no board and the rules see no step on that wall.
     sure = _walls_with_a_board(walls, p_board, whole)
-    if p_mean < ALONE_P:
+    if p_mean < FLOOR.skirting.alone_p:
         for wall in walls:
             sure[wall] &= (rules_px[wall] > 0).any()
     # Nor does it show them a strip of one height to cut on a wall the user clicked; the
@@ -682,8 +632,9 @@ def board_clicks(image: np.ndarray, mask: np.ndarray, calibration, points) -> np
     Returns
     -------
     (n,) bool
-        True for a point within ``BOARD_CLICK_REACH`` across of a wall's column and from
-        the mask's top edge there down by a board's greatest height (``MAX_HEIGHT_M``).
+        True for a point within ``FLOOR.skirting.board_click_reach`` across of a wall's
+        column and from the mask's top edge there down by a board's greatest height
+        (``FLOOR.skirting.max_height_m``).
     """
     points = np.asarray(points, np.float64).reshape(-1, 2)
     out = np.zeros(len(points), bool)
@@ -694,19 +645,20 @@ def board_clicks(image: np.ndarray, mask: np.ndarray, calibration, points) -> np
     walls = _walls(cols, rows)
     for i, point in enumerate(points):
         out[i] = _walls_clicked(walls, cols, rows, px_per_m, point[None] * scale,
-                                BOARD_CLICK_REACH * max(small_mask.shape)).any()
+                                FLOOR.skirting.board_click_reach * max(small_mask.shape)).any()
     return out
 
 
 def _board_doubt_px(view, walls, p_board: np.ndarray, whole: np.ndarray, depth_px: np.ndarray,
                     profiles) -> tuple[int, int] | None:
     """Photo pixel ``x, y`` on the strip of the wall left uncut (in most of its columns)
-    whose board model's mean probability is highest, at ``DOUBT_P`` or more: the middle
-    of its strip, where a "not floor" click trims it. None when there is none."""
+    whose board model's mean probability is highest, at ``FLOOR.skirting.doubt_p`` or
+    more: the middle of its strip, where a "not floor" click trims it. None when there is
+    none."""
     scale, _, _, _, cols, rows, px_per_m = view
-    best, best_p = None, DOUBT_P
+    best, best_p = None, FLOOR.skirting.doubt_p
     for wall in walls:
-        if len(wall) < MIN_WALL_COLUMNS or np.mean(depth_px[wall] > 0) >= 0.5:
+        if len(wall) < FLOOR.skirting.min_wall_columns or np.mean(depth_px[wall] > 0) >= 0.5:
             continue
         inside = wall[whole[wall]]
         p = float(np.mean(p_board[inside if len(inside) else wall]))

@@ -30,39 +30,7 @@ import cv2
 import numpy as np
 
 from ..floor.segment import below_horizon
-
-# The floor shown around the sheet on each side, as a share of the sheet's longer side:
-# the places the texture may be taken from.
-CONTEXT_SHARE = 1.5
-# The top-down view is as sharp as the photo at the sheet, up to this many pixels per
-# meter (a 45 mm square 270 px across; only the sheet and the place its texture comes
-# from are sampled at that size).
-MAX_PX_PER_M = 6000
-# The working size for the light and for finding the texture's source: the sheet's
-# shorter side this many pixels.
-SEARCH_SHEET_PX = 96
-# Light is what varies more slowly than this share of the sheet's shorter side (the
-# floor's own blotches and planks belong to the texture, copied whole: 0.08 left them to
-# the smooth fill, a visible blur on marble; chosen on 20 renders of seeds 7000-7001).
-LIGHT_SIGMA_SHARE = 0.5
-# The rim compared when choosing the texture's source, as a share of the shorter side.
-RIM_SHARE = 0.07
-# Beyond the sheet: how far the paper may reach (squares), and the margin always taken
-# for the paper's edge, shadow and blur (meters).
-PAPER_GROWTH_SQUARES = 1.0
-EDGE_MARGIN_M = 0.004
-# A line beyond the sheet is paper while at least this share of it has the paper's colour.
-PAPER_LINE_SHARE = 0.5
-# Pixels of the photo added around the sheet for the print's blurred edge, and the soft
-# edge of the blend (Gaussian sigma, pixels).
-EDGE_GROW_PX = 2
-FEATHER_PX = 1.0
-# Where no place beside the sheet is all floor, its halves look for one, and theirs.
-MAX_SPLITS = 2
-# The coarse grid on which the view's pixel maps are computed, then interpolated.
-MAP_STEP_PX = 4
-# Share of the sheet covered by a thing standing on it above which the user is warned.
-COVERED_WARN = 0.02
+from .settings import RENDER
 
 
 @dataclass(frozen=True)
@@ -103,7 +71,7 @@ class ErasedBoard:
     @property
     def warning(self) -> str | None:
         """What to tell the user when something stands on much of the board."""
-        if self.covered <= COVERED_WARN:
+        if self.covered <= RENDER.erase.covered_warn:
             return None
         return (f"something stands on {100 * self.covered:.0f} % of the board: it is kept in the staged photos, "
                 "but where it overhangs the paper it may be painted over with floor; --keep-board leaves the "
@@ -154,15 +122,16 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
         if floor_mask.shape != (h, w):
             raise ValueError(f"floor_mask must be ({h}, {w}) like the image, got {floor_mask.shape}")
 
+    settings = RENDER.erase
     board = calibration.board
     half = np.array(board.size_m) / 2
-    sheet = np.array([-half, half]) + [[-EDGE_MARGIN_M], [EDGE_MARGIN_M]]
-    context = CONTEXT_SHARE * 2 * float(half.max())
+    sheet = np.array([-half, half]) + [[-settings.edge_margin_m], [settings.edge_margin_m]]
+    context = settings.context_share * 2 * float(half.max())
     origin = -half - context
     extent = 2 * (half + context)
-    ppm = min(_density_px_per_m(calibration, half), MAX_PX_PER_M)
+    ppm = min(_density_px_per_m(calibration, half), settings.max_px_per_m)
     short_m = float(np.min(sheet[1] - sheet[0]))
-    scale = min(1.0, SEARCH_SHEET_PX / (short_m * ppm))
+    scale = min(1.0, settings.search_sheet_px / (short_m * ppm))
 
     # The whole neighbourhood, small: where the paper ends, the light, and where the
     # texture best matches.
@@ -181,15 +150,16 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     small_valid = small_valid & ~foreign
     hole &= ~foreign
     bad = hole | ~small_valid
-    sigma = max(1.0, LIGHT_SIGMA_SHARE * short_m * small.ppm)
+    # Light is what varies slowly; the floor's own blotches and planks are texture, copied whole.
+    sigma = max(1.0, settings.light_sigma_share * short_m * small.ppm)
     smooth = cv2.inpaint(small_rgb, bad.astype(np.uint8) * 255, 3, cv2.INPAINT_TELEA)
     light = cv2.GaussianBlur(smooth.astype(np.float32), (0, 0), sigma)
-    ring = max(2, round(RIM_SHARE * short_m * small.ppm))
+    ring = max(2, round(settings.rim_share * short_m * small.ppm))
     parts = _sources(small, small_rgb.astype(np.float32) - light, sheet, bad, ring)
 
     # The sheet at full size, and the places its texture comes from.
     full = _TopDown(calibration, origin, ppm)
-    ring = max(2, round(RIM_SHARE * short_m * ppm))
+    ring = max(2, round(settings.rim_share * short_m * ppm))
     (c0, r0), (c1, r1) = np.floor(full.view_px(sheet)).astype(int) + [[-ring], [ring + 1]]
     box = (c0, r0, c1, r1)
     rgb, valid = full.sample(image, floor_mask, box)
@@ -240,8 +210,8 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     map_y -= r0
     back = cv2.remap(filled, map_x, map_y, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
     ramp = cv2.remap(weight, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
-    grown = cv2.dilate(inside.astype(np.uint8), np.ones((2 * EDGE_GROW_PX + 1,) * 2, np.uint8))
-    a = np.maximum(cv2.GaussianBlur(grown.astype(np.float32), (0, 0), FEATHER_PX), ramp)
+    grown = cv2.dilate(inside.astype(np.uint8), np.ones((2 * settings.edge_grow_px + 1,) * 2, np.uint8))
+    a = np.maximum(cv2.GaussianBlur(grown.astype(np.float32), (0, 0), settings.feather_px), ramp)
     if foreign.any():
         a *= 1.0 - _small_at(foreign.astype(np.float32), scale, map_x + c0, map_y + r0, cv2.BORDER_CONSTANT)
     # Only floor: what stands on the board stays; nothing above the horizon, where a
@@ -299,7 +269,7 @@ class _TopDown:
         """Photo pixel of each view pixel of the box (float32, far outside the photo where
         it does not show the point: behind the camera or beyond the lens model),
         computed on a coarse grid and interpolated."""
-        step = MAP_STEP_PX
+        step = RENDER.erase.map_step_px
         gx, gy = np.meshgrid(np.arange(c0, c0 + cols + step, step, dtype=np.float64),
                              np.arange(r0, r0 + rows + step, step, dtype=np.float64))
         floor = self.origin_m + (np.column_stack([gx.ravel(), gy.ravel()]) + 0.5) / self.ppm
@@ -320,7 +290,7 @@ class _TopDown:
 
     def view_px_of_photo(self, x0, y0, x1, y1):
         """Maps (float32, (y1 - y0, x1 - x0)) from the photo's box to view pixels."""
-        step = MAP_STEP_PX
+        step = RENDER.erase.map_step_px
         gx, gy = np.meshgrid(np.arange(x0, x1 + step, step, dtype=np.float64),
                              np.arange(y0, y1 + step, step, dtype=np.float64))
         v = self.view_px(self.calibration.floor_from_pixels(np.column_stack([gx.ravel(), gy.ravel()])))
@@ -328,9 +298,9 @@ class _TopDown:
 
 
 def _from_grid(grid: np.ndarray, rows: int, cols: int) -> np.ndarray:
-    """(rows, cols) float32: values given every :data:`MAP_STEP_PX` pixels from the
-    first (``grid``, one more row and column than needed), interpolated between."""
-    step = MAP_STEP_PX
+    """(rows, cols) float32: values given every ``RENDER.erase.map_step_px`` pixels from
+    the first (``grid``, one more row and column than needed), interpolated between."""
+    step = RENDER.erase.map_step_px
     size = (grid.shape[1] - 1) * step + 1, (grid.shape[0] - 1) * step + 1
     return cv2.resize(grid.astype(np.float32), size, interpolation=cv2.INTER_LINEAR)[:rows, :cols]
 
@@ -453,17 +423,18 @@ def _foreign(lab, valid, hole, printed, on, square_px, colours) -> np.ndarray:
 def _grow_to_paper(view: _TopDown, lab, valid, sheet_m: np.ndarray, board, colours) -> np.ndarray:
     """``sheet_m`` ((2, 2) low, high corner) grown side by side while the next line of the
     view (``lab``, the box from the view's origin) beyond it is mostly the paper's colour
-    (``colours``, :func:`_print_colours`), at most :data:`PAPER_GROWTH_SQUARES` squares;
-    not at all where the floor beyond is the paper's colour."""
+    (``colours``, :func:`_print_colours`), at most ``RENDER.erase.paper_growth_squares``
+    squares; not at all where the floor beyond is the paper's colour."""
     rows, cols = valid.shape
     box = (0, 0, cols, rows)
     if colours is None:
         return sheet_m
     paper, _, tolerance = colours
     like_paper = (np.linalg.norm(lab - paper, axis=2) < tolerance) & valid
-    reach = int(PAPER_GROWTH_SQUARES * board.square_m * view.ppm)
+    growth = RENDER.erase.paper_growth_squares
+    reach = int(growth * board.square_m * view.ppm)
     # A floor the paper's colour tells nothing: the sheet stays as printed.
-    far = board.square_m * (PAPER_GROWTH_SQUARES + 0.5)
+    far = board.square_m * (growth + 0.5)
     ring = view.rectangle(sheet_m + [[-2 * far], [2 * far]], box) & ~view.rectangle(sheet_m + [[-far], [far]], box)
     if (ring & valid).sum() >= 20 and np.linalg.norm(np.median(lab[ring & valid], axis=0) - paper) < tolerance:
         return sheet_m
@@ -479,7 +450,7 @@ def _grow_to_paper(view: _TopDown, lab, valid, sheet_m: np.ndarray, board, colou
                 break
             line = like_paper[r0:r1 + 1, at] if axis == 0 else like_paper[at, c0:c1 + 1]
             seen = valid[r0:r1 + 1, at] if axis == 0 else valid[at, c0:c1 + 1]
-            if seen.sum() < 0.5 * len(seen) or line.sum() < PAPER_LINE_SHARE * seen.sum():
+            if seen.sum() < 0.5 * len(seen) or line.sum() < RENDER.erase.paper_line_share * seen.sum():
                 break
             n = k
         grown[0 if sign < 0 else 1, axis] += sign * n / view.ppm
@@ -490,13 +461,13 @@ def _sources(view: _TopDown, texture, sheet_m, bad, ring, depth=0) -> list:
     """Parts of the sheet ``sheet_m`` ((2, 2) low, high corner, meters) with the offset
     (view pixels) of the place their texture is copied from (:func:`_best_offset`): the
     whole sheet, or where no place is all floor, its halves across the longer side, and
-    theirs (to :data:`MAX_SPLITS` deep). Parts that find none are left out."""
+    theirs (to ``RENDER.erase.max_splits`` deep). Parts that find none are left out."""
     rows, cols = bad.shape
     part = view.rectangle(sheet_m, (0, 0, cols, rows))
     found = _best_offset(texture, part, bad, ring)
     if found is not None:
         return [(sheet_m, found)]
-    if depth >= MAX_SPLITS:
+    if depth >= RENDER.erase.max_splits:
         return []
     axis = int(np.argmax(sheet_m[1] - sheet_m[0]))
     middle = 0.5 * (sheet_m[0, axis] + sheet_m[1, axis])
@@ -562,7 +533,7 @@ def _photo_region(calibration, corners_m, around_m, shape):
         return calibration.pixels_from_floor(dense)
 
     outer = outline_px(corners_m + np.sign(corners_m - corners_m.mean(axis=0)) * around_m)
-    pad = EDGE_GROW_PX + 3 * int(np.ceil(FEATHER_PX)) + 1
+    pad = RENDER.erase.edge_grow_px + 3 * int(np.ceil(RENDER.erase.feather_px)) + 1
     x0, y0 = np.floor(outer.min(axis=0)).astype(int) - pad
     x1, y1 = np.ceil(outer.max(axis=0)).astype(int) + pad + 1
     x0, y0, x1, y1 = max(0, x0), max(0, y0), min(w, x1), min(h, y1)

@@ -12,7 +12,7 @@ along the depth with the front at +y, z up from the floor. The result, a
 (the front faces +x), y to the item's left, z up, the footprint centered on the origin and
 the base at z = 0. Its bounding box is exactly the item's size: width along y, depth along
 x, height along z (a final fit scales the assembled parts onto the box; at the catalog
-sizes the builders already come within :data:`FIT_SLACK_M` of it, and round things
+sizes the builders already come within ``RENDER.furniture.fit_slack_m`` of it, and round things
 become ovals when an item's width and depth differ).
 :func:`world_from_item` places it in the floor frame (z up, floor at z = 0) by the item's
 position and yaw.
@@ -33,13 +33,7 @@ import trimesh
 from layout.catalog import CATALOG
 
 from ..errors import FurnishError
-
-# The assembled parts may miss the box by this much before the fit (per side, meters); a
-# builder that misses it by more has a bug (checked in the tests).
-FIT_SLACK_M = 0.02
-# Bevels smaller than this are left out (sharp edges): they cost triangles and show only
-# from a few centimeters away.
-BEVEL_MIN_M = 0.004
+from .settings import RENDER
 
 
 # --------------------------------------------------------------------------------------
@@ -244,7 +238,7 @@ def _rounded_box_mesh(lo, hi, radius, segments):
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     center, half = (lo + hi) / 2, (hi - lo) / 2
     r = float(min(radius, 0.999 * half.min()))
-    if r < BEVEL_MIN_M:  # too small to see: a sharp box, 12 triangles
+    if r < RENDER.furniture.bevel_min_m:  # too small to see: a sharp box, 12 triangles
         r = 0.0
     inner = half - max(r, 0.0)
     if r <= 1e-6:

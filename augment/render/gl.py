@@ -19,15 +19,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .settings import RENDER
+
 # Debian packages behind each backend, for the error message when none loads.
 _EGL_PACKAGES = "libegl1 libegl-mesa0 libgl1-mesa-dri"
 _OSMESA_PACKAGES = "libosmesa6"
 # libglvnd's EGL finds Mesa through this vendor file (package libegl-mesa0).
 _MESA_EGL_VENDOR = Path("/usr/share/glvnd/egl_vendor.d/50_mesa.json")
-
-# Near and far clipping planes for all renders, meters: rooms are at most ~12 m across.
-ZNEAR_M = 0.05
-ZFAR_M = 40.0
 
 
 def _loads(name: str) -> bool:
@@ -81,10 +79,6 @@ def _import_pyrender():
 
 pyrender = _import_pyrender()
 
-# Shadow-pass depth offset (glPolygonOffset factor, units). pyrender's own bias is too
-# small for walls lit at a grazing angle and leaves stripes of "shadow acne" on them.
-SHADOW_OFFSET = (2.0, 8.0)
-
 
 def _by_name(node):
     return node.name or ""
@@ -120,7 +114,7 @@ def pyrender_camera(K: np.ndarray) -> "pyrender.IntrinsicsCamera":
     # OpenGL's pixel (i, j) covers [i, i+1): its center is i + 0.5, OpenCV's is i.
     return pyrender.IntrinsicsCamera(
         fx=K[0, 0], fy=K[1, 1], cx=K[0, 2] + 0.5, cy=K[1, 2] + 0.5,
-        znear=ZNEAR_M, zfar=ZFAR_M,
+        znear=RENDER.gl.znear_m, zfar=RENDER.gl.zfar_m,
     )
 
 
@@ -134,13 +128,14 @@ def gl_from_cv_pose(world_from_camera: np.ndarray) -> np.ndarray:
 
 
 def _with_shadow_offset(shadow_pass):
-    """Wrap one renderer's shadow pass so it writes depths pushed back by SHADOW_OFFSET
-    (slope-scaled, so grazing surfaces get more)."""
+    """Wrap one renderer's shadow pass so it writes depths pushed back by
+    ``RENDER.gl.shadow_offset`` (slope-scaled, so grazing surfaces get more): pyrender's own
+    bias is too small for walls lit at a grazing angle and leaves stripes of "shadow acne"."""
     from OpenGL import GL
 
     def offset_pass(*args, **kwargs):
         GL.glEnable(GL.GL_POLYGON_OFFSET_FILL)
-        GL.glPolygonOffset(*SHADOW_OFFSET)
+        GL.glPolygonOffset(*RENDER.gl.shadow_offset)
         try:
             return shadow_pass(*args, **kwargs)
         finally:

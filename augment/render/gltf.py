@@ -7,13 +7,8 @@ import numpy as np
 from layout.geometry import triangulate_polygon
 
 from .furniture import furniture_for, placed_items, world_from_item
+from .settings import RENDER
 from .staged import wall_segments
-
-FLOOR_RGBA = (196, 170, 132, 255)    # the glTF scene's floor and walls
-
-
-WALL_RGBA = (232, 229, 222, 255)
-
 
 # glTF is y up; the floor frame is z up: (x, y, z) -> (x, z, -y).
 GLTF_FROM_FLOOR = np.array([[1.0, 0, 0, 0], [0, 0, 1, 0], [0, -1, 0, 0], [0, 0, 0, 1]])
@@ -24,7 +19,7 @@ def _floor_mesh(polygon_m: np.ndarray):
 
     poly = np.asarray(polygon_m, dtype=np.float64)
     vertices = np.column_stack([poly, np.zeros(len(poly))])
-    return trimesh.Trimesh(vertices, triangulate_polygon(poly), face_colors=FLOOR_RGBA, process=False)
+    return trimesh.Trimesh(vertices, triangulate_polygon(poly), face_colors=RENDER.gltf.floor_rgba, process=False)
 
 
 def _wall_mesh(walls_m: np.ndarray, height_m: float):
@@ -39,7 +34,7 @@ def _wall_mesh(walls_m: np.ndarray, height_m: float):
         n = len(v)
         v += [(x0, y0, 0.0), (x1, y1, 0.0), (x1, y1, height_m), (x0, y0, height_m)]
         f += [(n, n + 2, n + 1), (n, n + 3, n + 2)]
-    return trimesh.Trimesh(np.array(v), np.array(f), face_colors=WALL_RGBA, process=False)
+    return trimesh.Trimesh(np.array(v), np.array(f), face_colors=RENDER.gltf.wall_rgba, process=False)
 
 
 def _matte(tree: dict) -> None:

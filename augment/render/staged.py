@@ -47,34 +47,11 @@ from numba import njit, prange
 from layout.fileio import write_atomic
 
 from .furniture import furniture_for, placed_items, world_from_item
-from .gl import ZNEAR_M, Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
+from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
+from .settings import RENDER, StagedSettings
 from ..photo.io import JPEG_QUALITY, encode_image
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
-PAPER_ALBEDO = 0.85         # the board's white squares: office paper
-
-
-@dataclass(frozen=True)
-class Tolerances:
-    """Every threshold of the renderer in one place (meters unless named otherwise)."""
-
-    occlusion_m: float = 0.06          # furniture this much behind an occluder still shows
-    occlusion_rel: float = 0.03        # ... plus this fraction of the occluder's distance
-    floor_level_m: float = 0.02        # furniture pixels this low take the floor's shadows
-    caster_min_height_m: float = 0.03  # parts lower than this cast no shadow (rugs)
-    shadow_samples: int = 10           # key-light directions averaged for a soft shadow
-    ao_strength: float = 0.8           # share of the ambient light occlusion removes at most
-    side_ao_weight: float = 0.45       # occlusion by the sides of things, relative to overhead
-    floor_cell_max_px: int = 900       # floor raster: at most this many cells a side
-    floor_cell_min_m: float = 0.004    # ... and cells no finer than this
-    occlusion_long_px: int = 800       # the floor mask is read at most this large
-    render_budget_px: float = 1.4e6    # rendered pixels (after supersampling) per image
-    max_supersample: float = 2.0
-    min_render_scale: float = 0.6      # large photos are rendered at this scale at least, then upsampled
-    margin_px: int = 6                 # around the region furniture and shadows can reach
-
-
-TOL = Tolerances()
 
 
 # --------------------------------------------------------------------------------------
@@ -179,7 +156,8 @@ def _window(small, candidates, f_small):
     return centroids[k], math.sqrt(area / math.pi) / f_small
 
 
-def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | None = None) -> Lighting:
+def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | None = None,
+                      settings: StagedSettings | None = None) -> Lighting:
     """Estimate exposure, colour and the key light's direction from a calibrated photo.
 
     Parameters
@@ -191,11 +169,14 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         exposure (white paper on the floor).
     floor_mask : (h, w) bool, optional
         Visible floor; else the floor is taken below the horizon, within 8 m.
+    settings : StagedSettings, optional
+        Default ``RENDER.staged`` (:mod:`augment.render.settings`).
 
     Returns
     -------
     Lighting
     """
+    settings = RENDER.staged if settings is None else settings
     image = _check_image(image)
     K, dist, pose = _camera(calibration)
     h, w = image.shape[:2]
@@ -214,7 +195,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     lum = rgb @ np.array([0.299, 0.587, 0.114])
     white = rgb[lum >= np.percentile(lum, 60)]
     paper = np.median(_to_linear(white), axis=0)
-    irradiance = paper / PAPER_ALBEDO
+    irradiance = paper / settings.paper_albedo
 
     # The board may lie in a sunny patch or a shadow: scale to the floor at large.
     small_scale = min(1.0, 320.0 / max(h, w))
@@ -270,12 +251,6 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
 # depth map seen from the light. Vertex colours are the linear light to the power 1/2.2,
 # the photo's encoding; pixel = (fill + key x visibility) in linear light.
 
-# Share of the non-key light that comes from the sky (above) rather than from all round.
-_SKY_SHARE = 0.55
-_FRONT_FILL = 0.18   # light from the room behind the camera, relative to the irradiance
-_BOUNCE = 0.5        # light off the floor, relative to the floor's brightness
-_METAL_ENV = 0.5     # what a metal mirrors of the room, relative to the irradiance
-
 
 def _vertex_occlusion(z_m, normals, item_height_m):
     """Baked ambient occlusion per vertex (n,): darker near the item's base (over 5 cm,
@@ -285,7 +260,8 @@ def _vertex_occlusion(z_m, normals, item_height_m):
     return ao * (1.0 - 0.35 * np.maximum(-normals[:, 2], 0.0))
 
 
-def _vertex_light(v, n, albedo, roughness, metal, emissive, ao, lighting: Lighting, cam_pos, forward_xy):
+def _vertex_light(v, n, albedo, roughness, metal, emissive, ao, lighting: Lighting, cam_pos, forward_xy,
+                  settings: StagedSettings):
     """Linear light leaving each vertex toward the camera: (fill (n, 3), key (n, 3)).
 
     Per vertex (n,) or (n, 3) arrays: positions, unit normals, albedo (linear RGB),
@@ -306,9 +282,10 @@ def _vertex_light(v, n, albedo, roughness, metal, emissive, ao, lighting: Lighti
     nz = n[:, 2]
     front = np.append(-forward_xy, 0.35)
     front /= np.linalg.norm(front)
-    around = rest * _SKY_SHARE * (0.5 + 0.5 * nz) + rest * (1.0 - _SKY_SHARE) + _FRONT_FILL * np.maximum(n @ front, 0)
-    fill = (around[:, None] * E + _BOUNCE * floor * (0.5 - 0.5 * nz)[:, None]) * diffuse
-    fill += (_METAL_ENV * metal * (0.6 + 0.4 * np.maximum(nz, 0.0)))[:, None] * albedo * E
+    sky = settings.sky_share
+    around = rest * sky * (0.5 + 0.5 * nz) + rest * (1.0 - sky) + settings.front_fill * np.maximum(n @ front, 0)
+    fill = (around[:, None] * E + settings.bounce * floor * (0.5 - 0.5 * nz)[:, None]) * diffuse
+    fill += (settings.metal_env * metal * (0.6 + 0.4 * np.maximum(nz, 0.0)))[:, None] * albedo * E
     ndl = np.maximum(n @ l, 0.0)
     key = (f_key * ndl / sin_e)[:, None] * E * diffuse
     # Highlight: normalized Blinn-Phong with Schlick's Fresnel.
@@ -330,7 +307,7 @@ def _encode(linear):
     return np.column_stack([np.clip(linear, 0.0, 1.0) ** (1.0 / GAMMA), np.ones(len(linear))]).astype(np.float32)
 
 
-def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy):
+def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings: StagedSettings):
     """The furniture as pyrender meshes in the floor frame, lit: (all light, key light
     alone), one primitive per texture (all untextured parts share one)."""
     groups: dict = {}
@@ -358,7 +335,7 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy):
         metal = np.repeat([p[3] for p in per], sizes)
         emissive = np.repeat(np.array([p[4] for p in per], dtype=np.float64), sizes, axis=0)
         ao = _vertex_occlusion(v[:, 2] - np.concatenate(hs), n, np.repeat([p[5] for p in per], sizes))
-        fill, key = _vertex_light(v, n, albedo, rough, metal, emissive, ao, lighting, cam_pos, forward_xy)
+        fill, key = _vertex_light(v, n, albedo, rough, metal, emissive, ao, lighting, cam_pos, forward_xy, settings)
         positions, normals = v.astype(np.float32), n.astype(np.float32)
         indices = np.concatenate(fs).astype(np.uint32)
         texture = members[0][0].material if tex_key else None
@@ -519,7 +496,7 @@ class _Caster:
     z_top: float
 
 
-def _casters(placed, tol: Tolerances):
+def _casters(placed, settings: StagedSettings):
     out = []
     for item, furniture in placed:
         T = world_from_item(item)
@@ -527,7 +504,7 @@ def _casters(placed, tol: Tolerances):
             if not part.casts_shadow:
                 continue
             v = part.vertices @ T[:3, :3].T + T[:3, 3]
-            if v[:, 2].max() < tol.caster_min_height_m:
+            if v[:, 2].max() < settings.caster_min_height_m:
                 continue
             tri = None if part.convex else v[part.faces]
             out.append(_Caster(v, tri, float(v[:, 2].min()), float(v[:, 2].max())))
@@ -606,12 +583,7 @@ def _shadow_directions(direction, softness_rad, n):
     return out
 
 
-# Ambient occlusion bins: parts grouped by the height of their underside (what hides the
-# sky from the floor below) and by their own height (what hides it from the floor beside).
-_AO_BINS_M = np.array([0.0, 0.06, 0.15, 0.3, 0.55, 0.9, 1.5, 1e9])
-
-
-def _floor_gain(casters, lighting: Lighting, extent_m, tol: Tolerances):
+def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings):
     """What the floor's brightness is multiplied by, in the photo's gamma: (irradiance with
     the furniture / without) ** (1 / 2.2), as a (rows, cols) float32 raster over the floor
     rectangle ``extent_m`` ((xmin, ymin), (xmax, ymax)); and its grid.
@@ -623,14 +595,14 @@ def _floor_gain(casters, lighting: Lighting, extent_m, tol: Tolerances):
     (the sides of things hide the sky near their base)."""
     lo, hi = np.asarray(extent_m[0], dtype=np.float64), np.asarray(extent_m[1], dtype=np.float64)
     size = hi - lo
-    cell = max(tol.floor_cell_min_m, float(size.max()) / tol.floor_cell_max_px)
+    cell = max(settings.floor_cell_min_m, float(size.max()) / settings.floor_cell_max_px)
     shape = (int(math.ceil(size[1] / cell)) + 1, int(math.ceil(size[0] / cell)) + 1)
     grid = _FloorGrid(lo, cell, shape)
     if not casters:
         return np.ones(shape, np.float32), grid
     shadow = np.zeros(shape, np.float32)
     layer = np.zeros(shape, np.uint8)
-    dirs = [d for d in _shadow_directions(lighting.direction, lighting.softness_rad, tol.shadow_samples)
+    dirs = [d for d in _shadow_directions(lighting.direction, lighting.softness_rad, settings.shadow_samples)
             if d[2] < -0.05]
     footprints = _Footprints(casters)
     for d in dirs:
@@ -645,25 +617,28 @@ def _floor_gain(casters, lighting: Lighting, extent_m, tol: Tolerances):
         shadow = _blur(shadow, max(0.5, 0.35 * spacing / cell))
     k = max(1, int(round(0.02 / cell)))  # occlusion is smooth: a 2 cm raster
     coarse = _FloorGrid(lo, cell * k, (shape[0] // k + 1, shape[1] // k + 1))
-    nb = len(_AO_BINS_M) - 1
+    # Ambient occlusion bins: parts grouped by the height of their underside (what hides the
+    # sky from the floor below) and by their own height (what hides it from the floor beside).
+    bins_m = settings.ao_bins_m
+    nb = len(bins_m) - 1
     free = np.ones(coarse.shape, np.float32)
     raster = np.zeros(coarse.shape, np.uint8)
     bottoms = np.array([c.z_bottom for c in casters])
     heights = np.array([c.z_top - c.z_bottom for c in casters])
     for key, sigma_of, weight in ((bottoms, lambda z: max(0.015, 0.45 * z), 0.8),
-                                  (heights, lambda z: float(np.clip(0.12 * z, 0.015, 0.1)), tol.side_ao_weight)):
-        bins = np.clip(np.searchsorted(_AO_BINS_M, key, side="right") - 1, 0, nb - 1)
+                                  (heights, lambda z: float(np.clip(0.12 * z, 0.015, 0.1)), settings.side_ao_weight)):
+        bins = np.clip(np.searchsorted(bins_m, key, side="right") - 1, 0, nb - 1)
         for b in np.unique(bins):
             raster[:] = 0
             # Footprints only: every part as its convex hull seen from above.
             _Footprints([_Caster(casters[i].points if casters[i].triangles is None
                                  else casters[i].triangles.reshape(-1, 3), None, 0.0, 0.0)
                          for i in np.flatnonzero(bins == b)]).fill(raster, coarse)
-            z = 0.5 * (_AO_BINS_M[b] + min(_AO_BINS_M[b + 1], 2.5))
+            z = 0.5 * (bins_m[b] + min(bins_m[b + 1], 2.5))
             blocked = _blur(raster.astype(np.float32), sigma_of(z) / coarse.cell_m)
             free *= 1.0 - weight * np.clip(blocked, 0, 1)
     ao = cv2.resize(1.0 - free, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
-    ratio = 1.0 - lighting.key_fraction * shadow - (1.0 - lighting.key_fraction) * tol.ao_strength * ao
+    ratio = 1.0 - lighting.key_fraction * shadow - (1.0 - lighting.key_fraction) * settings.ao_strength * ao
     return np.power(np.clip(ratio, 0.02, 1.0), 1.0 / GAMMA).astype(np.float32), grid
 
 
@@ -681,13 +656,13 @@ def _scaled_K(K, s):
     return Ks
 
 
-def _mask_occluders(floor_mask, K, pose, tol: Tolerances):
+def _mask_occluders(floor_mask, K, pose, settings: StagedSettings):
     """How far (horizontally, meters) from the camera the photo's content stands at each
     pixel, (h', w') float32 at working scale ``s`` (also returned): a pixel that is not
     floor shows something standing on the first floor pixel below it, along the image of
     the vertical through it; 1e6 where that walk leaves the photo first."""
     h, w = floor_mask.shape
-    s = min(1.0, tol.occlusion_long_px / max(h, w))
+    s = min(1.0, settings.occlusion_long_px / max(h, w))
     hs, ws = max(2, round(h * s)), max(2, round(w * s))
     m = cv2.resize(floor_mask.astype(np.uint8) * 255, (ws, hs), interpolation=cv2.INTER_AREA) > 127
     # Specks of "not floor" inside the floor are segmentation noise.
@@ -768,11 +743,11 @@ _OCCLUDERS = _Bounded(4)
 _FURNITURE = _Bounded(256)
 
 
-def _mask_occluders_cached(floor_mask, K, pose, tol):
+def _mask_occluders_cached(floor_mask, K, pose, settings):
     key = (hashlib.sha1(np.packbits(floor_mask)).hexdigest(), floor_mask.shape, K.tobytes(), pose.tobytes(),
-           tol.occlusion_long_px)
+           settings.occlusion_long_px)
     if key not in _OCCLUDERS:
-        _OCCLUDERS[key] = _mask_occluders(floor_mask, K, pose, tol)
+        _OCCLUDERS[key] = _mask_occluders(floor_mask, K, pose, settings)
     return _OCCLUDERS[key]
 
 
@@ -852,7 +827,7 @@ def _check_image(image) -> np.ndarray:
     return a
 
 
-def _reach_points(placed, lighting: Lighting, tol: Tolerances):
+def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
     """Floor-frame points whose projection bounds what the furniture and its shadows can
     touch: each box's corners grown by 0.35 m (contact darkening), and the shadows of its
     upper corners along the key light's extreme directions."""
@@ -874,7 +849,7 @@ def _reach_points(placed, lighting: Lighting, tol: Tolerances):
 
 def _roi(points_px, depth, size_px, margin):
     w, h = size_px
-    if np.any(depth <= ZNEAR_M):  # something reaches behind the camera: everything may show
+    if np.any(depth <= RENDER.gl.znear_m):  # something reaches behind the camera: everything may show
         return (0, 0, w, h)
     x0, y0 = np.floor(points_px.min(axis=0)).astype(int) - margin
     x1, y1 = np.ceil(points_px.max(axis=0)).astype(int) + margin + 1
@@ -904,11 +879,11 @@ def _undistort_map(K, dist, roi, step=8):
     return mx, my
 
 
-def _render_scale(box_px, supersample, tol: Tolerances):
+def _render_scale(box_px, supersample, settings: StagedSettings):
     if supersample is not None:
         return float(supersample)
-    s = math.sqrt(tol.render_budget_px / box_px)
-    s = float(np.clip(s, tol.min_render_scale, tol.max_supersample))
+    s = math.sqrt(settings.render_budget_px / box_px)
+    s = float(np.clip(s, settings.min_render_scale, settings.max_supersample))
     if 0.85 <= s < 1.3:
         return 1.0  # resampling by a few percent would blur more than it smooths
     return round(s * 4) / 4 if s > 1 else s
@@ -918,7 +893,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                   floor_mask: np.ndarray | None = None, floor_polygon=None,
                   lighting: Lighting | None = None, seed: int = 0, assets: dict | None = None,
                   supersample: float | None = None, self_shadows: bool = True, layer: bool = False,
-                  tol: Tolerances = TOL) -> Staged:
+                  settings: StagedSettings | None = None) -> Staged:
     """Render furniture into a calibrated photo, with its shadows on the photo's floor.
 
     Parameters
@@ -948,7 +923,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         Kind -> GLB/OBJ path, or parts from :func:`augment.render.furniture.load_asset`.
     supersample : float, optional
         Rendered pixels per photo pixel along each axis. Default: as many as
-        ``tol.render_budget_px`` allows over the region furniture and shadows reach, up
+        ``settings.render_budget_px`` allows over the region furniture and shadows reach, up
         to 2 (larger photos are rendered below 1 and upsampled); the renderer's 4x
         multisampling antialiases edges in any case.
     self_shadows : bool
@@ -956,12 +931,14 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         the light).
     layer : bool
         Also return the RGBA layer.
-    tol : Tolerances
+    settings : StagedSettings, optional
+        Default ``RENDER.staged`` (:mod:`augment.render.settings`).
 
     Returns
     -------
     Staged
     """
+    settings = RENDER.staged if settings is None else settings
     timings = {}
     t0 = time.perf_counter()
     image = _check_image(image)
@@ -978,7 +955,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     walls = None if floor_polygon is None else wall_segments(floor_polygon)
     K, dist, pose = _camera(calibration)
     if lighting is None:
-        lighting = estimate_lighting(image, calibration, floor_mask)
+        lighting = estimate_lighting(image, calibration, floor_mask, settings)
     placed = [(it, furniture_for(it, seed, assets, _FURNITURE)) for it in items]
     timings["build"] = time.perf_counter() - t0
 
@@ -987,8 +964,8 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     out = image.copy()
     roi = None
     if placed:
-        reach = _reach_points(placed, lighting, tol)
-        roi = _roi(*_project(reach, K, pose, dist), (w, h), tol.margin_px)
+        reach = _reach_points(placed, lighting, settings)
+        roi = _roi(*_project(reach, K, pose, dist), (w, h), settings.margin_px)
     if roi is None:  # nothing in view
         zeros, ones = np.zeros((h, w), np.float32), np.ones((h, w), np.float32)
         lay = np.dstack([out, np.zeros((h, w), np.uint8)]) if layer else None
@@ -1002,7 +979,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     else:
         box = roi
     bw, bh = box[2] - box[0], box[3] - box[1]
-    s = _render_scale(bw * bh, supersample, tol)
+    s = _render_scale(bw * bh, supersample, settings)
     rw, rh = max(1, round(bw * s)), max(1, round(bh * s))
     Kr = _scaled_K(K - np.array([[0, 0, box[0]], [0, 0, box[1]], [0, 0, 0]]), 1.0)
     Kr[0, 0] *= rw / bw
@@ -1018,7 +995,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     cam_pos = -R.T @ tvec
     cam_xy = cam_pos[:2]
     forward_xy = R[2, :2] / max(float(np.linalg.norm(R[2, :2])), 1e-9)
-    fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy)
+    fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy, settings)
     camera, camera_gl = pyrender_camera(Kr), gl_from_cv_pose(np.linalg.inv(pose))
     flags = pyrender.RenderFlags.RGBA | pyrender.RenderFlags.FLAT
     full, depth = renderer.render(_flat_scene(fulls, camera, camera_gl), rw, rh, flags=flags)
@@ -1043,7 +1020,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     rays[2] = 1.0
     world = (R.T.astype(np.float32) @ (rays * d - tvec[:, None].astype(np.float32))).T
     if self_shadows:
-        corners = np.concatenate([_reach_points([(it, f)], lighting, tol)[:8] for it, f in placed])
+        corners = np.concatenate([_reach_points([(it, f)], lighting, settings)[:8] for it, f in placed])
         view = _light_view(renderer, fulls, lighting, corners.min(axis=0), corners.max(axis=0),
                            2048 if rw * rh > 2.5e6 else 1024)
         radius_px = float(np.clip(0.3 * math.tan(lighting.softness_rad) / view.texel_m, 1.0, 8.0))
@@ -1072,7 +1049,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     # Occlusion, and which furniture pixels lie on the floor (rugs), at render resolution.
     t = time.perf_counter()
     low = np.zeros((rh, rw), np.uint8)
-    low[ys, xs] = np.where(world[:, 2] < tol.floor_level_m, 255, 0)
+    low[ys, xs] = np.where(world[:, 2] < settings.floor_level_m, 255, 0)
     if floor_mask is not None or (walls is not None and len(walls)):
         if floor_mask is not None and not distorted:  # the photo pixel of each render pixel
             px = np.stack([(xs + 0.5) * (bw / rw) - 0.5 + box[0], (ys + 0.5) * (bh / rh) - 0.5 + box[1]], 1)
@@ -1080,7 +1057,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
             px = _project(world, K, pose, dist)[0]
         else:
             px = None
-        hidden = _hidden(world, rays, px, floor_mask, walls, K, pose, cam_xy, tol)
+        hidden = _hidden(world, rays, px, floor_mask, walls, K, pose, cam_xy, settings)
         if hidden.any():
             # Hidden pixels grown by one (so a hidden silhouette's soft edge goes too), then
             # a cut a pixel wide.
@@ -1101,10 +1078,10 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         low = cv2.resize(low, (bw, bh), interpolation=interp)
     # Shadows: the floor raster warped onto the box, only where the floor can be (rays
     # pointing down; the warp folds the floor's far side into the sky).
-    casters = _casters(placed, tol)
+    casters = _casters(placed, settings)
     on_floor = reach[reach[:, 2] < 1e-6, :2]
     pts = np.concatenate([on_floor] + [c.points[:, :2] for c in casters])
-    gain_floor, grid = _floor_gain(casters, lighting, (pts.min(axis=0) - 0.3, pts.max(axis=0) + 0.3), tol)
+    gain_floor, grid = _floor_gain(casters, lighting, (pts.min(axis=0) - 0.3, pts.max(axis=0) + 0.3), settings)
     shift = np.array([[1.0, 0, -box[0]], [0, 1, -box[1]], [0, 0, 1]])
     H_box = shift @ K @ np.column_stack([R[:, 0], R[:, 1], tvec]) @ grid.floor_from_raster()
     gain = cv2.warpPerspective(gain_floor, H_box, (bw, bh), flags=cv2.INTER_LINEAR,
@@ -1130,7 +1107,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     return Staged(out, lay, full_alpha, full_gain, lighting, roi, s, timings)
 
 
-def _hidden(world, rays, px, floor_mask, walls, K, pose, cam_xy, tol) -> np.ndarray:
+def _hidden(world, rays, px, floor_mask, walls, K, pose, cam_xy, settings) -> np.ndarray:
     """Which furniture pixels (points ``world`` (n, 3), camera rays ``rays`` (3, n),
     photo pixels ``px`` (n, 2) when a floor mask is given) lie behind the nearest thing
     the photo shows along their ray: the floor mask's edge or a wall."""
@@ -1138,13 +1115,13 @@ def _hidden(world, rays, px, floor_mask, walls, K, pose, cam_xy, tol) -> np.ndar
     reach_xy = np.hypot(world[:, 0] - cam_xy[0], world[:, 1] - cam_xy[1])
     occluder = np.full(len(world), np.inf)
     if floor_mask is not None:
-        dmap, ms = _mask_occluders_cached(floor_mask, K, pose, tol)
+        dmap, ms = _mask_occluders_cached(floor_mask, K, pose, settings)
         mi = np.clip(np.rint((px[:, 1] + 0.5) * ms - 0.5).astype(int), 0, dmap.shape[0] - 1)
         mj = np.clip(np.rint((px[:, 0] + 0.5) * ms - 0.5).astype(int), 0, dmap.shape[1] - 1)
         occluder = np.minimum(occluder, dmap[mi, mj])
     if walls is not None and len(walls):
         occluder = np.minimum(occluder, _wall_occluders(walls, (R.T @ rays).T, cam_xy))
-    slack = tol.occlusion_m + tol.occlusion_rel * np.where(np.isfinite(occluder), occluder, 0.0)
+    slack = settings.occlusion_m + settings.occlusion_rel * np.where(np.isfinite(occluder), occluder, 0.0)
     return reach_xy > occluder + slack
 
 

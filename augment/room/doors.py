@@ -7,6 +7,7 @@ import numpy as np
 from layout.geometry import edge_distances
 
 from ..errors import FurnishError
+from .settings import ROOM
 
 
 def open_edges(polygon_m: np.ndarray, floor) -> list[int]:
@@ -28,19 +29,6 @@ def open_edges(polygon_m: np.ndarray, floor) -> list[int]:
     mid = 0.5 * (polygon_m + np.roll(polygon_m, -1, axis=0))
     nearest = edge_distances(mid, floor.polygon_m).argmin(axis=1)
     return [k for k, e in enumerate(nearest) if floor.edge_kind[e] != "boundary"]
-
-
-# Furniture area inside a marked door's swing zone that still leaves the door usable.
-DOOR_GRAZE_M2 = 0.005
-
-
-# A door's feet this far apart: a narrow cupboard door to a wide double door.
-DOOR_WIDTH_M = (0.5, 2.5)
-
-
-# The middle of a door's feet this near a wall of the layout's floor (which lies the wall
-# margin inside the measured one, itself a few centimeters off at worst).
-DOOR_FROM_WALL_M = 0.5
 
 
 def doors_on_floor(doors_px, calibration, polygon_m: np.ndarray, open_edges_=()) -> tuple:
@@ -72,6 +60,7 @@ def doors_on_floor(doors_px, calibration, polygon_m: np.ndarray, open_edges_=())
     """
     from layout.spec import Opening
 
+    fit = ROOM.fit
     poly = np.asarray(polygon_m, dtype=np.float64)
     walls = sorted(set(range(len(poly))) - {int(k) for k in open_edges_})
     cols, rows = calibration.size_px
@@ -88,14 +77,14 @@ def doors_on_floor(doors_px, calibration, polygon_m: np.ndarray, open_edges_=())
             raise FurnishError(f"{name}: above the horizon, so not on the floor; give the feet of the door's two "
                                "sides, where they meet the floor")
         width = float(np.linalg.norm(feet[1] - feet[0]))
-        lo, hi = DOOR_WIDTH_M
+        lo, hi = fit.door_width_m
         if not lo <= width <= hi:
             raise FurnishError(f"{name}: its two feet are {width:.2f} m apart on the floor, and a door is {lo:g}-"
                                f"{hi:g} m wide; give the feet of its two sides, where they meet the floor")
         middle = feet.mean(axis=0)
         distance = edge_distances(middle[None], poly)[0]
         k = min(walls, key=lambda e: distance[e]) if walls else None
-        if k is None or distance[k] > DOOR_FROM_WALL_M:
+        if k is None or distance[k] > fit.door_from_wall_m:
             where = "the floor found has no wall in view" if k is None else \
                 f"it is {distance[k]:.2f} m from the nearest wall of the floor found"
             raise FurnishError(f"{name}: {where}; a door is marked at a wall, by the feet of its two sides "

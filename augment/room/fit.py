@@ -5,12 +5,13 @@ The floor in view is the room: the layouts are made on the measured polygon shru
 wall margin, at the measured height; items taller than the room, too large for the floor
 at any angle, or beyond the floor's share for furniture are dropped, and when a
 suggestion still cannot place everything, the least important remaining item goes.
+
+Its tuning is ``ROOM.fit`` (:mod:`augment.room.settings`), read at call time.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -23,32 +24,18 @@ from layout.geometry import polygon_area
 from layout.presets import DEFAULT_ROOM, PRESETS
 
 from ..errors import FurnishError
-from .doors import DOOR_GRAZE_M2, doors_on_floor, open_edges
+from .doors import doors_on_floor, open_edges
+from .settings import ROOM
 
 
-@dataclass(frozen=True)
-class Tolerances:
-    """What :func:`fit_spec` and the outputs decide by, in one place."""
-
-    wall_margin_m: float = 0.05      # the layout's floor is the measured one shrunk by this (the outline
-                                     # strays up to augment.floor.polygon.SIMPLIFY_M beyond the mask; baseboards)
-    max_fill: float = 0.5            # summed footprint of floor-standing items: at most this share of the floor
-    seed_tries: int = 3              # seeds tried per suggestion before an item is dropped
-    min_difference_m: float = 0.3    # a suggestion this close to an earlier one (diversity) is a twin
-    fit_cell_m: float = 0.02         # raster cell of the "does this footprint fit the floor" test
-    fit_angles: int = 36             # orientations tried, over 180 degrees
-
-
-TOL = Tolerances()
-
-
-def _rect_fits(polygon_m: np.ndarray, width_m: float, depth_m: float, tol: Tolerances = TOL) -> bool:
+def _rect_fits(polygon_m: np.ndarray, width_m: float, depth_m: float) -> bool:
     """Whether a ``width_m`` x ``depth_m`` rectangle fits inside the polygon at some
-    position and orientation (rasterized at ``tol.fit_cell_m``; 180 / ``fit_angles``
+    position and orientation (rasterized at ``ROOM.fit.fit_cell_m``; 180 / ``fit_angles``
     degree steps)."""
-    cell = tol.fit_cell_m
+    fit = ROOM.fit
+    cell = fit.fit_cell_m
     kw, kd = max(1, math.ceil(width_m / cell)), max(1, math.ceil(depth_m / cell))
-    for theta in np.linspace(0.0, np.pi, tol.fit_angles, endpoint=False):
+    for theta in np.linspace(0.0, np.pi, fit.fit_angles, endpoint=False):
         c, s = math.cos(theta), math.sin(theta)
         p = polygon_m @ np.array([[c, -s], [s, c]])  # the rectangle's axes become x and y
         lo = p.min(axis=0)
@@ -62,7 +49,7 @@ def _rect_fits(polygon_m: np.ndarray, width_m: float, depth_m: float, tol: Toler
     return False
 
 
-def inset_polygon(polygon_m, margin_m: float, cell_m: float = 0.01) -> np.ndarray | None:
+def inset_polygon(polygon_m, margin_m: float, cell_m: float | None = None) -> np.ndarray | None:
     """The polygon shrunk by ``margin_m`` on every side (rasterized at ``cell_m``, the
     largest piece left, straightened within a cell), counter-clockwise; None when
     nothing is left.
@@ -70,12 +57,15 @@ def inset_polygon(polygon_m, margin_m: float, cell_m: float = 0.01) -> np.ndarra
     Parameters
     ----------
     polygon_m : (n, 2) float64
-    margin_m, cell_m : float
+    margin_m : float
+    cell_m : float, optional
+        Default ``ROOM.fit.inset_cell_m``.
 
     Returns
     -------
     (m, 2) float64 or None
     """
+    cell_m = ROOM.fit.inset_cell_m if cell_m is None else cell_m
     poly = np.ascontiguousarray(polygon_m, dtype=np.float64)
     if margin_m <= 0:
         return poly.copy()
@@ -204,14 +194,14 @@ def _units(spec) -> list[list]:
     return units
 
 
-def fit_spec(spec, polygon_m, height_m: float, tol: Tolerances = TOL):
+def fit_spec(spec, polygon_m, height_m: float):
     """Fit a spec's furniture to a measured floor.
 
     The room becomes ``polygon_m`` and ``height_m`` (the spec's doors and windows, in
     another frame, are dropped); items that cannot be placed are dropped: taller than
     the room, a footprint (a rigid group's: all its members) that
     does not fit inside the floor at any angle, and, in the spec's order, those that
-    would take the summed footprint of floor-standing items over ``tol.max_fill`` of the
+    would take the summed footprint of floor-standing items over ``ROOM.fit.max_fill`` of the
     floor's area.
 
     Parameters
@@ -230,6 +220,7 @@ def fit_spec(spec, polygon_m, height_m: float, tol: Tolerances = TOL):
     dropped : list of dict
         ``{"id", "kind", "reason"}`` per dropped item, in the order they were dropped.
     """
+    fit = ROOM.fit
     poly = np.ascontiguousarray(polygon_m, dtype=np.float64)
     area = abs(polygon_area(poly))
     kinds = {i.id: i.kind.name for i in spec.items}
@@ -252,15 +243,15 @@ def fit_spec(spec, polygon_m, height_m: float, tol: Tolerances = TOL):
     groups = {g.id: g for g in spec.groups}
     for unit in _units(spec):
         w, d = unit[0].kind.size_m[:2] if len(unit) == 1 else _unit_rect(unit, groups)
-        if not _rect_fits(poly, w, d, tol):
+        if not _rect_fits(poly, w, d):
             drop(unit, f"its footprint {w:.2f} x {d:.2f} m fits the {area:.1f} m\u00b2 floor at no angle")
     stacked = _stacked_tops(spec.constraints)
-    budget, used = tol.max_fill * area, 0.0
+    budget, used = fit.max_fill * area, 0.0
     for unit in _units(spec):
         fp = sum(i.kind.size_m[0] * i.kind.size_m[1] for i in unit if _blocks_floor(i, stacked))
         if used + fp > budget + 1e-9:
             drop(unit, f"no room left: {used + fp:.2f} m\u00b2 of furniture would cover more than "
-                       f"{100 * tol.max_fill:.0f} % of the {area:.1f} m\u00b2 floor")
+                       f"{100 * fit.max_fill:.0f} % of the {area:.1f} m\u00b2 floor")
         else:
             used += fp
     return spec, [{"id": i, "kind": kinds[i], "reason": r} for i, r in reasons.items()]
@@ -329,10 +320,10 @@ def too_small(area_m2: float, dropped: list) -> FurnishError:
                         + ". Show more of the floor: step back, turn toward the room, or hold the camera higher")
 
 
-def _layout_floor(floor, height_m: float, photo: Path, tol: Tolerances) -> np.ndarray:
+def _layout_floor(floor, height_m: float, photo: Path) -> np.ndarray:
     """The floor the layouts are made on: the measured polygon shrunk by the wall margin
     (the measured one itself when shrinking leaves no usable polygon)."""
-    for poly in (inset_polygon(floor.polygon_m, tol.wall_margin_m), floor.polygon_m):
+    for poly in (inset_polygon(floor.polygon_m, ROOM.fit.wall_margin_m), floor.polygon_m):
         if poly is None:
             continue
         try:
@@ -346,32 +337,32 @@ def _layout_floor(floor, height_m: float, photo: Path, tol: Tolerances) -> np.nd
 def _clean(rep: dict) -> bool:
     # A door the user marked is kept clear as the floor's edge is kept.
     return (rep["overlaps"]["count"] == 0 and rep["outside_m2"] == 0.0
-            and all(a <= DOOR_GRAZE_M2 for a in rep["door_clearance_m2"]))
+            and all(a <= ROOM.fit.door_graze_m2 for a in rep["door_clearance_m2"]))
 
 
-def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress,
-           tol: Tolerances):
+def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress):
     """Solve ``suggestions`` layouts, suggestion K from seed ``seed + K - 1``; one that
     collides, leaves the floor or repeats an earlier suggestion (closer than
-    ``tol.min_difference_m``, :func:`layout.diversity`) is solved again from seed
-    ``seed + K - 1 + N``, then ``+ 2N`` (``tol.seed_tries`` in all). A twin is kept when
+    ``ROOM.fit.min_difference_m``, :func:`layout.diversity`) is solved again from seed
+    ``seed + K - 1 + N``, then ``+ 2N`` (``ROOM.fit.seed_tries`` in all). A twin is kept when
     no try gives anything else (a floor may allow only so many arrangements). When a
     suggestion has no clean layout, the least important unit (the spec's last) is
     dropped and all are solved again."""
     from layout import diversity
     from layout.spec import build
 
+    fit = ROOM.fit
     while True:
         model, solver = build(spec)
         layouts, reports, failed = [], [], None
         for k in range(suggestions):
             twin = None
-            for t in range(tol.seed_tries):
+            for t in range(fit.seed_tries):
                 lay = solver.solve(model, seed=seed + k + t * suggestions)
                 rep = layout_report.evaluate(lay)
                 if not _clean(rep):
                     continue
-                if all(diversity([old, lay]) >= tol.min_difference_m for old in layouts):
+                if all(diversity([old, lay]) >= fit.min_difference_m for old in layouts):
                     break
                 twin = twin or (lay, rep)
             else:
@@ -397,7 +388,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
 
 
 def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=None, calibration=None,
-                        asset_kinds=(), warnings: list, tol: Tolerances = TOL):
+                        asset_kinds=(), warnings: list):
     """The furniture to lay out on a measured floor (the pipeline's ``furniture`` stage).
 
     Parameters
@@ -420,7 +411,7 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
     Returns
     -------
     spec : Spec
-        On the layout's floor (the measured one shrunk by ``tol.wall_margin_m``), the items
+        On the layout's floor (the measured one shrunk by ``ROOM.fit.wall_margin_m``), the items
         that fit.
     dropped : list of dict
         ``{"id", "kind", "reason"}`` of the items left out.
@@ -430,10 +421,10 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
     FurnishError
         The floor is no usable room, or too small for any of the furniture.
     """
-    poly = _layout_floor(floor, height_m, where, tol)
+    poly = _layout_floor(floor, height_m, where)
     edges = open_edges(poly, floor)
     spec = _spec_for_floor(source, poly, height_m, warnings, edges)
-    fitted, dropped = fit_spec(spec, poly, height_m, tol)
+    fitted, dropped = fit_spec(spec, poly, height_m)
     if doors is not None and len(doors):
         fitted = dataclasses.replace(fitted, doors=doors_on_floor(doors, calibration, poly, edges))
     if not fitted.items:

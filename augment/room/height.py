@@ -6,7 +6,7 @@ keeps the idea and makes each step a measurement:
 
 1. **Line segments** (:func:`detect_segments`): OpenCV's FastLineDetector (Canny edges,
    then line fitting) on a lightly blurred gray copy shrunk by a whole factor to about
-   ``LINE_SIDE_PX`` across, so a 12 MP photo costs about what a 1 MP one does. Not HED:
+   ``CAMERA.lines.side_px`` across, so a 12 MP photo costs about what a 1 MP one does. Not HED:
    it needs trained weights Stager does not ship, and its edge map would still have to be
    cut into straight segments. LSD (``method="lsd"``) is the alternative; slower, and it
    breaks lines into more short pieces.
@@ -18,11 +18,12 @@ keeps the idea and makes each step a measurement:
    have made the segment lies in it, so the largest cosine any of them can have with the
    floor normal is the cosine of the angle between the normal and that plane. Real
    vertical edges have it within a fraction of a degree of 1; 0.9 admits 26 degrees, far
-   too loose once the normal is known, so ``MIN_VERTICAL_COS`` is much stricter. The
-   segment must also pass through ``v`` (its endpoints within ``VP_DISTANCE_FRACTION`` of
-   the line from its midpoint to ``v``). Pieces of one edge are merged (across longer gaps
-   only where the image shows the edge in the gap) and followed in the image beyond their
-   detected ends (past a baseboard, through a light pool).
+   too loose once the normal is known, so ``CAMERA.lines.min_vertical_cos`` is much
+   stricter. The segment must also pass through ``v`` (its endpoints within
+   ``CAMERA.lines.vp_distance_fraction`` of the line from its midpoint to ``v``). Pieces
+   of one edge are merged (across longer gaps only where the image shows the edge in the
+   gap) and followed in the image beyond their detected ends (past a baseboard, through a
+   light pool).
 4. **Metrology** (:func:`segment_heights`): the lower end of an edge standing on the floor
    maps to floor meters through the floor homography; the vertical through that foot
    images to the line from the foot to ``v``, and the top's height ``h`` solves
@@ -37,12 +38,12 @@ keeps the idea and makes each step a measurement:
    the foot moves to that boundary; without one, the image just below looks like the
    floor around the board, a weak test); both ends are in the frame; no long line crosses
    the vertical above the top (a window head has its wall, and the ceiling line, above
-   it); the height is plausible (``MIN_HEIGHT_M`` excludes door frames).
+   it); the height is plausible (``ROOM.height.min_m`` excludes door frames).
 7. **Estimate** (:func:`measure_height`, :func:`height_from_segments`): the weighted
    median of the highest well-supported cluster of heights (anything that stands on the
    floor but stops short of the ceiling measures lower), weights from the image length
    and whether a long line (the ceiling's) meets the top; a confidence from the cluster's
-   weight and share. Without a trustworthy candidate: ``FALLBACK_HEIGHT_M`` with
+   weight and share. Without a trustworthy candidate: ``ROOM.height.fallback_m`` with
    ``fallback=True`` and the reason.
 
 Conventions: images are (row, col) arrays; points are (x, y) pixels with pixel centers at
@@ -60,37 +61,10 @@ import numpy as np
 from layout.geometry import point_segment_distances
 
 from ..camera.calibration import Calibration
-from ..camera.lines import (FLOOR_SHARE, VP_DISTANCE_FRACTION, as_camera, as_segments, detect_raw, floor_share,
-                            is_vertical, prepare_lines, sample_image, shrink_factor, to_full, to_gray, to_small,
-                            toward_vanishing_point)
-
-# Tolerances and limits, in one place.
-FALLBACK_HEIGHT_M = 2.5
-# Plausible wall heights. Doors are 2.0-2.1 m and habitable rooms at least 2.2 m high, so
-# door frames, which stand on the floor too, fall below the range.
-MIN_HEIGHT_M, MAX_HEIGHT_M = 2.2, 5.0
-MERGE_GAP_FRACTION = 0.015                 # pieces of one edge merge across gaps up to this x side,
-BRIDGE_GAP_FRACTION = 0.12                 # ... and up to this where the image shows the edge in the gap
-BRIDGE_CONTRAST = 2.0                      # ... as a gradient across it this many times the wall's beside it
-MIN_EDGE_FRACTION = 0.08                   # a measured vertical edge spans at least this x the shorter side
-BORDER_FRACTION = 0.01                     # ends this close to the frame are cut off by it
-HORIZON_MARGIN_FRACTION = 0.003            # a foot lies at least this far (x longer side) below the horizon
-JUNCTION_FRACTION = 0.012                  # a line meets an end when it passes this close (x longer side)
-MIN_JUNCTION_FRACTION = 0.06               # ... and is at least this long (x longer side)
-FLOOR_BAND_FRACTION = 0.02                 # the mask is searched this far (x longer side) either side of a foot,
-FLOOR_BAND_EDGE = 0.08                     # ... or this x the edge's length if more (a baseboard's height)
-WALL_STRAIGHTNESS = 0.02                   # feet of one wall lie this close to a line (x their distance)
-SPAN_PROBE_FRACTION = np.array([0.05, 0.08, 0.11])  # probed beyond a junction's ends (x longer side)
-FLOOR_COLOR_BELOW = (0.03, 0.15)           # ... read this far below a foot (x the edge's length)
-AGAINST_WALL_M = 0.15                      # radiators and the like stand this close to their wall
-FLOOR_RUN_PX = 5                           # the floor begins where this many floor pixels follow
-TRACE_FRACTION = 0.06                      # edge ends are followed at most this x the longer side
-TRACE_RATIO = 0.35                         # ... while the gradient across keeps this x its median
-TRACE_GAP_PX = 3                           # ... across gaps up to this (detection pixels)
-CLUSTER_WIDTH = 0.03                       # heights within 3 % form one cluster
-CONFIDENCE_WEIGHT = 0.3                    # cluster weight (edge length / side, x2 if capped) for confidence 0.63
-UNVERIFIED_CONFIDENCE = 0.5                # confidence factor when no floor mask checked the feet
-
+from ..camera.lines import (as_camera, as_segments, detect_raw, floor_share, is_vertical, prepare_lines, sample_image,
+                            shrink_factor, to_full, to_gray, to_small, toward_vanishing_point)
+from ..camera.settings import CAMERA
+from .settings import ROOM
 
 @dataclass(frozen=True)
 class HeightResult:
@@ -99,7 +73,7 @@ class HeightResult:
     Attributes
     ----------
     height_m : float
-        The wall height in meters (``FALLBACK_HEIGHT_M`` when ``fallback``).
+        The wall height in meters (``ROOM.height.fallback_m`` when ``fallback``).
     confidence : float
         0 to 1: how much and how consistent the evidence is (0 for the fallback).
     fallback : bool
@@ -300,7 +274,7 @@ def _across(gx: np.ndarray, gy: np.ndarray, p: np.ndarray, q: np.ndarray, offset
 def _bridge_test(grads: tuple[np.ndarray, np.ndarray], k: int):
     """A ``bridge(p, q)`` for :func:`_merge_vertical`: does the edge run on between full-size
     points p and q? Yes when the gradient across the line (best of three neighboring lines)
-    is ``BRIDGE_CONTRAST`` times the gradient a few pixels to either side, in median.
+    is ``ROOM.height.bridge_contrast`` times the gradient a few pixels to either side, in median.
     ``grads`` are the shrunk photo's (x, y) gradients, ``k`` its factor."""
     gx, gy = grads
 
@@ -308,7 +282,7 @@ def _bridge_test(grads: tuple[np.ndarray, np.ndarray], k: int):
         p, q = to_small(p, k), to_small(q, k)
         on = np.median(_across(gx, gy, p, q, np.array([-1.0, 0.0, 1.0])).max(axis=0))
         beside = np.median(_across(gx, gy, p, q, np.array([-6.0, -5.0, 5.0, 6.0])))
-        return on >= BRIDGE_CONTRAST * max(beside, 1.0)
+        return on >= ROOM.height.bridge_contrast * max(beside, 1.0)
 
     return bridge
 
@@ -319,10 +293,11 @@ def _trace(grads: tuple[np.ndarray, np.ndarray], starts: np.ndarray, ends: np.nd
 
     Detectors end a segment early where the edge fades (a baseboard, a light pool). Along
     the segment's line the gradient across it is compared with its median over the
-    detected part; an end moves on while ``TRACE_RATIO`` of that holds, across gaps up to
-    ``TRACE_GAP_PX``, for at most ``max_px``. ``grads`` are the shrunk photo's (x, y)
-    gradients. Returns new starts and ends.
+    detected part; an end moves on while ``ROOM.height.trace_ratio`` of that holds, across
+    gaps up to ``ROOM.height.trace_gap_px``, for at most ``max_px``. ``grads`` are the
+    shrunk photo's (x, y) gradients. Returns new starts and ends.
     """
+    settings = ROOM.height
     starts, ends = starts.copy(), ends.copy()
     lateral = np.array([-1.0, 0.0, 1.0])
     for i in range(len(starts)):
@@ -335,9 +310,9 @@ def _trace(grads: tuple[np.ndarray, np.ndarray], starts: np.ndarray, ends: np.nd
             continue
         u = (q - p) / length
         for end, sign in ((q, 1.0), (p, -1.0)):
-            hits = _across(*grads, end, end + sign * max_px * u, lateral).max(axis=0)[1:] >= TRACE_RATIO * ref
+            hits = _across(*grads, end, end + sign * max_px * u, lateral).max(axis=0)[1:] >= settings.trace_ratio * ref
             misses = np.cumsum(~hits) - np.maximum.accumulate(np.where(hits, np.cumsum(~hits), 0))  # current gap
-            stop = np.flatnonzero(misses > TRACE_GAP_PX)
+            stop = np.flatnonzero(misses > settings.trace_gap_px)
             hits = hits[: stop[0]] if len(stop) else hits
             reach = np.flatnonzero(hits)[-1] + 1 if hits.any() else 0
             if sign > 0:
@@ -351,11 +326,12 @@ def _merge_edges(vseg: np.ndarray, K: np.ndarray, pose: np.ndarray, side: int, b
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Vertical segments merged into edges: lower ends (n, 2) and upper ends (n, 2), both on
     the edge's line through the vanishing point."""
+    settings = ROOM.height
     up = pose[:3, 2]
     vp = K @ up
     bases, tops = [], []
-    for g in _merge_vertical(vseg, vp, 2 * VP_DISTANCE_FRACTION * side, MERGE_GAP_FRACTION * side,
-                             bridge, BRIDGE_GAP_FRACTION * side):
+    for g in _merge_vertical(vseg, vp, 2 * CAMERA.lines.vp_distance_fraction * side, settings.merge_gap_fraction * side,
+                             bridge, settings.bridge_gap_fraction * side):
         s = vseg[g]
         lengths = np.hypot(s[:, 2] - s[:, 0], s[:, 3] - s[:, 1])
         c = np.sum((s[:, :2] + s[:, 2:]) / 2 * lengths[:, None], axis=0) / max(lengths.sum(), 1e-12)
@@ -375,6 +351,7 @@ def _snap_to_floor(bases: np.ndarray, tops: np.ndarray, floor_mask: np.ndarray, 
     Returns the new bases and whether a floor boundary was found there: going down the
     edge, the mask turns from mostly not-floor to mostly floor.
     """
+    share = CAMERA.lines.floor_share
     snapped = bases.copy()
     found = np.zeros(len(bases), bool)
     for i in range(len(bases)):
@@ -388,7 +365,7 @@ def _snap_to_floor(bases: np.ndarray, tops: np.ndarray, floor_mask: np.ndarray, 
         j = np.arange(run, len(ks) - run)                        # candidate boundary positions
         below = (csum[j + run] - csum[j]) / run                  # mean over [k, k + run)
         above = (csum[j] - csum[j - run]) / run                  # mean over [k - run, k)
-        ok = (below >= FLOOR_SHARE) & (above <= 1 - FLOOR_SHARE)
+        ok = (below >= share) & (above <= 1 - share)
         if ok.any():
             k = ks[j[ok]][np.argmin(np.abs(ks[j[ok]]))]
             snapped[i] = bases[i] + k * down
@@ -401,22 +378,23 @@ def _drop_to_floor(tops: np.ndarray, K: np.ndarray, pose: np.ndarray, floor_mask
     """For each point (k, 2), where the vertical through it meets the floor in the mask.
 
     Walks down the point's vertical (its line away from the vanishing point) to the first
-    pixel that starts a run of ``FLOOR_RUN_PX`` floor pixels, after at least one that is
-    not floor; in strides of ``step`` pixels, then pixel by pixel over the last stride.
-    Returns (k, 2) pixels, NaN where the walk leaves the frame first.
+    pixel that starts a run of ``ROOM.height.floor_run_px`` floor pixels, after at least
+    one that is not floor; in strides of ``step`` pixels, then pixel by pixel over the
+    last stride. Returns (k, 2) pixels, NaN where the walk leaves the frame first.
     """
+    floor_run_px = ROOM.height.floor_run_px
     h, w = floor_mask.shape
     b = K @ pose[:3, 2]
     down = -(b[:2] - tops * b[2])
     down /= np.linalg.norm(down, axis=1, keepdims=True)
-    run = max(2, FLOOR_RUN_PX // step)
+    run = max(2, floor_run_px // step)
     first = _first_floor(tops, down, floor_mask, np.arange(0.0, float(np.hypot(h, w)), step), run)
     out = np.full((len(tops), 2), np.nan)
     found = np.isfinite(first)
     if step > 1 and found.any():
         starts = tops[found] + (first[found, None] - step) * down[found]
-        refined = _first_floor(starts, down[found], floor_mask, np.arange(0.0, step + FLOOR_RUN_PX + 1.0),
-                               FLOOR_RUN_PX, need_other=False)
+        refined = _first_floor(starts, down[found], floor_mask, np.arange(0.0, step + floor_run_px + 1.0),
+                               floor_run_px, need_other=False)
         first[found] = np.where(np.isfinite(refined), first[found] - step + refined, first[found])
     out[found] = tops[found] + first[found, None] * down[found]
     return out
@@ -473,7 +451,7 @@ def _ceiling_candidates(lines: np.ndarray, K: np.ndarray, pose: np.ndarray, floo
 
     Points along each line are dropped vertically to where the floor mask begins (walked in
     strides of ``k`` pixels); for the top of a wall their heights agree (within
-    ``CLUSTER_WIDTH``, at least half of them) and their feet lie on one floor line, the
+    ``ROOM.height.cluster_width``, at least half of them) and their feet lie on one floor line, the
     wall's. The line must also span its wall: where the wall goes on beyond an end of the
     line (feet beyond it continue along the same floor line) while the line does not (with
     ``grads``, the shrunk photo's gradients: no edge along its extension), it is a window
@@ -481,6 +459,7 @@ def _ceiling_candidates(lines: np.ndarray, K: np.ndarray, pose: np.ndarray, floo
     representative base and top (the point of median height), the height and the
     agreeing length, pixels.
     """
+    settings = ROOM.height
     side = max(size_px)
     up = pose[:3, 2]
     above = lines[(_elevation(lines[:, :2], K, up) > 0) & (_elevation(lines[:, 2:], K, up) > 0)]
@@ -500,12 +479,12 @@ def _ceiling_candidates(lines: np.ndarray, K: np.ndarray, pose: np.ndarray, floo
         if good.sum() < 3:
             continue
         med = np.median(heights[good])
-        agree = good & (np.abs(np.log(np.where(good, heights, 1.0) / med)) <= CLUSTER_WIDTH)
+        agree = good & (np.abs(np.log(np.where(good, heights, 1.0) / med)) <= settings.cluster_width)
         if agree.sum() < max(3, 0.5 * m):
             continue
         # The wall's foot: a line through the agreeing feet, in floor meters.
         feet = _floor_points(bases[agree], K, pose)
-        tol = WALL_STRAIGHTNESS * np.linalg.norm(feet - _camera_xy(pose), axis=1).mean()
+        tol = settings.wall_straightness * np.linalg.norm(feet - _camera_xy(pose), axis=1).mean()
         center, normal, on_wall = _wall_line(feet, tol)
         agree[np.flatnonzero(agree)[~on_wall]] = False
         if agree.sum() < max(3, 0.5 * m):
@@ -523,6 +502,7 @@ def _ceiling_candidates(lines: np.ndarray, K: np.ndarray, pose: np.ndarray, floo
 
 def _stops_mid_wall(line, K, pose, floor_mask, size_px, k, grads, center, normal, tol) -> bool:
     """Does the wall under ``line`` go on beyond one of its ends while the line does not?"""
+    settings = ROOM.height
     width, height = size_px
     length = np.hypot(line[2] - line[0], line[3] - line[1])
     direction = (line[2:] - line[:2]) / length
@@ -531,7 +511,7 @@ def _stops_mid_wall(line, K, pose, floor_mask, size_px, k, grads, center, normal
         ref = np.median(_across(*grads, to_small(line[:2], k), to_small(line[2:], k), np.array([-1.0, 0.0, 1.0]))
                         .max(axis=0))
     for end, sign in ((line[:2], -1.0), (line[2:], 1.0)):
-        beyond = end + sign * np.outer(SPAN_PROBE_FRACTION * max(size_px), direction)
+        beyond = end + sign * np.outer(settings.span_probe_fraction * max(size_px), direction)
         inside = (beyond[:, 0] >= 0) & (beyond[:, 0] <= width - 1) & (beyond[:, 1] >= 0) & \
             (beyond[:, 1] <= height - 1)
         if inside.sum() < 2:
@@ -542,12 +522,12 @@ def _stops_mid_wall(line, K, pose, floor_mask, size_px, k, grads, center, normal
             continue
         off = np.abs((_floor_points(dropped[hit], K, pose) - center) @ normal)
         # Things against the wall (radiators, baseboards) stand a little in front of it.
-        if np.sum(off <= max(tol, AGAINST_WALL_M)) < 2:
+        if np.sum(off <= max(tol, settings.against_wall_m)) < 2:
             continue
         if ref is not None and ref > 0:
             far = beyond[inside][hit][-1]
             edge = _across(*grads, to_small(end, k), to_small(far, k), np.array([-1.0, 0.0, 1.0])).max(axis=0)
-            if np.mean(edge >= TRACE_RATIO * ref) >= 0.6:
+            if np.mean(edge >= settings.trace_ratio * ref) >= 0.6:
                 continue                # the line itself goes on: a piece of a longer junction
         return True
     return False
@@ -600,28 +580,30 @@ def _blocked_above(tops: np.ndarray, K: np.ndarray, pose: np.ndarray, lines: np.
                           posinf=0.0)
     starts = tops + clear_px * up
     ends = tops + np.maximum(reach, clear_px)[:, None] * up
-    far = point_segment_distances(tops, lines[:, :2], lines[:, 2:]) > clear_px      # (k, m): the top's own junction does not count
+    # (k, m): the top's own junction does not count.
+    far = point_segment_distances(tops, lines[:, :2], lines[:, 2:]) > clear_px
     return np.array([_crossed(starts[i:i + 1], ends[i:i + 1], lines[far[i]])[0] for i in range(len(tops))])
 
 
 def _floor_like_below(color: np.ndarray, k: int, shape: tuple[int, int], bases: np.ndarray, tops: np.ndarray,
                       K: np.ndarray, pose: np.ndarray) -> np.ndarray:
     """Without a floor mask: does the image just below each base look like the floor around
-    the board? Read ``FLOOR_COLOR_BELOW`` of the edge's length below it (past a baseboard).
+    the board? Read ``ROOM.height.floor_color_below`` of the edge's length below it (past a baseboard).
     No floor reference in view: no verdict (all True). (n,) bool."""
     down = bases - tops
     length = np.linalg.norm(down, axis=1, keepdims=True)
     down /= np.maximum(length, 1e-12)
-    ks = np.linspace(*FLOOR_COLOR_BELOW, 12)
+    ks = np.linspace(*ROOM.height.floor_color_below, 12)
     pts = bases[:, None, :] + (ks[None, :, None] * length[:, :, None]) * down[:, None, :]
     share = floor_share(color, k, shape, pts, K, pose)
-    return np.ones(len(bases), bool) if share is None else share >= FLOOR_SHARE
+    return np.ones(len(bases), bool) if share is None else share >= CAMERA.lines.floor_share
 
 
 def _edge_candidates(seg: np.ndarray, vertical: np.ndarray, K: np.ndarray, pose: np.ndarray,
                      size_px: tuple[int, int], floor_mask: np.ndarray | None, small: np.ndarray | None,
                      color: np.ndarray | None, grads) -> dict:
     """Vertical edges: merged, followed in the image, their feet checked against the floor."""
+    settings = ROOM.height
     width, height = size_px
     side = max(size_px)
     k = shrink_factor((height, width))
@@ -629,11 +611,12 @@ def _edge_candidates(seg: np.ndarray, vertical: np.ndarray, K: np.ndarray, pose:
     bases, tops = _merge_edges(seg[vertical], K, pose, side, bridge)
     if grads is not None and len(bases):
         # Follow each edge beyond its detected ends, then merge edges that now meet.
-        b, t = _trace(grads, to_small(bases, k), to_small(tops, k), TRACE_FRACTION * max(small.shape))
+        b, t = _trace(grads, to_small(bases, k), to_small(tops, k), settings.trace_fraction * max(small.shape))
         bases, tops = _merge_edges(np.hstack([to_full(b, k), to_full(t, k)]), K, pose, side)
     on_floor = np.ones(len(bases), bool)
     if floor_mask is not None and len(bases):
-        band = np.maximum(FLOOR_BAND_FRACTION * side, FLOOR_BAND_EDGE * np.linalg.norm(tops - bases, axis=1))
+        band = np.maximum(settings.floor_band_fraction * side,
+                          settings.floor_band_edge * np.linalg.norm(tops - bases, axis=1))
         bases, on_floor = _snap_to_floor(bases, tops, floor_mask, band)
     elif color is not None and len(bases):
         on_floor = _floor_like_below(color, k, (height, width), bases, tops, K, pose)
@@ -647,6 +630,7 @@ def _candidates(seg: np.ndarray, K: np.ndarray, pose: np.ndarray, size_px: tuple
                 color: np.ndarray | None = None) -> dict:
     """Every candidate measurement and the evidence about it, as arrays of one length:
     vertical edges, then (with a floor mask) wall--ceiling lines."""
+    settings = ROOM.height
     width, height = size_px
     side = max(size_px)
     k = shrink_factor((height, width))
@@ -657,10 +641,11 @@ def _candidates(seg: np.ndarray, K: np.ndarray, pose: np.ndarray, size_px: tuple
     # Long non-vertical lines: where tops end (the ceiling line), what blocks them, and
     # with a floor mask, candidates of their own.
     lines = seg[~vertical]
-    lines = lines[np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1]) >= MIN_JUNCTION_FRACTION * side]
+    lines = lines[np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
+                  >= settings.min_junction_fraction * side]
     if grads is not None and len(lines):
         b, t = _trace(grads, to_small(lines[:, 2:], k), to_small(lines[:, :2], k),
-                      TRACE_FRACTION * max(small.shape))
+                      settings.trace_fraction * max(small.shape))
         lines = np.hstack([to_full(t, k), to_full(b, k)])
     if floor_mask is not None and len(lines):
         cb, ct, _, clen = _ceiling_candidates(lines, K, pose, floor_mask, size_px, k, grads)
@@ -673,11 +658,11 @@ def _candidates(seg: np.ndarray, K: np.ndarray, pose: np.ndarray, size_px: tuple
     hz = -(np.linalg.inv(K).T @ pose[:3, 2])
     hz /= np.hypot(hz[0], hz[1])
     c["below"] = np.column_stack([bases, np.ones(len(bases))]) @ hz       # px on the floor side of the horizon
-    border = BORDER_FRACTION * side
+    border = settings.border_fraction * side
     for key, p in (("base_in", bases), ("top_in", tops)):
         c[key] = (p[:, 0] >= border) & (p[:, 0] <= width - 1 - border) & (p[:, 1] >= border) & \
             (p[:, 1] <= height - 1 - border)
-    r = JUNCTION_FRACTION * side
+    r = settings.junction_fraction * side
     olen = np.hypot(lines[:, 2] - lines[:, 0], lines[:, 3] - lines[:, 1])
     if len(lines) and len(bases):
         capped = np.max(np.where(point_segment_distances(tops, lines[:, :2], lines[:, 2:]) <= r, olen, 0), axis=1) > 0
@@ -706,35 +691,38 @@ def _result(c: dict | None, height_m: float, confidence: float, fallback: bool, 
 
 
 def _fallback(reason: str, c: dict | None = None) -> HeightResult:
-    return _result(c, FALLBACK_HEIGHT_M, 0.0, True, f"{reason}: assuming {FALLBACK_HEIGHT_M} m")
+    fallback_m = ROOM.height.fallback_m
+    return _result(c, fallback_m, 0.0, True, f"{reason}: assuming {fallback_m} m")
 
 
 def _combine(c: dict, valid: np.ndarray, side: int, verified: bool) -> HeightResult:
     """The weighted median of the highest well-supported cluster of heights.
 
     Weights: image length over the longer side, doubled when a long line meets the top.
-    Clusters: heights within ``CLUSTER_WIDTH`` of each candidate; a cluster is well supported
-    with at least half the weight of the best one, and the highest of those wins (door
-    frames, window heads and edges cut short all end below the ceiling). Confidence: the
-    support ``1 - exp(-W / CONFIDENCE_WEIGHT)`` of the cluster's weight W, times its share
-    of all the weight, times ``UNVERIFIED_CONFIDENCE`` when no floor mask verified the feet.
+    Clusters: heights within ``ROOM.height.cluster_width`` of each candidate; a cluster is
+    well supported with at least half the weight of the best one, and the highest of those
+    wins (door frames, window heads and edges cut short all end below the ceiling).
+    Confidence: the support ``1 - exp(-W / ROOM.height.confidence_weight)`` of the
+    cluster's weight W, times its share of all the weight, times
+    ``ROOM.height.unverified_confidence`` when no floor mask verified the feet.
     """
+    settings = ROOM.height
     weights = np.where(valid, c["weight_length"] / side * (1.0 + c["capped"]), 0.0)
     idx = np.flatnonzero(valid)
     logh = np.log(np.where(valid, c["heights"], 1.0))
-    near = np.abs(logh[idx, None] - logh[None, idx]) <= CLUSTER_WIDTH
+    near = np.abs(logh[idx, None] - logh[None, idx]) <= settings.cluster_width
     support = near.astype(float) @ weights[idx]
     strong = support >= 0.5 * support.max()
     pick = idx[strong][np.argmax(c["heights"][idx[strong]])]
     inliers = np.zeros(len(valid), bool)
-    inliers[idx] = np.abs(logh[idx] - logh[pick]) <= CLUSTER_WIDTH
+    inliers[idx] = np.abs(logh[idx] - logh[pick]) <= settings.cluster_width
     h, w = c["heights"][inliers], weights[inliers]
     order = np.argsort(h)
     cum = np.cumsum(w[order])
     estimate = float(h[order][np.searchsorted(cum, cum[-1] / 2)])
-    confidence = (1 - np.exp(-cum[-1] / CONFIDENCE_WEIGHT)) * cum[-1] / weights.sum()
+    confidence = (1 - np.exp(-cum[-1] / settings.confidence_weight)) * cum[-1] / weights.sum()
     if not verified:
-        confidence *= UNVERIFIED_CONFIDENCE
+        confidence *= settings.unverified_confidence
     edges = int(np.sum(inliers & (c["kind"] == 0)))
     lines = int(np.sum(inliers & (c["kind"] == 1)))
     what = " and ".join(part for part in (f"{edges} vertical edge{'s' * (edges != 1)}" if edges else "",
@@ -793,6 +781,7 @@ def height_from_segments(segments_px: np.ndarray, K: np.ndarray, camera_from_flo
 
 def _measure(seg, K, pose, size_px, floor_mask, small, color=None) -> HeightResult:
     """Candidates, the checks each must pass, and the estimate (or the fallback)."""
+    settings = ROOM.height
     width, height = size_px
     side = max(width, height)
     if len(seg) == 0:
@@ -801,13 +790,13 @@ def _measure(seg, K, pose, size_px, floor_mask, small, color=None) -> HeightResu
     if len(c["bases"]) == 0:
         return _fallback("no vertical edges found", c)
     with np.errstate(invalid="ignore"):
-        plausible = (c["heights"] >= MIN_HEIGHT_M) & (c["heights"] <= MAX_HEIGHT_M)
+        plausible = (c["heights"] >= settings.min_m) & (c["heights"] <= settings.max_m)
     valid = (plausible & c["on_floor"] & ~c["blocked"] & c["base_in"] & c["top_in"]
-             & (c["below"] >= HORIZON_MARGIN_FRACTION * side)
-             & (c["length"] >= MIN_EDGE_FRACTION * min(width, height)))
+             & (c["below"] >= settings.horizon_margin_fraction * side)
+             & (c["length"] >= settings.min_edge_fraction * min(width, height)))
     if not valid.any():
         return _fallback(f"none of {len(c['bases'])} candidate edges stands on the floor and reaches the ceiling "
-                         f"in view at a plausible height ({MIN_HEIGHT_M}-{MAX_HEIGHT_M} m); the ceiling may be "
+                         f"in view at a plausible height ({settings.min_m}-{settings.max_m} m); the ceiling may be "
                          "out of the photo", c)
     return _combine(c, valid, side, verified=floor_mask is not None)
 
@@ -826,13 +815,13 @@ def measure_height(image: np.ndarray, calibration: Calibration, floor_mask: np.n
         The floor segmentation. Not modified. When given, only edges whose foot lies where
         the floor begins count (window frames, which end at their sill, do not), and
         wall--ceiling lines are measured too. Without it the feet are checked by color
-        only and the confidence is at most ``UNVERIFIED_CONFIDENCE``.
+        only and the confidence is at most ``ROOM.height.unverified_confidence``.
 
     Returns
     -------
     HeightResult
-        ``height_m`` with a confidence, or ``FALLBACK_HEIGHT_M`` with ``fallback=True`` and
-        the reason when nothing trustworthy is in view.
+        ``height_m`` with a confidence, or ``ROOM.height.fallback_m`` with ``fallback=True``
+        and the reason when nothing trustworthy is in view.
 
     Notes
     -----

@@ -15,6 +15,7 @@ from augment.camera.calibration import _distortion_reach, turn_points
 from augment.camera.board import Board
 from augment.camera.calibrate import _focal_from_homography, calibrate_file, calibrate_photo, camera_profile, exif_intrinsics, load_profile, single_view_intrinsics, tilt_readings
 from augment.camera.detect import _find_chessboard, _saddle_refine, detect_board
+from augment.camera.settings import CAMERA
 from augment.errors import CalibrationError
 from augment.photo.exif import exif_focal_px, exif_orientation
 from augment.photo.io import read_photo
@@ -701,7 +702,7 @@ def test_far_board_tilt_is_settled_by_the_vertical_edges(far_board, as_detected,
     w, h = far_board.truth["size_px"]
     intrinsics = exif_intrinsics(far_board.truth["K"][0][0], (w, h))
     assert _normal_error_deg(calibrate_photo(far_board.image, Board(), intrinsics=intrinsics), far_board.truth) < 0.5
-    monkeypatch.setattr(calibrate, "AMBIGUOUS_RMS_RATIO", 1.0)  # the board's fit alone
+    monkeypatch.setattr(CAMERA.calibrate, "ambiguous_rms_ratio", 1.0)  # the board's fit alone
     assert _normal_error_deg(calibrate_photo(far_board.image, Board(), intrinsics=intrinsics), far_board.truth) > 30
 
 
@@ -748,7 +749,7 @@ def test_far_board_with_its_corner_mended_needs_no_vertical_edges(far_board, mon
     t = far_board.truth
     detection = detect_board(far_board.image, Board())
     assert _corner_errors_px(detection.corners_px, detection.ids, t["board"]["corners_px"]).max() < 0.3
-    monkeypatch.setattr(calibrate, "AMBIGUOUS_RMS_RATIO", 1.0)  # the board's fit alone
+    monkeypatch.setattr(CAMERA.calibrate, "ambiguous_rms_ratio", 1.0)  # the board's fit alone
     c = calibrate_photo(far_board.image, Board(), intrinsics=exif_intrinsics(t["K"][0][0], tuple(t["size_px"])))
     assert _normal_error_deg(c, t) < 0.5
     c = calibrate_photo(far_board.image, Board())

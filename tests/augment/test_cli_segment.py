@@ -282,7 +282,7 @@ def _inside_point(region):
 
 
 def test_segment_with_clicks_records_and_marks_them(tmp_path, capsys):
-    from augment.draw.floor import CLICK_COLORS
+    from augment.draw.settings import DRAW
 
     truth = truth_mask()
     fx, fy = _inside_point(truth)
@@ -298,8 +298,9 @@ def test_segment_with_clicks_records_and_marks_them(tmp_path, capsys):
     truth_iou = np.logical_and(mask, truth).sum() / np.logical_or(mask, truth).sum()
     assert truth_iou > 0.95
     overlay = cv2.imread(str(tmp_path / "f_overlay.png"))[..., ::-1]
-    assert tuple(overlay[fy, fx]) == CLICK_COLORS[1] and tuple(overlay[wy, wx]) != CLICK_COLORS[1]
-    assert tuple(overlay[wy - 8, wx]) == CLICK_COLORS[0]  # the red disc, between the arms of its white cross
+    colors = DRAW.floor.click_colors
+    assert tuple(overlay[fy, fx]) == colors[1] and tuple(overlay[wy, wx]) != colors[1]
+    assert tuple(overlay[wy - 8, wx]) == colors[0]  # the red disc, between the arms of its white cross
 
 
 def test_bad_clicks_are_refused(tmp_path, capsys):

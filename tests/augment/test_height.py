@@ -12,6 +12,8 @@ from augment.camera import lines as L
 from augment.room import height as H
 from augment.camera.board import Board
 from augment.camera.calibrate import calibrate_file
+from augment.camera.settings import CAMERA
+from augment.room.settings import ROOM
 from augment.render.gl import Renderer
 from augment.draw.height import height_overlay
 from augment.synth import render_sample
@@ -152,13 +154,13 @@ def test_tilted_segments_are_not_vertical():
     hi = project(np.column_stack([feet + [0.0, lean], np.full(3, 2.5)]))
     tilted = np.hstack([lo, hi])
     cos_3d, angle_deg, _ = L.vertical_alignment(tilted, K, CAMERA_FROM_FLOOR)
-    assert np.all(cos_3d < L.MIN_VERTICAL_COS) and np.all(cos_3d > 0.9)
+    assert np.all(cos_3d < CAMERA.lines.min_vertical_cos) and np.all(cos_3d > 0.9)
     assert np.all(angle_deg > 0.5)
     upright, _, dist = L.vertical_alignment(verticals(feet, 0.0, 2.5), K, CAMERA_FROM_FLOOR)
     np.testing.assert_allclose(upright, 1.0, atol=1e-9)
     assert np.all(dist < 1e-6)
     result = H.height_from_segments(tilted, K, CAMERA_FROM_FLOOR, SIZE)
-    assert result.fallback and result.height_m == H.FALLBACK_HEIGHT_M
+    assert result.fallback and result.height_m == ROOM.height.fallback_m
 
 
 def test_inputs_are_not_modified_and_results_are_read_only():
@@ -194,7 +196,7 @@ def test_blank_photo_falls_back(sample_calibration):
     w, h = sample_calibration.size_px
     blank = np.full((h, w, 3), 128, np.uint8)
     result = H.measure_height(blank, sample_calibration)
-    assert result.fallback and result.height_m == H.FALLBACK_HEIGHT_M and result.confidence == 0.0
+    assert result.fallback and result.height_m == ROOM.height.fallback_m and result.confidence == 0.0
     assert "assuming 2.5 m" in result.reason
     with pytest.raises(ValueError, match="calibration is for"):
         H.measure_height(blank[:100], sample_calibration)

@@ -20,12 +20,13 @@ from augment.app import cli
 from augment.floor import segment
 from augment.room import doors as room_doors
 from augment.room import fit
+from augment.room.settings import ROOM
 from augment.camera.board import Board
 from augment.camera.calibrate import calibrate_file
 from augment.photo.io import read_photo
-from augment.draw.floor import DOOR_COLOR
 from augment.floor.polygon import FloorPolygon
-from augment.draw.sheet import SHEET_GAP_PX, contact_sheet
+from augment.draw.settings import DRAW
+from augment.draw.sheet import contact_sheet
 from augment.errors import FurnishError
 from augment.pipeline import REPORT_KEYS, furnish, write_outputs
 from augment.render.gltf import scene_glb
@@ -382,7 +383,7 @@ def test_several_photos_in_one_command(tmp_path, capsys, monkeypatch):
     gray.write_bytes(cv2.imencode(".png", np.full((480, 640, 3), 128, np.uint8))[1].tobytes())
     out = tmp_path / "batch"
     # Every floor called uncertain, to see the photos to check listed at the end.
-    monkeypatch.setattr(segment, "DISPUTED_SHARE_WARN", 0.0)
+    monkeypatch.setattr(segment.FLOOR.segment, "disputed_share_warn", 0.0)
     code, stdout, err = run(["furnish", CRAMPED, gray, ROOMY, "--room", "bedroom", "--suggestions", "1",
                              "--out", out], capsys)
     # The photo without a board is refused with its own error; the others are furnished.
@@ -577,7 +578,7 @@ def test_fit_spec_caps_the_summed_footprint(square_spec):
     small = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], float)
     fitted, dropped = fit_spec(square_spec, small, 2.5)
     area = sum(i.kind.size_m[0] * i.kind.size_m[1] for i in fitted.items)
-    assert area <= fit.TOL.max_fill * 4.0 + 1e-9
+    assert area <= ROOM.fit.max_fill * 4.0 + 1e-9
     assert [i.id for i in fitted.items] == ["table", "chair_1", "chair_2"]
     assert [d["id"] for d in dropped] == ["lamp", "rack"] and all("no room left" in d["reason"] for d in dropped)
 
@@ -628,7 +629,7 @@ def test_furniture_goes_against_walls_not_the_photos_edge(roomy):
 def test_contact_sheet_layout(rng):
     images = [rng.integers(0, 255, (120, 160, 3), dtype=np.uint8) for _ in range(4)]
     sheet = contact_sheet(images)
-    gap = SHEET_GAP_PX
+    gap = DRAW.sheet.gap_px
     assert sheet.shape == (2 * 120 + 3 * gap, 2 * 160 + 3 * gap, 3)
     assert contact_sheet(images[:3]).shape == (120 + 2 * gap, 3 * 160 + 4 * gap, 3)
 
@@ -644,11 +645,11 @@ def test_a_repeated_suggestion_is_solved_again_from_another_seed(monkeypatch):
     def run(twin_seeds):
         monkeypatch.setattr(Solver, "solve", lambda self, model, seed=None, state=None:
                             real(self, model, seed=0 if seed in twin_seeds else seed))
-        _, layouts, _ = fit.solve_suggestions(spec, 2, 0, 20.0, [], pipeline._Progress(False, 2), fit.TOL)
+        _, layouts, _ = fit.solve_suggestions(spec, 2, 0, 20.0, [], pipeline._Progress(False, 2))
         return layouts
 
     first, second = run({1})
-    assert diversity([first, second]) >= fit.TOL.min_difference_m
+    assert diversity([first, second]) >= ROOM.fit.min_difference_m
     np.testing.assert_array_equal(second.position_m, real(Solver(**{**spec.solver.__dict__}), first.model,
                                                           seed=1 + 2).position_m)
     first, second = run({1, 3, 5})  # every try for suggestion 2 repeats suggestion 1
@@ -707,11 +708,11 @@ def test_a_marked_door_is_kept_clear(tmp_path, capsys):
     # The overlay shows the door as marked: a blue bar between its feet.
     overlay = cv2.cvtColor(cv2.imread(str(out / "overlay_floor.png")), cv2.COLOR_BGR2RGB)
     x, y = feet_px.mean(axis=0).round().astype(int)
-    assert np.abs(overlay[y, x].astype(int) - DOOR_COLOR).max() < 40, overlay[y, x]
+    assert np.abs(overlay[y, x].astype(int) - DRAW.floor.door_color).max() < 40, overlay[y, x]
     for k in (1, 2):
         layout = json.loads((out / f"layout_{k}.json").read_text())
         assert len(layout["room"]["doors_m"]) == 1
-        assert layout["metrics"]["door_clearance_m2"][0] <= room_doors.DOOR_GRAZE_M2
+        assert layout["metrics"]["door_clearance_m2"][0] <= ROOM.fit.door_graze_m2
     out.mkdir(exist_ok=True)
     for value, words in (("1193,280,1196,281", "apart on the floor, and a door is 0.5-2.5 m wide"),
                          ("1193,280,99999,219", "outside the photo (1280 x 960 px)"),

@@ -13,8 +13,9 @@ import trimesh
 from augment.camera.board import Board
 from augment.camera.calibration import Calibration, Intrinsics
 from augment.photo.io import read_photo
-from augment.render.furniture import BUILDERS, FIT_SLACK_M, Part, PlacedItem, build_furniture, furniture_from_asset, item_mesh, load_asset, placed_items
+from augment.render.furniture import BUILDERS, Part, PlacedItem, build_furniture, furniture_from_asset, item_mesh, load_asset, placed_items
 from augment.render.gl import Renderer
+from augment.render.settings import RENDER
 from augment.render.staged import Lighting, estimate_lighting, render_staged, write_jpeg
 from layout.catalog import CATALOG
 
@@ -260,7 +261,7 @@ def test_walls_in_the_mask_and_the_polygon_hide_what_stands_behind_them(renderer
 def test_every_kind_fills_its_box_exactly(kind):
     """Bounds equal the item's size within 1 mm (width along the item's y, depth along x),
     at the catalog size and at another; at the catalog size the builders themselves come
-    within FIT_SLACK_M of it (the final fit only trims)."""
+    within RENDER.furniture.fit_slack_m of it (the final fit only trims)."""
     assert kind in BUILDERS
     w, d, h = CATALOG[kind].size_m
     for size, seed in (((w, d, h), 0), ((w * 1.2, d * 0.9, h * 1.1), 3)):
@@ -271,7 +272,7 @@ def test_every_kind_fills_its_box_exactly(kind):
         if seed == 0:  # round things (tables, pots) are stretched into ovals at other sizes
             raw = f.raw_bounds_m
             target = np.array([[-size[0] / 2, -size[1] / 2, 0.0], [size[0] / 2, size[1] / 2, size[2]]])
-            assert np.abs(raw - target).max() < FIT_SLACK_M, (kind, f.style, raw - target)
+            assert np.abs(raw - target).max() < RENDER.furniture.fit_slack_m, (kind, f.style, raw - target)
         assert all(np.all(np.isfinite(p.vertices)) and np.allclose(np.linalg.norm(p.normals, axis=1), 1, atol=1e-6)
                    for p in f.parts)
 

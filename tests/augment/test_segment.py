@@ -17,12 +17,14 @@ from augment.floor import segment
 from augment.floor.upright import Upright
 from augment.camera.board import Board
 from augment.camera.calibrate import calibrate_photo, exif_intrinsics
-from augment.draw.floor import DISPUTED_COLOR, floor_overlay
-from augment.floor.polygon import BRIDGE_M, _bridge, floor_area_m2, floor_polygon
+from augment.draw.floor import floor_overlay
+from augment.draw.settings import DRAW
+from augment.floor.polygon import _bridge, floor_area_m2, floor_polygon
 from augment.render.gl import Renderer
 from augment.errors import SegmentationError
 from augment.floor.model import DEFAULT_MODEL, FloorModel, ModelSpec
-from augment.floor.segment import GRABCUT_LONG_PX, below_horizon, disputed_floor, floor_parts, segment_floor
+from augment.floor.segment import below_horizon, disputed_floor, floor_parts, segment_floor
+from augment.floor.settings import FLOOR
 from augment.synth import render_sample
 from layout.geometry import polygon_area, self_intersection
 
@@ -100,7 +102,7 @@ def test_floor_the_model_nearly_rules_out_is_left_to_grabcut(model, monkeypatch)
 
     missed, extra = missed_and_extra()
     assert missed < 0.01 and extra < 0.01, (missed, extra)
-    monkeypatch.setattr(segment, "SURE_OTHER", 0.03)
+    monkeypatch.setattr(FLOOR.segment, "sure_other", 0.03)
     assert missed_and_extra()[0] > 0.03
 
 
@@ -494,12 +496,12 @@ def test_a_floor_with_narrow_necks_gives_simple_polygons(held_out):
 
 
 def test_a_corridor_joins_two_polygons_into_one_simple_polygon():
-    """Two unit squares 1 m apart: the corridor (``BRIDGE_M`` wide, centered on the
-    line between the nearest corners) adds its own area and two half-width triangles
-    where it leaves the corners, 2 + 0.001 + 2 * 0.00025 m^2 by hand; the squares' edge
-    kinds are kept and the corridor's two sides are boundaries. A part that overlaps the
-    polygon cannot be joined without crossing."""
-    assert BRIDGE_M == 0.001
+    """Two unit squares 1 m apart: the corridor (``FLOOR.polygon.bridge_m`` wide,
+    centered on the line between the nearest corners) adds its own area and two
+    half-width triangles where it leaves the corners, 2 + 0.001 + 2 * 0.00025 m^2 by
+    hand; the squares' edge kinds are kept and the corridor's two sides are boundaries.
+    A part that overlaps the polygon cannot be joined without crossing."""
+    assert FLOOR.polygon.bridge_m == 0.001
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     kinds = ["boundary", "image", "far", "boundary"]
     poly, out_kinds = _bridge(square, kinds, square + [2.0, 0.0], ["far"] * 4)
@@ -512,9 +514,10 @@ def test_a_corridor_joins_two_polygons_into_one_simple_polygon():
 
 def test_a_small_far_part_clicked_as_floor_is_in_the_polygon(held_out):
     """A far patch of floor behind a carton covers too few pixels to count in the
-    polygon on its own (under ``MIN_PART_SHARE`` of the main region's), but the user who
-    clicks it sees it green in the overlay: with the click's pixel given, it counts, the
-    area within 1 % of both parts'; a click on the main region changes nothing."""
+    polygon on its own (under ``FLOOR.segment.min_part_share`` of the main region's), but
+    the user who clicks it sees it green in the overlay: with the click's pixel given, it
+    counts, the area within 1 % of both parts'; a click on the main region changes
+    nothing."""
     _, cal = held_out[0]
     cam = np.linalg.inv(cal.camera_from_floor)[:2, 3]
     toward = -cam / np.linalg.norm(cam)
@@ -526,7 +529,7 @@ def test_a_small_far_part_clicked_as_floor_is_in_the_polygon(held_out):
 
     main = patch(-1.0, 1.0, near, far)
     island = patch(-0.25, 0.25, far + 5.0 * toward, far + 5.6 * toward)
-    assert 0 < island.sum() < segment.MIN_PART_SHARE * main.sum()
+    assert 0 < island.sum() < FLOOR.segment.min_part_share * main.sum()
     mask = main | island
     both = floor_area_m2(mask, cal)
     alone = floor_polygon(mask, cal).area_m2
@@ -558,27 +561,29 @@ def test_thin_spurs_far_from_the_models_floor_are_dropped():
     edge up a wall), and keeps what GrabCut rightly adds past the model: a sliver near its
     floor's edge (behind a carton at a far wall), a region (shade), and any line the user
     clicked as floor."""
-    from augment.floor.segment import SPUR_REACH_PX, SPUR_WIDTH_PX, _clean
+    from augment.floor.segment import _clean
+
+    reach_px, width_px = FLOOR.segment.spur_reach_px, FLOOR.segment.spur_width_px
 
     floor = np.zeros((480, 640), bool)
     floor[300:] = True
     p = np.where(floor, 0.95, 0.02)
-    thin = SPUR_WIDTH_PX - 2
+    thin = width_px - 2
     spur = np.zeros_like(floor)
-    spur[300 - 3 * SPUR_REACH_PX:300, 100:100 + thin] = True  # up the wall ...
-    spur[300 - 3 * SPUR_REACH_PX:300 - 3 * SPUR_REACH_PX + thin, 100:300] = True  # ... and along it
+    spur[300 - 3 * reach_px:300, 100:100 + thin] = True  # up the wall ...
+    spur[300 - 3 * reach_px:300 - 3 * reach_px + thin, 100:300] = True  # ... and along it
     sliver = np.zeros_like(floor)
-    top = 300 - SPUR_REACH_PX // 2
+    top = 300 - reach_px // 2
     sliver[top:top + thin, 400:500] = True
     sliver[top:300, 400:400 + thin] = True
     region = np.zeros_like(floor)
-    region[300 - 3 * SPUR_REACH_PX:300, 540:600] = True
+    region[300 - 3 * reach_px:300, 540:600] = True
     mask = floor | spur | sliver | region
     kept = _clean(mask, None, 1.0, p)
     # (A region's sharp corners far out lose a pixel each.)
     assert kept[floor].all() and kept[sliver].all() and kept[region].mean() > 0.999
     far = spur.copy()
-    far[300 - SPUR_REACH_PX:] = False
+    far[300 - reach_px:] = False
     assert not kept[far].any()
     # A line the user clicked as floor is floor.
     assert _clean(mask, None, 1.0, p, clicked=spur)[spur].all()
@@ -631,7 +636,8 @@ def test_disputed_floor_is_the_area_the_model_and_the_mask_disagree_on(held_out)
     cols, rows = cal.size_px
 
     def model_says(floor_mask):  # at GrabCut's working size, as segment_floor has it
-        size = (GRABCUT_LONG_PX, round(rows * GRABCUT_LONG_PX / cols))
+        long_px = FLOOR.segment.grabcut_long_px
+        size = (long_px, round(rows * long_px / cols))
         return cv2.resize(floor_mask.astype(np.float32), size, interpolation=cv2.INTER_AREA)
 
     patch = _floor_mask(cal, square(0.0, 0.4, 0.4, 0.75))
@@ -642,8 +648,8 @@ def test_disputed_floor_is_the_area_the_model_and_the_mask_disagree_on(held_out)
     # Where they agree nothing is disputed.
     assert disputed_floor(mask, model_says(mask), cal)[1] < 0.001
     # The floor overlay hatches the disputed patch, and nothing else.
-    hatched = np.all(floor_overlay(np.zeros((rows, cols, 3), np.uint8), mask, disputed=region) == DISPUTED_COLOR,
-                     axis=2)
+    hatched = np.all(floor_overlay(np.zeros((rows, cols, 3), np.uint8), mask, disputed=region)
+                     == DRAW.floor.disputed_color, axis=2)
     assert 0.25 < hatched.sum() / patch.sum() < 0.45 and not (hatched & ~cv2.dilate(patch.astype(np.uint8),
                                                                                      np.ones((5, 5)))).any()
 
@@ -654,7 +660,7 @@ def test_an_uncertain_floor_is_said(held_out, model, monkeypatch):
     region, m2, share = disputed_floor(seg.mask, seg.probability, cal)
     assert np.array_equal(seg.disputed, region) and (seg.disputed_m2, seg.disputed_share) == (m2, share)
     for threshold, said in ((share * 0.9, True), (share * 1.1, False)):
-        monkeypatch.setattr(segment, "DISPUTED_SHARE_WARN", threshold)
+        monkeypatch.setattr(FLOOR.segment, "disputed_share_warn", threshold)
         again = segment_floor(sample.image, model, cal)
         assert again.uncertain == said and (again.doubted is not None) == said
         assert any("floor found is uncertain" in w and f"{m2:.1f} m² ({100 * share:.0f} % of the floor found"
@@ -662,7 +668,7 @@ def test_an_uncertain_floor_is_said(held_out, model, monkeypatch):
         assert (again.doubt_px is not None) == said and (again.doubt_json() is not None) == said
     # The warning names a pixel in the largest patch in doubt and what the mask says
     # there; the overlay rings it.
-    monkeypatch.setattr(segment, "DISPUTED_SHARE_WARN", share * 0.9)
+    monkeypatch.setattr(FLOOR.segment, "disputed_share_warn", share * 0.9)
     doubted = segment_floor(sample.image, model, cal)
     warning = next(w for w in doubted.warnings if "uncertain" in w)
     x, y = map(int, re.search(r"around (\d+),(\d+)", warning).groups())
@@ -732,24 +738,26 @@ def test_a_floor_click_brings_back_floor_the_model_missed(held_out, model):
     r, c = after.disputed.shape
     scale = c / truth.shape[1]
     yy, xx = np.mgrid[:r, :c]
-    reach = (xx - x * scale) ** 2 + (yy - y * scale) ** 2 < (0.95 * segment.CLICK_REACH * c) ** 2
+    reach = (xx - x * scale) ** 2 + (yy - y * scale) ** 2 < (0.95 * FLOOR.segment.click_reach * c) ** 2
     assert before.disputed[reach].sum() > 100 and after.disputed[reach].sum() == 0
 
 
 def test_a_clicks_region_reaches_half_a_meter_over_the_floor(held_out):
     """On a photo of one flat grey (no edges, so only the reach bounds the region), a
-    floor click's region is every pixel that sees the floor within CLICK_REGION_REACH_M
-    of the clicked one and lies within CLICK_REGION_MAX_REACH of the long side: far away
+    floor click's region is every pixel that sees the floor within click_region_reach_m
+    of the clicked one and lies within click_region_max_reach of the long side: far away
     a wide, flat ellipse, running along a far wall rather than up it as a disc of
-    CLICK_REGION_REACH of the long side would; near, the disc of the larger share."""
+    click_region_reach of the long side would; near, the disc of the larger share."""
+    settings = FLOOR.segment
+    long_px = settings.grabcut_long_px
     sample, cal = held_out[0]
     rows, cols = sample.floor_mask.shape
-    scale = GRABCUT_LONG_PX / cols
-    small = np.full((round(rows * scale), GRABCUT_LONG_PX, 3), 128, np.uint8)
+    scale = long_px / cols
+    small = np.full((round(rows * scale), long_px, 3), 128, np.uint8)
     working = cal.scaled(scale)
     cam = np.linalg.inv(cal.camera_from_floor)[:2, 3]
-    old_disc_px = 2 * round(segment.CLICK_REGION_REACH * GRABCUT_LONG_PX) + 1
-    max_px = segment.CLICK_REGION_MAX_REACH * GRABCUT_LONG_PX
+    old_disc_px = 2 * round(settings.click_region_reach * long_px) + 1
+    max_px = settings.click_region_max_reach * long_px
     for distance_m in (2.0, 6.0):
         x, y = cal.pixels_from_floor((cam - distance_m * cam / np.linalg.norm(cam))[None])[0]
         floor, other, _ = segment._click_regions(small, scale, cal, np.array([[x, y, 1.0, x, y]]))
@@ -759,7 +767,7 @@ def test_a_clicks_region_reaches_half_a_meter_over_the_floor(held_out):
         at = working.floor_from_pixels(np.array([[col + 0.5, row + 0.5]]))[0]
         reach_m = np.linalg.norm(working.floor_from_pixels(np.column_stack([xs + 0.5, ys + 0.5])) - at, axis=1)
         reach_px = np.hypot(xs - col, ys - row)
-        assert reach_m.max() < segment.CLICK_REGION_REACH_M and reach_px.max() <= max_px + 0.5
+        assert reach_m.max() < settings.click_region_reach_m and reach_px.max() <= max_px + 0.5
         width, height = np.ptp(xs) + 1, np.ptp(ys) + 1
         assert width > old_disc_px and height < width, (distance_m, width, height)
         if distance_m == 2.0:  # near: the disc binds, and is filled

@@ -9,6 +9,7 @@ from augment.floor import skirting
 from augment.floor.upright import Upright
 from augment.camera.board import Board
 from augment.camera.calibration import Calibration, Intrinsics
+from augment.floor.settings import FLOOR
 from augment.floor.skirting import board_clicks, extend_to_floor_line, trim_skirting
 
 WALL_Y_M = 4.0
@@ -189,7 +190,7 @@ def test_mask_already_at_the_floor_line_is_left_alone(depth_m, factor):
 def test_board_profiles_measure_in_meters_against_the_floor():
     """The board model's input, checked by hand: the mask's edge at the board's top, a
     12 cm board 200 px per meter tall, the floor below."""
-    from augment.floor.skirting import PROFILE_FROM_M, PROFILE_STEP_M, board_profiles
+    from augment.floor.skirting import board_profiles
 
     image = np.zeros((400, 3, 3), np.uint8)
     image[:100] = (200, 200, 200)  # wall
@@ -199,7 +200,7 @@ def test_board_profiles_measure_in_meters_against_the_floor():
     mask[100:] = True
     profile, scalars, whole = board_profiles(image, mask, np.arange(3), np.full(3, 100), np.full(3, 200.0))
     assert profile.shape == (3, 7, 81) and whole.all()
-    at = lambda m: int(round((m - PROFILE_FROM_M) / PROFILE_STEP_M))  # noqa: E731
+    at = lambda m: int(round((m - FLOOR.skirting.profile_from_m) / FLOOR.skirting.profile_step_m))  # noqa: E731
     np.testing.assert_allclose(profile[1, :3, at(0.05)], np.log1p([100, 50, 25]) - np.log1p(50), atol=1e-5)
     np.testing.assert_allclose(profile[1, :3, at(-0.05)], np.log1p(200) - np.log1p(50), atol=1e-5)
     np.testing.assert_allclose(profile[1, :3, at(0.20)], 0, atol=1e-5)
@@ -211,16 +212,18 @@ def test_the_working_view_holds_every_row_the_profiles_read():
     """A wall seen square-on: every column's edge is on one row, so the rows 10 cm above
     it (the profiles' top) and 30 cm below it (their floor reference) must come from the
     photo, not the black the rest of the view is left as."""
-    from augment.floor.skirting import PROFILE_FROM_M, PROFILE_TO_M, working_view
+    from augment.floor.skirting import working_view
+
+    from_m, to_m = FLOOR.skirting.profile_from_m, FLOOR.skirting.profile_to_m
 
     image, truth, _, calibration = _room(0.0)
     _, small_image, small_mask, _, cols, rows, px_per_m = working_view(image, truth, calibration)
     assert np.ptp(rows) <= 1  # square-on: the edge is level
-    for offset_m in (PROFILE_FROM_M, PROFILE_TO_M):
+    for offset_m in (from_m, to_m):
         y = np.round(rows + offset_m * px_per_m).astype(int)
         seen = small_image[y, cols].astype(float)
         np.testing.assert_allclose(seen, image[y, cols], atol=20)  # the wall above, the floor below
-    assert not small_image[: int((rows + PROFILE_FROM_M * px_per_m).min()) - 3].any()  # the rest is not filled
+    assert not small_image[: int((rows + from_m * px_per_m).min()) - 3].any()  # the rest is not filled
 
 
 def _render_untrimmed(seed: int, index: int):
@@ -261,7 +264,7 @@ def test_a_board_whose_strongest_steps_spread_is_trimmed(monkeypatch):
     t, brightness, hue = skirting._board_rows(small_image, small_mask, cols, rows, px_per_m)
     known = ~np.isnan(t)
     assert not skirting._rules_see_a_board(known, known & (t > 0), t / px_per_m, brightness, hue)
-    monkeypatch.setattr(skirting, "BOARD_P", 1.1)  # the rules decide
+    monkeypatch.setattr(FLOOR.skirting, "board_p", 1.1)  # the rules decide
     check(*trim_skirting(sample.image, mask, calibration)[:2])
     monkeypatch.setattr(skirting, "_rules_see_a_board", lambda *args: False)
     assert trim_skirting(sample.image, mask, calibration)[1] is None
@@ -274,12 +277,12 @@ def test_a_board_in_dashes_is_cut_whole_where_the_board_model_sees_it():
     6 cm) in columns 0-9 and 60-69 only, too few to cut the whole stretch and 50 columns
     apart. The gap is cut, at heights interpolated between the dashes, where the board
     model sees the board, and nowhere past the last dash."""
-    from augment.floor.skirting import GAP_PX, _bridge
+    from augment.floor.skirting import _bridge
 
     cols, rows = np.arange(100), np.full(100, 40)
     height = np.full(100, np.nan)
     height[:10], height[60:70] = 0.04, 0.06
-    assert 60 - 9 > GAP_PX
+    assert 60 - 9 > FLOOR.skirting.gap_px
     unseen = _bridge(cols, rows, height, np.zeros(100, bool))
     assert np.all(unseen[10:60] == 0) and np.all(unseen[70:] == 0)
     seen = _bridge(cols, rows, height, np.ones(100, bool))
@@ -298,8 +301,8 @@ def test_a_render_with_its_board_in_dashes(monkeypatch):
     extra = mask & ~sample.floor_mask
     left = (trim_skirting(sample.image, mask, calibration)[0] & extra).sum() / extra.sum()
     assert left < 0.1
-    monkeypatch.setattr(skirting, "BOARD_P", 1.1)  # the board model is sure of no wall
-    monkeypatch.setattr(skirting, "SEEN_P", 1.1)  # and sees no column
+    monkeypatch.setattr(FLOOR.skirting, "board_p", 1.1)  # the board model is sure of no wall
+    monkeypatch.setattr(FLOOR.skirting, "seen_p", 1.1)  # and sees no column
     assert (trim_skirting(sample.image, mask, calibration)[0] & extra).sum() / extra.sum() > 0.4
 
 
@@ -338,7 +341,7 @@ def test_a_board_on_one_wall_is_cut_when_the_other_walls_show_none(monkeypatch):
     assert abs(floor_polygon(trimmed, calibration).area_m2 / true_m2 - 1) < 0.02
     cut = mask & ~trimmed
     assert (truth & cut).sum() < 2 * cut.any(axis=0).sum()
-    monkeypatch.setattr(skirting, "MIN_WALL_COLUMNS", 10 ** 6)  # no wall judged on its own
+    monkeypatch.setattr(FLOOR.skirting, "min_wall_columns", 10 ** 6)  # no wall judged on its own
     assert trim_skirting(sample.image, mask, calibration)[1] is None
 
 
@@ -450,7 +453,7 @@ def test_a_click_on_the_strip_at_a_walls_foot_is_a_board_click():
 
 
 def test_no_doubt_where_the_board_model_sees_no_board(monkeypatch):
-    """Below ``DOUBT_P`` the strip left is taken for floor, without a word."""
+    """Below ``FLOOR.skirting.doubt_p`` the strip left is taken for floor, without a word."""
     monkeypatch.setattr(skirting, "board_probability", lambda profile, scalars: np.full(len(profile), 0.25))
     image, truth, mask, calibration = _room(0.08, board_rgb=(140, 103, 66))
     assert trim_skirting(image, mask, calibration)[2] is None

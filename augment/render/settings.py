@@ -1,0 +1,96 @@
+"""The render stage's tuning values, one section per module, each with its reason.
+
+Code reads them at call time (``RENDER.staged.margin_px`` inside a function), so a
+caller, or a test with ``monkeypatch.setattr(RENDER.erase, "covered_warn", 0.05)``, can
+change one. Lengths are meters unless the name says otherwise.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class GlSettings:
+    """The GL context (:mod:`augment.render.gl`)."""
+
+    znear_m: float = 0.05  # near clipping plane of every render
+    zfar_m: float = 40.0  # far clipping plane: rooms are at most about 12 m across
+    shadow_offset: tuple[float, float] = (2.0, 8.0)  # shadow pass glPolygonOffset (factor, units): against acne
+
+
+@dataclass
+class FurnitureSettings:
+    """The procedural furniture (:mod:`augment.render.furniture`)."""
+
+    fit_slack_m: float = 0.02  # parts may miss the item's box by this per side before the final fit; more is a bug
+    bevel_min_m: float = 0.004  # smaller bevels are left out: they cost triangles and show only from up close
+
+
+@dataclass
+class StagedSettings:
+    """Light, shadows, occlusion and resolution of a staged photo (:mod:`augment.render.staged`)."""
+
+    paper_albedo: float = 0.85  # the board's white squares are office paper: they give the photo's exposure
+    sky_share: float = 0.55  # share of the non-key light that comes from above rather than from all round
+    front_fill: float = 0.18  # light from the room behind the camera, relative to the irradiance
+    bounce: float = 0.5  # light off the floor onto the furniture, relative to the floor's brightness
+    metal_env: float = 0.5  # what a metal mirrors of the room, relative to the irradiance
+    occlusion_m: float = 0.06  # furniture this much behind an occluder still shows
+    occlusion_rel: float = 0.03  # ... plus this fraction of the occluder's distance
+    floor_level_m: float = 0.02  # furniture pixels this low take the floor's shadows
+    caster_min_height_m: float = 0.03  # parts lower than this cast no shadow (rugs)
+    shadow_samples: int = 10  # key-light directions averaged for a soft shadow
+    ao_strength: float = 0.8  # share of the ambient light occlusion removes at most
+    side_ao_weight: float = 0.45  # occlusion by the sides of things, relative to overhead
+    ao_bins_m: np.ndarray = field(  # (k,) part heights grouped for ambient occlusion: one blur per group
+        default_factory=lambda: np.array([0.0, 0.06, 0.15, 0.3, 0.55, 0.9, 1.5, 1e9]))
+    floor_cell_max_px: int = 900  # floor raster: at most this many cells a side
+    floor_cell_min_m: float = 0.004  # ... and cells no finer than this
+    occlusion_long_px: int = 800  # the floor mask is read at most this large
+    render_budget_px: float = 1.4e6  # rendered pixels (after supersampling) per image
+    max_supersample: float = 2.0  # rendered pixels per photo pixel along each axis, at most
+    min_render_scale: float = 0.6  # large photos are rendered at this scale at least, then upsampled
+    margin_px: int = 6  # around the region furniture and shadows can reach
+
+
+@dataclass
+class EraseSettings:
+    """The board erased from the photo (:mod:`augment.render.erase`)."""
+
+    context_share: float = 1.5  # floor shown around the sheet on each side, of its longer side: texture sources
+    max_px_per_m: int = 6000  # the top-down view is as sharp as the photo at the sheet, up to this
+    search_sheet_px: int = 96  # the sheet's shorter side on the small view that finds light and texture source
+    light_sigma_share: float = 0.5  # light: what varies slower than this share of the shorter side (blotches: texture)
+    rim_share: float = 0.07  # the rim matched when choosing the texture's source, of the sheet's shorter side
+    paper_growth_squares: float = 1.0  # the paper may reach this many squares beyond the print (larger paper)
+    edge_margin_m: float = 0.004  # always erased beyond the sheet: the paper's edge, its shadow and blur
+    paper_line_share: float = 0.5  # a line beyond the sheet is paper while this share of it has the paper's colour
+    edge_grow_px: int = 2  # photo pixels added around the sheet for the print's blurred edge
+    feather_px: float = 1.0  # the blend's soft edge (Gaussian sigma)
+    max_splits: int = 2  # where no place beside the sheet is all floor, its halves look for one, and theirs
+    map_step_px: int = 4  # the view's pixel maps are computed on this coarse grid, then interpolated
+    covered_warn: float = 0.02  # the user is warned when something stands on more of the sheet than this
+
+
+@dataclass
+class GltfSettings:
+    """The suggestion's 3-D scene (:mod:`augment.render.gltf`)."""
+
+    floor_rgba: tuple[int, int, int, int] = (196, 170, 132, 255)  # the scene's floor: a mid wood
+    wall_rgba: tuple[int, int, int, int] = (232, 229, 222, 255)  # its walls: off-white paint
+
+
+@dataclass
+class RenderSettings:
+    """Every tuning value of the render stage, by module."""
+
+    gl: GlSettings = field(default_factory=GlSettings)
+    furniture: FurnitureSettings = field(default_factory=FurnitureSettings)
+    staged: StagedSettings = field(default_factory=StagedSettings)
+    erase: EraseSettings = field(default_factory=EraseSettings)
+    gltf: GltfSettings = field(default_factory=GltfSettings)
+
+
+RENDER = RenderSettings()

@@ -1,0 +1,71 @@
+"""The room stage's tuning: measuring the wall height, and fitting the furniture to the floor.
+
+One mutable dataclass per module, each field with its reason, composed into :data:`ROOM`.
+Code reads the values at call time (``ROOM.height.cluster_width``), so a caller, or a
+test with ``monkeypatch.setattr(ROOM.height, "min_m", 2.0)``, can change one. Lengths
+given as a fraction are of the photo's longer side unless the reason says otherwise.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class HeightSettings:
+    """Wall height from vertical edges (:mod:`augment.room.height`)."""
+
+    fallback_m: float = 2.5  # assumed when nothing trustworthy is in view
+    min_m: float = 2.2  # rooms are at least 2.2 m high, doors 2.0-2.1 m: door frames fall below
+    max_m: float = 5.0  # ... and at most this: plausible wall heights
+    merge_gap_fraction: float = 0.015  # pieces of one edge merge across gaps up to this
+    bridge_gap_fraction: float = 0.12  # ... and up to this where the image shows the edge in the gap
+    bridge_contrast: float = 2.0  # ... as a gradient across it this many times the wall's beside it
+    min_edge_fraction: float = 0.08  # a measured vertical edge spans at least this x the shorter side
+    border_fraction: float = 0.01  # ends this close to the frame are cut off by it
+    horizon_margin_fraction: float = 0.003  # a foot lies at least this far below the horizon
+    junction_fraction: float = 0.012  # a line meets an end when it passes this close
+    min_junction_fraction: float = 0.06  # ... and is at least this long
+    floor_band_fraction: float = 0.02  # the mask is searched this far either side of a foot,
+    floor_band_edge: float = 0.08  # ... or this x the edge's length if more (a baseboard's height)
+    wall_straightness: float = 0.02  # feet of one wall lie this close to a line (x their distance)
+    span_probe_fraction: np.ndarray = field(
+        default_factory=lambda: np.array([0.05, 0.08, 0.11]))  # probed beyond a junction's ends
+    floor_color_below: tuple[float, float] = (0.03, 0.15)  # a foot's floor colour is read this far below (x length)
+    against_wall_m: float = 0.15  # radiators and the like stand this close to their wall
+    floor_run_px: int = 5  # the floor begins where this many floor pixels follow
+    trace_fraction: float = 0.06  # edge ends are followed at most this far
+    trace_ratio: float = 0.35  # ... while the gradient across keeps this x its median
+    trace_gap_px: int = 3  # ... across gaps up to this (detection pixels)
+    cluster_width: float = 0.03  # heights within 3 % form one cluster
+    confidence_weight: float = 0.3  # cluster weight (edge length / side, x2 if capped) for confidence 0.63
+    unverified_confidence: float = 0.5  # confidence factor when no floor mask checked the feet
+
+
+@dataclass
+class FitSettings:
+    """Fitting the furniture to the measured floor (:mod:`augment.room.fit`) and putting
+    the doors the user marked on it (:mod:`augment.room.doors`)."""
+
+    wall_margin_m: float = 0.05  # layouts keep this far inside the measured floor: its outline strays; baseboards
+    max_fill: float = 0.5  # summed footprint of floor-standing items: at most this share of the floor
+    seed_tries: int = 3  # seeds tried per suggestion before an item is dropped
+    min_difference_m: float = 0.3  # a suggestion this close to an earlier one (diversity) is a twin
+    fit_cell_m: float = 0.02  # raster cell of the "does this footprint fit the floor" test
+    fit_angles: int = 36  # orientations tried, over 180 degrees
+    inset_cell_m: float = 0.01  # raster cell of the floor shrunk by the wall margin
+    door_graze_m2: float = 0.005  # furniture area inside a marked door's swing zone that still leaves the door usable
+    door_width_m: tuple[float, float] = (0.5, 2.5)  # a door's feet this far apart: a cupboard door to a double door
+    door_from_wall_m: float = 0.5  # a door's middle at most this far from a wall of the layouts' floor (a margin in)
+
+
+@dataclass
+class RoomSettings:
+    """The room stage's settings, one section per module."""
+
+    height: HeightSettings = field(default_factory=HeightSettings)
+    fit: FitSettings = field(default_factory=FitSettings)
+
+
+ROOM = RoomSettings()
