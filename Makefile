@@ -3,12 +3,15 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+COMPILED := $(VENV)/.compiled
+# numba compiles these files' kernels on their first use (1-2 minutes) and caches them.
+KERNELS := layout/_kernels.py layout/metrics.py augment/render/staged.py
 # Mesa's EGL/OSMesa for the renderer; Chromium for the web app's browser test.
 APT_PACKAGES := libegl1 libgl1-mesa-dri libegl-mesa0 libosmesa6 chromium
 
 .PHONY: setup test demo clean system-packages
 
-setup: $(STAMP)
+setup: $(STAMP) $(COMPILED)
 
 # The renderer needs Mesa's EGL/OSMesa libraries; install them only when missing.
 system-packages:
@@ -23,10 +26,21 @@ system-packages:
 $(STAMP): pyproject.toml | system-packages
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
+	@# pyrender2 installs the same `pyrender` package as the unmaintained pyrender an older
+	@# .venv holds: that one goes first, or removing it later would take pyrender2's files.
+	@if $(PY) -m pip show -q pyrender >/dev/null 2>&1; then $(PY) -m pip uninstall -q -y pyrender; fi
 	$(PY) -m pip install -q -e '.[dev]'
-	# pyrender pins PyOpenGL 3.1.0, with which OSMesa fails; 3.1.10 makes EGL and OSMesa work.
-	$(PY) -m pip install -q 'PyOpenGL==3.1.10'
 	touch $(STAMP)
+
+# Compile the solver's and the renderer's kernels into numba's cache now, by furnishing a
+# sample photo once, so that the first `stage furnish` a user runs is as quick as any
+# other; again whenever a kernel's source changes.
+$(COMPILED): $(STAMP) $(KERNELS)
+	@echo "compiling the layout solver and the renderer (numba, once: 1-2 minutes)"
+	@tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
+	  $(VENV)/bin/stage furnish samples/photos/room_4.jpg --suggestions 1 --out "$$tmp/out" --quiet \
+	    >"$$tmp/log" 2>&1 || { cat "$$tmp/log"; exit 1; }
+	touch $(COMPILED)
 
 test: setup
 	$(PY) -m pytest
@@ -39,6 +53,12 @@ demo: setup
 	$(VENV)/bin/stage furnish samples/photos/room_4.jpg --room living_room --suggestions 4 --seed 0 --out out/demo/furnished
 	@echo "sample photos for the image stage: $(CURDIR)/samples/photos/room_1.jpg ... room_4.jpg"
 	@echo "staged images of samples/photos/room_4.jpg in $(CURDIR)/out/demo/furnished (staged_1.jpg ... staged_4.jpg, side by side in staged_all.jpg; report.json, scene_K.glb, overlays)"
+	@echo
+	@echo "To run Stager yourself, in a new shell here:"
+	@echo "  . .venv/bin/activate"
+	@echo "  stage furnish YOUR_PHOTO.jpg --room living_room --out out/mine"
+	@echo "  stage --help        (every command; the web app: stage serve)"
+	@echo "or without activating: $(CURDIR)/.venv/bin/stage furnish YOUR_PHOTO.jpg"
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

@@ -342,9 +342,11 @@ def versions() -> dict:
 
     out = {"stager": __version__, "python": platform.python_version(), "numpy": np.__version__,
            "opencv": cv2.__version__}
-    for name in ("onnxruntime", "pyrender", "trimesh", "numba"):
+    # By import name; pyrender's maintained fork is distributed as pyrender2.
+    for name, distribution in (("onnxruntime", "onnxruntime"), ("pyrender", "pyrender2"), ("trimesh", "trimesh"),
+                               ("numba", "numba")):
         try:
-            out[name] = version(name)
+            out[name] = version(distribution)
         except PackageNotFoundError:
             out[name] = None
     return out

@@ -1,4 +1,5 @@
-"""The one place that loads pyrender: headless GL backend, NumPy 2 shim, camera conventions.
+"""The one place that loads pyrender (the maintained fork ``pyrender2``): headless GL backend,
+camera conventions.
 
 Backend selection. ``PYOPENGL_PLATFORM`` is respected when set. Otherwise EGL is used when
 its libraries are installed (Mesa's llvmpipe renders on a CPU, and EGL draws about twice
@@ -68,10 +69,6 @@ def select_platform() -> str:
 
 def _import_pyrender():
     select_platform()
-    # pyrender 0.1.45 (2021) still spells np.inf as np.infty (removed in NumPy 2) in
-    # Mesh.bounds, which shadows and scene bounds use.
-    if not hasattr(np, "infty"):
-        np.infty = np.inf
     import pyrender
 
     return pyrender
@@ -165,6 +162,10 @@ class Renderer:
                 f"({type(error).__name__}: {error}). Install `{_EGL_PACKAGES}` and "
                 f"`{_OSMESA_PACKAGES}`, or try PYOPENGL_PLATFORM={other}."
             ) from error
+        self._prepare()
+
+    def _prepare(self) -> None:
+        """Stager's changes to a new context's renderer (pyrender's context is current)."""
         self._offscreen._renderer._shadow_mapping_pass = _with_shadow_offset(
             self._offscreen._renderer._shadow_mapping_pass)
         # pyrender uploads textures as tightly packed rows; GL's default assumes rows padded
@@ -184,7 +185,8 @@ class Renderer:
 
         Returns
         -------
-        color : (height_px, width_px, 3) uint8
+        color : (height_px, width_px, 3) uint8, or (height_px, width_px, 4) with ``RenderFlags.RGBA``
+            (premultiplied over a transparent black background).
         depth_m : (height_px, width_px) float32
             Distance along the optical axis, 0 where nothing was drawn.
         """
@@ -195,7 +197,31 @@ class Renderer:
         pyrender.light.SHADOW_TEX_SZ = pyrender.renderer.SHADOW_TEX_SZ = int(shadow_map_px)
         self._offscreen.viewport_width = int(width_px)
         self._offscreen.viewport_height = int(height_px)
-        return self._offscreen.render(scene, flags=flags, seg_node_map=seg_node_map)
+        platform = self._offscreen._platform
+        if platform.supports_framebuffers():
+            return self._offscreen.render(scene, flags=flags, seg_node_map=seg_node_map)
+        # OSMesa draws into a buffer of fixed size, read back as RGB. For another size
+        # pyrender makes a new context, which would lose the changes above: made here.
+        if (platform.viewport_width, platform.viewport_height) != (int(width_px), int(height_px)):
+            self._offscreen.delete()
+            self._offscreen._create()
+            self._prepare()
+        if not flags & pyrender.RenderFlags.RGBA:
+            return self._offscreen.render(scene, flags=flags, seg_node_map=seg_node_map)
+        # Alpha from two renders, over black and over white: a pixel shows the background
+        # as much as it is transparent.
+        flags &= ~pyrender.RenderFlags.RGBA
+        background = scene.bg_color.copy()
+        try:
+            scene.bg_color = [0.0, 0.0, 0.0, 1.0]
+            over_black, depth = self._offscreen.render(scene, flags=flags, seg_node_map=seg_node_map)
+            scene.bg_color = [1.0, 1.0, 1.0, 1.0]
+            over_white, _ = self._offscreen.render(scene, flags=flags, seg_node_map=seg_node_map)
+        finally:
+            scene.bg_color = background
+        seen = (over_white.astype(np.int16) - over_black).max(axis=2)
+        alpha = (255 - np.clip(seen, 0, 255)).astype(np.uint8)
+        return np.dstack([over_black, alpha]), depth
 
     def close(self) -> None:
         if self._offscreen is not None:
