@@ -18,10 +18,15 @@ described on the app's OpenAPI page (``/docs``):
                                     uncertain floor is most in doubt, or a
                                     skirting board may be left in it)
 ``GET /api/jobs/{id}/files/{name}`` one output file; only names in the job's ``files``
+``GET /api/jobs/{id}/photo``        the photo the job was sent
 ``GET /api/jobs/{id}/download.zip`` every output file in one zip
 ``DELETE /api/jobs/{id}``           delete the job and its files now (a running job's as it ends)
 ``GET /api/board.pdf``              the board to print (``board``, ``square``, ``paper``)
 =================================== ==================================================
+
+``GET /jobs/{id}`` is the job's page: the upload page showing that job's stages, then its
+results, as after an upload (a job sent through the API can be watched in a browser), with
+its options and photo loaded so that it can be corrected and furnished again.
 
 Jobs run in a pool of worker processes (one per core by default), each with one GL
 context reused for all its jobs (:class:`augment.render.gl.Renderer`); at most ``workers +
@@ -35,9 +40,7 @@ as ``photo.<type>`` with the type found by decoding it, a spec as ``spec.toml`` 
 has been checked as ``stage furnish --spec`` would check it (422 with the reason
 otherwise; it is data, read by :mod:`tomllib`, and names no files).
 
-Layout of ``jobs_dir``: one folder per job, ``<id>/input/`` (the photo, the camera
-profile, the spec), ``<id>/out/`` (the files of :func:`augment.pipeline.write_outputs`),
-``<id>/progress.json`` (written by the worker as stages finish).
+The jobs and their worker processes: :mod:`augment.app.jobs`.
 """
 from __future__ import annotations
 
@@ -287,6 +290,12 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
     async def index():
         return HTMLResponse(page)
 
+    @app.get("/jobs/{job_id}", include_in_schema=False)
+    async def job_page(job_id: str):
+        # The page finds the job in its address and shows it; for a job that is not
+        # there it says so, as the API's 404 does.
+        return HTMLResponse(page, status_code=200 if job_id in queue.jobs else 404)
+
     @app.post("/api/jobs", status_code=202)
     async def submit(photo: Annotated[UploadFile, File(description="photo of the empty room, the board on "
                                                                    "its floor")],
@@ -424,6 +433,12 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
             raise HTTPException(404, f"job {job_id} has no file {name!r}; its files are listed by "
                                      f"GET /api/jobs/{job_id}")
         return FileResponse(job.folder / "out" / name)
+
+    @app.get("/api/jobs/{job_id}/photo")
+    async def photo_file(job_id: str):
+        """The photo the job was sent (its page loads it, to furnish it again)."""
+        job = get_job(job_id)
+        return FileResponse(job.folder / "input" / job.options["photo"])
 
     @app.get("/api/jobs/{job_id}/download.zip")
     async def download(job_id: str):

@@ -76,6 +76,19 @@ def test_job_runs_to_completion(finished):
                                 "suggestions": 1, "seed": 0}
 
 
+def test_a_job_has_its_own_page(finished):
+    """A job sent through the API can be opened in a browser: /jobs/{id} is the page (which
+    finds the job in its address), and the photo it was sent is there to furnish again."""
+    client, job_id, state, *_ = finished
+    page = client.get(f"/jobs/{job_id}")
+    assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
+    assert '<form id="options">' in page.text and "/api/jobs/${id}/photo" in page.text
+    assert client.get(f"/api/jobs/{job_id}/photo").content == PHOTO.read_bytes()
+    missing = "00000000-0000-4000-8000-000000000000"
+    assert client.get(f"/jobs/{missing}").status_code == 404
+    assert client.get(f"/api/jobs/{missing}/photo").status_code == 404
+
+
 def test_a_job_is_deleted_on_request(finished):
     """DELETE removes a job's folder (the photo too) now: a running one's as it ends, a
     finished one's at once; then the job is gone (404) and a second DELETE says so."""
@@ -388,6 +401,7 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             page.wait_for_selector("#preview", state="visible", timeout=5_000)
             page.click("#go")
             page.wait_for_selector("#download:not([hidden])", timeout=50_000)
+            assert re.fullmatch(rf"{server}/jobs/[0-9a-f-]{{36}}", page.url), page.url  # the job's own page
             staged = page.locator("#staged img[alt^='Suggestion']")
             assert staged.count() == 4
             assert page.locator("#staged img[alt^='Plan']").count() == 4
@@ -455,6 +469,35 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             page.wait_for_function("document.getElementById('status').textContent.startsWith('Deleted')",
                                    timeout=5_000)
             assert page.locator("#staged img").count() == 0 and page.request.get(job_url).status == 404
+        finally:
+            browser.close()
+
+
+def test_browser_shows_a_job_sent_through_the_api(server):
+    """A job sent with curl (here: Playwright's request API), opened at its address: the
+    page shows its options, then its staged photo, and has its photo to furnish again."""
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=str(CHROMIUM), args=["--no-sandbox", "--headless"])
+        try:
+            page = browser.new_page(viewport={"width": 1200, "height": 900})
+            sent = page.request.post(server + "/api/jobs", multipart={
+                "photo": {"name": "room_4.jpg", "mimeType": "image/jpeg", "buffer": PHOTO.read_bytes()},
+                "suggestions": "1", "seed": "3"})
+            assert sent.status == 202, sent.text()
+            job_id = sent.json()["id"]
+            page.goto(f"{server}/jobs/{job_id}")
+            assert page.input_value("input[name=seed]") == "3"
+            assert page.input_value("input[name=suggestions]") == "1"
+            page.wait_for_selector("#download:not([hidden])", timeout=50_000)
+            assert page.locator("#staged img[alt^='Suggestion']").count() == 1
+            assert page.locator("#details img").count() == 3 and page.locator("#error").is_hidden()
+            page.wait_for_selector("#preview", state="visible", timeout=5_000)  # its photo, loaded
+            assert page.locator("#go").is_enabled()
+            page.goto(f"{server}/jobs/00000000-0000-4000-8000-000000000000")
+            page.wait_for_selector("#error:not([hidden])", timeout=5_000)
+            assert "no job" in page.inner_text("#error")
         finally:
             browser.close()
 
