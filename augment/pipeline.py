@@ -121,18 +121,11 @@ class Measurement:
 
 @dataclass(kw_only=True)
 class FurnishResult(Measurement):
-    """Everything :func:`furnish` made, in memory.
+    """Everything :func:`furnish` made, in memory: the :class:`Measurement` (its
+    ``timings_s`` then cover every stage, and ``total``), and:
 
     Attributes
     ----------
-    photo : Path
-    image : (h, w, 3) uint8
-        The photo as read (RGB).
-    calibration : Calibration
-    segmentation : Segmentation
-    floor : FloorPolygon
-        The visible floor, meters, floor frame.
-    height : HeightResult
     room_height_m : float
         The wall height the layouts were made for.
     source : str
@@ -166,9 +159,6 @@ class FurnishResult(Measurement):
         photo the furniture was rendered into; None with ``keep_board``.
     report : dict
         What ``report.json`` holds (:func:`report_dict`).
-    timings_s : dict of str -> float
-        Seconds per stage, and ``total``.
-    warnings : list of str
     """
 
     room_height_m: float

@@ -161,8 +161,8 @@ def output_files(layouts, reports=None, title=""):
             window_segments_m=m.window_segments_m, lanes_m=lane_segments(m, lay),
             overlap_pairs=overlap, access_corners_m=access, access_depth_m=depth,
             kinds=[m.kinds[i] for i in items], open_edges=np.flatnonzero(~m.floor_edge_wall),
-            title=(f"{title}suggestion {k}: rule energy {lay.energy:.3g} (0 = every rule met), "
-                   f"{rep['overlaps']['count']} overlaps, {verdict}"),
+            title=(f"{title}suggestion {k}: {rep['overlaps']['count']} overlaps, {verdict}\n"
+                   f"rule energy {lay.energy:.3g} (0: every rule of the spec met)"),
         ))
     traces = {f"suggestion {k}": lay.trace[np.isfinite(lay.trace)] for k, lay in enumerate(layouts, 1)}
     files["energy.png"] = plot.figure_png(plot.energy_figure(traces, title=f"{title}energy per iteration"))

@@ -170,11 +170,8 @@ def initial_state(model: Model, rng: np.random.Generator, stratify_from: int = S
     ``stratify_from`` bodies need one (curve members, which start on their curve,
     not counted). From that many on (beyond the paper) they are stratified, one per
     random cell of a grid (:func:`_stratified_inside`): a uniform start piles a crowd
-    onto itself, and separating it pulls partners apart. On crowded floors of 300 to
-    10,000 boxes the median final energy came out 25-35 % lower, in as many
-    iterations or fewer (README, "Stratified start"); with fewer items the effect was
-    mixed, and in the paper's furnished rooms worse (living room, 20 seeds: median
-    0.84 against 0.36), so small rooms keep the paper's start.
+    onto itself, and separating it pulls partners apart, while in a furnished room of a
+    few items the paper's start solves better (docs/layout.md).
 
     Particles with a start pose in the model keep it; rigid-group members follow their
     group; stacked items start on their base.
@@ -213,7 +210,7 @@ def _start_near_partners(model, pos, random_xy, rng):
     together through a crowd takes hundreds of iterations. "eq" distances are left
     alone: they mostly seat chairs around a focal point, and chairs that arrive from
     random directions spread around their table, while chairs started next to it
-    bunch up (the picnic's median energy rose from 0.47 to 0.60 when they did).
+    bunch up.
 
     Each item moves at most once, in constraint order, so a chain of constraints
     starts as a chain; ``random_xy`` (n,) marks the items whose start was random.
@@ -294,14 +291,12 @@ class Solver:
     threads_from : from this many boxes in the pair list (items that collide or need
         clearance, and door and window zones), the collision, clearance and floor
         passes run on two threads; below it the thread start-up costs more than it
-        saves (benchmarks/scaling.py: on two cores, 10,000 packed boxes solve 1.8 times
-        faster on two threads, 3,000 theater seats 17 % slower). The layout depends
-        on the choice (the order of the projections changes), not on timing.
+        saves (benchmarks/scaling.py). The layout depends on the choice (the order of
+        the projections changes), not on timing.
     restarts : fresh random starts allowed when a run's best layout still collides,
         leaves the floor, is not walkable or has an item more than ``ACCESS_CLEAR_M``
-        inside another's clearance (0: one run, as in the paper). In the tightly
-        packed bedroom one run in three is clean, so 10 restarts left 5 of 40 seeds
-        unwalkable; with 20, none of 140 (seeds 0-139).
+        inside another's clearance (0: one run, as in the paper). In a tightly packed
+        room one run in three can be clean: 20 leave next to none unclean.
     stratify_from : from this many bodies placed at random, the start is stratified
         instead of uniform (:func:`initial_state`).
     polish_rounds : after the loop, at most this many rounds of collision and
@@ -419,8 +414,8 @@ class Solver:
 
 
 # What the command lines say before a solve that compiles.
-COMPILE_NOTE = ("the first run on this machine compiles the layout solver (numba): 1-2 minutes, once; "
-                "later runs load it in about a second")
+COMPILE_NOTE = ("the first run on this machine compiles the layout solver (numba): 2-3 minutes, once "
+                "(`make setup` does it ahead); later runs load it in about a second")
 
 
 def compiled() -> bool:
