@@ -68,7 +68,7 @@ import cv2
 import numpy as np
 
 from layout import report as layout_report
-from layout.fileio import replaced_input, staged_folder
+from layout.fileio import folder_problem, replaced_input, staged_folder
 
 from . import __version__
 from .camera.calibrate import calibrate_file
@@ -636,8 +636,8 @@ def write_outputs(result: FurnishResult, out_dir, inputs=()) -> list[Path]:
         one of ``inputs``.
     """
     out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise FurnishError(f"output folder {out}: exists and is not a folder")
+    if (problem := folder_problem(out)) is not None:
+        raise FurnishError(f"output folder {out}: {problem}")
     try:
         stale = layout_report.earlier_suggestion_files(out, SUGGESTION_FILES, inputs)
         with staged_folder(out, stale=stale) as staging:

@@ -33,6 +33,8 @@ DEFAULT_STIFFNESS = {
 DOOR_HEIGHT_M = 2.1
 # Across the room's bounding box: walkability is checked on a 5 cm grid, 16 M cells at this.
 MAX_ROOM_M = 200.0
+# A room's outline: curved walls drawn in short pieces stay far below this.
+MAX_CORNERS = 1000
 # Any length or position: a few room sizes.
 MAX_LENGTH_M = 1000.0
 
@@ -77,6 +79,8 @@ class LayoutBuilder:
             poly = poly[:-1]
         if len(poly) < 3:
             raise LayoutError(f"room.polygon: needs at least 3 vertices, got {len(poly)}")
+        if len(poly) > MAX_CORNERS:
+            raise LayoutError(f"room.polygon: {len(poly):,} corners; a room's outline has at most {MAX_CORNERS:,}")
         if not np.all(np.isfinite(poly)):
             raise LayoutError("room.polygon: contains a value that is not a finite number")
         same = np.flatnonzero(np.all(poly == np.roll(poly, -1, axis=0), axis=1))

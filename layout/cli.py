@@ -14,9 +14,9 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .command import EXIT_OK, Parser, dispatch, parse, run as run_command, seed_arg
-from .errors import LayoutError
-
+from .command import EXIT_OK, Parser, dispatch, parse, path_arg, seed_arg
+from .command import run as run_command
+from .errors import LayoutError, UsageError
 
 MAX_SUGGESTIONS = 100
 
@@ -27,11 +27,11 @@ def _parser():
     s = sub.add_parser("solve", help="solve a spec file into layout suggestions",
                        description="Solve SPEC (a TOML file, see layout.spec) from several random "
                                    "starts; write layout_K.json, plan_K.png and energy.png.")
-    s.add_argument("spec", type=Path, metavar="SPEC.toml")
+    s.add_argument("spec", type=path_arg, metavar="SPEC.toml")
     s.add_argument("--suggestions", "-n", type=int, default=5, metavar="N",
                    help="number of suggestions (default 5)")
     s.add_argument("--seed", type=seed_arg, default=0, help="seed of suggestion 1; K uses seed + K - 1")
-    s.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
+    s.add_argument("--out", "-o", type=path_arg, default=None, metavar="DIR",
                    help="output folder (default out/<spec name>)")
     s.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
     sub.add_parser("kinds", help="list the furniture catalog")
@@ -49,8 +49,10 @@ def _progress(iterable, total, quiet):
 
 
 def _check_out_dir(out):
-    if out.exists() and not out.is_dir():
-        raise LayoutError(f"--out {out}: exists and is not a folder")
+    from .fileio import folder_problem
+
+    if (problem := folder_problem(out)) is not None:
+        raise UsageError(f"--out {out}: {problem}")
 
 
 def _solve(args):

@@ -16,16 +16,83 @@ import threading
 import time
 import traceback
 from collections.abc import Callable
+from pathlib import Path
 from typing import NoReturn
 
-from .errors import StagerError, UsageError
+from .errors import StagerError, UsageError, shorten
 
 EXIT_OK, EXIT_BUG, EXIT_INPUT = 0, 1, 2
 
 
 class Parser(argparse.ArgumentParser):
+    """An argparse parser that reports usage errors instead of exiting, and takes a value
+    that starts with a dash as the value of the option before it (``--board -3x5`` is
+    ``--board=-3x5``: argparse would say "expected one argument" and never name the value)."""
+
     def error(self, message):
         raise UsageError(f"{self.prog}: {message}")
+
+    def parse_known_args(self, args=None, namespace=None):
+        return super().parse_known_args(self._values_joined(args), namespace)
+
+    def _values_joined(self, args):
+        if args is None:
+            args = sys.argv[1:]
+        args = [str(a) for a in args]
+        takes_one = {}
+        for parser in self._all_parsers():
+            for action in parser._actions:
+                if action.option_strings and action.nargs is None:
+                    takes_one.update(dict.fromkeys(action.option_strings))
+        known = {o for parser in self._all_parsers() for o in parser._option_string_actions}
+        out, k = [], 0
+        while k < len(args):
+            arg = args[k]
+            following = args[k + 1] if k + 1 < len(args) else None
+            if (arg in takes_one and following is not None and following.startswith("-")
+                    and following not in ("-", "--", *known) and following.split("=", 1)[0] not in known):
+                out.append(f"{arg}={following}")
+                k += 2
+                continue
+            out.append(arg)
+            k += 1
+        return out
+
+    def _all_parsers(self):
+        parsers = [self]
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    parsers += sub._all_parsers() if isinstance(sub, Parser) else [sub]
+        return parsers
+
+
+def path_arg(text: str) -> Path:
+    """A path flag's value, refused when no file system here could hold it: empty, with a
+    NUL character, a name over the longest a folder takes, or a path over the longest the
+    system takes (later checks would fail with a traceback on it)."""
+    shown = shorten(repr(text))
+    if not text:
+        raise argparse.ArgumentTypeError("'': give a path")
+    if "\0" in text:
+        raise argparse.ArgumentTypeError(f"{shown}: a path cannot hold a NUL character")
+    name_max, path_max = _limits()
+    for part in Path(text).parts:
+        if len(os.fsencode(part)) > name_max:
+            raise argparse.ArgumentTypeError(f"{shown}: the name {shorten(part)!r} is {len(os.fsencode(part))} "
+                                             f"bytes long, and a file or folder name is at most {name_max}")
+    if len(os.fsencode(text)) > path_max:
+        raise argparse.ArgumentTypeError(f"{shown}: the path is {len(os.fsencode(text))} bytes long, at most "
+                                         f"{path_max} are allowed")
+    return Path(text)
+
+
+def _limits() -> tuple[int, int]:
+    """The longest file name and path the current folder's file system takes."""
+    try:
+        return os.pathconf(".", "PC_NAME_MAX"), os.pathconf(".", "PC_PATH_MAX")
+    except (OSError, ValueError):
+        return 255, 4096
 
 
 def seed_arg(text: str) -> int:

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import metrics, plot
 from .errors import LayoutError
-from .fileio import replaced_input, staged_folder
+from .fileio import folder_problem, replaced_input, staged_folder
 from .geometry import SIDE_NAMES
 from .metrics import MIN_OVERLAP_M2, item_geometry, walkability
 from .solver import ACCESS_CLEAR_M, clearance_intrusions
@@ -216,11 +216,14 @@ def write_outputs(layouts, out_dir, reports=None, title="", inputs=()):
     Raises
     ------
     LayoutError
-        When an output would replace one of ``inputs``; nothing is written then.
+        When ``out_dir`` cannot be an output folder (:func:`~layout.fileio.folder_problem`), or
+        an output would replace one of ``inputs``; nothing is written then.
     OSError
         When ``out_dir`` cannot be written; nothing is changed in it then.
     """
     out = Path(out_dir)
+    if (problem := folder_problem(out)) is not None:
+        raise LayoutError(f"--out {out}: {problem}")
     files = output_files(layouts, reports, title)
     if (clash := replaced_input([out / name for name in files], inputs)) is not None:
         raise LayoutError(f"--out {out}: {clash[0].name} there is the input {clash[1]}, which is never "

@@ -329,16 +329,22 @@ class Solver:
             raise LayoutError(f"solver.method: {self.method!r} is not 'gauss-seidel' or 'jacobi'")
         if self.collision not in codes.COLLISION_NAMES:
             raise LayoutError(f"solver.collision: {self.collision!r} is not 'box' or 'sphere'")
-        for name, lowest in (("max_iterations", 1), ("min_iterations", 0), ("patience", 1),
-                             ("energy_every", 1), ("restarts", 0), ("polish_rounds", 0), ("threads_from", 0),
-                             ("stratify_from", 0)):
+        # Bounds no layout comes near: a run past them would take hours or all the memory
+        # (the two thresholds only count items, and may be huge to mean "never").
+        for name, lowest, highest in (("max_iterations", 1, 100_000), ("min_iterations", 0, 100_000),
+                                      ("patience", 1, 100_000), ("energy_every", 1, 10_000), ("restarts", 0, 1_000),
+                                      ("polish_rounds", 0, 10_000), ("threads_from", 0, 2**62),
+                                      ("stratify_from", 0, 2**62)):
             value = getattr(self, name)
-            if not (isinstance(value, int) and value >= lowest):
-                raise LayoutError(f"solver.{name}: {value!r} must be an integer >= {lowest}")
-        if not self.rate >= 1.0:
-            raise LayoutError(f"solver.rate: {self.rate!r} must be >= 1 (the paper's M)")
-        if not self.pad_m > 0.0:
-            raise LayoutError(f"solver.pad_m: {self.pad_m!r} must be > 0")
+            whole = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+            if not (whole and lowest <= value <= highest):
+                raise LayoutError(f"solver.{name}: {_shown(value)} must be a whole number from {lowest} to {highest:,}")
+        if not 1.0 <= self.rate <= 1e6:
+            raise LayoutError(f"solver.rate: {self.rate!r} must lie in [1, 1e6] (the paper's M)")
+        if not 0.0 < self.omega < 2.0:
+            raise LayoutError(f"solver.omega: {self.omega!r} must lie in (0, 2) (over-relaxation)")
+        if not 0.0 < self.pad_m <= 10.0:
+            raise LayoutError(f"solver.pad_m: {self.pad_m!r} must lie in (0, 10] meters")
         for name in ("collision_stiffness", "access_stiffness"):
             if not 0.0 < getattr(self, name) <= 1.0:
                 raise LayoutError(f"solver.{name}: {getattr(self, name)!r} must lie in (0, 1]")
@@ -416,6 +422,12 @@ class Solver:
 # What the command lines say before a solve that compiles.
 COMPILE_NOTE = ("the first run on this machine compiles the layout solver (numba): 2-3 minutes, once "
                 "(`make setup` does it ahead); later runs load it in about a second")
+
+
+def _shown(value) -> str:
+    """A number as a message names it: a huge one by its first digits and its length."""
+    text = repr(value)
+    return text if len(text) <= 20 else f"{text[:8]}…({len(text)} digits)"
 
 
 def compiled() -> bool:

@@ -114,9 +114,10 @@ from pathlib import Path
 import numpy as np
 
 from . import catalog
-from .builder import LayoutBuilder
+from .builder import MAX_CORNERS, LayoutBuilder
 from .catalog import Kind, RuleItem
 from .errors import LayoutError
+from .fileio import path_problem
 from .geometry import edge_distances, polygon_area
 from .solver import Solver
 
@@ -165,6 +166,11 @@ MODES = ("eq", "min", "max")
 SCHEDULES = ("constant", "decay", "grow")
 DOOR_SNAP_M = 0.5
 MAX_COUNT = 1000
+# Sizes no room reaches; past them checking and solving would take minutes or more.
+MAX_ENTRIES = 20_000      # items (after count), groups, constraints, each
+MAX_GROUP_DEPTH = 16      # groups inside groups
+MAX_OPENINGS = 100        # doors, and windows
+MAX_SPEC_BYTES = 256 << 10  # a spec is a short text; the web app takes no more either
 
 
 def _show(value):
@@ -305,7 +311,7 @@ class _Reader:
             raise self.error(where, f"expected a table {{ ... }}, got {_show(value)}")
         unknown = [k for k in value if k not in allowed]
         if unknown:
-            close = difflib.get_close_matches(unknown[0], allowed, n=1)
+            close = difflib.get_close_matches(unknown[0], allowed, n=1) if len(unknown[0]) <= 100 else []
             hint = f"did you mean {close[0]!r}? " if close else ""
             raise self.error(where, f"unknown field {unknown[0]!r}; {hint}allowed fields: "
                                     f"{', '.join(allowed)}")
@@ -319,6 +325,8 @@ class _Reader:
         value = doc.get(key, [])
         if not isinstance(value, list):
             raise self.error(key, f"expected an array of tables [[{key}]], got {_show(value)}")
+        if len(value) > MAX_ENTRIES:
+            raise self.error(key, f"{len(value):,} entries; at most {MAX_ENTRIES:,}")
         return value
 
     def number(self, value, where, field, *, positive=False, nonnegative=False, unit="m"):
@@ -380,6 +388,8 @@ class _Reader:
         return self.vector(value, where, field, 2, "[x, y] in meters")
 
     def polygon(self, value, where):
+        if isinstance(value, list) and len(value) > MAX_CORNERS:
+            raise self.error(where, f"{len(value):,} corners; a room's outline has at most {MAX_CORNERS:,}")
         if not isinstance(value, list) or not all(isinstance(p, list) for p in value):
             raise self.error(where, f"{_show(value)} must be a list of [x, y] corners in meters")
         pts = [self.point(p, where, f"vertex {k}") for k, p in enumerate(value)]
@@ -409,6 +419,8 @@ def _read_openings(r, room, key, fields):
     value = room.get(key, [])
     if not isinstance(value, list):
         raise r.error(f"room.{key}", f"expected a list of tables, got {_show(value)}")
+    if len(value) > MAX_OPENINGS:
+        raise r.error(f"room.{key}", f"{len(value):,} entries; a room has at most {MAX_OPENINGS}")
     out = []
     for n, d in enumerate(value):
         where = f"room.{key}[{n}]"
@@ -588,6 +600,9 @@ def _read_items(r, tables, groups_by_id, where_prefix=""):
         elevation = r.number(t.get("elevation", 0.0), where, "elevation", nonnegative=True)
         rules = r.boolean(t.get("rules", True), where, "rules")
         ids = [iid] if count == 1 else [f"{iid}_{k + 1}" for k in range(count)]
+        if len(items) + count > MAX_ENTRIES:
+            raise r.error(where, f"more than {MAX_ENTRIES:,} items in all (counting each copy); a room holds "
+                                 "far fewer")
         aliases[iid] = ids
         for k, cid in enumerate(ids):
             items.append(Item(
@@ -632,6 +647,9 @@ def _check_names(r, groups, items, aliases):
         while p is not None:
             if p in chain:
                 raise r.error(g.where, f"groups nest in a cycle: {' -> '.join(chain + [p])}")
+            if len(chain) > MAX_GROUP_DEPTH:
+                raise r.error(g.where, f"groups nest more than {MAX_GROUP_DEPTH} deep ({' -> '.join(chain[:4])} "
+                                       "-> ...); a room's groups nest a few deep")
             chain.append(p)
             p = by_id[p].parent
     for g in groups:
@@ -828,14 +846,15 @@ def load_spec(path) -> Spec:
         column) or any invalid entry; the message starts with the file path.
     """
     path = Path(path)
+    if (problem := path_problem(path, missing="no such file", folder="is a directory, not a spec file")) is not None:
+        raise LayoutError(f"{path}: {problem}")
+    if path.stat().st_size > MAX_SPEC_BYTES:
+        raise LayoutError(f"{path}: is {path.stat().st_size:,} bytes; a spec is a short TOML text (at most "
+                          f"{MAX_SPEC_BYTES >> 10} KB)")
     try:
         data = path.read_bytes()
-    except FileNotFoundError:
-        raise LayoutError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise LayoutError(f"{path}: is a directory, not a spec file") from None
-    except PermissionError:
-        raise LayoutError(f"{path}: permission denied") from None
+    except OSError as error:
+        raise LayoutError(f"{path}: cannot be read ({error.strerror or error})") from None
     return spec_from_bytes(data, path)
 
 

@@ -43,12 +43,22 @@ import re
 import sys
 from pathlib import Path
 
-from layout.command import EXIT_INPUT, EXIT_OK, Parser, arg_type, dispatch, parse, run as run_command, seed_arg
+from layout.command import EXIT_INPUT, EXIT_OK, Parser, arg_type, dispatch, parse, path_arg, seed_arg
+from layout.command import run as run_command
 from layout.errors import StagerError, UsageError
+from layout.fileio import path_problem
 from layout.presets import PRESETS
 
-from ..camera.board import (CHARUCO_DICTIONARY, DEFAULT_BOARD, DEFAULT_INNER_CORNERS, DEFAULT_PAPER,
-                            DEFAULT_SQUARE_MM, MIN_SQUARE_MM, PAPER_MM, parse_board)
+from ..camera.board import (
+    CHARUCO_DICTIONARY,
+    DEFAULT_BOARD,
+    DEFAULT_INNER_CORNERS,
+    DEFAULT_PAPER,
+    DEFAULT_SQUARE_MM,
+    MIN_SQUARE_MM,
+    PAPER_MM,
+    parse_board,
+)
 
 DEFAULT_PROFILE = "profile.json"
 DEFAULT_BOARD_PDF = "board.pdf"
@@ -120,9 +130,9 @@ def _add_click_args(p) -> None:
 def _add_floor_args(p) -> None:
     """--model or --floor-mask: where the floor comes from; clicks correct the first."""
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
+    where.add_argument("--model", type=path_arg, default=None, metavar="MODEL.onnx",
                        help="floor model (default: Stager's models/floor_segnet.onnx, with its MODEL.json)")
-    where.add_argument("--floor-mask", type=Path, default=None, metavar="MASK.png",
+    where.add_argument("--floor-mask", type=path_arg, default=None, metavar="MASK.png",
                        help="your own floor mask (white = floor), used instead of finding the floor: the "
                             "floor.png `stage segment` wrote, corrected in an image editor")
     _add_click_args(p)
@@ -167,7 +177,7 @@ def _parser():
     b.add_argument("--paper", type=_paper, default=DEFAULT_PAPER,
                    help=f"A3 or A4, used landscape (default {DEFAULT_PAPER})")
     _add_board_args(b, square_help="side of one square, millimeters (default 45 on A3, 30 on A4)")
-    b.add_argument("--out", "-o", type=Path, default=Path(DEFAULT_BOARD_PDF), metavar="FILE.pdf",
+    b.add_argument("--out", "-o", type=path_arg, default=Path(DEFAULT_BOARD_PDF), metavar="FILE.pdf",
                    help=f"the PDF to write (default {DEFAULT_BOARD_PDF}; its folder is created)")
     b.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
 
@@ -178,10 +188,10 @@ def _parser():
                                    "distances, the board filling much of the frame. Pass it to `stage check "
                                    "--camera`. Photos where the board is not found, and files that are not "
                                    "photos Stager reads (named, with why), are skipped.")
-    c.add_argument("shots", type=Path, nargs="+", metavar="SHOT",
+    c.add_argument("shots", type=path_arg, nargs="+", metavar="SHOT",
                    help="photos of the board, or folders of them")
     _add_board_args(c)
-    c.add_argument("--out", "-o", type=Path, default=Path(DEFAULT_PROFILE), metavar="FILE.json",
+    c.add_argument("--out", "-o", type=path_arg, default=Path(DEFAULT_PROFILE), metavar="FILE.json",
                    help=f"the profile to write (default {DEFAULT_PROFILE} in the current folder; "
                         "its folder is created)")
     c.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
@@ -192,11 +202,11 @@ def _parser():
                                    "pose and height above the floor. Writes DIR/calibration.json and "
                                    "DIR/overlay_calibration.png (corners, floor axes, a 1 m floor grid, the "
                                    "horizon).")
-    k.add_argument("photo", type=Path, metavar="PHOTO")
+    k.add_argument("photo", type=path_arg, metavar="PHOTO")
     _add_board_args(k)
-    k.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
+    k.add_argument("--camera", type=path_arg, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate` (most accurate focal length)")
-    k.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
+    k.add_argument("--out", "-o", type=path_arg, default=None, metavar="DIR",
                    help="output folder (default out/<photo name>; created)")
     k.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
 
@@ -204,9 +214,9 @@ def _parser():
                        description="Find the floor in PHOTO with the floor model refined by GrabCut (or GrabCut "
                                    "alone). Writes MASK.png (255 = floor, the photo's size), MASK_overlay.png "
                                    "and, when the board is found, MASK.json with the floor polygon in meters.")
-    g.add_argument("photo", type=Path, metavar="PHOTO")
+    g.add_argument("photo", type=path_arg, metavar="PHOTO")
     _add_board_args(g)
-    g.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
+    g.add_argument("--camera", type=path_arg, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate`")
     g.add_argument("--method", choices=("onnx", "grabcut"), default="onnx",
                    help="onnx: the model, refined by GrabCut (default); grabcut: GrabCut alone, seeded "
@@ -214,7 +224,7 @@ def _parser():
     g.add_argument("--no-refine", dest="refine", action="store_false",
                    help="take the model's mask as it is, without GrabCut")
     _add_click_args(g)
-    g.add_argument("--model", type=Path, default=None, metavar="MODEL.onnx",
+    g.add_argument("--model", type=path_arg, default=None, metavar="MODEL.onnx",
                    help="an ONNX segmentation model (default: Stager's models/floor_segnet.onnx). Its "
                         "input and classes are read from MODEL.json beside it, else these options:")
     g.add_argument("--input-size", type=_size_px, default=None, metavar="WxH",
@@ -229,7 +239,7 @@ def _parser():
                         "for ADE20K's floor and rug (default 1)")
     g.add_argument("--output-kind", dest="output", choices=("logits", "probabilities"), default=None,
                    help="whether the model's output needs a softmax (default logits)")
-    g.add_argument("--out", "-o", type=Path, default=None, metavar="MASK.png",
+    g.add_argument("--out", "-o", type=path_arg, default=None, metavar="MASK.png",
                    help="the mask to write (default out/<photo name>/floor.png; folder created)")
     g.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
 
@@ -238,12 +248,12 @@ def _parser():
                                    "measure the wall height from vertical edges. Writes DIR/report.json and "
                                    "the three overlays overlay_calibration.png, overlay_floor.png, "
                                    "overlay_height.png.")
-    m.add_argument("photo", type=Path, metavar="PHOTO")
+    m.add_argument("photo", type=path_arg, metavar="PHOTO")
     _add_board_args(m)
-    m.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
+    m.add_argument("--camera", type=path_arg, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate`")
     _add_floor_args(m)
-    m.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
+    m.add_argument("--out", "-o", type=path_arg, default=None, metavar="DIR",
                    help="output folder (default out/<photo name>; created)")
     m.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
 
@@ -254,7 +264,7 @@ def _parser():
                                    "staged_all.jpg (contact sheet), layout_K.json, plan_K.png, energy.png, "
                                    "scene_K.glb (glTF: floor, walls, furniture), overlay_calibration.png, "
                                    "overlay_floor.png, overlay_height.png and report.json.")
-    f.add_argument("photo", type=Path, nargs="+", metavar="PHOTO",
+    f.add_argument("photo", type=path_arg, nargs="+", metavar="PHOTO",
                    help="the photo; with several, each one's files go to DIR/<photo name>/ and one process "
                         "(one GL context, one floor model) furnishes them all")
     _add_board_args(f)
@@ -262,13 +272,13 @@ def _parser():
     what.add_argument("--room", choices=tuple(PRESETS), default=None, metavar="NAME",
                       help=f"room preset: {', '.join(PRESETS)} (default living_room); the furniture is "
                            "chosen for the floor's area")
-    what.add_argument("--spec", type=Path, default=None, metavar="FILE.toml",
+    what.add_argument("--spec", type=path_arg, default=None, metavar="FILE.toml",
                       help="a layout spec (see `layout solve`): its items, groups and constraints on the "
                            "measured floor (its own room, doors and windows are not used)")
     f.add_argument("--suggestions", "-n", type=_count, default=4, metavar="N",
                    help="number of layout suggestions (default 4)")
     f.add_argument("--seed", type=seed_arg, default=0, help="seed of suggestion 1; K uses seed + K - 1 (default 0)")
-    f.add_argument("--camera", type=Path, default=None, metavar="PROFILE.json",
+    f.add_argument("--camera", type=path_arg, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate`")
     _add_floor_args(f)
     f.add_argument("--door", type=_door, action="append", default=[], metavar="X1,Y1,X2,Y2",
@@ -285,7 +295,7 @@ def _parser():
     f.add_argument("--keep-board", action="store_true",
                    help="leave the board in the staged photos (by default its sheet is filled with the floor "
                         "around it)")
-    f.add_argument("--out", "-o", type=Path, default=None, metavar="DIR",
+    f.add_argument("--out", "-o", type=path_arg, default=None, metavar="DIR",
                    help="output folder (default out/<photo name>; created)")
     f.add_argument("--quiet", "-q", action="store_true",
                    help="print nothing but errors and warnings (no progress bar either)")
@@ -299,7 +309,7 @@ def _parser():
     s.add_argument("--port", type=_port, default=8000, help="port (default 8000)")
     s.add_argument("--workers", type=_count, default=None, metavar="N",
                    help="worker processes, each furnishing one photo at a time (default one per core)")
-    s.add_argument("--jobs", type=Path, default=Path("out") / "jobs", metavar="DIR",
+    s.add_argument("--jobs", type=path_arg, default=Path("out") / "jobs", metavar="DIR",
                    help="folder for uploads and results (default out/jobs; created)")
     return p
 
@@ -375,13 +385,12 @@ def _prepare_file_out(out: Path, example: str) -> None:
 
 
 def _prepare_dir_out(out: Path, flag: str = "--out") -> None:
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"{flag} {out}: exists and is not a folder; give a folder for the outputs")
-    for parent in out.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise UsageError(f"{flag} {out}: {parent} is a file, not a folder")
-            break
+    """Refuse an output folder that cannot be one (:func:`layout.fileio.folder_problem`),
+    before any work is done."""
+    from layout.fileio import folder_problem
+
+    if (problem := folder_problem(out)) is not None:
+        raise UsageError(f"{flag} {out}: {problem}")
 
 
 def _mkdir(folder: Path, flag: str, shown: Path) -> None:
@@ -432,7 +441,7 @@ def _expand_shots(paths: list[Path]) -> list[Path]:
 
     shots = []
     for path in paths:
-        if path.is_dir():
+        if path_problem(path, "folder") is None:
             found = sorted(p for p in path.iterdir() if p.suffix.lower() in PHOTO_SUFFIXES and p.is_file())
             if not found:
                 raise UsageError(f"folder {path} holds no photos ({', '.join(PHOTO_SUFFIXES)})")
@@ -477,14 +486,14 @@ def _calibrate_cmd(args):
 
 def _check_floor_mask(path) -> None:
     """A ``--floor-mask`` that is not there is named before any work is done."""
-    if path is not None and not path.is_file():
-        raise UsageError(f"--floor-mask {path}: no such file; give the floor.png `stage segment` wrote "
+    if path is not None and (problem := path_problem(path, missing="no such file")) is not None:
+        raise UsageError(f"--floor-mask {path}: {problem}; give the floor.png `stage segment` wrote "
                          "(white = floor), corrected by hand")
 
 
 def _check_camera(args) -> None:
     """A ``--camera`` profile that is not there is named before any work is done."""
-    if args.photo.is_file():
+    if path_problem(args.photo) is None:
         _check_input_file("--camera", args.camera, CAMERA_HINT)
 
 
@@ -494,8 +503,7 @@ CAMERA_HINT = "make a camera profile with `stage calibrate`"
 def _check_input_file(flag: str, path: Path | None, hint: str) -> None:
     """Refuse an input file named by ``flag`` (``"--asset sofa="`` joins its path) that is
     not one, saying what it is instead."""
-    if path is not None and not path.is_file():
-        what = "is a folder" if path.is_dir() else "is not a file" if path.exists() else "no such file"
+    if path is not None and (what := path_problem(path, missing="no such file", folder="is a folder")) is not None:
         raise UsageError(f"{flag}{'' if flag.endswith('=') else ' '}{path}: {what}; {hint}")
 
 
@@ -540,10 +548,10 @@ def _load_model(path, **spec_overrides):
     from ..floor.model import DEFAULT_MODEL, FloorModel, ModelSpec
 
     path = path if path is not None else DEFAULT_MODEL
-    if not path.is_file():
+    if (problem := path_problem(path, missing="no such file")) is not None:
         hint = "use --method grabcut" if path != DEFAULT_MODEL else \
             "the repository's models/floor_segnet.onnx is missing; reinstall, or use --method grabcut"
-        raise UsageError(f"--model {path}: no such file; {hint}")
+        raise UsageError(f"--model {path}: {problem}; {hint}")
     sidecar = path.with_suffix(".json")
     spec = ModelSpec.from_json(sidecar) if sidecar.is_file() else ModelSpec()
     return FloorModel(path, spec=replace(spec, **spec_overrides))
@@ -593,7 +601,8 @@ def _segment_cmd(args):
     if polygon is not None:
         report = {"photo": str(args.photo), **seg.to_json(), "floor": polygon.to_json(), "warnings": warnings}
         files[out.with_suffix(".json")] = json.dumps(report, indent=2) + "\n"
-    _write_all(files, out.parent, [args.photo, args.camera, args.model])
+    # Into a folder of the user's: each file replaced on its own.
+    _write_all(files, out.parent, [args.photo, args.camera, args.model], whole=False)
     if not args.quiet:
         print(f"floor       {100 * seg.mask.mean():.1f} % of the photo ({seg.method})")
         if polygon is not None:
@@ -643,7 +652,7 @@ def _asset(text: str) -> tuple[str, Path]:
     kind, sep, path = text.partition("=")
     if not sep or not kind.strip() or not path.strip():
         raise argparse.ArgumentTypeError(f"{text!r}: give KIND=FILE, e.g. --asset sofa=models/my_sofa.glb")
-    return kind.strip(), Path(path.strip())
+    return kind.strip(), path_arg(path.strip())
 
 
 def _furnish_cmd(args):
@@ -666,8 +675,10 @@ def _furnish_cmd(args):
         outs = [args.out if args.out is not None else Path("out") / photos[0].stem]
     for out in outs:
         _prepare_dir_out(out)
-        # The files are made in a folder beside out, then moved in: both places must take them.
-        for folder in ([out] if out.is_dir() else []) + [next(p for p in out.parents if p.exists())]:
+        # The new folder is made beside out, which it then replaces: the folder above
+        # must take it (out itself too, where an earlier run's files are left).
+        resolved = out.resolve()
+        for folder in ([resolved] if resolved.is_dir() else []) + [next(p for p in resolved.parents if p.exists())]:
             if not os.access(folder, os.W_OK | os.X_OK):
                 raise UsageError(f"--out {out}: cannot write in {folder}; choose a folder you can write to")
     if batch and args.floor_mask is not None:
@@ -821,7 +832,7 @@ def _keep_inputs(outputs, inputs) -> None:
                          "write the outputs to another file or folder")
 
 
-def _write_all(files: dict, folder: Path, inputs) -> None:
+def _write_all(files: dict, folder: Path, inputs, whole: bool = True) -> None:
     """Write ``files`` ({path in ``folder``: bytes or text}) all or none: made beside
     ``folder``, then moved in (:func:`layout.fileio.staged_folder`); none of them may be
     one of the command's ``inputs`` (paths or None)."""
@@ -829,7 +840,7 @@ def _write_all(files: dict, folder: Path, inputs) -> None:
 
     _keep_inputs(files, inputs)
     try:
-        with staged_folder(folder) as staging:
+        with staged_folder(folder, whole=whole) as staging:
             for path, data in files.items():
                 (staging / path.name).write_bytes(data.encode("utf-8") if isinstance(data, str) else data)
     except OSError as error:
@@ -839,9 +850,9 @@ def _write_all(files: dict, folder: Path, inputs) -> None:
 
 def main(argv=None) -> int:
     """Run the command line; returns the exit status."""
-    # OpenCV's own warnings (a TIFF it cannot handle, a PNG cut short) would come before
-    # Stager's one error line that says the same; a user's OPENCV_LOG_LEVEL still wins.
-    os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
+    # OpenCV's own messages (a TIFF it cannot handle, a header it cannot read) would come
+    # before Stager's one error line that says the same; a user's OPENCV_LOG_LEVEL still wins.
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "SILENT")
     parser = _parser()
     args = parse(parser, argv)
     if isinstance(args, int):

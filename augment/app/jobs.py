@@ -18,6 +18,7 @@ import multiprocessing
 import os
 import shutil
 import statistics
+import threading
 import time
 import uuid
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -31,6 +32,7 @@ from layout.errors import StagerError
 # jobs' times (this default until one is done), within these bounds.
 DEFAULT_JOB_S = 20.0
 RETRY_AFTER_BOUNDS_S = (2, 60)
+MAX_ATTEMPTS = 2  # a job whose worker died is tried once more
 STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene", "overlays",
           "plans", "write")
 
@@ -75,8 +77,11 @@ class _FileProgress:
 
 def _write_progress(state: dict) -> None:
     tmp = _progress_path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(state))
-    os.replace(tmp, _progress_path)
+    try:
+        tmp.write_text(json.dumps(state))
+        os.replace(tmp, _progress_path)
+    except FileNotFoundError:
+        pass  # the job was deleted while it ran: nobody waits for its progress
 
 
 def _run_job(job_dir: str, options: dict) -> dict:
@@ -93,6 +98,8 @@ def _run_job(job_dir: str, options: dict) -> dict:
 
     start = time.perf_counter()
     job = Path(job_dir)
+    if not (job / "input").is_dir():
+        return {"error": {"kind": "cancelled", "message": "the job was deleted before it started"}, "seconds": 0.0}
     _progress_path = job / "progress.json"
     if _renderer is None:
         _renderer = Renderer()
@@ -100,6 +107,10 @@ def _run_job(job_dir: str, options: dict) -> dict:
     camera = job / "input" / options["camera"] if options.get("camera") else None
     spec = job / "input" / options["spec"] if options.get("spec") else None
     floor_mask = job / "input" / options["floor_mask"] if options.get("floor_mask") else None
+    # No server path in what the user gets back: each input by the name it was sent under.
+    names = options.get("names") or {}
+    shown = [(photo, names.get("photo", "the photo")), (camera, names.get("camera", "the camera profile")),
+             (spec, names.get("spec", "the spec file")), (floor_mask, names.get("floor_mask", "the floor mask"))]
     clicks = options.get("clicks") or None
     doors = options.get("doors") or None
     try:
@@ -109,6 +120,8 @@ def _run_job(job_dir: str, options: dict) -> dict:
                                   floor_mask=floor_mask, clicks=clicks, doors=doors,
                                   keep_board=options["keep_board"], reporter=_FileProgress,
                                   renderer=_renderer)
+        result.report = _scrub(result.report, shown, job)
+        result.warnings[:] = _scrub(result.warnings, shown, job)
         state = json.loads(_progress_path.read_text())
         _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
         paths = pipeline.write_outputs(result, job / "out")
@@ -129,6 +142,21 @@ def _run_job(job_dir: str, options: dict) -> dict:
 # --------------------------------------------------------------------------------------
 # The queue (in the server process)
 # --------------------------------------------------------------------------------------
+
+def _scrub(value, shown, job: Path):
+    """``value`` (JSON-like) with every input's server path replaced by the name the user
+    sent it under, and what else names the job's folder without it."""
+    if isinstance(value, dict):
+        return {k: _scrub(v, shown, job) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_scrub(v, shown, job) for v in value]
+    if isinstance(value, str):
+        for path, name in shown:
+            if path is not None:
+                value = value.replace(str(path), name)
+        return value.replace(f"{job}/", "").replace(str(job), "the job")
+    return value
+
 
 def retry_after_s(job_seconds, workers: int) -> int:
     """Seconds until a worker is likely free: the median of the last (up to 10) job
@@ -151,6 +179,7 @@ class Job:
     finished: float | None = None
     result: dict | None = None
     delete_when_done: bool = False
+    attempts: int = 0
 
 
 def job_state(job: Job) -> dict:
@@ -214,6 +243,7 @@ class JobQueue:
         self.max_queued = int(max_queued)
         self.jobs: dict[str, Job] = {}
         self._pool: ProcessPoolExecutor | None = None
+        self._lock = threading.RLock()
 
     def start(self) -> None:
         self._pool = self._new_pool()
@@ -248,28 +278,50 @@ class JobQueue:
         """Queue a job whose inputs are in ``folder/input``; ``on_done(job)`` is called
         from a pool thread when it finishes."""
         job = self.jobs[job_id] = Job(job_id, folder, options)
-        try:
-            job.future = self._pool.submit(_run_job, str(folder), options)
-        except BrokenProcessPool:
-            # A worker died (its jobs failed as internal errors); start a fresh pool.
-            self._pool.shutdown(wait=False)
-            self._pool = self._new_pool()
-            job.future = self._pool.submit(_run_job, str(folder), options)
+        self._run(job, on_done)
+        return job
+
+    def _run(self, job: Job, on_done) -> None:
+        """Hand ``job`` to a worker; a worker that dies under it (killed, out of memory)
+        gets the job tried once more on a fresh pool, then failed saying so."""
+        job.attempts += 1
+        with self._lock:
+            try:
+                job.future = self._pool.submit(_run_job, str(job.folder), job.options)
+            except BrokenProcessPool:
+                self._replace_pool(self._pool)
+                job.future = self._pool.submit(_run_job, str(job.folder), job.options)
+            pool = self._pool
 
         def done(future: Future) -> None:
+            died = not future.cancelled() and isinstance(future.exception(), BrokenProcessPool)
+            if died and job.attempts < MAX_ATTEMPTS and not job.delete_when_done and self._pool is not None:
+                self._replace_pool(pool)
+                self._run(job, on_done)
+                return
             _finish(job, future)
             on_done(job)
 
         job.future.add_done_callback(done)
-        return job
+
+    def _replace_pool(self, broken: ProcessPoolExecutor) -> None:
+        """A fresh pool in place of ``broken`` (once, however many of its jobs ask)."""
+        with self._lock:
+            if self._pool is broken and broken is not None:
+                broken.shutdown(wait=False)
+                self._pool = self._new_pool()
 
     def cancel(self, job: Job) -> bool:
-        """Whether the job is not running (cancelled or finished); a running job is
-        marked to be deleted when it finishes."""
-        if job.result is None and not job.future.cancel() and not job.future.done():
-            job.delete_when_done = True
-            return False
-        return True
+        """Whether the job is deleted at once: it was waiting, or is done. A job handed to
+        a worker that has not begun it loses its inputs now, and its worker stops at once.
+        A running job is marked to be deleted when it finishes."""
+        if job.result is not None or job.future.cancel() or job.future.done():
+            return True
+        job.delete_when_done = True
+        if not (job.folder / "progress.json").exists():
+            shutil.rmtree(job.folder / "input", ignore_errors=True)
+            return True
+        return False
 
     def forget(self, job: Job) -> None:
         """The job, and its folder with the photo and every file made from it, deleted."""
@@ -302,6 +354,10 @@ def _finish(job: Job, future: Future) -> None:
     error = future.exception() if not future.cancelled() else None
     if future.cancelled():
         job.result = {"error": {"kind": "cancelled", "message": "the server stopped before this photo was done"}}
+    elif isinstance(error, BrokenProcessPool):
+        job.result = {"error": {"kind": "worker", "message": f"the worker furnishing this photo stopped, "
+                                f"{job.attempts} time{'s' * (job.attempts > 1)} (killed, or out of memory); try "
+                                "again later, or send a smaller photo"}}
     elif error is not None:
         import traceback
 

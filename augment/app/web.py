@@ -55,23 +55,23 @@ from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Annotated
 
-from fastapi import FastAPI, File, Form, HTTPException, Request, UploadFile
+from fastapi import FastAPI, File, Form, HTTPException, UploadFile
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response
 
+from layout.errors import shorten
+from layout.spec import MAX_SPEC_BYTES
+
+from ..camera.calibrate import MAX_PROFILE_BYTES
 from ..errors import UploadError
+from ..floor.segment import MAX_CLICKS
+from ..room.doors import MAX_DOORS
 from .jobs import STAGES, Job, JobQueue, job_state
 
 MAX_PIXELS = 50_000_000
-MAX_PROFILE_BYTES = 1 << 20
-MAX_SPEC_BYTES = 256 << 10
 MAX_SUGGESTIONS = 12
-MAX_CLICKS = 100  # corrections per photo; more is a job for a floor mask
-MAX_DOORS = 10
 DEFAULT_JOBS_DIR = Path("out") / "jobs"
 STATIC_DIR = Path(__file__).with_name("web_static")
-# The format PIL reads from the header -> the photo's stored suffix.
-_SUFFIXES = {"JPEG": ".jpg", "MPO": ".jpg", "PNG": ".png", "TIFF": ".tif", "WEBP": ".webp", "BMP": ".bmp",
-             "HEIF": ".heic"}
 
 
 # --------------------------------------------------------------------------------------
@@ -93,7 +93,7 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
     """
     from PIL import Image, UnidentifiedImageError
 
-    from ..photo.io import PHOTO_FORMATS, decode_image, decode_problem, register_heif, size_problem
+    from ..photo.io import ACCEPTED_FORMATS, PHOTO_FORMATS, decode_image, decode_problem, register_heif, size_problem
 
     register_heif()
 
@@ -113,11 +113,11 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
     if width * height > max_pixels:
         raise UploadError(413, f"the photo is {width} x {height} = {width * height / 1e6:.0f} megapixels; at "
                                f"most {max_pixels / 1e6:g} megapixels are accepted: send a smaller photo")
-    if kind not in _SUFFIXES:
+    if kind not in ACCEPTED_FORMATS:
         raise UploadError(415, f"the photo is a {kind or 'unknown'} file; send a {PHOTO_FORMATS} photo")
     if decode_image(data) is None:
         raise UploadError(415, f"the photo {decode_problem(data)}")
-    return _SUFFIXES[kind]
+    return ACCEPTED_FORMATS[kind]
 
 
 def _check_spec(data: bytes) -> None:
@@ -269,6 +269,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
     app = FastAPI(title="Stager", version=_version(), lifespan=lifespan,
                   description="Furnish a photo of an empty room. Upload a photo with the printed board on its "
                               "floor to POST /api/jobs, poll GET /api/jobs/{id}, then fetch its files.")
+    app.state.queue = queue
     app.state.sweep = queue.sweep
     app.state.jobs = queue.jobs
 
@@ -276,13 +277,13 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
     async def upload_error(request, error: UploadError):
         return JSONResponse({"detail": str(error)}, status_code=error.status)
 
-    @app.middleware("http")
-    async def limit_size(request: Request, call_next):
-        # Refuse a too large body from its header, before it is read.
-        length = request.headers.get("content-length")
-        if request.method == "POST" and length is not None and length.isdigit() and int(length) > max_bytes:
-            return JSONResponse({"detail": _too_large(int(length), max_bytes)}, status_code=413)
-        return await call_next(request)
+    @app.exception_handler(RequestValidationError)
+    async def invalid_request(request, error: RequestValidationError):
+        # Where and what, never the value sent (it may be a whole photo).
+        return JSONResponse({"detail": [{"loc": list(e.get("loc", ())), "msg": shorten(str(e.get("msg", ""))),
+                                         "type": e.get("type")} for e in error.errors()]}, status_code=422)
+
+    app.add_middleware(_BodyLimit, max_bytes=max_bytes)
 
     page = _page()
 
@@ -332,7 +333,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
             raise UploadError(413, _too_large(len(data), max_bytes))
         if not data:
             raise UploadError(422, "no photo: choose a photo of the empty room with the board on its floor")
-        suffix = check_photo(data)
+        suffix = await asyncio.to_thread(check_photo, data)  # decoding takes a while: off the event loop
         profile = None
         if camera is not None and camera.filename:
             profile = await camera.read(MAX_PROFILE_BYTES + 1)
@@ -349,7 +350,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
             if len(layout_spec) > MAX_SPEC_BYTES:
                 raise UploadError(413, f"the spec file is larger than {MAX_SPEC_BYTES >> 10} KB; a layout spec "
                                        "is a short TOML text")
-            _check_spec(layout_spec)
+            await asyncio.to_thread(_check_spec, layout_spec)
         mask, mask_suffix = None, None
         if floor_mask is not None and floor_mask.filename:
             mask = await floor_mask.read(max_bytes + 1)
@@ -357,7 +358,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                 raise UploadError(413, f"the floor mask is larger than {max_bytes / 1e6:g} MB; save it as a "
                                        "black-and-white PNG (white = floor)")
             try:
-                mask_suffix = check_photo(mask)
+                mask_suffix = await asyncio.to_thread(check_photo, mask)
             except UploadError as error:
                 raise UploadError(error.status, f"the floor mask: {error}") from None
             if corrections:
@@ -382,7 +383,11 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                    "clicks": corrections, "doors": door_feet,
                    "board": (board_spec.cols, board_spec.rows), "kind": board_spec.kind, "square": float(square),
                    "room": None if layout_spec is not None else room, "suggestions": int(suggestions),
-                   "seed": int(seed), "keep_board": bool(keep_board)}
+                   "seed": int(seed), "keep_board": bool(keep_board),
+                   "names": {"photo": _sent_name(photo.filename, "photo"),
+                             **({"camera": _sent_name(camera.filename, "camera profile")} if profile else {}),
+                             **({"spec": _sent_name(spec.filename, "spec file")} if layout_spec else {}),
+                             **({"floor_mask": _sent_name(floor_mask.filename, "floor mask")} if mask else {})}}
         loop = asyncio.get_running_loop()
 
         def done(job: Job) -> None:
@@ -478,9 +483,44 @@ def _board_pdf(board: str, square: float | None, paper: str) -> bytes:
         return path.read_bytes()
 
 
-def _too_large(n_bytes: int, max_bytes: int) -> str:
-    return (f"the upload is {n_bytes / 1e6:.1f} MB; at most {max_bytes / 1e6:g} MB are accepted: send a smaller "
-            "photo")
+class _BodyLimit:
+    """Refuse (413) a request whose body is larger than ``max_bytes``: by its header before
+    it is read, and as it arrives when it says no length (chunked), reading no further."""
+
+    def __init__(self, app, max_bytes: int):
+        self.app, self.max_bytes = app, max_bytes
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        length = dict(scope.get("headers") or ()).get(b"content-length", b"")
+        if length.isdigit() and int(length) > self.max_bytes:
+            response = JSONResponse({"detail": _too_large(int(length), self.max_bytes)}, status_code=413)
+            return await response(scope, receive, send)
+        seen = 0
+
+        async def counted():
+            nonlocal seen
+            message = await receive()
+            if message["type"] == "http.request":
+                seen += len(message.get("body", b""))
+                if seen > self.max_bytes:
+                    # An HTTPException passes through the body's parser as it is.
+                    raise HTTPException(413, _too_large(None, self.max_bytes))
+            return message
+
+        await self.app(scope, counted, send)
+
+
+def _sent_name(filename: str | None, default: str) -> str:
+    """An uploaded file's name as the reports give it: its last part, printable, short."""
+    name = "".join(c for c in Path(str(filename or "").replace("\\", "/")).name if c.isprintable())[:100]
+    return name or default
+
+
+def _too_large(n_bytes: int | None, max_bytes: int) -> str:
+    size = "larger than that" if n_bytes is None else f"{n_bytes / 1e6:.1f} MB"
+    return f"the upload is {size}; at most {max_bytes / 1e6:g} MB are accepted: send a smaller photo"
 
 
 def _version() -> str:
@@ -492,6 +532,9 @@ def _version() -> str:
 def serve(host: str = "127.0.0.1", port: int = 8000, workers: int | None = None, jobs_dir=DEFAULT_JOBS_DIR) -> None:
     """Run the app with uvicorn until interrupted."""
     import uvicorn
+
+    # The workers say what is wrong with a photo themselves; OpenCV's lines would only crowd the log.
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "SILENT")
 
     uvicorn.run(create_app(jobs_dir, workers=workers), host=host, port=port)
 

@@ -34,6 +34,9 @@ DEFAULT_SQUARE_MM = {"A3": 45.0, "A4": 30.0}[DEFAULT_PAPER]
 # Smaller squares are a few pixels in a room photo, and a ChArUco marker's bits in them
 # are a few printer dots.
 MIN_SQUARE_MM = 5.0
+# Limits no printed board reaches: more inner corners a side, or larger squares.
+MAX_INNER_CORNERS = 100
+MAX_SQUARE_MM = 1000.0
 BOARD_KINDS = ("chessboard", "charuco")
 # ChArUco: 4x4-bit markers are the easiest to read when small; 50 of them cover boards up
 # to 100 squares (the default 8 x 6 squares use 24). The marker, its black border
@@ -58,6 +61,12 @@ def charuco_board(cols: int, rows: int):
 
     return cv2.aruco.CharucoBoard((cols + 1, rows + 1), 1.0, CHARUCO_MARKER_BITS / CHARUCO_BITS_PER_SQUARE,
                                   _dictionary())
+
+
+def _short(number) -> str:
+    """A number as a message names it: a long one by its first digits and its length."""
+    text = number if isinstance(number, str) else str(number)
+    return text if len(text) <= 12 else f"{text[:6]}…({len(text)} digits)"
 
 
 @dataclass(frozen=True)
@@ -92,8 +101,12 @@ class Board:
                 f"board {self.cols}x{self.rows}: needs at least 2x2 inner corners "
                 "(count the corners where four squares meet, not the squares)"
             )
-        if not self.square_mm > 0:
-            raise ValueError(f"board square size {self.square_mm} mm: must be positive, e.g. {DEFAULT_SQUARE_MM:g}")
+        if int(self.cols) > MAX_INNER_CORNERS or int(self.rows) > MAX_INNER_CORNERS:
+            raise ValueError(f"board {_short(self.cols)}x{_short(self.rows)}: at most {MAX_INNER_CORNERS} inner "
+                             "corners a side; count the corners where four squares meet, e.g. 7x5")
+        if not 0 < self.square_mm <= MAX_SQUARE_MM:
+            raise ValueError(f"board square size {self.square_mm:g} mm: must be positive and at most "
+                             f"{MAX_SQUARE_MM:g}, e.g. {DEFAULT_SQUARE_MM:g}")
         if self.kind == "charuco":
             available = _dictionary().bytesList.shape[0]
             if self.marker_count > available:
@@ -253,7 +266,13 @@ def parse_board(text: str) -> BoardSpec:
         raise ValueError(
             f"{text!r}: unknown board kind {match[1]!r}; write COLSxROWS for a checkerboard or "
             f"charuco:COLSxROWS for a ChArUco board ({', '.join(BOARD_KINDS)})")
+    if max(len(match[2]), len(match[3])) > 6:
+        raise ValueError(f"{_short(match[2])}x{_short(match[3])}: at most {MAX_INNER_CORNERS} inner corners a "
+                         f"side; {counting}")
     cols, rows = int(match[2]), int(match[3])
     if cols < 2 or rows < 2:
         raise ValueError(f"{text!r}: needs at least 2x2 inner corners; {counting}")
+    if cols > MAX_INNER_CORNERS or rows > MAX_INNER_CORNERS:
+        raise ValueError(f"{_short(cols)}x{_short(rows)}: at most {MAX_INNER_CORNERS} inner corners a side; "
+                         f"{counting}")
     return BoardSpec(cols, rows, kind)

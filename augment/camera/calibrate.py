@@ -14,15 +14,18 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from layout.fileio import path_problem
+
 from ..errors import CalibrationError
 from ..photo.exif import exif_focal_px, exif_orientation
-from ..photo.io import read_photo
+from ..photo.io import read_photo, read_user_file
 from .board import Board
 from .calibration import Calibration, Intrinsics, board_json, quarter_turn
 from .detect import BoardDetection, detect_board, suggest_board
@@ -151,6 +154,43 @@ def exif_intrinsics(focal_px: float, size_px: tuple[int, int]) -> Intrinsics:
     return Intrinsics(K, np.zeros(5), "exif", 0.03, "EXIF 35 mm equivalent focal length; principal point at center")
 
 
+# What a camera's calibration can be: OpenCV's distortion models, and focal lengths from
+# a fisheye's to a long telephoto's, in multiples of the photo's longer side.
+DISTORTION_TERMS = (4, 5, 8, 12, 14)
+FOCAL_SIDES = (0.1, 20.0)
+MAX_DISTORTION = 1e3
+MAX_PROFILE_SIDE_PX = 100_000
+MAX_PROFILE_BYTES = 1 << 20
+
+
+def _profile_problem(K, dist, w0, h0, data) -> str | None:
+    """What is wrong with a profile's values, or None."""
+    if not all(isinstance(v, int) and not isinstance(v, bool) and 0 < v <= MAX_PROFILE_SIDE_PX for v in (w0, h0)):
+        return (f"size_px {str(data['size_px'])[:40]} must be the photos' width and height, whole pixels up to "
+                f"{MAX_PROFILE_SIDE_PX:,}")
+    if not (np.isfinite(K).all() and np.isfinite(dist).all()):
+        return "K and distortion hold a number that is not finite"
+    lo, hi = (f * max(w0, h0) for f in FOCAL_SIDES)
+    if not (lo <= K[0, 0] <= hi and lo <= K[1, 1] <= hi):
+        return (f"focal lengths K[0][0] = {K[0, 0]:.4g} and K[1][1] = {K[1, 1]:.4g} px must lie between {lo:.0f} "
+                f"and {hi:.0f} px for {w0}x{h0} photos")
+    if not (-w0 <= K[0, 2] <= 2 * w0 and -h0 <= K[1, 2] <= 2 * h0) or np.any(K[2] != [0, 0, 1]) or K[1, 0] != 0:
+        return "K is not a camera matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] with its center near the photo's"
+    if len(dist) not in DISTORTION_TERMS:
+        return (f"distortion has {len(dist)} coefficients; OpenCV's models have "
+                f"{', '.join(map(str, DISTORTION_TERMS))}")
+    if np.abs(dist).max(initial=0.0) > MAX_DISTORTION:
+        return f"a distortion coefficient is {np.abs(dist).max():.3g}; a lens's are at most {MAX_DISTORTION:g}"
+    for field, top in (("rms_px", float("inf")), ("focal_uncertainty", 1.0)):
+        value = data.get(field, 0.0)
+        if value is None or (type(value) is float and math.isnan(value)):
+            continue  # not known: the defaults stand
+        if type(value) not in (int, float) or not 0 <= value < top:
+            return (f"{field} {str(value)[:30]} must be a number from 0" + (f" below {top:g}" if top < 2 else "")
+                    + " (what `stage calibrate` writes)")
+    return None
+
+
 def load_profile(path, size_px: tuple[int, int], orientation: int | None = None) -> Intrinsics:
     """Intrinsics from a camera profile JSON (``stage calibrate``), scaled to ``size_px``.
 
@@ -166,11 +206,16 @@ def load_profile(path, size_px: tuple[int, int], orientation: int | None = None)
     """
     path = Path(path)
     remake = "make it again with `stage calibrate`"
+    if path_problem(path) is None and path.stat().st_size > MAX_PROFILE_BYTES:
+        raise CalibrationError(f"camera profile {path} is {path.stat().st_size:,} bytes; a profile from `stage "
+                               f"calibrate` is a short JSON text (at most {MAX_PROFILE_BYTES >> 10} KB)")
+    raw, problem = read_user_file(path)
+    if problem is not None:
+        raise CalibrationError(f"camera profile {path} {problem}"
+                               + ("; make one with `stage calibrate`" if problem.startswith("does not") else ""))
     try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise CalibrationError(f"camera profile {path} does not exist; make one with `stage calibrate`") from None
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as error:
+        data = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError) as error:
         # RecursionError: JSON nested thousands deep is no profile either.
         raise CalibrationError(f"camera profile {path}: cannot read it as JSON ({type(error).__name__}: "
                                f"{str(error)[:120]}); expected the JSON written by `stage calibrate`") from None
@@ -190,19 +235,10 @@ def load_profile(path, size_px: tuple[int, int], orientation: int | None = None)
                                f"numbers and size_px [width, height] (K = {str(data['K'])[:60]}, distortion = "
                                f"{str(data['distortion'])[:60]}, size_px = {str(data['size_px'])[:30]}); "
                                f"{remake}") from None
-    if not (np.isfinite(K).all() and np.isfinite(dist).all()):
-        problem = "K and distortion hold a number that is not finite"
-    elif not (K[0, 0] > 0 and K[1, 1] > 0):
-        problem = f"focal lengths K[0][0] = {K[0, 0]:g} and K[1][1] = {K[1, 1]:g} must be positive"
-    elif not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in (w0, h0)):
-        problem = f"size_px {data['size_px']!r} must be the photos' width and height, whole pixels"
-    elif type(data.get("rms_px", 0.0)) not in (int, float):
-        problem = f"rms_px {str(data['rms_px'])[:30]} must be a number (the calibration's error in pixels)"
-    else:
-        problem = None
+    problem = _profile_problem(K, dist, w0, h0, data)
     if problem is not None:
         raise CalibrationError(f"camera profile {path}: {problem}; {remake}")
-    rms = float(data.get("rms_px", 0.0))
+    rms = _known(data.get("rms_px"), 0.0)
     note = f"camera profile {path.name} (RMS {rms:.2f} px)"
     width, height = size_px
     if abs(w0 / h0 - width / height) > 0.01 and abs(h0 / w0 - width / height) <= 0.01:
@@ -220,7 +256,12 @@ def load_profile(path, size_px: tuple[int, int], orientation: int | None = None)
         K[:2, :] *= s
         # Pixel centers at integers: the image edge, at -0.5, is what scales.
         K[:2, 2] += 0.5 * s - 0.5
-    return Intrinsics(K, dist, "profile", float(data.get("focal_uncertainty", 0.005)), note)
+    return Intrinsics(K, dist, "profile", _known(data.get("focal_uncertainty"), 0.005), note)
+
+
+def _known(value, default: float) -> float:
+    """A profile's number, or ``default`` where it is missing or not known (null, NaN)."""
+    return default if value is None or (isinstance(value, float) and math.isnan(value)) else float(value)
 
 
 def _pose(detection: BoardDetection, board: Board, intrinsics: Intrinsics):

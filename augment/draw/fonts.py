@@ -6,6 +6,7 @@ from pathlib import Path
 
 from PIL import ImageFont
 
+
 def overlay_font(size_px: int) -> ImageFont.ImageFont:
     """DejaVu Sans (shipped with matplotlib, as the printed board uses), else PIL's own."""
     spec = importlib.util.find_spec("matplotlib")  # found without importing matplotlib (slow)

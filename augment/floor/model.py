@@ -15,6 +15,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from layout.fileio import path_problem
+
 from ..errors import SegmentationError
 from ..photo.io import size_problem
 from .settings import FLOOR
@@ -145,8 +147,8 @@ class FloorModel:
         import onnxruntime as ort  # loaded lazily: GrabCut-only runs need none of it
 
         self.path = Path(path)
-        if not self.path.is_file():
-            raise SegmentationError(f"model {self.path}: no such file; train one with models/train_floor.py "
+        if (problem := path_problem(self.path, missing="no such file")) is not None:
+            raise SegmentationError(f"model {self.path}: {problem}; train one with models/train_floor.py "
                                     "or use --method grabcut")
         sidecar = self.path.with_suffix(".json")
         self.spec = spec if spec is not None else (ModelSpec.from_json(sidecar) if sidecar.is_file() else ModelSpec())

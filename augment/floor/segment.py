@@ -19,13 +19,14 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
+from layout.fileio import path_problem
+
 from ..errors import SegmentationError
-from ..photo.io import decode_grey, decode_problem, read_user_file
+from ..photo.io import decode_grey, decode_problem, header, pixels_problem, read_user_file
 from .model import FloorModel, check_image, shrink_to, working_scale
 from .settings import FLOOR
 from .skirting import board_clicks, trim_skirting
 from .upright import Upright
-
 
 # ----------------------------------------------------------------------------- geometry seeds
 
@@ -267,6 +268,10 @@ def _hide_board(small, calibration, scale):
     return cv2.inpaint(small, mask, 3, cv2.INPAINT_TELEA)
 
 
+# Corrections per photo: more is a job for a floor mask (each click runs a region fill).
+MAX_CLICKS = 100
+
+
 def _check_clicks(clicks, shape: tuple[int, int]) -> np.ndarray:
     """Clicks as an (n, 3) float array of x, y photo pixels and 1 (floor) or 0, each
     inside the photo."""
@@ -276,6 +281,8 @@ def _check_clicks(clicks, shape: tuple[int, int]) -> np.ndarray:
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise SegmentationError(f"clicks of shape {arr.shape}: give rows of x, y, and 1 for floor or 0 for "
                                 "not floor")
+    if len(arr) > MAX_CLICKS:
+        raise SegmentationError(f"{len(arr)} clicks: at most {MAX_CLICKS}; for larger corrections give a floor mask")
     rows, cols = shape
     for x, y, floor in arr:
         name = "floor at" if floor else "not floor at"
@@ -692,12 +699,14 @@ def read_floor_mask(path, size_px: tuple[int, int], calibration=None) -> Segment
         floor, or the board is not on its floor.
     """
     path = Path(path)
-    if not path.is_file():
+    if path_problem(path) is not None and path_problem(path).startswith("does not exist"):
         raise SegmentationError(f"floor mask {path}: no such file; give the mask `stage segment` wrote "
                                 "(white = floor), corrected in any image editor")
     data, problem = read_user_file(path)
     if problem is not None:
         raise SegmentationError(f"floor mask {path}: {problem}")
+    if (head := header(data)) is not None and (problem := pixels_problem(*head[1])) is not None:
+        raise SegmentationError(f"floor mask {path} {problem}")
     lightness = decode_grey(data)
     if lightness is None:
         raise SegmentationError(f"floor mask {path} {decode_problem(data)} (a mask: PNG, white = floor)")

@@ -7,18 +7,25 @@ from __future__ import annotations
 
 import io
 import threading
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
 import cv2
 import numpy as np
 
+from layout.fileio import path_problem
+
 from ..errors import CalibrationError
 
 # The ISO base-media brands of HEIF stills: HEIC is what iPhones save by default.
 _HEIF_BRANDS = (b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"mif1", b"msf1")
 
-# What decode_image reads, as error messages name it.
+# The photo formats Stager reads, the command line and the web app alike: the format's
+# name as Pillow reads it from the header -> the suffix a photo of it is stored under.
+ACCEPTED_FORMATS = {"JPEG": ".jpg", "MPO": ".jpg", "PNG": ".png", "TIFF": ".tif", "WEBP": ".webp", "BMP": ".bmp",
+                    "HEIF": ".heic"}
+# The same, as error messages name them.
 PHOTO_FORMATS = "JPEG, PNG, HEIC, TIFF, WebP or BMP"
 # The names photos of those formats go by, as a folder of shots is searched for them.
 PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".heic", ".heif", ".tif", ".tiff", ".webp", ".bmp")
@@ -28,6 +35,9 @@ MIN_PHOTO_PX = 64  # a side: a thumbnail; a board in it would be a few pixels ac
 # view, which the calibration assumes) or a strip, whose board search copy would be a few
 # pixels high.
 MAX_ASPECT = 4.0
+# The most pixels a photo may have: above the 200 MP phones take, below what decoding
+# a file that only claims its size would cost (100,000 x 100,000 asks for 30 GB).
+MAX_PHOTO_PIXELS = 250_000_000
 
 
 def size_problem(width: int, height: int) -> str | None:
@@ -44,10 +54,31 @@ def size_problem(width: int, height: int) -> str | None:
     return None
 
 
+def header(data: bytes) -> tuple[str | None, tuple[int, int]] | None:
+    """The format (Pillow's name) and ``(width, height)`` an encoded image's header
+    claims, read without decoding its pixels; None when it is no image Pillow can open."""
+    try:
+        with pillow_open(io.BytesIO(bytes(data))) as image:
+            return image.format, image.size
+    except (OSError, ValueError, SyntaxError):
+        return None
+
+
+def pixels_problem(width: int, height: int, limit: int = MAX_PHOTO_PIXELS) -> str | None:
+    """What is wrong with a photo of ``width`` x ``height`` pixels for its pixel count,
+    worded to follow its name, or None."""
+    if width * height <= limit:
+        return None
+    return (f"is {width} x {height} = {width * height / 1e6:,.0f} megapixels; at most {limit / 1e6:g} megapixels "
+            "are read: give the photo as a phone takes it (12 to 200 megapixels)")
+
+
 def read_user_file(path) -> tuple[bytes | None, str | None]:
     """The bytes of a file the user named and None, or None and why it cannot be read,
     worded to follow the file's name in an error ("... cannot be read (Permission
-    denied); check that you may read it")."""
+    denied); check that you may read it"). A named pipe or a device is refused unread."""
+    if (problem := path_problem(path)) is not None:
+        return None, problem
     try:
         return Path(path).read_bytes(), None
     except OSError as error:
@@ -98,14 +129,18 @@ def pillow_open(source):
     register_heif()
     # Pillow reads its guard, a global, when it opens a file: lifted for this open only,
     # one thread at a time, so that the web app's threads never leave it lifted.
-    with _UNGUARDED:
-        limit, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
-        try:
-            image = Image.open(source)
-        finally:
-            Image.MAX_IMAGE_PIXELS = limit
-    with image:
-        yield image
+    # Pillow warns of what it reads past in a damaged file (corrupt EXIF, a truncated
+    # tag); Stager says what is wrong with the file itself, once.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        with _UNGUARDED:
+            limit, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
+            try:
+                image = Image.open(source)
+            finally:
+                Image.MAX_IMAGE_PIXELS = limit
+        with image:
+            yield image
 
 
 def decode_grey(data: bytes) -> np.ndarray | None:
@@ -135,12 +170,42 @@ def decode_grey(data: bytes) -> np.ndarray | None:
         return None
 
 
+def _other_format(data: bytes) -> str | None:
+    """The format of an image Pillow can open but Stager does not take (a GIF), or None."""
+    head = header(data)
+    return head[0] if head is not None and head[0] is not None and head[0] not in ACCEPTED_FORMATS else None
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _png_damage(data: bytes) -> str | None:
+    """Why a PNG file is damaged (a chunk's checksum does not match), or None. Checked
+    before OpenCV sees it: libpng prints its own error lines for such a file."""
+    if not bytes(data[:8]) == _PNG_SIGNATURE:
+        return None
+    try:
+        with pillow_open(io.BytesIO(bytes(data))) as image:
+            image.verify()
+    except SyntaxError as error:
+        said = " ".join(str(error).split())
+        return "a checksum does not match" if "checksum" in said or "CRC" in said else said[:120]
+    except (OSError, ValueError):
+        return "its header is damaged"
+    return None
+
+
 def decode_problem(data: bytes) -> str:
     """Why an image did not decode, worded to follow its name ("photo room.jpg is cut
     short: ..."): empty, cut short (a copy or upload that stopped), samples of 32 bits
     or floats, or not an image at all."""
     if len(data) == 0:
         return "is empty (0 bytes); copy it again from the camera"
+    if (kind := _other_format(data)) is not None:
+        return f"is a {kind} file; Stager reads {PHOTO_FORMATS} photos: save it as one of those"
+    if (damage := _png_damage(data)) is not None:
+        return (f"is a damaged PNG file ({damage}: it was changed or cut after it was saved); save or copy it "
+                "again")
     try:
         with pillow_open(io.BytesIO(bytes(data))) as image:
             kind, mode = image.format, image.mode
@@ -168,9 +233,12 @@ def decode_image(data: bytes) -> np.ndarray | None:
     orientation); HEIC/HEIF, what iPhones save, through pillow-heif (which applies the
     file's rotation).
     """
-    if len(data) == 0:
+    if len(data) == 0 or _png_damage(data) is not None or _other_format(data) is not None:
         return None
-    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    try:
+        image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    except cv2.error:  # a header OpenCV refuses (a size past its limits)
+        image = None
     if image is not None:
         return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
     if not is_heif(data):
@@ -194,12 +262,12 @@ def read_photo(path) -> np.ndarray:
         do (too small, or a panorama).
     """
     path = Path(path)
-    if path.is_dir():
+    if path_problem(path, "folder") is None:
         raise CalibrationError(f"photo {path} is a folder; give a photo file, e.g. {path / 'room.jpg'}")
-    if not path.is_file():
-        raise CalibrationError(f"photo {path} does not exist; check the path")
     data, problem = read_user_file(path)
     if problem is not None:
+        raise CalibrationError(f"photo {path} {problem}")
+    if (head := header(data)) is not None and (problem := pixels_problem(*head[1])) is not None:
         raise CalibrationError(f"photo {path} {problem}")
     image = decode_image(data)
     if image is None:

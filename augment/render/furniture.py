@@ -31,10 +31,10 @@ import numpy as np
 import trimesh
 
 from layout.catalog import CATALOG
+from layout.fileio import path_problem
 
 from ..errors import FurnishError
 from .settings import RENDER
-
 
 # --------------------------------------------------------------------------------------
 # Materials
@@ -1900,8 +1900,8 @@ def load_asset(path, up: str = "y", yaw_deg: float = 0.0) -> tuple[Part, ...]:
     path = Path(path)
     if up not in _ASSET_TO_BUILDER:
         raise ValueError(f"up={up!r} for {path}: use 'y' (glTF, most OBJ files) or 'z'")
-    if not path.is_file():
-        raise ValueError(f"furniture model {path} does not exist")
+    if (problem := path_problem(path)) is not None:
+        raise ValueError(f"furniture model {path} {problem}")
     try:
         scene = trimesh.load(str(path), force="scene")
     except Exception as error:  # noqa: BLE001 - a malformed file makes trimesh raise anything

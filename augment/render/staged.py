@@ -46,10 +46,10 @@ from numba import njit, prange
 
 from layout.fileio import write_atomic
 
+from ..photo.io import JPEG_QUALITY, encode_image
 from .furniture import furniture_for, placed_items, world_from_item
 from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from .settings import RENDER, StagedSettings
-from ..photo.io import JPEG_QUALITY, encode_image
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 

@@ -31,6 +31,10 @@ def open_edges(polygon_m: np.ndarray, floor) -> list[int]:
     return [k for k, e in enumerate(nearest) if floor.edge_kind[e] != "boundary"]
 
 
+# Doors kept clear in one photo: more than a room shows.
+MAX_DOORS = 10
+
+
 def doors_on_floor(doors_px, calibration, polygon_m: np.ndarray, open_edges_=()) -> tuple:
     """The doors the user marked in the photo, as the layout's doors: their swing zones,
     as deep as the door is wide, are kept free of furniture.
@@ -65,7 +69,10 @@ def doors_on_floor(doors_px, calibration, polygon_m: np.ndarray, open_edges_=())
     walls = sorted(set(range(len(poly))) - {int(k) for k in open_edges_})
     cols, rows = calibration.size_px
     doors = []
-    for d in np.asarray(doors_px, dtype=np.float64).reshape(-1, 4):
+    marked = np.asarray(doors_px, dtype=np.float64).reshape(-1, 4)
+    if len(marked) > MAX_DOORS:
+        raise FurnishError(f"{len(marked)} doors: at most {MAX_DOORS} are kept clear in one photo")
+    for d in marked:
         name = "door " + ",".join(f"{v:g}" for v in d)
         feet_px = d.reshape(2, 2)
         if not ((feet_px >= 0).all() and (feet_px[:, 0] < cols).all() and (feet_px[:, 1] < rows).all()):

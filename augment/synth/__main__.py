@@ -22,10 +22,10 @@ from tqdm import tqdm
 
 from layout.fileio import write_atomic
 
-from ..camera.board import DEFAULT_INNER_CORNERS, DEFAULT_SQUARE_MM, Board
-from ..camera.board import DEFAULT_BOARD, parse_board
+from ..camera.board import DEFAULT_BOARD, DEFAULT_INNER_CORNERS, DEFAULT_SQUARE_MM, Board, parse_board
 from .dataset import contact_sheet, init_worker, render_one, truth_view
 from .rooms import BASEBOARD_M
+
 
 def _parse_size(text: str) -> tuple[int, int]:
     try:

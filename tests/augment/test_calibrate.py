@@ -11,16 +11,25 @@ import numpy as np
 import pytest
 
 from augment.camera import calibrate, detect
-from augment.camera.calibration import _distortion_reach, turn_points
 from augment.camera.board import Board
-from augment.camera.calibrate import _focal_from_homography, calibrate_file, calibrate_photo, camera_profile, exif_intrinsics, load_profile, single_view_intrinsics, tilt_readings
+from augment.camera.calibrate import (
+    _focal_from_homography,
+    calibrate_file,
+    calibrate_photo,
+    camera_profile,
+    exif_intrinsics,
+    load_profile,
+    single_view_intrinsics,
+    tilt_readings,
+)
+from augment.camera.calibration import _distortion_reach, turn_points
 from augment.camera.detect import _find_chessboard, _saddle_refine, detect_board
 from augment.camera.settings import CAMERA
 from augment.errors import CalibrationError
+from augment.floor.segment import floor_distance_m
 from augment.photo.exif import exif_focal_px, exif_orientation
 from augment.photo.io import read_photo
 from augment.render.gl import Renderer
-from augment.floor.segment import floor_distance_m
 from augment.synth import render_sample
 from augment.synth.camera import look_pose
 

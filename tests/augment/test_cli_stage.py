@@ -14,9 +14,9 @@ import pytest
 from augment.app import cli
 from augment.camera.board import Board, parse_board
 from augment.camera.calibrate import calibrate_file
+from augment.draw.calibration import calibration_overlay
 from augment.photo.io import read_photo
 from augment.render.gl import Renderer
-from augment.draw.calibration import calibration_overlay
 from augment.synth import render_sample, write_sample
 
 OPENCV_DATA = Path(__file__).resolve().parents[1] / "data" / "opencv-chessboard"

@@ -9,13 +9,13 @@ import pytest
 
 import augment.synth.camera as synth_camera
 from augment.camera import lines as L
-from augment.room import height as H
 from augment.camera.board import Board
 from augment.camera.calibrate import calibrate_file
 from augment.camera.settings import CAMERA
-from augment.room.settings import ROOM
-from augment.render.gl import Renderer
 from augment.draw.height import height_overlay
+from augment.render.gl import Renderer
+from augment.room import height as H
+from augment.room.settings import ROOM
 from augment.synth import render_sample
 from augment.synth.camera import look_pose
 

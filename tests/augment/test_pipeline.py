@@ -17,21 +17,21 @@ import trimesh
 
 from augment import pipeline
 from augment.app import cli
-from augment.floor import segment
-from augment.room import doors as room_doors
-from augment.room import fit
-from augment.room.settings import ROOM
 from augment.camera.board import Board
 from augment.camera.calibrate import calibrate_file
-from augment.photo.io import read_photo
-from augment.floor.polygon import FloorPolygon
 from augment.draw.settings import DRAW
 from augment.draw.sheet import contact_sheet
 from augment.errors import FurnishError
+from augment.floor import segment
+from augment.floor.polygon import FloorPolygon
+from augment.photo.io import read_photo
 from augment.pipeline import REPORT_KEYS, furnish, write_outputs
 from augment.render.gltf import scene_glb
+from augment.room import doors as room_doors
+from augment.room import fit
 from augment.room.doors import open_edges
 from augment.room.fit import fit_spec, inset_polygon
+from augment.room.settings import ROOM
 from layout.geometry import edge_distances, polygon_area
 from layout.solver import ACCESS_CLEAR_M
 from layout.spec import load_spec

@@ -12,19 +12,19 @@ import numpy as np
 import pytest
 from skimage.measure import points_in_poly
 
-from augment.camera.calibration import turn_points
-from augment.floor import segment
-from augment.floor.upright import Upright
 from augment.camera.board import Board
 from augment.camera.calibrate import calibrate_photo, exif_intrinsics
+from augment.camera.calibration import turn_points
 from augment.draw.floor import floor_overlay
 from augment.draw.settings import DRAW
-from augment.floor.polygon import _bridge, floor_area_m2, floor_polygon
-from augment.render.gl import Renderer
 from augment.errors import SegmentationError
+from augment.floor import segment
 from augment.floor.model import DEFAULT_MODEL, FloorModel, ModelSpec
+from augment.floor.polygon import _bridge, floor_area_m2, floor_polygon
 from augment.floor.segment import below_horizon, disputed_floor, floor_parts, segment_floor
 from augment.floor.settings import FLOOR
+from augment.floor.upright import Upright
+from augment.render.gl import Renderer
 from augment.synth import render_sample
 from layout.geometry import polygon_area, self_intersection
 

@@ -4,13 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from augment.camera.calibration import turn_points
-from augment.floor import skirting
-from augment.floor.upright import Upright
 from augment.camera.board import Board
-from augment.camera.calibration import Calibration, Intrinsics
+from augment.camera.calibration import Calibration, Intrinsics, turn_points
+from augment.floor import skirting
 from augment.floor.settings import FLOOR
 from augment.floor.skirting import board_clicks, extend_to_floor_line, trim_skirting
+from augment.floor.upright import Upright
 
 WALL_Y_M = 4.0
 SIZE = (960, 720)
@@ -230,9 +229,9 @@ def _render_untrimmed(seed: int, index: int):
     """A render of the synthetic photographer, its calibration from the board, and the
     floor mask from the model and GrabCut before the trim."""
     from augment.camera.calibrate import calibrate_photo, exif_intrinsics
-    from augment.render.gl import Renderer
     from augment.floor.model import DEFAULT_MODEL, FloorModel
     from augment.floor.segment import segment_floor
+    from augment.render.gl import Renderer
     from augment.synth import render_sample
 
     with Renderer() as renderer:
@@ -465,8 +464,8 @@ def test_floor_below_a_boards_shadow_is_brought_back():
     short of the floor line; far away those rows are 6 % of the floor's area. No board is
     in the mask, so nothing is trimmed; the gap model moves the edge up to the floor
     line. The truth is the render's floor mask, its polygon through the same calibration."""
-    from augment.floor.polygon import floor_polygon
     from augment.floor.model import DEFAULT_MODEL, FloorModel
+    from augment.floor.polygon import floor_polygon
     from augment.floor.segment import segment_floor
 
     sample, calibration, mask = _render_untrimmed(930, 69)
