@@ -83,6 +83,7 @@ from .floor.segment import read_floor_mask, segment_floor
 from .photo.io import encode_image, read_photo
 from .render.erase import erase_board, layer_over_photo
 from .render.furniture import load_assets
+from .render.styles import STYLES
 from .render.gltf import scene_glb
 from .room.fit import dropped_summary, furniture_for_floor, furniture_source, solve_suggestions
 from .room.height import measure_height
@@ -150,6 +151,8 @@ class FurnishResult(Measurement):
         (:func:`layout.report.output_files`).
     assets : dict of str -> str
         The user's models by kind (``assets`` of :func:`furnish`), as given.
+    styles : list of str
+        Each suggestion's style (:data:`augment.render.styles.STYLES`).
     layers : list of (h, w, 4) uint8
         With ``layers=True``: what each suggestion adds to the photo (furniture and
         shadows, and the floor over the board) as straight-alpha RGBA; laid over the photo
@@ -173,6 +176,7 @@ class FurnishResult(Measurement):
     scenes_glb: list
     layout_files: dict
     assets: dict = field(default_factory=dict)
+    styles: list = field(default_factory=list)
     layers: list = field(default_factory=list)
     erased: object = None
     report: dict = field(default_factory=dict)
@@ -389,7 +393,8 @@ def report_dict(result: FurnishResult) -> dict:
     suggestions = []
     for k, (lay, rep) in enumerate(zip(result.layouts, result.reports), start=1):
         suggestions.append({
-            "k": k, "seed": lay.seed, "energy": float(lay.energy), "iterations": int(lay.iterations),
+            "k": k, "seed": lay.seed, "style": result.styles[k - 1] if result.styles else None,
+            "energy": float(lay.energy), "iterations": int(lay.iterations),
             "items": len(lay.items), "overlaps": rep["overlaps"]["count"],
             "overlap_area_m2": rep["overlaps"]["area_m2"], "outside_m2": rep["outside_m2"],
             "traversable": rep["traversable"], "unreachable": rep["unreachable"],
@@ -426,10 +431,21 @@ def report_dict(result: FurnishResult) -> dict:
 # furnish
 # --------------------------------------------------------------------------------------
 
+def suggestion_styles(style: str | None, seed: int, suggestions: int) -> list[str]:
+    """Each suggestion's style: ``style`` for all, or by default a different one for each,
+    in :data:`augment.render.styles.STYLES`' order from the seed's on."""
+    names = list(STYLES)
+    if style is None:
+        return [names[(seed + k) % len(names)] for k in range(suggestions)]
+    if style not in STYLES:
+        raise FurnishError(f"style {style!r}: choose one of {', '.join(names)}")
+    return [style] * suggestions
+
+
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
-            seed: int = 0, camera=None, model=None, floor_mask=None, clicks=None, doors=None,
-            assets: dict | None = None, layers: bool = False, keep_board: bool = False, progress: bool = False,
-            reporter=None, renderer=None) -> FurnishResult:
+            seed: int = 0, style: str | None = None, camera=None, model=None, floor_mask=None, clicks=None,
+            doors=None, assets: dict | None = None, layers: bool = False, keep_board: bool = False,
+            progress: bool = False, reporter=None, renderer=None) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
     Parameters
@@ -446,7 +462,10 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     suggestions : int
         Layouts to make; suggestion K is solved from seed ``seed + K - 1``.
     seed : int
-        Also picks the furniture's styles.
+        Also picks the furniture's designs and, without ``style``, the first suggestion's style.
+    style : str, optional
+        Every suggestion in this style (:data:`augment.render.styles.STYLES`); by default
+        suggestion K takes the K-th style from the seed's on, so each looks different.
     camera : path-like, optional
         A camera profile from ``stage calibrate``.
     model : path-like or FloorModel, optional
@@ -498,6 +517,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     photo = Path(photo)
     t_start = time.perf_counter()
     # Everything that can be checked without the photo is, first.
+    styles = suggestion_styles(style, seed, suggestions)
     source_name, source = furniture_source(room, spec)
     user_models = load_assets(assets)
     steps = 6 + 3 * suggestions
@@ -538,9 +558,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 base = m.image if erased is None else erased.image
                 lighting = render.estimate_lighting(base, m.calibration, m.segmentation.mask)
                 staged, staged_layers = [], []
-                for lay in layouts:
+                for lay, look in zip(layouts, styles):
                     done = render.render_staged(base, m.calibration, lay, gl, floor_mask=m.segmentation.mask,
-                                                floor_polygon=m.floor, lighting=lighting, seed=seed,
+                                                floor_polygon=m.floor, lighting=lighting, seed=seed, style=look,
                                                 assets=user_models, layer=layers)
                     staged.append(done.image)
                     if layers:
@@ -553,8 +573,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         with clock("scene"):
             cache = {}
             scenes = []
-            for lay in layouts:
-                scenes.append(scene_glb(m.floor, room_height, lay, seed=seed, cache=cache, assets=user_models))
+            for lay, look in zip(layouts, styles):
+                scenes.append(scene_glb(m.floor, room_height, lay, seed=seed, cache=cache, assets=user_models,
+                                        style=look))
                 bar.step()
         with clock("overlays"):
             pictures = overlays(m, doors)
@@ -571,7 +592,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                            floor=m.floor, height=m.height, timings_s=timings, warnings=warnings,
                            room_height_m=room_height, source=source_name, spec=fitted, dropped=dropped,
                            layouts=layouts, reports=reports, staged=staged, contact_sheet=sheet, overlays=pictures,
-                           scenes_glb=scenes, layout_files=layout_files,
+                           scenes_glb=scenes, layout_files=layout_files, styles=styles[:len(layouts)],
                            assets={k: str(v) if isinstance(v, (str, Path)) else "parts" for k, v in
                                    (assets or {}).items()}, layers=staged_layers, erased=erased)
     result.report = report_dict(result)

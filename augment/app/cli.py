@@ -43,7 +43,16 @@ import re
 import sys
 from pathlib import Path
 
-from layout.command import EXIT_INPUT, EXIT_OK, Parser, arg_type, dispatch, parse, path_arg, seed_arg
+from layout.command import (
+    EXIT_INPUT,
+    EXIT_OK,
+    Parser,
+    arg_type,
+    dispatch,
+    parse,
+    path_arg,
+    seed_arg,
+)
 from layout.command import run as run_command
 from layout.errors import StagerError, UsageError
 from layout.fileio import path_problem
@@ -59,6 +68,7 @@ from ..camera.board import (
     PAPER_MM,
     parse_board,
 )
+from ..render.styles import STYLES
 
 DEFAULT_PROFILE = "profile.json"
 DEFAULT_BOARD_PDF = "board.pdf"
@@ -292,6 +302,9 @@ def _parser():
     f.add_argument("--layers", action="store_true",
                    help="also write staged_K_layer.png: what suggestion K adds to the photo (furniture, "
                         "shadows and the floor over the board) as RGBA, to composite by hand")
+    f.add_argument("--style", choices=tuple(STYLES), default=None, metavar="NAME",
+                   help=f"the furniture's look: {', '.join(STYLES)}; by default each suggestion takes "
+                        "another, so that they look different")
     f.add_argument("--keep-board", action="store_true",
                    help="leave the board in the staged photos (by default its sheet is filled with the floor "
                         "around it)")
@@ -411,7 +424,11 @@ def _write(path: Path, data, flag: str, shown: Path) -> None:
 
 
 def _board_cmd(args):
-    from ..camera.printable import DEFAULT_SQUARE_BY_PAPER_MM, board_for_paper, write_board_pdf
+    from ..camera.printable import (
+        DEFAULT_SQUARE_BY_PAPER_MM,
+        board_for_paper,
+        write_board_pdf,
+    )
 
     _prepare_file_out(args.out, DEFAULT_BOARD_PDF)
     cols, rows, kind = args.board
@@ -718,7 +735,7 @@ def _furnish_cmd(args):
                                  seed=args.seed, camera=args.camera, model=shared.get("model", args.model),
                                  floor_mask=args.floor_mask, clicks=args.clicks, doors=args.door,
                                  assets=dict(args.asset), layers=args.layers, keep_board=args.keep_board,
-                                 renderer=shared.get("renderer"),
+                                 style=args.style, renderer=shared.get("renderer"),
                                  progress=not args.quiet and sys.stderr.isatty())
                 paths = write_outputs(result, out, inputs=[photo, args.floor_mask, args.spec, args.camera,
                                                             args.model, *dict(args.asset).values()])
@@ -767,10 +784,10 @@ def _print_furnished(result, out: Path, paths: list, quiet: bool, photo: Path | 
         else:
             how = "floor copied from beside it" if len(result.erased.source_m) else "filled in smoothly"
             print(f"board       erased from the staged photos ({how})")
-        print(f"{'K':>3} {'energy':>9} {'overlaps':>8} {'outside m²':>11} {'walkable':>8}")
-        for k, (lay, rep) in enumerate(zip(result.layouts, result.reports), start=1):
+        print(f"{'K':>3} {'energy':>9} {'overlaps':>8} {'outside m²':>11} {'walkable':>8}  style")
+        for k, (lay, rep, look) in enumerate(zip(result.layouts, result.reports, result.styles), start=1):
             print(f"{k:>3} {lay.energy:>9.4g} {rep['overlaps']['count']:>8d} {rep['outside_m2']:>11.3f} "
-                  f"{'yes' if rep['traversable'] else 'no':>8}")
+                  f"{'yes' if rep['traversable'] else 'no':>8}  {look}")
         t = result.timings_s
         print("time        " + ", ".join(f"{k} {v:.2f}" for k, v in t.items() if k != "total")
               + f"; total {t['total']:.1f} s")

@@ -118,7 +118,8 @@ def _run_job(job_dir: str, options: dict) -> dict:
                                   room=None if spec is not None else options["room"], spec=spec,
                                   suggestions=options["suggestions"], seed=options["seed"], camera=camera,
                                   floor_mask=floor_mask, clicks=clicks, doors=doors,
-                                  keep_board=options["keep_board"], reporter=_FileProgress,
+                                  keep_board=options["keep_board"], style=options.get("style"),
+                                  reporter=_FileProgress,
                                   renderer=_renderer)
         result.report = _scrub(result.report, shown, job)
         result.warnings[:] = _scrub(result.warnings, shown, job)
@@ -135,7 +136,7 @@ def _run_job(job_dir: str, options: dict) -> dict:
                 "seconds": time.perf_counter() - start}
     state = json.loads(_progress_path.read_text())
     _write_progress(dict(state, stage=None, finished=list(STAGES), done=state["total"]))
-    return {"files": [p.name for p in paths], "warnings": list(result.warnings),
+    return {"files": [p.name for p in paths], "warnings": list(result.warnings), "styles": list(result.styles),
             "doubt": result.segmentation.doubt_json(), "seconds": time.perf_counter() - start}
 
 
@@ -188,13 +189,13 @@ def job_state(job: Job) -> dict:
     if job.options["kind"] != "chessboard":
         board = f"{job.options['kind']}:{board}"
     state = {"id": job.id, "status": "queued", "stage": None, "stages": {s: "pending" for s in STAGES},
-             "progress": 0.0, "error": None, "files": [], "warnings": [], "doubt": None,
+             "progress": 0.0, "error": None, "files": [], "styles": [], "warnings": [], "doubt": None,
              "options": {"board": board, "square": job.options["square"], "room": job.options["room"],
                          "spec": job.options.get("spec") is not None,
                          "floor_mask": job.options.get("floor_mask") is not None,
                          "clicks": len(job.options.get("clicks") or ()),
                          "doors": len(job.options.get("doors") or ()),
-                         "keep_board": job.options["keep_board"],
+                         "keep_board": job.options["keep_board"], "style": job.options.get("style"),
                          "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
     try:
         progress = json.loads((job.folder / "progress.json").read_text())
@@ -216,6 +217,7 @@ def job_state(job: Job) -> dict:
                 state["stages"][state["stage"]] = "failed"
         else:
             state.update(status="done", progress=1.0, stage=None, files=job.result["files"],
+                         styles=job.result.get("styles", []),
                          warnings=job.result["warnings"], doubt=job.result["doubt"],
                          stages={s: "done" for s in STAGES})
     return state

@@ -65,6 +65,7 @@ from layout.spec import MAX_SPEC_BYTES
 from ..camera.calibrate import MAX_PROFILE_BYTES
 from ..errors import UploadError
 from ..floor.segment import MAX_CLICKS
+from ..render.styles import STYLES
 from ..room.doors import MAX_DOORS
 from .jobs import STAGES, Job, JobQueue, job_state
 
@@ -93,7 +94,14 @@ def check_photo(data: bytes, max_pixels: int = MAX_PIXELS) -> str:
     """
     from PIL import Image, UnidentifiedImageError
 
-    from ..photo.io import ACCEPTED_FORMATS, PHOTO_FORMATS, decode_image, decode_problem, register_heif, size_problem
+    from ..photo.io import (
+        ACCEPTED_FORMATS,
+        PHOTO_FORMATS,
+        decode_image,
+        decode_problem,
+        register_heif,
+        size_problem,
+    )
 
     register_heif()
 
@@ -210,14 +218,17 @@ def _board_hint(job: Job) -> dict:
 
 
 def _page() -> str:
-    """The one page, its room list filled from the presets (as ``stage furnish --room``)."""
+    """The one page, its room and style lists filled as ``stage furnish --room`` and ``--style`` take them."""
     import html
 
     from layout.presets import DEFAULT_ROOM, PRESETS
 
     options = "".join(f'<option value="{name}"{" selected" if name == DEFAULT_ROOM else ""}>'
                       f'{html.escape(name.replace("_", " "))}</option>' for name in PRESETS)
-    return (STATIC_DIR / "index.html").read_text(encoding="utf-8").replace("<!-- PRESETS -->", options)
+    styles = '<option value="" selected>a different one for each suggestion</option>' + "".join(
+        f'<option value="{name}">{html.escape(name.replace("_", " "))}</option>' for name in STYLES)
+    return (STATIC_DIR / "index.html").read_text(encoding="utf-8").replace("<!-- PRESETS -->", options).replace(
+        "<!-- STYLES -->", styles)
 
 
 def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: int | None = None,
@@ -321,11 +332,15 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                      doors: Annotated[str, Form(description="doors to keep clear: a JSON list of [x1, y1, x2, "
                                                             "y2], the photo pixels of the feet of each door's "
                                                             "two sides")] = "",
+                     style: Annotated[str, Form(description="the furniture's look (" + ", ".join(STYLES) + "); "
+                                                            "empty: each suggestion another")] = "",
                      keep_board: Annotated[bool, Form(description="leave the board in the staged photos (by "
                                                                   "default its sheet is filled with the floor "
                                                                   "around it)")] = False):
         """Start furnishing a photo; answers the job's id."""
         board_spec = _check_options(board, square, room, suggestions, seed)
+        if style and style not in STYLES:
+            raise UploadError(422, f"style {style[:40]!r}: choose one of {', '.join(STYLES)}")
         corrections = _check_clicks(clicks)
         door_feet = _check_doors(doors)
         data = await photo.read(max_bytes + 1)
@@ -383,7 +398,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                    "clicks": corrections, "doors": door_feet,
                    "board": (board_spec.cols, board_spec.rows), "kind": board_spec.kind, "square": float(square),
                    "room": None if layout_spec is not None else room, "suggestions": int(suggestions),
-                   "seed": int(seed), "keep_board": bool(keep_board),
+                   "seed": int(seed), "keep_board": bool(keep_board), "style": style or None,
                    "names": {"photo": _sent_name(photo.filename, "photo"),
                              **({"camera": _sent_name(camera.filename, "camera profile")} if profile else {}),
                              **({"spec": _sent_name(spec.filename, "spec file")} if layout_spec else {}),

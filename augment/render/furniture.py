@@ -22,6 +22,7 @@ sRGB and converted with the 2.2 power of :mod:`augment.render.gl`'s renderer.
 """
 from __future__ import annotations
 
+import contextvars
 import math
 import zlib
 from dataclasses import dataclass, field, replace
@@ -35,6 +36,7 @@ from layout.fileio import path_problem
 
 from ..errors import FurnishError
 from .settings import RENDER
+from .styles import STYLES
 
 # --------------------------------------------------------------------------------------
 # Materials
@@ -110,39 +112,53 @@ def _pick(rng, options):
     return options[int(rng.integers(len(options)))]
 
 
+# The style a piece is being built in (build_furniture sets it; None: any material).
+_STYLE: contextvars.ContextVar = contextvars.ContextVar("style", default=None)
+
+
+def _styled(palette: str, options):
+    """``options`` (a palette, entries named first) narrowed to the current style's."""
+    style = _STYLE.get()
+    names = () if style is None else getattr(style, palette)
+    kept = tuple(o for o in options if o[0] in names)
+    return kept or tuple(options)
+
+
 def _wood(rng):
-    name, rgb, rough = _pick(rng, WOODS)
+    name, rgb, rough = _pick(rng, _styled("woods", WOODS))
     return _mat(rng, name, rgb, rough)
 
 
 def _paint(rng):
-    name, rgb, rough = _pick(rng, PAINTS)
+    name, rgb, rough = _pick(rng, _styled("paints", PAINTS))
     return _mat(rng, name, rgb, rough, spread=0.03)
 
 
 def _fabric(rng):
-    name, rgb = _pick(rng, FABRICS)
+    name, rgb = _pick(rng, _styled("fabrics", FABRICS))
     return _mat(rng, name, rgb, 0.92)
 
 
 def _leather(rng):
-    name, rgb = _pick(rng, LEATHERS)
+    name, rgb = _pick(rng, _styled("leathers", LEATHERS))
     return _mat(rng, name, rgb, 0.5)
 
 
 def _metal(rng, names=None):
     options = [m for m in METALS if names is None or m[0] in names]
-    name, rgb, rough, metal = _pick(rng, options)
+    name, rgb, rough, metal = _pick(rng, _styled("metals", options))
     return _mat(rng, name, rgb, rough, metal, spread=0.03)
 
 
 def _upholstery(rng):
-    return _leather(rng) if rng.random() < 0.2 else _fabric(rng)
+    style = _STYLE.get()
+    return _leather(rng) if rng.random() < (0.2 if style is None else style.leather_share) else _fabric(rng)
 
 
 def _finish(rng):
     """Wood or paint, for carcasses."""
-    return _wood(rng) if rng.random() < 0.6 else _paint(rng)
+    style = _STYLE.get()
+    return _wood(rng) if rng.random() < (0.6 if style is None else style.wood_share) else _paint(rng)
 
 
 # --------------------------------------------------------------------------------------
@@ -597,8 +613,8 @@ def _bed(shop, rng, W, D, H, pillows=None):
     style = _pick(rng, ("upholstered", "wood", "metal"))
     frame = (_fabric(rng) if style == "upholstered" else _wood(rng) if style == "wood"
              else _metal(rng, ("black steel", "white steel")))
-    sheet = _mat(rng, *_pick(rng, BEDDING), 0.95)
-    duvet = _mat(rng, *_pick(rng, BEDDING), 0.95)
+    sheet = _mat(rng, *_pick(rng, _styled("bedding", BEDDING)), 0.95)
+    duvet = _mat(rng, *_pick(rng, _styled("bedding", BEDDING)), 0.95)
     mattress = _mat(rng, "mattress", (232, 230, 224), 0.9, spread=0.02)
     pillow_top = H
     mattress_top = H - min(0.14, 0.3 * H)
@@ -655,7 +671,7 @@ def _bed(shop, rng, W, D, H, pillows=None):
                  0.05, tilt)
     shop.reach(first, 2, pillow_top - 0.015)
     if rng.random() < 0.5:
-        throw = _mat(rng, *_pick(rng, BEDDING + FABRICS), 0.95)
+        throw = _mat(rng, *_pick(rng, _styled("bedding", BEDDING) + _styled("fabrics", FABRICS)), 0.95)
         shop.box((-x_out, D / 2 - 0.5, mattress_top - 0.14), (x_out, y_out, mattress_top + 0.07), throw, 0.03, 2)
     return style
 
@@ -860,7 +876,7 @@ def _tv_stand(shop, rng, W, D, H):
     if style == "soundbar":
         black = _mat(rng, "soundbar", (30, 30, 32), 0.6, spread=0.01)
         shop.box((-min(0.45, W * 0.3), -0.05, top), (min(0.45, W * 0.3), 0.04, top + 0.07), black, 0.02, 2)
-        pot = _mat(rng, *_pick(rng, POTS))
+        pot = _mat(rng, *_pick(rng, _styled("pots", POTS)))
         shop.lathe(W / 2 - 0.14, 0.0,
                    [(0, top), (0.05, top), (0.06, top + 0.06), (0.055, top + 0.065), (0, top + 0.065)],
                    pot, 20, shadow=False)
@@ -930,7 +946,7 @@ def _books(shop, rng, x0, x1, z0, z1, y0, y1):
             x += 0.22
             continue
         if r < 0.26 and x1 - x > 0.12:
-            pot = _mat(rng, *_pick(rng, POTS))
+            pot = _mat(rng, *_pick(rng, _styled("pots", POTS)))
             h = min(gap_h * 0.7, 0.2)
             shop.lathe(x + 0.05, (y0 + y1) / 2, [(0, z0), (0.035, z0), (0.05, z0 + h * 0.5), (0.02, z0 + h),
                                                 (0, z0 + h)], pot, 16, shadow=False)
@@ -960,7 +976,7 @@ def _pot(shop, rng, r, h, mat):
 
 def _plant(shop, rng, W, D, H):
     style = _pick(rng, ("bush", "fiddle leaf", "snake plant"))
-    pot_mat = _mat(rng, *_pick(rng, POTS))
+    pot_mat = _mat(rng, *_pick(rng, _styled("pots", POTS)))
     green = _mat(rng, "leaves", _pick(rng, GREENS), 0.6, spread=0.08)
     r = min(W, D) / 2
     pot_r = r * (0.62 if style != "snake plant" else 0.7)
@@ -1805,7 +1821,8 @@ def _check_size(kind, size_m):
     return size
 
 
-def build_furniture(kind: str, size_m=None, rng: np.random.Generator | None = None, style_seed=0) -> Furniture:
+def build_furniture(kind: str, size_m=None, rng: np.random.Generator | None = None, style_seed=0,
+                    style: str | None = None) -> Furniture:
     """Build a piece of furniture of catalog ``kind`` and size ``size_m``.
 
     Parameters
@@ -1818,6 +1835,8 @@ def build_furniture(kind: str, size_m=None, rng: np.random.Generator | None = No
         Picks the style, materials and details; ``default_rng(style_seed)`` when None.
     style_seed : int
         Seed used when ``rng`` is None.
+    style : str, optional
+        A name of :data:`STYLES`: its materials only; any material when None.
 
     Returns
     -------
@@ -1830,8 +1849,14 @@ def build_furniture(kind: str, size_m=None, rng: np.random.Generator | None = No
         size_m = CATALOG[kind].size_m
     W, D, H = _check_size(kind, size_m)
     rng = np.random.default_rng(style_seed) if rng is None else rng
+    if style is not None and style not in STYLES:
+        raise ValueError(f"style {style!r}: choose one of {', '.join(STYLES)}")
     shop = _Shop()
-    style = BUILDERS.get(kind, _carton)(shop, rng, W, D, H)
+    token = _STYLE.set(None if style is None else STYLES[style])
+    try:
+        style = BUILDERS.get(kind, _carton)(shop, rng, W, D, H)
+    finally:
+        _STYLE.reset(token)
     parts, raw = _fit(shop.parts, (W, D, H))
     return Furniture(kind, style, (W, D, H), parts, raw)
 
@@ -1998,23 +2023,24 @@ def item_seed(item: PlacedItem, seed: int = 0) -> int:
     return int(zlib.crc32(f"{seed}:{item.id or item.kind}".encode()))
 
 
-def furniture_for(item: PlacedItem, seed: int = 0, assets: dict | None = None, cache: dict | None = None) -> Furniture:
+def furniture_for(item: PlacedItem, seed: int = 0, assets: dict | None = None, cache: dict | None = None,
+                  style: str | None = None) -> Furniture:
     """The furniture of ``item``: a user's model when ``assets`` maps its kind to one (a
     path, or parts from :func:`load_asset`), else the procedural builder seeded by
-    :func:`item_seed`. ``cache`` (a dict) keeps built pieces between calls (not those
-    made from parts in memory)."""
+    :func:`item_seed`, in ``style`` (a name of :data:`STYLES`; any material when None).
+    ``cache`` (a dict) keeps built pieces between calls (not those made from parts in memory)."""
     asset = (assets or {}).get(item.kind)
     if asset is not None and not isinstance(asset, (str, Path)):
         cache = None  # parts in memory: nothing to key them by
     key = (item.kind, tuple(round(v, 6) for v in item.size_m), item_seed(item, seed),
-           None if asset is None else str(asset))
+           None if asset is None else str(asset), style)
     if cache is not None and key in cache:
         return cache[key]
     if asset is not None:
         parts = load_asset(asset) if isinstance(asset, (str, Path)) else asset
         result = furniture_from_asset(item.kind, item.size_m, parts)
     else:
-        result = build_furniture(item.kind, item.size_m, np.random.default_rng(key[2]))
+        result = build_furniture(item.kind, item.size_m, np.random.default_rng(key[2]), style=style)
     if cache is not None:
         cache[key] = result
     return result

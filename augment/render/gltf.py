@@ -51,7 +51,7 @@ def _matte(tree: dict) -> None:
 
 
 def scene_glb(floor, height_m: float, layout, seed: int = 0, cache: dict | None = None,
-              assets: dict | None = None) -> bytes:
+              assets: dict | None = None, style: str | None = None) -> bytes:
     """A suggestion as a binary glTF 2.0 scene (y up, meters, as Blender, three.js and
     Unity expect): the measured floor, walls of ``height_m`` along its ``"boundary"``
     edges, and the furniture (node names are the item ids).
@@ -69,6 +69,8 @@ def scene_glb(floor, height_m: float, layout, seed: int = 0, cache: dict | None 
         Built furniture kept between calls (:func:`augment.render.furniture.furniture_for`).
     assets : dict, optional
         Kind -> the user's model, as for :func:`augment.render.staged.render_staged`.
+    style : str, optional
+        The furniture's style, as given to :func:`augment.render.staged.render_staged`.
     """
     import trimesh
 
@@ -80,7 +82,7 @@ def scene_glb(floor, height_m: float, layout, seed: int = 0, cache: dict | None 
         scene.add_geometry(walls, node_name="walls", geom_name="walls", transform=GLTF_FROM_FLOOR)
     items = list(layout) if isinstance(layout, (list, tuple)) else placed_items(layout)
     for k, item in enumerate(items):
-        mesh = furniture_for(item, seed, assets, cache).to_trimesh(world_from_item(item))
+        mesh = furniture_for(item, seed, assets, cache, style).to_trimesh(world_from_item(item))
         name = item.id or f"{item.kind}_{k + 1}"
         scene.add_geometry(mesh, node_name=name, geom_name=name, transform=GLTF_FROM_FLOOR)
     from trimesh.exchange.gltf import export_glb

@@ -891,7 +891,8 @@ def _render_scale(box_px, supersample, settings: StagedSettings):
 
 def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                   floor_mask: np.ndarray | None = None, floor_polygon=None,
-                  lighting: Lighting | None = None, seed: int = 0, assets: dict | None = None,
+                  lighting: Lighting | None = None, seed: int = 0, style: str | None = None,
+                  assets: dict | None = None,
                   supersample: float | None = None, self_shadows: bool = True, layer: bool = False,
                   settings: StagedSettings | None = None) -> Staged:
     """Render furniture into a calibrated photo, with its shadows on the photo's floor.
@@ -917,8 +918,11 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         Estimated from the photo (:func:`estimate_lighting`) when None; pass it to reuse
         one estimate for several suggestions.
     seed : int
-        Picks each item's style and materials, with the item's id: an item looks the same
-        in every suggestion.
+        Picks each item's design and materials, with the item's id: an item looks the same
+        in every suggestion of one style.
+    style : str, optional
+        A name of :data:`augment.render.styles.STYLES`: every item in its palette and
+        materials; any material when None.
     assets : dict, optional
         Kind -> GLB/OBJ path, or parts from :func:`augment.render.furniture.load_asset`.
     supersample : float, optional
@@ -956,7 +960,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     K, dist, pose = _camera(calibration)
     if lighting is None:
         lighting = estimate_lighting(image, calibration, floor_mask, settings)
-    placed = [(it, furniture_for(it, seed, assets, _FURNITURE)) for it in items]
+    placed = [(it, furniture_for(it, seed, assets, _FURNITURE, style)) for it in items]
     timings["build"] = time.perf_counter() - t0
 
     # The region of the photo furniture and shadows can reach, and the box to render.

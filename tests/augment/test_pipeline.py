@@ -151,6 +151,22 @@ def test_report_is_complete(roomy):
     assert {"stager", "numpy", "opencv", "onnxruntime", "pyrender"} <= set(report["versions"])
 
 
+def test_each_suggestion_has_its_own_style_unless_one_is_asked(roomy, tmp_path, capsys):
+    """By default the three suggestions take three styles (their staged photos differ in
+    their pieces' materials); --style gives every suggestion one."""
+    from augment.render.styles import STYLES
+
+    result, _ = roomy
+    looks = [s["style"] for s in result.report["suggestions"]]
+    assert looks == list(STYLES)[:3] == result.styles
+    assert pipeline.suggestion_styles("modern", 5, 2) == ["modern", "modern"]
+    assert pipeline.suggestion_styles(None, 4, 2) == [list(STYLES)[4], list(STYLES)[0]]
+    with pytest.raises(FurnishError, match="style 'baroque': choose one of scandinavian"):
+        furnish(ROOMY, Board(), style="baroque")
+    code, _, err = run(["furnish", ROOMY, "--style", "baroque", "--out", tmp_path / "o"], capsys)
+    assert code == 2 and "--style" in err and "invalid choice: 'baroque'" in err
+
+
 def test_outputs_are_all_there_and_readable(roomy, tmp_path):
     result, _ = roomy
     out = tmp_path / "new" / "out"

@@ -73,7 +73,8 @@ def test_job_runs_to_completion(finished):
     assert client.get(f"/api/jobs/{job_id}/files/report.json").json()["board"]["erased"] is True
     assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "spec": False,
                                 "floor_mask": False, "clicks": 0, "doors": 0, "keep_board": False,
-                                "suggestions": 1, "seed": 0}
+                                "suggestions": 1, "seed": 0, "style": None}
+    assert state["styles"] == ["scandinavian"]  # seed 0's
 
 
 def test_a_job_has_its_own_page(finished):
