@@ -83,8 +83,8 @@ from .floor.segment import read_floor_mask, segment_floor
 from .photo.io import encode_image, read_photo
 from .render.erase import erase_board, layer_over_photo
 from .render.furniture import load_assets
-from .render.styles import STYLES
 from .render.gltf import scene_glb
+from .render.styles import STYLES
 from .room.fit import dropped_summary, furniture_for_floor, furniture_source, solve_suggestions
 from .room.height import measure_height
 
