@@ -43,31 +43,14 @@ import re
 import sys
 from pathlib import Path
 
-from layout.command import (
-    EXIT_INPUT,
-    EXIT_OK,
-    Parser,
-    arg_type,
-    dispatch,
-    parse,
-    path_arg,
-    seed_arg,
-)
+from layout.command import EXIT_INPUT, EXIT_OK, Parser, arg_type, dispatch, parse, path_arg, seed_arg
 from layout.command import run as run_command
 from layout.errors import StagerError, UsageError
 from layout.fileio import path_problem
 from layout.presets import PRESETS
 
-from ..camera.board import (
-    CHARUCO_DICTIONARY,
-    DEFAULT_BOARD,
-    DEFAULT_INNER_CORNERS,
-    DEFAULT_PAPER,
-    DEFAULT_SQUARE_MM,
-    MIN_SQUARE_MM,
-    PAPER_MM,
-    parse_board,
-)
+from ..camera.board import (CHARUCO_DICTIONARY, DEFAULT_BOARD, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM,
+                            MIN_SQUARE_MM, PAPER_MM, parse_board)
 from ..render.styles import STYLES
 
 DEFAULT_PROFILE = "profile.json"

@@ -31,15 +31,8 @@ from matplotlib.textpath import TextToPath
 
 from layout.fileio import atomic_path
 
-from .board import (
-    CHARUCO_BITS_PER_SQUARE,
-    CHARUCO_DICTIONARY,
-    CHARUCO_MARKER_BITS,
-    DEFAULT_INNER_CORNERS,
-    MIN_SQUARE_MM,
-    PAPER_MM,
-    Board,
-)
+from .board import (CHARUCO_BITS_PER_SQUARE, CHARUCO_DICTIONARY, CHARUCO_MARKER_BITS, DEFAULT_INNER_CORNERS,
+                    MIN_SQUARE_MM, PAPER_MM, Board)
 
 DEFAULT_SQUARE_BY_PAPER_MM = {"A3": 45.0, "A4": 30.0}
 

@@ -61,20 +61,8 @@ import numpy as np
 from layout.geometry import point_segment_distances
 
 from ..camera.calibration import Calibration
-from ..camera.lines import (
-    as_camera,
-    as_segments,
-    detect_raw,
-    floor_share,
-    is_vertical,
-    prepare_lines,
-    sample_image,
-    shrink_factor,
-    to_full,
-    to_gray,
-    to_small,
-    toward_vanishing_point,
-)
+from ..camera.lines import (as_camera, as_segments, detect_raw, floor_share, is_vertical, prepare_lines, sample_image,
+                            shrink_factor, to_full, to_gray, to_small, toward_vanishing_point)
 from ..camera.settings import CAMERA
 from .settings import ROOM
 

@@ -12,16 +12,8 @@ import pytest
 
 from augment.camera import calibrate, detect
 from augment.camera.board import Board
-from augment.camera.calibrate import (
-    _focal_from_homography,
-    calibrate_file,
-    calibrate_photo,
-    camera_profile,
-    exif_intrinsics,
-    load_profile,
-    single_view_intrinsics,
-    tilt_readings,
-)
+from augment.camera.calibrate import (_focal_from_homography, calibrate_file, calibrate_photo, camera_profile,
+                                      exif_intrinsics, load_profile, single_view_intrinsics, tilt_readings)
 from augment.camera.calibration import _distortion_reach, turn_points
 from augment.camera.detect import _find_chessboard, _saddle_refine, detect_board
 from augment.camera.settings import CAMERA

@@ -14,14 +14,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from augment.camera import printable
 from augment.camera.board import PAPER_MM, Board
-from augment.camera.printable import (
-    DEFAULT_SQUARE_BY_PAPER_MM,
-    PRINTER_MARGIN_MM,
-    QUIET_ZONE_MM,
-    board_figure,
-    board_for_paper,
-    write_board_pdf,
-)
+from augment.camera.printable import (DEFAULT_SQUARE_BY_PAPER_MM, PRINTER_MARGIN_MM, QUIET_ZONE_MM, board_figure,
+                                      board_for_paper, write_board_pdf)
 
 MM_PER_PT = 25.4 / 72.0
 

@@ -13,16 +13,8 @@ import trimesh
 from augment.camera.board import Board
 from augment.camera.calibration import Calibration, Intrinsics
 from augment.photo.io import read_photo
-from augment.render.furniture import (
-    BUILDERS,
-    Part,
-    PlacedItem,
-    build_furniture,
-    furniture_from_asset,
-    item_mesh,
-    load_asset,
-    placed_items,
-)
+from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furniture, furniture_from_asset, item_mesh,
+                                      load_asset, placed_items)
 from augment.render.gl import Renderer
 from augment.render.settings import RENDER
 from augment.render.staged import Lighting, estimate_lighting, render_staged, write_jpeg
