@@ -38,7 +38,7 @@ Files written by :func:`write_outputs` (K = 1 … N):
 ``staged_K_layer.png``      with ``layers=True``: what suggestion K adds (RGBA)
 ``layout_K.json``           suggestion K (see ``layout solve``): room, items, energy, metrics
 ``plan_K.png``              its top-down plan on the measured floor
-``energy.png``              energy per solver iteration of every suggestion
+``energy.png``              energy per solver iteration of every suggestion (not of ``--layout``)
 ``scene_K.glb``             glTF 2.0 scene (y up, meters): floor, walls, furniture
 ``overlay_calibration.png`` board corners, floor axes, 1 m grid, horizon
 ``overlay_floor.png``       the floor mask and polygon (edges coloured by kind), plan
@@ -69,6 +69,8 @@ import numpy as np
 
 from layout import report as layout_report
 from layout.fileio import folder_problem, replaced_input, staged_folder
+from layout.metrics import area_outside
+from layout.spec import read_layout
 
 from . import __version__
 from .camera.calibrate import calibrate_file
@@ -420,7 +422,8 @@ def report_dict(result: FurnishResult) -> dict:
                                 for o in result.spec.doors],
                       "assets": dict(result.assets)},
         "suggestions": suggestions,
-        "files": {"contact_sheet": "staged_all.jpg", "energy": "energy.png", "report": "report.json",
+        "files": {"contact_sheet": "staged_all.jpg", "report": "report.json",
+                  "energy": "energy.png" if "energy.png" in result.layout_files else None,
                   "overlays": list(result.overlays), "per_suggestion": n},
         "timings_s": {k: round(v, 4) for k, v in result.timings_s.items()},
         "warnings": list(result.warnings),
@@ -430,6 +433,16 @@ def report_dict(result: FurnishResult) -> dict:
 # --------------------------------------------------------------------------------------
 # furnish
 # --------------------------------------------------------------------------------------
+
+def off_floor_m2(layout, polygon_m) -> float:
+    """How much of a layout's furniture footprint lies off the floor ``polygon_m``, m²."""
+    return float(area_outside(np.asarray(polygon_m, dtype=np.float64), layout.corners_m()).sum())
+
+
+def _seed(layout, seed: int) -> int:
+    """The seed a suggestion was solved from, which also picks its designs."""
+    return seed if layout.seed is None else int(layout.seed)
+
 
 def suggestion_styles(style: str | None, seed: int, suggestions: int) -> list[str]:
     """Each suggestion's style: ``style`` for all, or by default a different one for each,
@@ -443,8 +456,8 @@ def suggestion_styles(style: str | None, seed: int, suggestions: int) -> list[st
 
 
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
-            seed: int = 0, style: str | None = None, camera=None, model=None, floor_mask=None, clicks=None,
-            doors=None, assets: dict | None = None, layers: bool = False, keep_board: bool = False,
+            seed: int = 0, style: str | None = None, layout=None, camera=None, model=None, floor_mask=None,
+            clicks=None, doors=None, assets: dict | None = None, layers: bool = False, keep_board: bool = False,
             progress: bool = False, reporter=None, renderer=None) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
@@ -460,12 +473,17 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         A spec file (:mod:`layout.spec`) instead of a preset: its items, groups and
         constraints on the measured floor.
     suggestions : int
-        Layouts to make; suggestion K is solved from seed ``seed + K - 1``.
+        Layouts to make; suggestion K is solved from seed ``seed + K - 1``, which also
+        picks its furniture's designs.
     seed : int
-        Also picks the furniture's designs and, without ``style``, the first suggestion's style.
+        The first suggestion's seed.
     style : str, optional
         Every suggestion in this style (:data:`augment.render.styles.STYLES`); by default
         suggestion K takes the K-th style from the seed's on, so each looks different.
+    layout : path-like, optional
+        A layout made before for this photo (``layout_K.json``), rendered again as it
+        stands, with its own designs, instead of solving: one suggestion, e.g. in another
+        ``style``.
     camera : path-like, optional
         A camera profile from ``stage calibrate``.
     model : path-like or FloorModel, optional
@@ -517,8 +535,18 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     photo = Path(photo)
     t_start = time.perf_counter()
     # Everything that can be checked without the photo is, first.
-    styles = suggestion_styles(style, seed, suggestions)
-    source_name, source = furniture_source(room, spec)
+    if layout is not None:
+        # A layout made before (layout_K.json), rendered again as it stands: one suggestion.
+        if room is not None or spec is not None:
+            raise FurnishError(f"layout {layout}: it holds its own furniture; give no room preset or spec with it")
+        source_name = f"layout {layout}"
+        fixed_spec, fixed_layout = read_layout(layout)
+        suggestions = 1
+        # Its own seed picks the designs and default style it was first rendered with.
+        styles = suggestion_styles(style, seed if fixed_layout.seed is None else fixed_layout.seed, 1)
+    else:
+        source_name, source = furniture_source(room, spec)
+        styles = suggestion_styles(style, seed, suggestions)
     user_models = load_assets(assets)
     steps = 6 + 3 * suggestions
     bar = _Progress(progress, steps) if reporter is None else reporter(steps)
@@ -535,18 +563,29 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         if m.floor.caveat:
             warnings.append(f"furniture is placed on the floor in view only ({m.floor.caveat})")
         room_height = float(m.height.height_m)
-        with clock("furniture"):
-            fitted, dropped = furniture_for_floor(source, m.floor, room_height, photo, doors=doors,
-                                                  calibration=m.calibration, asset_kinds=user_models,
-                                                  warnings=warnings)
-        bar.step()
-        with clock("layout"):
-            fitted, layouts, reports = solve_suggestions(fitted, suggestions, seed, m.floor.area_m2, dropped, bar)
+        if layout is not None:
+            fitted, layouts, dropped = fixed_spec, [fixed_layout], []
+            reports = [layout_report.evaluate(fixed_layout)]
+            if (off := off_floor_m2(fixed_layout, m.floor.polygon_m)) > 0.05:
+                warnings.append(f"layout {layout}: {off:.2f} m\u00b2 of its furniture stands off the floor "
+                                "measured in this photo: was it made for this photo?")
+            bar.step(1 + suggestions)
+        else:
+            with clock("furniture"):
+                fitted, dropped = furniture_for_floor(source, m.floor, room_height, photo, doors=doors,
+                                                      calibration=m.calibration, asset_kinds=user_models,
+                                                      warnings=warnings)
+            bar.step()
+            with clock("layout"):
+                fitted, layouts, reports = solve_suggestions(fitted, suggestions, seed, m.floor.area_m2, dropped,
+                                                             bar)
         if dropped:
             warnings.append(f"left out {len(dropped)} item(s) that do not fit the measured floor: "
                             + dropped_summary(dropped))
+        # A plan's title names no folder (the web app's files are its own).
+        titled = source_name if layout is None else f"layout {Path(layout).name}"
         layout_files = background.submit(layout_report.output_files, layouts, reports,
-                                         title=f"{photo.stem}, {source_name}: ")
+                                         title=f"{photo.stem}, {titled}: ")
         with clock("render"):
             render = render_module.result()
             own = renderer is None
@@ -560,8 +599,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 staged, staged_layers = [], []
                 for lay, look in zip(layouts, styles):
                     done = render.render_staged(base, m.calibration, lay, gl, floor_mask=m.segmentation.mask,
-                                                floor_polygon=m.floor, lighting=lighting, seed=seed, style=look,
-                                                assets=user_models, layer=layers)
+                                                floor_polygon=m.floor, lighting=lighting, seed=_seed(lay, seed),
+                                                style=look, assets=user_models, layer=layers)
                     staged.append(done.image)
                     if layers:
                         staged_layers.append(done.layer if erased is None else
@@ -574,8 +613,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             cache = {}
             scenes = []
             for lay, look in zip(layouts, styles):
-                scenes.append(scene_glb(m.floor, room_height, lay, seed=seed, cache=cache, assets=user_models,
-                                        style=look))
+                scenes.append(scene_glb(m.floor, room_height, lay, seed=_seed(lay, seed), cache=cache,
+                                        assets=user_models, style=look))
                 bar.step()
         with clock("overlays"):
             pictures = overlays(m, doors)

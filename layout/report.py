@@ -138,7 +138,8 @@ def output_files(layouts, reports=None, title=""):
     Returns
     -------
     files : dict of str to bytes
-        ``layout_K.json`` and ``plan_K.png`` for each K, then ``energy.png``.
+        ``layout_K.json`` and ``plan_K.png`` for each K, then ``energy.png`` (of
+        solved layouts only).
     """
     reports = [evaluate(lay) for lay in layouts] if reports is None else list(reports)
     files = {}
@@ -165,7 +166,8 @@ def output_files(layouts, reports=None, title=""):
                    f"rule energy {lay.energy:.3g} (0: every rule of the spec met)"),
         ))
     traces = {f"suggestion {k}": lay.trace[np.isfinite(lay.trace)] for k, lay in enumerate(layouts, 1)}
-    files["energy.png"] = plot.figure_png(plot.energy_figure(traces, title=f"{title}energy per iteration"))
+    if all(len(t) for t in traces.values()):  # a layout read back from its file has no trace
+        files["energy.png"] = plot.figure_png(plot.energy_figure(traces, title=f"{title}energy per iteration"))
     return files
 
 
@@ -211,7 +213,8 @@ def write_outputs(layouts, out_dir, reports=None, title="", inputs=()):
     Returns
     -------
     paths : list of Path
-        ``layout_K.json`` and ``plan_K.png`` for each K, then ``energy.png``.
+        ``layout_K.json`` and ``plan_K.png`` for each K, then ``energy.png`` (of
+        solved layouts only).
 
     Raises
     ------

@@ -171,6 +171,7 @@ MAX_ENTRIES = 20_000      # items (after count), groups, constraints, each
 MAX_GROUP_DEPTH = 16      # groups inside groups
 MAX_OPENINGS = 100        # doors, and windows
 MAX_SPEC_BYTES = 256 << 10  # a spec is a short text; the web app takes no more either
+MAX_LAYOUT_BYTES = 4 << 20  # a layout_K.json of the most items a spec may hold, with its metrics
 
 
 def _show(value):
@@ -1163,3 +1164,89 @@ def _add_constraint(b, c, index, sizes, all_items):
         chain = a["chain"]
         for lo, hi in zip(chain, chain[1:]):
             b.stack(index[lo], index[hi], **kw)
+
+
+# ------------------------------------------------------------------- a layout as written
+
+
+def read_layout(path):
+    """A layout as ``layout solve`` or ``stage furnish`` wrote it (``layout_K.json``): the
+    spec of its room with every item fixed where it stands, and the
+    :class:`~layout.solver.Layout` of that, to render, check or plot it again.
+
+    Returns
+    -------
+    spec : Spec
+    layout : Layout
+
+    Raises
+    ------
+    LayoutError
+        For a file that is missing, not such JSON, or a room or item that will not do;
+        the message starts with the file path.
+    """
+    path = Path(path)
+    if (problem := path_problem(path, missing="no such file")) is not None:
+        raise LayoutError(f"{path}: {problem}")
+    if path.stat().st_size > MAX_LAYOUT_BYTES:
+        raise LayoutError(f"{path}: is {path.stat().st_size:,} bytes, more than a layout_K.json holds "
+                          f"({MAX_LAYOUT_BYTES >> 20} MB at most)")
+    try:
+        doc = json.loads(path.read_bytes().decode("utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as error:
+        raise LayoutError(f"{path}: not the JSON of a layout_K.json ({str(error)[:100]})") from None
+    return layout_from_dict(doc, path)
+
+
+def layout_from_dict(doc, where="<layout>"):
+    """:func:`read_layout` of a layout's ``to_dict()`` (the JSON, parsed)."""
+    from .solver import Layout, energy_terms, initial_state
+
+    spec = spec_of_layout(doc, where)
+    model, _ = build(spec)
+    state = initial_state(model, np.random.default_rng(0))
+    seed = doc.get("seed")
+    layout = Layout.from_state(model, state.position_m, state.yaw_rad, energy_terms(model, state), np.zeros(0), 0,
+                               0, seed if isinstance(seed, int) and not isinstance(seed, bool) else None, 0.0)
+    # The rules it was solved under are not in the file: its energy is the one it was solved at.
+    energy = doc.get("energy")
+    if _is_number(energy) and math.isfinite(energy) and energy >= 0:
+        terms = doc.get("energy_by_kind")
+        layout = dataclasses.replace(layout, energy=float(energy),
+                                     energy_by_kind=terms if isinstance(terms, dict) else {})
+    return spec, layout
+
+
+def spec_of_layout(doc, where="<layout>") -> Spec:
+    """The spec of a layout's ``to_dict()``: its room, every item fixed where it stands.
+    Checks the layout as :func:`read_layout` does, without building it."""
+    r = _Reader(where)
+    if not isinstance(doc, dict) or not isinstance(doc.get("room"), dict) or not isinstance(doc.get("items"), list):
+        raise LayoutError(f"{where}: not a layout_K.json (expected an object with room and items)")
+    room = r.table(doc["room"], "room", ("polygon_m", "open_edges", "height_m", "doors_m", "windows_m"),
+                   ("polygon_m",))
+    doors = room.get("doors_m") or []
+    if not isinstance(doors, list) or len(doors) > MAX_OPENINGS:
+        raise r.error("room", f"doors_m must be a list of at most {MAX_OPENINGS} [[x, y], [x, y]] segments")
+    spec_doors = []
+    for k, d in enumerate(doors):
+        a, b = (r.point(p, f"room.doors_m[{k}]", "end") for p in (d if isinstance(d, list) and len(d) == 2 else [0]))
+        spec_doors.append({"at": [(a[0] + b[0]) / 2, (a[1] + b[1]) / 2], "width": math.dist(a, b)})
+    items = []
+    if len(doc["items"]) > MAX_ENTRIES:
+        raise r.error("items", f"{len(doc['items']):,} entries; at most {MAX_ENTRIES:,}")
+    for n, it in enumerate(doc["items"]):
+        where_item = f"items[{n}]"
+        r.table(it, where_item, ("id", "kind", "position_m", "yaw_rad", "size_m", "group"),
+                ("id", "kind", "position_m", "yaw_rad", "size_m"))
+        x, y, z = r.vector(it["position_m"], where_item, "position_m", 3, "[x, y, z] meters")
+        size = r.vector_checked(it["size_m"], where_item, "size_m", 3, "width, depth, height", positive=True)
+        yaw = r.number(it["yaw_rad"], where_item, "yaw_rad", unit="radians")
+        items.append({"id": r.string(it["id"], where_item, "id"), "kind": r.string(it["kind"], where_item, "kind"),
+                      "size": list(size), "at": [x, y], "yaw_deg": math.degrees(yaw), "fixed": True,
+                      "elevation": max(0.0, round(z - size[2] / 2, 9)), "rules": False})
+    if not items:
+        raise r.error("items", "no items: nothing to lay out")
+    return spec_from_dict({"room": {"polygon": room["polygon_m"], "height": room.get("height_m", 2.5),
+                                    "open_edges": room.get("open_edges", []), "doors": spec_doors},
+                           "items": items}, where=where)

@@ -7,9 +7,9 @@
     stage check PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
     stage segment PHOTO [--model M.onnx] [--method onnx|grabcut] [--board ...] [--out MASK.png] [--quiet]
     stage measure PHOTO [--board 7x5] [--square 45] [--camera profile.json] [--out DIR] [--quiet]
-    stage furnish PHOTO... [--board 7x5] [--square 45] [--room NAME | --spec FILE] [--suggestions 4]
+    stage furnish PHOTO... [--board 7x5] [--square 45] [--room NAME | --spec FILE | --layout FILE] [-n 4]
                   [--seed 0] [--camera profile.json] [--model M.onnx] [--asset KIND=FILE ...]
-                  [--layers] [--out DIR] [--quiet]
+                  [--style NAME] [--layers] [--out DIR] [--quiet]
     stage serve [--host 127.0.0.1] [--port 8000] [--workers N] [--jobs DIR]
 
 ``--board`` counts inner corners, ``COLSxROWS`` for a plain checkerboard (the default
@@ -268,7 +268,11 @@ def _parser():
     what.add_argument("--spec", type=path_arg, default=None, metavar="FILE.toml",
                       help="a layout spec (see `layout solve`): its items, groups and constraints on the "
                            "measured floor (its own room, doors and windows are not used)")
-    f.add_argument("--suggestions", "-n", type=_count, default=4, metavar="N",
+    what.add_argument("--layout", type=path_arg, default=None, metavar="LAYOUT.json",
+                      help="render a layout_K.json made before for this photo again as it stands, with its "
+                           "designs, e.g. in another --style (default out: out/<photo name>_<layout name>"
+                           "[_<style>])")
+    f.add_argument("--suggestions", "-n", type=_count, default=None, metavar="N",
                    help="number of layout suggestions (default 4)")
     f.add_argument("--seed", type=seed_arg, default=0, help="seed of suggestion 1; K uses seed + K - 1 (default 0)")
     f.add_argument("--camera", type=path_arg, default=None, metavar="PROFILE.json",
@@ -663,6 +667,12 @@ def _furnish_cmd(args):
     photos = args.photo
     board = _board(args)
     batch = len(photos) > 1
+    if args.layout is not None:
+        if args.suggestions is not None:
+            raise UsageError(f"--layout {args.layout}: it is one suggestion; leave --suggestions out")
+        if batch:
+            raise UsageError(f"--layout {args.layout}: a layout is of one photo; give one photo with it")
+    suggestions = 4 if args.suggestions is None else args.suggestions
     if batch:
         stems = [p.stem for p in photos]
         twice = sorted({stem for stem in stems if stems.count(stem) > 1})
@@ -671,6 +681,9 @@ def _furnish_cmd(args):
                              "--out/<photo name>/; give them different names")
         parent = args.out if args.out is not None else Path("out")
         outs = [parent / p.stem for p in photos]
+    elif args.out is None and args.layout is not None:
+        # Beside the run that made the layout, not over it.
+        outs = [Path("out") / "_".join([photos[0].stem, args.layout.stem] + ([args.style] if args.style else []))]
     else:
         outs = [args.out if args.out is not None else Path("out") / photos[0].stem]
     for out in outs:
@@ -695,6 +708,7 @@ def _furnish_cmd(args):
         for flag, path, hint in (("--camera", args.camera, CAMERA_HINT),
                                  ("--model", args.model, "give an ONNX floor model, or leave --model out"),
                                  ("--spec", args.spec, "write one (see `layout solve --help`)"),
+                                 ("--layout", args.layout, "give a layout_K.json that stage furnish wrote"),
                                  *((f"--asset {kind}=", path, "give a GLB, glTF or OBJ file")
                                    for kind, path in args.asset)):
             _check_input_file(flag, path, hint)
@@ -714,14 +728,14 @@ def _furnish_cmd(args):
     try:
         for photo, out in zip(photos, outs):
             try:
-                result = furnish(photo, board, room=args.room, spec=args.spec, suggestions=args.suggestions,
+                result = furnish(photo, board, room=args.room, spec=args.spec, suggestions=suggestions,
                                  seed=args.seed, camera=args.camera, model=shared.get("model", args.model),
                                  floor_mask=args.floor_mask, clicks=args.clicks, doors=args.door,
                                  assets=dict(args.asset), layers=args.layers, keep_board=args.keep_board,
-                                 style=args.style, renderer=shared.get("renderer"),
+                                 style=args.style, layout=args.layout, renderer=shared.get("renderer"),
                                  progress=not args.quiet and sys.stderr.isatty())
-                paths = write_outputs(result, out, inputs=[photo, args.floor_mask, args.spec, args.camera,
-                                                            args.model, *dict(args.asset).values()])
+                paths = write_outputs(result, out, inputs=[photo, args.floor_mask, args.spec, args.layout,
+                                                            args.camera, args.model, *dict(args.asset).values()])
             except StagerError as error:
                 if not batch:
                     raise

@@ -7,7 +7,7 @@ writes a job's progress to ``<job>/progress.json`` as its stages finish; the rou
 :mod:`augment.app.web` read it from there.
 
 Layout of ``jobs_dir``: one folder per job, ``<id>/input/`` (the photo, the camera
-profile, the spec), ``<id>/out/`` (the files of :func:`augment.pipeline.write_outputs`),
+profile, the spec, the layout), ``<id>/out/`` (the files of :func:`augment.pipeline.write_outputs`),
 ``<id>/progress.json``.
 """
 from __future__ import annotations
@@ -106,16 +106,18 @@ def _run_job(job_dir: str, options: dict) -> dict:
     photo = job / "input" / options["photo"]
     camera = job / "input" / options["camera"] if options.get("camera") else None
     spec = job / "input" / options["spec"] if options.get("spec") else None
+    layout = job / "input" / options["layout"] if options.get("layout") else None
     floor_mask = job / "input" / options["floor_mask"] if options.get("floor_mask") else None
     # No server path in what the user gets back: each input by the name it was sent under.
     names = options.get("names") or {}
     shown = [(photo, names.get("photo", "the photo")), (camera, names.get("camera", "the camera profile")),
-             (spec, names.get("spec", "the spec file")), (floor_mask, names.get("floor_mask", "the floor mask"))]
+             (spec, names.get("spec", "the spec file")), (layout, names.get("layout", "the layout file")),
+             (floor_mask, names.get("floor_mask", "the floor mask"))]
     clicks = options.get("clicks") or None
     doors = options.get("doors") or None
     try:
         result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
-                                  room=None if spec is not None else options["room"], spec=spec,
+                                  room=options["room"], spec=spec, layout=layout,
                                   suggestions=options["suggestions"], seed=options["seed"], camera=camera,
                                   floor_mask=floor_mask, clicks=clicks, doors=doors,
                                   keep_board=options["keep_board"], style=options.get("style"),
@@ -128,7 +130,8 @@ def _run_job(job_dir: str, options: dict) -> dict:
         paths = pipeline.write_outputs(result, job / "out")
     except StagerError as error:
         message = str(error).replace(str(photo), "the photo")
-        for path, name in ((camera, "the camera profile"), (spec, "the spec file"), (floor_mask, "the floor mask")):
+        for path, name in ((camera, "the camera profile"), (spec, "the spec file"), (layout, "the layout file"),
+                           (floor_mask, "the floor mask")):
             if path is not None:
                 # "floor mask PATH: ..." reads "the floor mask: ...", not "floor mask the floor mask".
                 message = message.replace(f"{name[4:]} {path}", name).replace(str(path), name)
@@ -192,6 +195,7 @@ def job_state(job: Job) -> dict:
              "progress": 0.0, "error": None, "files": [], "styles": [], "warnings": [], "doubt": None,
              "options": {"board": board, "square": job.options["square"], "room": job.options["room"],
                          "spec": job.options.get("spec") is not None,
+                         "layout": job.options.get("layout") is not None,
                          "floor_mask": job.options.get("floor_mask") is not None,
                          "clicks": len(job.options.get("clicks") or ()),
                          "doors": len(job.options.get("doors") or ()),

@@ -9,7 +9,9 @@ described on the app's OpenAPI page (``/docs``):
                                     furnish`` (``board``, ``square``, ``room``,
                                     ``suggestions``, ``seed``, an optional ``camera``
                                     profile file, an optional ``spec`` file instead of
-                                    the room preset, an optional ``floor_mask`` file or
+                                    the room preset or ``layout`` (a ``layout_K.json``
+                                    to render again, e.g. in another ``style``), an
+                                    optional ``floor_mask`` file or
                                     ``clicks`` correcting the floor, ``doors`` to keep
                                     clear) -> 202 ``{"id": ...}``
 ``GET /api/jobs/{id}``              ``status`` (queued, running, done, failed), per-stage
@@ -38,7 +40,8 @@ are served only by name from the job's own output listing; finished jobs are del
 after ``keep_minutes``. Nothing the user sends is used as a path: the photo is stored
 as ``photo.<type>`` with the type found by decoding it, a spec as ``spec.toml`` once it
 has been checked as ``stage furnish --spec`` would check it (422 with the reason
-otherwise; it is data, read by :mod:`tomllib`, and names no files).
+otherwise; it is data, read by :mod:`tomllib`, and names no files), a layout likewise
+as ``layout.json``.
 
 The jobs and their worker processes: :mod:`augment.app.jobs`.
 """
@@ -60,7 +63,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response
 
 from layout.errors import shorten
-from layout.spec import MAX_SPEC_BYTES
+from layout.spec import MAX_LAYOUT_BYTES, MAX_SPEC_BYTES
 
 from ..camera.calibrate import MAX_PROFILE_BYTES
 from ..errors import UploadError
@@ -135,6 +138,21 @@ def _check_spec(data: bytes) -> None:
 
     try:
         spec_from_bytes(data, "the spec file")
+    except LayoutError as error:
+        raise UploadError(422, str(error)) from None
+
+
+def _check_layout(data: bytes) -> None:
+    """Refuse (422) a layout that ``stage furnish --layout`` would refuse."""
+    from layout.errors import LayoutError
+    from layout.spec import spec_of_layout
+
+    try:
+        doc = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError):
+        raise UploadError(422, "the layout is not JSON; send a layout_K.json that Stager wrote") from None
+    try:
+        spec_of_layout(doc, "the layout file")
     except LayoutError as error:
         raise UploadError(422, str(error)) from None
 
@@ -332,6 +350,10 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                      doors: Annotated[str, Form(description="doors to keep clear: a JSON list of [x1, y1, x2, "
                                                             "y2], the photo pixels of the feet of each door's "
                                                             "two sides")] = "",
+                     layout: Annotated[UploadFile | None, File(description="a layout_K.json made before for "
+                                                                           "this photo, rendered again as it "
+                                                                           "stands (one suggestion; room and "
+                                                                           "suggestions do not apply)")] = None,
                      style: Annotated[str, Form(description="the furniture's look (" + ", ".join(STYLES) + "); "
                                                             "empty: each suggestion another")] = "",
                      keep_board: Annotated[bool, Form(description="leave the board in the staged photos (by "
@@ -366,6 +388,15 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                 raise UploadError(413, f"the spec file is larger than {MAX_SPEC_BYTES >> 10} KB; a layout spec "
                                        "is a short TOML text")
             await asyncio.to_thread(_check_spec, layout_spec)
+        made = None
+        if layout is not None and layout.filename:
+            if layout_spec is not None:
+                raise UploadError(422, "a layout holds its own furniture: send a layout or a spec, not both")
+            made = await layout.read(MAX_LAYOUT_BYTES + 1)
+            if len(made) > MAX_LAYOUT_BYTES:
+                raise UploadError(413, f"the layout is larger than {MAX_LAYOUT_BYTES >> 20} MB; it is not a "
+                                       "layout_K.json that Stager wrote")
+            await asyncio.to_thread(_check_layout, made)
         mask, mask_suffix = None, None
         if floor_mask is not None and floor_mask.filename:
             mask = await floor_mask.read(max_bytes + 1)
@@ -390,18 +421,23 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
             (folder / "input" / "camera.json").write_bytes(profile)
         if layout_spec is not None:
             (folder / "input" / "spec.toml").write_bytes(layout_spec)
+        if made is not None:
+            (folder / "input" / "layout.json").write_bytes(made)
         if mask is not None:
             (folder / "input" / f"floor_mask{mask_suffix}").write_bytes(mask)
         options = {"photo": f"photo{suffix}", "camera": "camera.json" if profile is not None else None,
                    "spec": "spec.toml" if layout_spec is not None else None,
+                   "layout": "layout.json" if made is not None else None,
                    "floor_mask": f"floor_mask{mask_suffix}" if mask is not None else None,
                    "clicks": corrections, "doors": door_feet,
                    "board": (board_spec.cols, board_spec.rows), "kind": board_spec.kind, "square": float(square),
-                   "room": None if layout_spec is not None else room, "suggestions": int(suggestions),
+                   "room": None if layout_spec is not None or made is not None else room,
+                   "suggestions": 1 if made is not None else int(suggestions),
                    "seed": int(seed), "keep_board": bool(keep_board), "style": style or None,
                    "names": {"photo": _sent_name(photo.filename, "photo"),
                              **({"camera": _sent_name(camera.filename, "camera profile")} if profile else {}),
                              **({"spec": _sent_name(spec.filename, "spec file")} if layout_spec else {}),
+                             **({"layout": _sent_name(layout.filename, "layout file")} if made else {}),
                              **({"floor_mask": _sent_name(floor_mask.filename, "floor mask")} if mask else {})}}
         loop = asyncio.get_running_loop()
 

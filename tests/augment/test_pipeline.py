@@ -304,6 +304,78 @@ def test_outputs_never_replace_an_input(roomy, tmp_path):
     assert _digest(photo) != before["staged_1.jpg"]
 
 
+def _positions(layout_json: Path) -> dict:
+    return {it["id"]: (it["position_m"], it["yaw_rad"]) for it in json.loads(layout_json.read_text())["items"]}
+
+
+def test_a_layout_is_rendered_again_as_it_stands(roomy, tmp_path, capsys, monkeypatch):
+    """--layout layout_2.json: the same furniture where it stood; without --style the very
+    staged photo it was first rendered as, with one another look, in a folder of its own."""
+    result, _ = roomy
+    first = tmp_path / "first"
+    write_outputs(result, first)
+    code, out, _ = run(["furnish", ROOMY, "--layout", first / "layout_2.json", "--out", tmp_path / "same", "-q"],
+                       capsys)
+    assert code == 0, out
+    again = json.loads((tmp_path / "same" / "report.json").read_text())
+    assert again["furniture"]["source"] == f"layout {first / 'layout_2.json'}"
+    assert [s["style"] for s in again["suggestions"]] == [result.styles[1]]
+    assert _positions(tmp_path / "same" / "layout_1.json") == _positions(first / "layout_2.json")
+    assert not (tmp_path / "same" / "energy.png").exists() and again["files"]["energy"] is None
+    staged = [cv2.imread(str(p)).astype(float) for p in (first / "staged_2.jpg", tmp_path / "same" / "staged_1.jpg")]
+    assert np.abs(staged[0] - staged[1]).mean() < 0.05  # JPEG of the same render
+
+    monkeypatch.chdir(tmp_path)  # the default folder: beside the first run's, not over it
+    code, out, _ = run(["furnish", ROOMY, "--layout", first / "layout_2.json", "--style", "industrial"], capsys)
+    assert code == 0 and "industrial" in out, out
+    restyled = tmp_path / "out" / "room_4_layout_2_industrial"
+    assert json.loads((restyled / "report.json").read_text())["suggestions"][0]["style"] == "industrial"
+    assert _positions(restyled / "layout_1.json") == _positions(first / "layout_2.json")
+    other = cv2.imread(str(restyled / "staged_1.jpg")).astype(float)
+    # Another look where the furniture stands, the photo itself nowhere else.
+    changed = np.abs(other - staged[0]).max(axis=2) > 40
+    photo = cv2.imread(str(ROOMY)).astype(float)
+    assert changed.mean() > 0.05
+    for render in (staged[0], other):
+        assert (changed & (np.abs(render - photo).max(axis=2) < 8)).mean() < 0.01
+
+
+def test_bad_layouts_are_refused(roomy, tmp_path, out_with_a_file, capsys):
+    result, _ = roomy
+    good = tmp_path / "layout_1.json"
+    good.write_bytes(result.layout_files["layout_1.json"])
+    _refused(["furnish", ROOMY, "--layout", tmp_path / "none.json", "--out", out_with_a_file], out_with_a_file,
+             capsys, "--layout", "no such file", "layout_K.json")
+    bad = tmp_path / "bad.json"
+    for text, needles in (("{", ("not the JSON of a layout_K.json",)),
+                          ('{"room": 3}', ("not a layout_K.json (expected an object with room and items)",))):
+        bad.write_text(text)
+        _refused(["furnish", ROOMY, "--layout", bad, "--out", out_with_a_file], out_with_a_file, capsys,
+                 str(bad), *needles)
+    doc = json.loads(good.read_text())
+    doc["items"][1]["size_m"][2] = -0.4
+    bad.write_text(json.dumps(doc))
+    _refused(["furnish", ROOMY, "--layout", bad, "--out", out_with_a_file], out_with_a_file, capsys,
+             f"{bad}: items[1]: size_m = [", "must be greater than 0")
+    _refused(["furnish", ROOMY, "--layout", good, "-n", "2", "--out", out_with_a_file], out_with_a_file, capsys,
+             "--layout", "one suggestion; leave --suggestions out")
+    _refused(["furnish", ROOMY, CRAMPED, "--layout", good, "--out", out_with_a_file], out_with_a_file, capsys,
+             "a layout is of one photo")
+    _refused(["furnish", ROOMY, "--layout", good, "--spec", good, "--out", out_with_a_file], out_with_a_file,
+             capsys, "--spec", "not allowed with argument --layout")
+    with pytest.raises(FurnishError, match="holds its own furniture; give no room preset or spec"):
+        furnish(ROOMY, Board(), layout=good, room="bedroom")
+    # Another photo's layout: rendered, and said to stand off this photo's floor.
+    doc = json.loads(good.read_text())
+    for it in doc["items"]:
+        it["position_m"][0] += 6.0
+    doc["room"]["polygon_m"] = [[x + 6.0, y] for x, y in doc["room"]["polygon_m"]]
+    bad.write_text(json.dumps(doc))
+    moved = furnish(ROOMY, Board(), layout=bad)
+    assert any(w.startswith(f"layout {bad}: ") and "stands off the floor measured in this photo" in w
+               for w in moved.warnings), moved.warnings
+
+
 def test_glb_scene_is_y_up_with_walls_of_the_room_height(roomy):
     result, _ = roomy
     scene = trimesh.load(io.BytesIO(scene_glb(result.floor, 2.7, result.layouts[0])), file_type="glb")
@@ -404,7 +476,7 @@ def test_several_photos_in_one_command(tmp_path, capsys, monkeypatch):
                              "--out", out], capsys)
     # The photo without a board is refused with its own error; the others are furnished.
     assert code == 2
-    assert f"error: " in err and str(gray) in err and "no 7x5 checkerboard" in err
+    assert "error: " in err and str(gray) in err and "no 7x5 checkerboard" in err
     assert "furnished 2 of 3 photos" in stdout and f"== {ROOMY}" in stdout
     assert ("floor uncertain in 2 (check their overlay_floor.png; correct each with --floor-at / --not-floor-at "
             "or --floor-mask): room_1.jpg, room_4.jpg") in stdout

@@ -11,7 +11,7 @@ from augment.camera.board import Board
 from augment.render.gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from augment.synth import CEILING, FLOOR, render_labels, render_sample, write_sample
 from augment.synth.__main__ import main as synth_main
-from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, ROLL_DEG, look_pose, random_handling,
+from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, look_pose, random_handling,
                                   random_shot)
 from augment.synth.rooms import ROOM_SIDE_M, WALL_HEIGHT_M, random_polygon, random_room
 from augment.synth.scene import SEG_FLOOR, SEG_WALL, _Batch

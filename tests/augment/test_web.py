@@ -71,7 +71,7 @@ def test_job_runs_to_completion(finished):
     assert any("focal length" in w for w in state["warnings"])
     assert state["doubt"] is None  # this floor is found well
     assert client.get(f"/api/jobs/{job_id}/files/report.json").json()["board"]["erased"] is True
-    assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "spec": False,
+    assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "spec": False, "layout": False,
                                 "floor_mask": False, "clicks": 0, "doors": 0, "keep_board": False,
                                 "suggestions": 1, "seed": 0, "style": None}
     assert state["styles"] == ["scandinavian"]  # seed 0's
@@ -267,6 +267,38 @@ kind = "floor_lamp"
     report = client.get(f"/api/jobs/{state['id']}/files/report.json").json()
     assert report["furniture"]["items"] == ["reading_chair", "lamp"]
     assert report["furniture"]["kinds"] == ["armchair", "floor_lamp"]
+
+
+def test_a_layout_sent_is_rendered_again_in_another_style(finished):
+    """The finished job's layout_1.json sent back with another style: one suggestion, the
+    same items where they stood; a layout that will not do is refused with the reason."""
+    client, job_id = finished[:2]
+    made = client.get(f"/api/jobs/{job_id}/files/layout_1.json").content
+    response = client.post("/api/jobs", files={"photo": ("room_4.jpg", PHOTO.read_bytes(), "image/jpeg"),
+                                               "layout": ("layout_1.json", made, "application/json")},
+                           data={"suggestions": "4", "style": "industrial"})
+    assert response.status_code == 202, response.text
+    state = _wait(client, response.json()["id"])
+    assert state["status"] == "done", state
+    assert state["options"]["layout"] is True and state["options"]["room"] is None
+    assert state["options"]["suggestions"] == 1 and state["styles"] == ["industrial"]
+    report = client.get(f"/api/jobs/{state['id']}/files/report.json").json()
+    assert report["furniture"]["source"] == "layout layout_1.json"  # the name sent, no server path
+    again = client.get(f"/api/jobs/{state['id']}/files/layout_1.json").json()
+    assert [(it["id"], it["position_m"], it["yaw_rad"]) for it in again["items"]] == \
+        [(it["id"], it["position_m"], it["yaw_rad"]) for it in json.loads(made)["items"]]
+    doc = json.loads(made)
+    doc["items"][0]["yaw_rad"] = "north"
+    spec = b'[room]\nheight = 2.5\n[[items]]\nid = "sofa"\nkind = "sofa"\n'
+    for files, status, words in (
+            ({"layout": ("l.json", b"{", "application/json")}, 422, "the layout is not JSON"),
+            ({"layout": ("l.json", json.dumps(doc).encode(), "application/json")}, 422,
+             "the layout file: items[0]: yaw_rad"),
+            ({"layout": ("l.json", made, "application/json"), "spec": ("s.toml", spec, "text/plain")}, 422,
+             "send a layout or a spec, not both")):
+        response = client.post("/api/jobs", files={"photo": ("x.jpg", PHOTO.read_bytes(), "image/jpeg"), **files})
+        assert response.status_code == status, (words, response.text)
+        assert words in response.json()["detail"], response.text
 
 
 def test_a_floor_mask_of_ones_own_replaces_the_floor_found(finished):
@@ -474,9 +506,10 @@ def test_browser_upload_shows_gallery(server, tmp_path):
             browser.close()
 
 
-def test_browser_shows_a_job_sent_through_the_api(server):
+def test_browser_shows_a_job_sent_through_the_api(server, tmp_path):
     """A job sent with curl (here: Playwright's request API), opened at its address: the
-    page shows its options, then its staged photo, and has its photo to furnish again."""
+    page shows its options, then its staged photo, and has its photo to furnish again; its
+    suggestion rendered again in another style from the control under it."""
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as p:
@@ -496,6 +529,16 @@ def test_browser_shows_a_job_sent_through_the_api(server):
             assert page.locator("#details img").count() == 3 and page.locator("#error").is_hidden()
             page.wait_for_selector("#preview", state="visible", timeout=5_000)  # its photo, loaded
             assert page.locator("#go").is_enabled()
+            # Seed 3's style is industrial (the fourth): the control offers the four others.
+            assert page.locator(".restyle option").all_inner_texts() == ["scandinavian", "modern", "mid century",
+                                                                         "classic"]
+            page.select_option(".restyle select", "classic")
+            page.click(".restyle button")
+            page.wait_for_function(f"!location.pathname.endsWith({job_id!r}) && "
+                                   "!document.getElementById('download').hidden", timeout=50_000)
+            assert page.locator("#staged img").first.get_attribute("alt") == "The layout sent: classic"
+            assert page.locator("#error").is_hidden()
+            page.screenshot(path=str(tmp_path / "restyled.png"), full_page=True)
             page.goto(f"{server}/jobs/00000000-0000-4000-8000-000000000000")
             page.wait_for_selector("#error:not([hidden])", timeout=5_000)
             assert "no job" in page.inner_text("#error")

@@ -224,7 +224,7 @@ def test_wall_distance_and_orientation():
     m = b.finalize()
     pos, yaw = _state(m, [[1.0, 4.0]], yaw=[0.4])
     before = pos.copy()
-    P, R = m.packed()[0], m.packed()[11]
+    R = m.packed()[11]
     _project(K.project_wall_distance, m.packed()[6], m, pos, yaw, R)
     # Nearest wall is x = 0; the center goes to half the depth from it.
     np.testing.assert_allclose(pos[0, :2], [0.3, 4.0])
@@ -391,8 +391,8 @@ def test_wall_bound_pair_slides_along_the_wall():
 @pytest.mark.parametrize("model", [codes.BOX, codes.SPHERE])
 def test_accessibility_active_only_when_boxes_intersect(model):
     b = LayoutBuilder(ROOM)
-    sofa = b.add_item("sofa", (1.0, 1.0, 0.8), access_m=(0, 0, 0.5, 0))
-    table = b.add_item("table", (0.4, 0.4, 0.4))
+    b.add_item("sofa", (1.0, 1.0, 0.8), access_m=(0, 0, 0.5, 0))
+    b.add_item("table", (0.4, 0.4, 0.4))
     m = b.finalize()
     P = m.packed()[0]
     acc = np.zeros((2, 6))
@@ -582,7 +582,8 @@ def test_verlet_refresh_grows_an_empty_list():
 
 def test_pair_runs_share_no_movable_body(rng):
     b = LayoutBuilder([[0, 0], [12, 0], [12, 12], [0, 12]], 3.0)
-    items = [b.add_item(f"i{k}", (0.6, 0.5, 0.8), access_m=(0, 0, 0.4, 0)) for k in range(120)]
+    for k in range(120):
+        b.add_item(f"i{k}", (0.6, 0.5, 0.8), access_m=(0, 0, 0.4, 0))
     for g in range(6):  # rigid pairs: one body, two footprints
         group = b.add_group(f"g{g}", rigid=True)
         for k in range(2):

@@ -1,5 +1,7 @@
 """Spec files (layout.spec) and the furniture catalog with its default rules (layout.catalog)."""
+import json
 import math
+import re
 import textwrap
 from pathlib import Path
 
@@ -609,3 +611,39 @@ def test_bad_open_edges_are_named(tmp_path, value, expect):
     kind = "bed"
     """)
     assert expect in message
+
+
+def test_a_solved_layout_reads_back_as_it_stands(tmp_path):
+    """layout_K.json read back (``read_layout``): every item where the solver left it
+    (a lamp stacked on the desk included), fixed, with the seed and energy it was solved at."""
+    model, solver = spec.build(spec.load_spec(SAMPLES / "desk.toml"))
+    (solved,) = solver.suggest(model, 1, seed=3)
+    path = tmp_path / "layout_1.json"
+    path.write_text(json.dumps(solved.to_dict()))
+    loaded_spec, again = spec.read_layout(path)
+    assert all(item.fixed for item in loaded_spec.items)
+    assert again.seed == 3 and again.energy == solved.energy and again.trace.size == 0
+    assert [again.model.names[i] for i in again.items] == [solved.model.names[i] for i in solved.items]
+    np.testing.assert_allclose(again.position_m[again.items], solved.position_m[solved.items], atol=2e-6)
+    np.testing.assert_allclose(again.yaw_rad[again.items], solved.yaw_rad[solved.items], atol=2e-6)
+    top = [solved.model.names.index(f"book_{s}_6") for s in "ab"]  # six 3 cm books: 15 cm up
+    np.testing.assert_allclose(again.position_m[top, 2], [0.165, 0.165], atol=1e-9)
+    np.testing.assert_allclose(again.model.floor_polygon_m, solved.model.floor_polygon_m)
+
+
+@pytest.mark.parametrize("change, expected", [
+    (lambda d: d.pop("items"), "not a layout_K.json (expected an object with room and items)"),
+    (lambda d: d["items"][0].pop("yaw_rad"), "items[0]: missing field 'yaw_rad'"),
+    (lambda d: d["items"][0].update(position_m=[1, 2]), "items[0]: position_m"),
+    (lambda d: d["items"][1].update(size_m=[0.5, 0, 0.5]), "items[1]: size_m = [0.5, 0, 0.5]"),
+    (lambda d: d["room"].update(polygon_m=[[0, 0], [1, 0]]), "room"),
+])
+def test_bad_layout_files_name_the_file_and_entry(tmp_path, change, expected):
+    model, solver = spec.build(spec.load_spec(SAMPLES / "desk.toml"))
+    doc = solver.suggest(model, 1, seed=0)[0].to_dict()
+    change(doc)
+    path = tmp_path / "layout_1.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(LayoutError, match=rf"^{re.escape(str(path))}: .*{re.escape(expected)}"):
+        spec.read_layout(path)
+    assert json.loads(path.read_text()) == doc  # never modified
