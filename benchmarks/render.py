@@ -13,7 +13,8 @@ Run by hand (from the repository root):
   and later suggestions of a photo.
 * ``python benchmarks/render.py --gallery``: ``docs/furniture_gallery.png``, every catalog
   kind rendered by :func:`augment.render.staged.render_staged` on a plain studio floor (its style in
-  brackets), and ``docs/render_rooms.jpg``, the four sample photos before and after staging.
+  brackets), ``docs/render_rooms.jpg``, the four sample photos before and after staging, and
+  ``docs/surfaces.jpg``, every surface as a 20 cm swatch and three pieces close up.
 """
 from __future__ import annotations
 
@@ -40,6 +41,7 @@ from augment.floor.polygon import floor_polygon  # noqa: E402
 from augment.render.furniture import PlacedItem, furniture_for, placed_items  # noqa: E402
 from augment.render.gl import Renderer  # noqa: E402
 from augment.render.staged import Lighting, estimate_lighting, render_staged, write_jpeg, write_png  # noqa: E402
+from augment.render.surfaces import surface  # noqa: E402
 from layout.catalog import CATALOG  # noqa: E402
 from layout.spec import build, load_spec  # noqa: E402
 
@@ -235,6 +237,51 @@ def gallery(path: Path, cell=(320, 240), columns=8) -> None:
     print(f"wrote {path} ({len(kinds)} kinds)")
 
 
+# A typical colour per surface for its swatch (linear RGB), and the swatches' order.
+_SWATCHES = {"wood:oak": (0.45, 0.30, 0.17), "wood:light oak": (0.62, 0.47, 0.30), "wood:ash": (0.66, 0.55, 0.40),
+             "wood:pine": (0.62, 0.45, 0.25), "wood:teak": (0.42, 0.24, 0.11), "wood:walnut": (0.28, 0.16, 0.09),
+             "wood:dark walnut": (0.16, 0.09, 0.05), "wood:weathered": (0.40, 0.36, 0.31),
+             "weave": (0.35, 0.37, 0.40), "linen": (0.62, 0.58, 0.50), "boucle": (0.80, 0.77, 0.70),
+             "velvet": (0.10, 0.22, 0.16), "wool": (0.45, 0.28, 0.18), "felt": (0.30, 0.30, 0.32),
+             "rug": (0.55, 0.48, 0.38), "leather": (0.38, 0.18, 0.08), "metal:brushed": (0.60, 0.50, 0.30),
+             "metal:powder": (0.04, 0.04, 0.04), "paint": (0.80, 0.80, 0.78), "ceramic": (0.65, 0.68, 0.70),
+             "terracotta": (0.55, 0.25, 0.13), "concrete": (0.45, 0.44, 0.42), "marble": (0.85, 0.85, 0.83),
+             "basket": (0.55, 0.40, 0.22), "leaf": (0.10, 0.28, 0.07)}
+
+
+def surfaces_picture(path: Path, swatch_px=200, columns=9, close=(480, 360)) -> None:
+    """Every surface as a 20 cm square (its colour times its detail, sampled at 1 px per
+    mm), and a sofa, a dresser and an armchair rendered close."""
+    tiles = []
+    for name, rgb in _SWATCHES.items():
+        surf = surface(name)
+        n = round(0.2 / surf.tile_m * surf.image.shape[0])  # texels in 20 cm
+        detail = (np.resize(surf.image, (n, n, 3)) if n > surf.image.shape[0] else surf.image[:n, :n]) / 255.0
+        linear = detail ** 2.2 * np.asarray(rgb) / np.asarray(surf.mean_rgb)
+        srgb = np.clip(255.0 * np.clip(linear, 0, 1) ** (1 / 2.2), 0, 255).astype(np.uint8)
+        tile = cv2.resize(srgb, (swatch_px, swatch_px), interpolation=cv2.INTER_AREA)
+        tile = _label(np.vstack([tile, np.full((28, swatch_px, 3), 255, np.uint8)]), name.replace("wood:", ""), 15)
+        tiles.append(tile)
+    blank = np.full_like(tiles[0], 255)
+    rows = [np.hstack(tiles[i:i + columns] + [blank] * (columns - len(tiles[i:i + columns])))
+            for i in range(0, len(tiles), columns)]
+    pieces = []
+    with Renderer() as renderer:
+        for kind in ("sofa", "dresser", "armchair"):
+            size = CATALOG[kind].size_m
+            view = _studio_view(size, close)
+            photo, floor = _backdrop(view)
+            item = PlacedItem(kind, (0.0, 0.0, size[2] / 2), 0.0, size, kind)
+            staged = render_staged(photo, view, [item], renderer, floor_mask=floor, lighting=_STUDIO_LIGHT,
+                                   supersample=2.0, self_shadows=True)
+            pieces.append(staged.image)
+    strip = np.hstack(pieces)
+    width = rows[0].shape[1]
+    strip = cv2.resize(strip, (width, round(strip.shape[0] * width / strip.shape[1])), interpolation=cv2.INTER_AREA)
+    write_jpeg(path, np.vstack(rows + [strip]), quality=90)
+    print(f"wrote {path}")
+
+
 def rooms_picture(path: Path, width=640) -> None:
     pairs = []
     with Renderer() as renderer:
@@ -256,6 +303,7 @@ def main() -> None:
     if args.gallery:
         gallery(DOCS / "furniture_gallery.png")
         rooms_picture(DOCS / "render_rooms.jpg")
+        surfaces_picture(DOCS / "surfaces.jpg")
     else:
         benchmark(max(2, args.repeats))
 

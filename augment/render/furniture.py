@@ -36,7 +36,8 @@ from layout.fileio import path_problem
 
 from ..errors import FurnishError
 from .settings import RENDER
-from .styles import STYLES
+from .styles import STYLES, WEAVES
+from .surfaces import surface_name
 
 # --------------------------------------------------------------------------------------
 # Materials
@@ -58,6 +59,9 @@ class Material:
         Identifies ``texture`` (a user asset's base-colour image); "" when there is none.
     texture : (h, w, 3) uint8 or None
         sRGB base-colour texture, multiplied by ``color_rgb``.
+    surface : str
+        Its surface detail (:func:`augment.render.surfaces.surface`: grain, weave, ...),
+        laid on the parts' ``uv`` (meters); "" for none.
     """
 
     name: str
@@ -67,21 +71,24 @@ class Material:
     emissive_rgb: tuple = (0.0, 0.0, 0.0)
     texture_key: str = ""
     texture: np.ndarray | None = field(default=None, compare=False, hash=False, repr=False)
+    surface: str = ""
 
 
 def _linear(srgb255) -> np.ndarray:
     return (np.asarray(srgb255, dtype=np.float64) / 255.0) ** 2.2
 
 
-def _mat(rng, name, srgb255, roughness=0.7, metallic=0.0, spread=0.06, emissive=None) -> Material:
-    """A material of colour ``srgb255`` varied by about ``spread`` in brightness and tint."""
+def _mat(rng, name, srgb255, roughness=0.7, metallic=0.0, spread=0.06, emissive=None, surface=None) -> Material:
+    """A material of colour ``srgb255`` varied by about ``spread`` in brightness and tint;
+    its surface by default the one its name says (:func:`surface_name`)."""
     base = _linear(srgb255)
     gain = math.exp(rng.normal(0.0, spread * 2.0))
     tint = np.exp(rng.normal(0.0, spread * 0.5, 3))
     color = np.clip(base * gain * tint, 0.002, 0.92)
     r = float(np.clip(roughness + rng.normal(0.0, 0.04), 0.05, 1.0))
     em = (0.0, 0.0, 0.0) if emissive is None else tuple(float(v) for v in emissive)
-    return Material(name, tuple(float(v) for v in color), r, float(metallic), em)
+    return Material(name, tuple(float(v) for v in color), r, float(metallic), em,
+                    surface=surface_name(name) if surface is None else surface)
 
 
 # Palettes: (name, sRGB 0-255, roughness, metallic).
@@ -136,7 +143,8 @@ def _paint(rng):
 
 def _fabric(rng):
     name, rgb = _pick(rng, _styled("fabrics", FABRICS))
-    return _mat(rng, name, rgb, 0.92)
+    style = _STYLE.get()
+    return _mat(rng, name, rgb, 0.92, surface=_pick(rng, WEAVES if style is None else style.weaves))
 
 
 def _leather(rng):
@@ -179,7 +187,8 @@ class Part:
         Counter-clockwise seen from outside.
     material : Material
     uv : (n, 2) float64 or None
-        Texture coordinates, for textured user assets.
+        Texture coordinates: a user asset's own, or for the builders' parts meters along
+        the surface (u along the part's length, where a wood's grain runs).
     convex : bool
         The part is convex: its shadow is the hull of its projected vertices.
     casts_shadow : bool
@@ -250,7 +259,8 @@ def _face_grid(coords_b, coords_d):
 
 def _rounded_box_mesh(lo, hi, radius, segments):
     """A box from ``lo`` to ``hi`` with its edges rounded by ``radius`` (``segments`` facets
-    per 45 degrees; radius 0 gives a sharp box). Exact extents, analytic normals."""
+    per 45 degrees; radius 0 gives a sharp box). Exact extents, analytic normals; each
+    side's texture coordinates (meters) run along its longer edge first."""
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     center, half = (lo + hi) / 2, (hi - lo) / 2
     r = float(min(radius, 0.999 * half.min()))
@@ -260,10 +270,11 @@ def _rounded_box_mesh(lo, hi, radius, segments):
     if r <= 1e-6:
         segments = 0
     t = np.tan(np.linspace(0.0, np.pi / 4, segments + 1)[1:]) if segments else np.zeros(0)
-    verts, norms, faces = [], [], []
+    verts, norms, faces, uvs = [], [], [], []
     count = 0
     for a in range(3):
         b, d = (a + 1) % 3, (a + 2) % 3
+        along, across = (b, d) if half[b] >= half[d] else (d, b)
         cb = np.concatenate([-inner[b] - r * t[::-1], [-inner[b], inner[b]], inner[b] + r * t])
         cd = np.concatenate([-inner[d] - r * t[::-1], [-inner[d], inner[d]], inner[d] + r * t])
         for sign in (-1.0, 1.0):
@@ -283,31 +294,33 @@ def _rounded_box_mesh(lo, hi, radius, segments):
             verts.append(pos + center)
             norms.append(n)
             faces.append(_face_grid(cb, cd) + count)
+            uvs.append(pos[:, [along, across]] + half[[along, across]])
             count += len(p)
     v, n, f = np.concatenate(verts), np.concatenate(norms), np.concatenate(faces)
     # Drop the zero-area triangles of the flat middle strips when the box is sharp.
     tri = v[f]
     area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     f = f[area > 1e-14]
-    return v, n, _oriented(v, n, f)
+    return v, n, _oriented(v, n, f), np.concatenate(uvs)
 
 
 def _lathe_mesh(profile, sections, arc=(0.0, 2 * np.pi), smooth_deg=35.0):
     """Revolve a profile of (radius, z) points about the z axis. Consecutive profile edges
-    meeting at less than ``smooth_deg`` share a normal (curved), else the edge is sharp."""
+    meeting at less than ``smooth_deg`` share a normal (curved), else the edge is sharp.
+    Texture coordinates (meters): on the sides u along the axis (a turned leg's grain), v
+    around it at the widest radius, the seam's vertices doubled so that v does not wrap;
+    tops and steps as seen from above."""
     prof = np.asarray(profile, dtype=np.float64)
     seg_dir = np.diff(prof, axis=0)
     seg_len = np.linalg.norm(seg_dir, axis=1)
     keep = seg_len > 1e-9
     starts, ends, seg_dir = prof[:-1][keep], prof[1:][keep], seg_dir[keep] / seg_len[keep, None]
     seg_n = np.stack([seg_dir[:, 1], -seg_dir[:, 0]], axis=1)  # outward (right of travel)
-    full = np.isclose(arc[1] - arc[0], 2 * np.pi)
     phi = np.linspace(arc[0], arc[1], sections + 1)
-    if full:
-        phi = phi[:-1]
     cos_p, sin_p = np.cos(phi), np.sin(phi)
+    around = phi * max(float(np.abs(prof[:, 0]).max()), 1e-3)
     cos_limit = math.cos(math.radians(smooth_deg))
-    verts, norms, faces = [], [], []
+    verts, norms, faces, uvs = [], [], [], []
     count = 0
     for k in range(len(starts)):
         ends_n = []
@@ -325,8 +338,12 @@ def _lathe_mesh(profile, sections, arc=(0.0, 2 * np.pi), smooth_deg=35.0):
         m = len(phi)
         verts += [ring[0][0], ring[1][0]]
         norms += [ring[0][1], ring[1][1]]
-        i = np.arange(m if full else m - 1)
-        j = (i + 1) % m
+        if abs(ends[k][1] - starts[k][1]) >= abs(ends[k][0] - starts[k][0]):  # a side: along the axis, around
+            uvs += [np.column_stack([np.full(m, z), around]) for z in (starts[k][1], ends[k][1])]
+        else:  # a top or a step: seen from above
+            uvs += [ring[0][0][:, :2], ring[1][0][:, :2]]
+        i = np.arange(m - 1)
+        j = i + 1
         a, b, c, d = i + count, j + count, j + m + count, i + m + count
         quads = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
         faces.append(quads)
@@ -335,7 +352,16 @@ def _lathe_mesh(profile, sections, arc=(0.0, 2 * np.pi), smooth_deg=35.0):
     tri = v[f]
     area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     f = f[area > 1e-14]
-    return v, n, _oriented(v, n, f)
+    return v, n, _oriented(v, n, f), np.concatenate(uvs)
+
+
+def _planar_uv(v, n):
+    """Texture coordinates (meters) of vertices projected along their normal's main axis:
+    for meshes whose faces do not share vertices across such axes."""
+    axis = np.abs(n).argmax(axis=1)
+    first, second = np.array([1, 2, 0])[axis], np.array([2, 0, 1])[axis]
+    rows = np.arange(len(v))
+    return np.column_stack([v[rows, first], v[rows, second]])
 
 
 def _hull_mesh(points):
@@ -343,7 +369,7 @@ def _hull_mesh(points):
     v = hull.vertices[hull.faces].reshape(-1, 3)
     n = np.repeat(hull.face_normals, 3, axis=0)
     f = np.arange(len(v)).reshape(-1, 3)
-    return v, n, f
+    return v, n, f, _planar_uv(v, n)
 
 
 _ICO = trimesh.creation.icosphere(subdivisions=2)
@@ -355,8 +381,11 @@ class _Shop:
     def __init__(self):
         self.parts: list[Part] = []
 
-    def _add(self, v, n, f, mat, convex=True, shadow=True, matrix=None) -> Part:
-        part = Part(v, n, f, mat, None, convex, shadow)
+    def _add(self, v, n, f, uv, mat, convex=True, shadow=True, matrix=None) -> Part:
+        # Each part starts its surface elsewhere, so that neighbours' grain does not line up.
+        phase = abs(math.sin(float(v.mean(axis=0) @ (12.9898, 78.233, 37.719))))
+        start = np.modf(phase * np.array([43758.55, 24634.63]))[0]
+        part = Part(v, n, f, mat, uv + 3.0 * start, convex, shadow)
         if matrix is not None:
             part = part.transformed(matrix)
         self.parts.append(part)
@@ -369,9 +398,8 @@ class _Shop:
     def lathe(self, x, y, profile, mat, sections=24, arc=(0.0, 2 * np.pi), convex=True, shadow=True,
               matrix=None) -> Part:
         """A turned part: ``profile`` (radius, z) pairs revolved about the vertical through (x, y)."""
-        v, n, f = _lathe_mesh(profile, sections, arc)
         m = _move(x, y, 0.0) if matrix is None else matrix @ _move(x, y, 0.0)
-        return self._add(v, n, f, mat, convex, shadow, m)
+        return self._add(*_lathe_mesh(profile, sections, arc), mat, convex, shadow, m)
 
     def cylinder(self, x, y, z0, z1, radius, mat, sections=16, radius_top=None, shadow=True) -> Part:
         rt = radius if radius_top is None else radius_top
@@ -383,10 +411,10 @@ class _Shop:
         axis = p1 - p0
         length = float(np.linalg.norm(axis))
         re = radius if radius_end is None else radius_end
-        v, n, f = _lathe_mesh([(0, 0), (radius, 0), (re, length), (0, length)], sections)
+        mesh = _lathe_mesh([(0, 0), (radius, 0), (re, length), (0, length)], sections)
         R = np.eye(4)
         R[:3, :3] = trimesh.geometry.align_vectors([0, 0, 1.0], axis / length)[:3, :3]
-        return self._add(v, n, f, mat, True, shadow, _move(*p0) @ R)
+        return self._add(*mesh, mat, True, shadow, _move(*p0) @ R)
 
     def ellipsoid(self, center, radii, mat, shadow=True, matrix=None) -> Part:
         radii = np.asarray(radii, dtype=np.float64)
@@ -394,7 +422,8 @@ class _Shop:
         n = _ICO.vertices / radii
         n /= np.linalg.norm(n, axis=1, keepdims=True)
         m = _move(*center) if matrix is None else matrix @ _move(*center)
-        return self._add(v, n, _oriented(v, n, _ICO.faces.copy()), mat, True, shadow, m)
+        flat = np.argsort(radii)[::-1][:2]  # seen from its flattest side, as a cushion is
+        return self._add(v, n, _oriented(v, n, _ICO.faces.copy()), v[:, flat], mat, True, shadow, m)
 
     def reach(self, first, axis, target, side=1, last=None):
         """Stretch parts ``first:last`` along ``axis`` about their far bound until their
@@ -451,7 +480,8 @@ class _Shop:
         v = np.concatenate([tri.reshape(-1, 3), tri[:, ::-1].reshape(-1, 3)])
         n = np.concatenate([np.repeat(fn, 3, axis=0), np.repeat(-fn, 3, axis=0)])
         faces = np.arange(len(v)).reshape(-1, 3)
-        return self._add(v, n, faces, mat, False, shadow)
+        uv = np.column_stack([(v - base) @ d, (v - base) @ side])  # along the leaf, across it
+        return self._add(v, n, faces, uv, mat, False, shadow)
 
 
 # --------------------------------------------------------------------------------------

@@ -50,6 +50,7 @@ from ..photo.io import JPEG_QUALITY, encode_image
 from .furniture import furniture_for, placed_items, world_from_item
 from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from .settings import RENDER, StagedSettings
+from .surfaces import surface
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 
@@ -303,8 +304,21 @@ def _vertex_light(v, n, albedo, roughness, metal, emissive, ao, lighting: Lighti
 
 
 def _encode(linear):
-    """Vertex colours (n, 4) float32: linear light in the photo's gamma, alpha 1."""
-    return np.column_stack([np.clip(linear, 0.0, 1.0) ** (1.0 / GAMMA), np.ones(len(linear))]).astype(np.float32)
+    """Vertex colours (n, 4) float32: linear light in the photo's gamma, alpha 1. Above 1
+    is kept: a surface texture (at most 1) multiplies it before the shader clamps."""
+    return np.column_stack([np.maximum(linear, 0.0) ** (1.0 / GAMMA), np.ones(len(linear))]).astype(np.float32)
+
+
+def _texture_of(part):
+    """(key, image, uv, albedo scale) of a part: a user asset's own texture (its colour
+    in the image), or its material's surface detail at real scale; key "" for none."""
+    m = part.material
+    if m.texture is not None:
+        return m.texture_key, m.texture, part.uv, None
+    if m.surface and part.uv is not None:
+        detail = surface(m.surface)
+        return f"surface {m.surface}", detail.image, part.uv / detail.tile_m, 1.0 / np.asarray(detail.mean_rgb)
+    return "", None, None, np.ones(3)
 
 
 def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings: StagedSettings):
@@ -314,19 +328,20 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
     for item, furniture in placed:
         T = world_from_item(item)
         for part in furniture.parts:
-            groups.setdefault(part.material.texture_key, []).append((part, T, item.size_m[2]))
+            key, image, uv, scale = _texture_of(part)
+            groups.setdefault(key, (image, []))[1].append((part, T, item.size_m[2], uv, scale))
     fills, keys = [], []
-    for tex_key, members in groups.items():
+    for tex_key, (image, members) in groups.items():
         vs, ns, fs, hs, per = [], [], [], [], []
         count = 0
-        for part, T, height in members:
+        for part, T, height, _, scale in members:
             vs.append(part.vertices @ T[:3, :3].T + T[:3, 3])
             ns.append(part.normals @ T[:3, :3].T)
             hs.append(np.full(len(part.vertices), T[2, 3]))
             fs.append(part.faces + count)
             m = part.material
-            per.append((len(part.vertices), np.ones(3) if m.texture is not None else m.color_rgb, m.roughness,
-                        m.metallic, m.emissive_rgb, height))
+            per.append((len(part.vertices), np.ones(3) if scale is None else np.asarray(m.color_rgb) * scale,
+                        m.roughness, m.metallic, m.emissive_rgb, height))
             count += len(part.vertices)
         v, n = np.concatenate(vs), np.concatenate(ns)
         sizes = [p[0] for p in per]
@@ -338,10 +353,10 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
         fill, key = _vertex_light(v, n, albedo, rough, metal, emissive, ao, lighting, cam_pos, forward_xy, settings)
         positions, normals = v.astype(np.float32), n.astype(np.float32)
         indices = np.concatenate(fs).astype(np.uint32)
-        texture = members[0][0].material if tex_key else None
-        uv = np.concatenate([p.uv for p, _, _ in members]).astype(np.float32) if tex_key else None
+        uv = np.concatenate([m[3] for m in members]).astype(np.float32) if tex_key else None
+        # One texture for both meshes: pyrender uploads it once while it stays in the scenes.
+        tex = None if image is None else pyrender.Texture(source=image, source_channels="RGB")
         for colors, out in ((fill + key, fills), (key, keys)):
-            tex = None if texture is None else pyrender.Texture(source=texture.texture, source_channels="RGB")
             material = pyrender.MetallicRoughnessMaterial(baseColorFactor=(1.0, 1.0, 1.0, 1.0), baseColorTexture=tex)
             out.append(pyrender.Mesh([pyrender.Primitive(
                 positions=positions, normals=normals, texcoord_0=uv, color_0=_encode(colors), indices=indices,

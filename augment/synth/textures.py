@@ -15,43 +15,28 @@ Images are ``(size_px, size_px, 3)`` uint8 in sRGB, channel order RGB (convert b
 ``cv2.imwrite``). Randomness comes only from the ``rng`` passed in: the same generator
 state gives the same image.
 
-The textures are made per rendered image, so they are written for speed: noise is
-generated on a grid coarse enough for its scale and upsampled with cubic interpolation,
-per-plank and per-tile values are looked up with ``cv2.LUT`` on uint8 id maps, color is
-kept as three planes because NumPy broadcasting over a trailing axis of length 3 is an
-order of magnitude slower than plane-wise arithmetic, and image-sized temporaries live
-in per-thread scratch buffers (:class:`_Scratch`) because at 512 px fresh ones cost as
-much in page faults as the arithmetic does. The functions are thread-safe.
+The textures are made per rendered image, so they are written for speed: the noise is
+:mod:`augment.render.noise`'s, per-plank and per-tile values are looked up with
+``cv2.LUT`` on uint8 id maps, color is kept as three planes because NumPy broadcasting
+over a trailing axis of length 3 is an order of magnitude slower than plane-wise
+arithmetic, and image-sized temporaries live in the noise module's per-thread scratch
+buffers. The functions are thread-safe.
 """
 from __future__ import annotations
 
 import colorsys
 import math
-import threading
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
+from ..render.noise import SCRATCH, WOOD_SHADE_GAIN_RGB, fine_scale, noise_mix, octave_layers, wood_grain
+
 FLOOR_KINDS = ("wood", "tiles", "carpet", "concrete", "laminate")
 
 # Plank and tile layouts need a few pixels per plank or tile to mean anything.
 _MIN_SIZE_PX = 16
-
-# Noise is generated on a grid `step` times coarser than the output, with `step` as
-# large as the smoothing scale allows: the Gaussian must still span this many grid
-# samples, so that almost nothing is left near the grid's Nyquist frequency and the
-# upsampling adds no visible structure of its own.
-_MIN_GRID_SIGMA = 1.25
-# ... and the grid keeps at least this many samples per axis.
-_MIN_GRID_SAMPLES = 8
-# Wrapped samples kept around every noise grid: enough for cubic interpolation when a
-# coarse grid is refined onto a finer one that keeps the same margin.
-_GRID_MARGIN = 4
-
-# Darker wood is more saturated and warmer than lighter wood of the same board, so the
-# grain shading hits blue hardest and red least.
-_WOOD_SHADE_GAIN_RGB = (0.85, 1.0, 1.2)
 
 # name, base sRGB, plank-to-plank tone sd (log), figure contrast, streak contrast,
 # probability of knots.
@@ -90,253 +75,12 @@ _CARPET_COLORS = (
 )
 
 
-class _Scratch(threading.local):
-    """Work buffers reused from call to call, one set per thread.
-
-    From 512 px up, every image-sized temporary is larger than glibc's mmap threshold,
-    so a fresh one comes back from the kernel page by page, and the page faults cost
-    as much as the arithmetic. A buffer is asked for by tag and stays valid until the
-    same tag is asked for again. Generators run one at a time in a thread, so they
-    share tags: ``noise0``..``noise2`` (each with the sub-tags of
-    :func:`_noise_mix`), ``plane0``.., ``ids`` and ``rgb0``..``rgb2``; only the returned
-    images are freshly allocated. Each tag keeps its largest buffer: about 25 MB per
-    thread after 512 px textures.
-    """
-
-    def __init__(self):
-        self._flat = {}
-
-    def array(self, tag, shape, dtype=np.float32):
-        size = shape[0] * shape[1]
-        key = (tag, np.dtype(dtype))
-        flat = self._flat.get(key)
-        if flat is None or flat.size < size:
-            flat = self._flat[key] = np.empty(size, dtype)
-        # The leading part of the flat buffer is C-contiguous in any 2-D shape.
-        return flat[:size].reshape(shape)
-
-
-_SCRATCH = _Scratch()
-
-
 def _check_size(size_px):
     if isinstance(size_px, bool) or not isinstance(size_px, (int, np.integer)):
         raise TypeError(f"size_px must be an int, got {type(size_px).__name__}")
     if size_px < _MIN_SIZE_PX:
         raise ValueError(f"size_px must be >= {_MIN_SIZE_PX}, got {size_px}")
     return int(size_px)
-
-
-def _grid_step(size_px, sigma_px):
-    """Largest divisor of ``size_px`` usable as the coarse-grid spacing for ``sigma_px``."""
-    limit = min(sigma_px / _MIN_GRID_SIGMA, size_px / _MIN_GRID_SAMPLES)
-    for step in range(int(limit), 1, -1):
-        if size_px % step == 0:
-            return step
-    return 1
-
-
-def _wrapped_square_sum(kernel, period):
-    """Sum of squares of a centred kernel wrapped onto ``period`` samples."""
-    if len(kernel) <= period:
-        return float(kernel @ kernel)
-    radius = len(kernel) // 2
-    wrapped = np.bincount((np.arange(len(kernel)) - radius) % period, kernel, period)
-    return float(wrapped @ wrapped)
-
-
-def _noise_grid(rng, size_px, step_y, step_x, sigma_y_px, sigma_x_px, std, tag):
-    """White noise on a ``step``-coarser periodic grid, smoothed and normalized.
-
-    Returns the grid with ``_GRID_MARGIN`` wrapped samples on every side (a view into
-    the scratch buffer ``tag``), zero mean and standard deviation ``std``.
-    """
-    rows, cols = size_px // step_y, size_px // step_x
-    # Beyond a quarter of the period a periodic field has nothing left to show but its
-    # first harmonic, and normalizing what is left would only amplify rounding noise.
-    sy, sx = min(sigma_y_px / step_y, rows / 4.0), min(sigma_x_px / step_x, cols / 4.0)
-    ry, rx = math.ceil(3.0 * sy), math.ceil(3.0 * sx)
-    py, px = ry + _GRID_MARGIN, rx + _GRID_MARGIN
-    # uint8 draws are the fastest NumPy offers; 256 levels are plenty for white noise
-    # that is smoothed afterwards.
-    white = rng.integers(0, 256, (rows, cols), dtype=np.uint8)
-    # Wrap padding makes the blur a circular convolution on the interior, and the
-    # margin repeats the grid: this is what makes the noise periodic.
-    if py <= rows and px <= cols:
-        padded = cv2.copyMakeBorder(
-            white, py, py, px, px, cv2.BORDER_WRAP,
-            dst=_SCRATCH.array(tag + ".pad", (rows + 2 * py, cols + 2 * px), np.uint8))
-    else:
-        padded = np.pad(white, ((py, py), (px, px)), mode="wrap")
-    ky = cv2.getGaussianKernel(2 * ry + 1, sy, cv2.CV_64F)
-    kx = cv2.getGaussianKernel(2 * rx + 1, sx, cv2.CV_64F)
-    # Normalize exactly instead of measuring. The blur is a circular convolution with
-    # the kernels wrapped onto the grid; it keeps the grid mean, which is removed (a
-    # constant is no texture), and the rest of the output has variance
-    # var(white) * (sum(wrapped ky**2) * sum(wrapped kx**2) - 1 / cells).
-    sum_y, sum_x = _wrapped_square_sum(ky[:, 0], rows), _wrapped_square_sum(kx[:, 0], cols)
-    variance = (256.0 ** 2 - 1.0) / 12.0 * (sum_y * sum_x - 1.0 / (rows * cols))
-    scale = std / math.sqrt(variance) if variance > 1e-9 * sum_y * sum_x else 0.0
-    # One pass converts, blurs, scales and removes the mean.
-    blurred = cv2.sepFilter2D(padded, cv2.CV_32F, kx * scale, ky,
-                              dst=_SCRATCH.array(tag, padded.shape),
-                              delta=-cv2.mean(white)[0] * scale)
-    return blurred[ry:ry + rows + 2 * _GRID_MARGIN, rx:rx + cols + 2 * _GRID_MARGIN]
-
-
-def _reach(factor, out_margin, cubic):
-    """Input margin that resizing by ``factor`` reads to fill ``out_margin`` of output.
-
-    OpenCV maps output sample ``j`` to input ``(j + 0.5) / factor - 0.5`` and reads
-    taps ``floor - 1 .. floor + 2`` (cubic) or ``floor .. floor + 1`` (linear).
-    """
-    if factor == 1:
-        return out_margin
-    low = math.floor((0.5 - out_margin) / factor - 0.5)
-    high = math.floor((out_margin - 0.5) / factor - 0.5)
-    return max(-low + (1 if cubic else 0), high + (3 if cubic else 2))
-
-
-def _resize_grid(grid, margin, factor, out_margin, cubic, tag):
-    """Resize a periodic grid with wrapped margins by integer factors, keeping it aligned.
-
-    Parameters are per axis ``(y, x)``. The input is cropped to what the kernel reads,
-    and the output to ``out_margin`` samples around the refined grid, so that output
-    sample ``out_margin`` is the refined grid's sample 0.
-    """
-    (my, mx), (fy, fx), (oy, ox) = margin, factor, out_margin
-    rows, cols = grid.shape[0] - 2 * my, grid.shape[1] - 2 * mx
-    ky, kx = _reach(fy, oy, cubic), _reach(fx, ox, cubic)
-    src = grid[my - ky:my + rows + ky, mx - kx:mx + cols + kx]
-    if fy > 1 or fx > 1:
-        shape = (src.shape[0] * fy, src.shape[1] * fx)
-        src = cv2.resize(src, shape[::-1], dst=_SCRATCH.array(tag, shape),
-                         interpolation=cv2.INTER_CUBIC if cubic else cv2.INTER_LINEAR)
-    # Input sample k lands on refined coordinate k * factor - reach * factor.
-    y0, x0 = ky * fy - oy, kx * fx - ox
-    return src[y0:y0 + rows * fy + 2 * oy, x0:x0 + cols * fx + 2 * ox]
-
-
-def _cubic_factor(factor):
-    """Share of an upsampling factor done with cubic interpolation.
-
-    Cubic upsampling by large factors is slow in OpenCV, so it goes to at most four
-    times the grid, where the signal is smooth enough for linear interpolation to
-    finish the job without visible kinks.
-    """
-    for f in (4, 3, 2):
-        if factor % f == 0:
-            return f
-    return factor
-
-
-def _refine(grid, factor, out_margin, tag):
-    """Upsample a grid with ``_GRID_MARGIN`` margins by integer ``factor`` (y, x)."""
-    a = tuple(_cubic_factor(f) for f in factor)
-    b = tuple(f // c for f, c in zip(factor, a))
-    m = (_GRID_MARGIN, _GRID_MARGIN)
-    if b == (1, 1):
-        return _resize_grid(grid, m, a, (out_margin, out_margin), True, tag)
-    # The linear stage reads at most one sample beyond what it fills, plus the margin.
-    mid = tuple(_reach(f, out_margin, cubic=False) for f in b)
-    coarse = _resize_grid(grid, m, a, mid, True, tag + ".cubic")
-    return _resize_grid(coarse, mid, b, (out_margin, out_margin), False, tag)
-
-
-def _noise_mix(rng, size_px, layers, tag):
-    """Sum of independent periodic noise layers, as one (size_px, size_px) float32 array.
-
-    ``layers`` holds ``((sigma_y_px, sigma_x_px), std)`` pairs. Layers are summed on
-    their coarse grids, coarsest first, each refined onto the next finer grid, so that
-    only one resize reaches full resolution: at full size every pass over the image
-    costs more than the noise itself. The result lives in the scratch buffers ``tag``.
-    """
-    plans = []
-    for (sigma_y_px, sigma_x_px), std in layers:
-        if not (sigma_y_px > 0 and sigma_x_px > 0):
-            raise ValueError(f"noise scales must be > 0, got {(sigma_y_px, sigma_x_px)}")
-        plans.append((_grid_step(size_px, sigma_y_px), _grid_step(size_px, sigma_x_px),
-                      sigma_y_px, sigma_x_px, std))
-    plans.sort(key=lambda p: -p[0] * p[1])
-    total = acc = None
-    acc_step = (1, 1)
-    for i, (step_y, step_x, sigma_y_px, sigma_x_px, std) in enumerate(plans):
-        # Two grid buffers in turn: the previous grid is read while the next is made.
-        grid = _noise_grid(rng, size_px, step_y, step_x, sigma_y_px, sigma_x_px, std,
-                           f"{tag}.grid{i % 2}")
-        if acc is not None and acc_step[0] % step_y == 0 and acc_step[1] % step_x == 0:
-            factor = (acc_step[0] // step_y, acc_step[1] // step_x)
-            np.add(grid, _refine(acc, factor, _GRID_MARGIN, tag + ".refine"), out=grid)
-        elif acc is not None:
-            # Grids that do not nest (sizes with few divisors) meet at full resolution.
-            full = _refine(acc, acc_step, 0, tag + ".full")
-            if total is None:
-                total = _SCRATCH.array(tag + ".total", full.shape)
-                np.copyto(total, full)
-            else:
-                total += full
-        acc, acc_step = grid, (step_y, step_x)
-    full = _refine(acc, acc_step, 0, tag + ".full")
-    if total is None:
-        return full
-    total += full
-    return total
-
-
-def periodic_noise(rng, size_px, scale_px, *, octaves=1, persistence=0.5):
-    """Seamless band-limited noise: white noise smoothed by a periodic Gaussian.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Only source of randomness.
-    size_px : int
-        Side of the square output in pixels.
-    scale_px : float or (float, float)
-        Standard deviation in pixels of the Gaussian that smooths the white noise, i.e.
-        the correlation length; blobs are roughly ``2 * scale_px`` across. A pair gives
-        ``(rows, columns)`` scales for anisotropic noise, e.g. ``(1, 40)`` for streaks
-        that run along the image x axis.
-    octaves : int, optional
-        Number of layers in the fractal sum; layer ``i`` has scale ``scale_px / 2**i``.
-    persistence : float, optional
-        Amplitude ratio between consecutive layers.
-
-    Returns
-    -------
-    (size_px, size_px) float32
-        Zero mean and standard deviation about 1/3 (in expectation), so values lie in
-        [-1, 1] apart from rare tails. Periodic: row 0 continues row -1, column 0
-        continues column -1. Scales near the image size leave only the lowest harmonics
-        that fit the period.
-    """
-    size_px = int(size_px)
-    if size_px < 1:
-        raise ValueError(f"size_px must be >= 1, got {size_px}")
-    scale_y_px, scale_x_px = (scale_px, scale_px) if np.isscalar(scale_px) else scale_px
-    if octaves < 1:
-        raise ValueError(f"octaves must be >= 1, got {octaves}")
-    amplitudes = persistence ** np.arange(octaves)
-    # The layers are independent, so their variances add.
-    amplitudes = amplitudes / (3.0 * math.sqrt(float((amplitudes ** 2).sum())))
-    layers = [((scale_y_px / 2 ** i, scale_x_px / 2 ** i), float(a))
-              for i, a in enumerate(amplitudes)]
-    # A copy: the mix lives in scratch buffers that the next call overwrites.
-    return np.array(_noise_mix(rng, size_px, layers, "noise0"), dtype=np.float32)
-
-
-def _octaves(scale_px, std, octaves, persistence=0.5):
-    """Layers for :func:`_noise_mix`: a fractal sum with total standard deviation ``std``."""
-    scale_y_px, scale_x_px = (scale_px, scale_px) if np.isscalar(scale_px) else scale_px
-    amplitudes = persistence ** np.arange(octaves)
-    amplitudes = amplitudes * (std / math.sqrt(float((amplitudes ** 2).sum())))
-    return [((scale_y_px / 2 ** i, scale_x_px / 2 ** i), float(a))
-            for i, a in enumerate(amplitudes)]
-
-
-def _fine(scale_px):
-    """Scale for pixel-level noise: below half a pixel the Gaussian is only a delta."""
-    return max(0.5, scale_px)
 
 
 def _lut(values):
@@ -353,7 +97,7 @@ def _shade_to_rgb8(shade, rgb):
     absolute values, hence the sign requirement.
     """
     return cv2.merge([cv2.convertScaleAbs(shade, alpha=float(c),
-                                          dst=_SCRATCH.array(f"rgb{i}", shade.shape, np.uint8))
+                                          dst=SCRATCH.array(f"rgb{i}", shade.shape, np.uint8))
                       for i, c in enumerate(rgb)])
 
 
@@ -418,46 +162,6 @@ def _plank_joints(rng, size_px, n_rows, *, min_stagger_px, laminate):
                 break
         joints.append(sorted(int(x) for x in xs))
     return joints
-
-
-def _wood_grain(rng, size_px, px_per_mm, figure, streak):
-    """Periodic relative shade of a board surface, grain along x.
-
-    Latewood lines are the level sets of ``y / spacing + warp(x, y)``; a strong, slowly
-    varying warp bends them into the elongated loops (cathedrals) of flat-sawn boards.
-    """
-    # Pores and fibres: long thin streaks. Tone drifts slowly along a board, faster
-    # across it.
-    shade = _noise_mix(rng, size_px, _octaves(
-        (_fine(rng.uniform(0.7, 1.4) * px_per_mm), rng.uniform(60.0, 140.0) * px_per_mm),
-        streak / 3.0, 2, persistence=0.7) + _octaves(
-        (rng.uniform(20.0, 50.0) * px_per_mm, rng.uniform(150.0, 300.0) * px_per_mm),
-        0.1 / 3.0, 2), "noise0")
-    warp = _noise_mix(rng, size_px, _octaves(
-        (rng.uniform(15.0, 35.0) * px_per_mm, rng.uniform(200.0, 450.0) * px_per_mm),
-        1.0 / 3.0, 2), "noise1")
-    # Where the warp is strong the lines loop into cathedrals (flat-sawn), where it is
-    # weak they run straight (rift-sawn): let its strength wander so planks differ.
-    strength = _noise_mix(rng, size_px, [((rng.uniform(150.0, 300.0) * px_per_mm,) * 2,
-                                          1.0 / 3.0)], "noise2")
-    np.abs(strength, out=strength)
-    strength *= np.float32(2.0 * math.pi * rng.uniform(2.0, 7.0))
-    strength += np.float32(2.0 * math.pi * rng.uniform(0.3, 1.0))
-    # A whole number of rings per repeat keeps the y term periodic.
-    rings = max(1, round(size_px / (rng.uniform(5.0, 14.0) * px_per_mm)))
-    y = np.arange(size_px, dtype=np.float32) * np.float32(2.0 * math.pi * rings / size_px)
-    line = np.multiply(warp, strength, out=warp)
-    line += y[:, None]
-    np.cos(line, out=line)
-    line += np.float32(1.0)
-    line *= np.float32(0.5)
-    line *= line
-    line *= line
-    # E[((1 + cos) / 2)^4] = 35/128: subtracting it keeps the mean tone at the base color.
-    line -= np.float32(35.0 / 128.0)
-    line *= np.float32(-figure)
-    shade += line
-    return shade
 
 
 def _add_knots(rng, shade, row_edges, px_per_mm, count):
@@ -536,15 +240,15 @@ def _planks(rng, size_px, *, laminate):
     else:
         off_y = rng.integers(0, size_px, n_planks)
         off_x = rng.integers(0, size_px, n_planks)
-    grain = _wood_grain(rng, size_px, px_per_mm, figure, streak)
+    grain = wood_grain(rng, size_px, px_per_mm, figure, streak)
     shape = (size_px, size_px)
     grid = np.arange(size_px, dtype=np.float32)
-    map_x = cv2.LUT(ids, _lut(off_x), dst=_SCRATCH.array("plane0", shape))
+    map_x = cv2.LUT(ids, _lut(off_x), dst=SCRATCH.array("plane0", shape))
     map_x += grid[None, :]
-    map_y = cv2.LUT(ids, _lut(off_y), dst=_SCRATCH.array("plane1", shape))
+    map_y = cv2.LUT(ids, _lut(off_y), dst=SCRATCH.array("plane1", shape))
     map_y += grid[:, None]
     shade = cv2.remap(grain, map_x, map_y, cv2.INTER_NEAREST, borderMode=cv2.BORDER_WRAP,
-                      dst=_SCRATCH.array("plane2", shape))
+                      dst=SCRATCH.array("plane2", shape))
 
     if not laminate and rng.random() < knot_p:
         _add_knots(rng, shade, row_edges, px_per_mm, int(rng.integers(1, 4)))
@@ -573,15 +277,15 @@ def _planks(rng, size_px, *, laminate):
     gains = _tones(rng, n_planks, tone_sd)
     shade *= edges
     tone = map_y  # reuse the buffer
-    factor = _SCRATCH.array("plane3", shape)
+    factor = SCRATCH.array("plane3", shape)
     channels = []
     for c in range(3):
         tone = cv2.LUT(ids, _lut(base[c] * gains[:, c]), dst=tone)
-        factor = cv2.scaleAdd(shade, _WOOD_SHADE_GAIN_RGB[c], edges, dst=factor)
+        factor = cv2.scaleAdd(shade, WOOD_SHADE_GAIN_RGB[c], edges, dst=factor)
         factor = cv2.multiply(tone, factor, dst=factor)
         np.maximum(factor, 0.0, out=factor)
         channels.append(cv2.convertScaleAbs(
-            factor, dst=_SCRATCH.array(f"rgb{c}", shape, np.uint8)))
+            factor, dst=SCRATCH.array(f"rgb{c}", shape, np.uint8)))
     return cv2.merge(channels), float(tile_m)
 
 
@@ -673,14 +377,14 @@ def _tile_grid(size_px, layout):
         cov_x[k], col[k] = _line_coverage(x, pitch_x_px, grout_px)
         wide_x[k], _ = _line_coverage(x, pitch_x_px, edge_px)
     shape = (size_px, size_px)
-    grout = np.take(cov_x, kind_of_row, axis=0, out=_SCRATCH.array("plane0", shape))
+    grout = np.take(cov_x, kind_of_row, axis=0, out=SCRATCH.array("plane0", shape))
     np.maximum(grout, cov_y[:, None], out=grout)
-    edge = np.take(wide_x, kind_of_row, axis=0, out=_SCRATCH.array("plane1", shape))
+    edge = np.take(wide_x, kind_of_row, axis=0, out=SCRATCH.array("plane1", shape))
     np.maximum(edge, wide_y[:, None], out=edge)
     edge -= grout
     # uint8 arithmetic wraps at 256, which is the id space of cv2.LUT anyway.
     ids = np.take((col % layout.nx).astype(np.uint8), kind_of_row, axis=0,
-                  out=_SCRATCH.array("ids", shape, np.uint8))
+                  out=SCRATCH.array("ids", shape, np.uint8))
     ids += ((row % layout.ny) * layout.nx % 256).astype(np.uint8)[:, None]
     return ids, grout, edge
 
@@ -707,7 +411,7 @@ def _marble_veins(rng, size_px, px_per_mm, level, *, strength, thin, tag):
     # contour lines on a map.
     sigma_px = rng.uniform(50.0, 120.0) * px_per_mm
     slope = math.hypot(kx, ky) / size_px
-    phase = _noise_mix(rng, size_px, _octaves(
+    phase = noise_mix(rng, size_px, octave_layers(
         sigma_px, rng.uniform(0.3, 0.6) * sigma_px * slope, 3, persistence=0.4),
         "noise1")
     phase += (np.arange(size_px, dtype=np.float32) * np.float32(ky / size_px))[:, None]
@@ -715,11 +419,11 @@ def _marble_veins(rng, size_px, px_per_mm, level, *, strength, thin, tag):
     phase += level
     # Distance in pixels to the nearest vein centre line, over the local vein width,
     # which swells and thins along the vein.
-    dist = np.round(phase, out=_SCRATCH.array(tag, phase.shape))
+    dist = np.round(phase, out=SCRATCH.array(tag, phase.shape))
     np.subtract(phase, dist, out=dist)
     np.abs(dist, out=dist)
     width_px = max(1.5, (rng.uniform(0.5, 1.2) if thin else rng.uniform(1.0, 3.0)) * px_per_mm)
-    width = _noise_mix(rng, size_px, [((0.5 * sigma_px,) * 2, 0.5 * width_px)], "noise2")
+    width = noise_mix(rng, size_px, [((0.5 * sigma_px,) * 2, 0.5 * width_px)], "noise2")
     width += np.float32(width_px)
     np.maximum(width, 0.6 * width_px, out=width)
     width *= np.float32(slope)
@@ -759,9 +463,9 @@ def _render_tiles(rng, size_px, layout):
     # Recessed joints receive less light than the tile faces.
     grout_rgb = grout_rgb * 0.92
 
-    layers = _octaves(rng.uniform(8.0, 25.0) * px_per_mm, mottle_amp / 3.0, 3)
-    layers.append(((_fine(0.6 * px_per_mm),) * 2, speckle_amp / 3.0))
-    shade = _noise_mix(rng, size_px, layers, "noise0")
+    layers = octave_layers(rng.uniform(8.0, 25.0) * px_per_mm, mottle_amp / 3.0, 3)
+    layers.append(((fine_scale(0.6 * px_per_mm),) * 2, speckle_amp / 3.0))
+    shade = noise_mix(rng, size_px, layers, "noise0")
     shade += np.float32(1.0)
     edge *= np.float32(-0.12)
     shade += edge
@@ -769,13 +473,13 @@ def _render_tiles(rng, size_px, layout):
     # Every channel is tile[id] * k_tile + vein_c * k_vein + grout_c * k_grout, with the
     # weights shared by the channels; the grout takes the tile's noise too, as sand.
     shape = (size_px, size_px)
-    k_grout = cv2.multiply(grout, shade, dst=_SCRATCH.array("plane2", shape))
+    k_grout = cv2.multiply(grout, shade, dst=SCRATCH.array("plane2", shape))
     inside = np.subtract(np.float32(1.0), grout, out=grout)
     k_tile = cv2.multiply(inside, shade, dst=edge)
     k_vein = None
     if veins:
         level = cv2.LUT(ids, _lut(rng.uniform(0.0, 1.0, n_tiles)),
-                        dst=_SCRATCH.array("plane3", shape))
+                        dst=SCRATCH.array("plane3", shape))
         vein = _marble_veins(rng, size_px, px_per_mm, level, strength=rng.uniform(0.5, 0.85),
                              thin=False, tag="plane4")
         vein += _marble_veins(rng, size_px, px_per_mm, level, strength=rng.uniform(0.12, 0.3),
@@ -787,8 +491,8 @@ def _render_tiles(rng, size_px, layout):
                     else base * np.array([0.55, 0.57, 0.63]))
 
     gains = _tones(rng, n_tiles, tone_sd)
-    tone = _SCRATCH.array("plane6", shape)
-    out = _SCRATCH.array("plane7", shape)
+    tone = SCRATCH.array("plane6", shape)
+    out = SCRATCH.array("plane7", shape)
     channels = []
     for c in range(3):
         tone = cv2.LUT(ids, _lut(base[c] * gains[:, c]), dst=tone)
@@ -797,7 +501,7 @@ def _render_tiles(rng, size_px, layout):
         if k_vein is not None:
             out = cv2.scaleAdd(k_vein, float(vein_rgb[c]), out, dst=out)
         np.maximum(out, 0.0, out=out)
-        channels.append(cv2.convertScaleAbs(out, dst=_SCRATCH.array(f"rgb{c}", shape, np.uint8)))
+        channels.append(cv2.convertScaleAbs(out, dst=SCRATCH.array(f"rgb{c}", shape, np.uint8)))
     return cv2.merge(channels), float(layout.tile_m)
 
 
@@ -811,32 +515,32 @@ def _carpet(rng, size_px):
     base = _jitter_rgb(rng, _CARPET_COLORS[rng.integers(len(_CARPET_COLORS))], 0.06)
     # Tufts are 2-4 mm, about one pixel: the pile is near-white noise, tufts clump a
     # little, and wear and pile direction show as large faint blotches.
-    layers = [((_fine(rng.uniform(0.5, 1.0) * px_per_mm),) * 2, rng.uniform(0.18, 0.32) / 3.0),
+    layers = [((fine_scale(rng.uniform(0.5, 1.0) * px_per_mm),) * 2, rng.uniform(0.18, 0.32) / 3.0),
               ((rng.uniform(3.0, 6.0) * px_per_mm,) * 2, rng.uniform(0.08, 0.15) / 3.0)]
-    layers += _octaves(rng.uniform(60.0, 150.0) * px_per_mm, rng.uniform(0.05, 0.12) / 3.0, 2)
+    layers += octave_layers(rng.uniform(60.0, 150.0) * px_per_mm, rng.uniform(0.05, 0.12) / 3.0, 2)
     if rng.random() < 0.3:
         # Looped (berber) pile: short rows along x.
-        layers.append(((_fine(px_per_mm), 5.0 * px_per_mm), rng.uniform(0.1, 0.2) / 3.0))
-    shade = _noise_mix(rng, size_px, layers, "noise0")
+        layers.append(((fine_scale(px_per_mm), 5.0 * px_per_mm), rng.uniform(0.1, 0.2) / 3.0))
+    shade = noise_mix(rng, size_px, layers, "noise0")
     shade += np.float32(1.0)
     np.maximum(shade, 0.0, out=shade)
 
     # Heathered yarn: a share of fibres in a second color. Each channel is
     # base_c * shade + (fleck_c - base_c) * flecks * shade.
     fleck_rgb = base * np.exp(rng.normal(0.0, 0.1, 3)) * rng.choice([0.8, 1.2])
-    flecks = _noise_mix(rng, size_px, [((_fine(0.7 * px_per_mm),) * 2, 4.0 / 3.0)],
+    flecks = noise_mix(rng, size_px, [((fine_scale(0.7 * px_per_mm),) * 2, 4.0 / 3.0)],
                         "noise1")
     flecks -= np.float32(4.0 * rng.uniform(0.25, 0.5))
     np.clip(flecks, 0.0, 1.0, out=flecks)
     flecks *= shade
     flecks *= np.float32(rng.uniform(0.4, 0.9))
     shape = (size_px, size_px)
-    out = _SCRATCH.array("plane0", shape)
+    out = SCRATCH.array("plane0", shape)
     channels = []
     for c in range(3):
         out = cv2.addWeighted(shade, float(base[c]), flecks, float(fleck_rgb[c] - base[c]),
                               0.0, dst=out)
-        channels.append(cv2.convertScaleAbs(out, dst=_SCRATCH.array(f"rgb{c}", shape, np.uint8)))
+        channels.append(cv2.convertScaleAbs(out, dst=SCRATCH.array(f"rgb{c}", shape, np.uint8)))
     return cv2.merge(channels), float(tile_m)
 
 
@@ -852,12 +556,12 @@ def _concrete(rng, size_px):
 
     # Cement paste: fractal mottling with plenty of mid-scale detail (a flat spectrum
     # would read as clouds), plus a sandy grain.
-    layers = _octaves(rng.uniform(20.0, 60.0) * px_per_mm, contrast / 3.0, 5, persistence=0.75)
+    layers = octave_layers(rng.uniform(20.0, 60.0) * px_per_mm, contrast / 3.0, 5, persistence=0.75)
     layers.append(((max(0.7, rng.uniform(1.0, 2.0) * px_per_mm),) * 2, rng.uniform(0.01, 0.025)))
-    shade = _noise_mix(rng, size_px, layers, "noise0")
+    shade = noise_mix(rng, size_px, layers, "noise0")
     shade += np.float32(1.0)
     # Stains: soft-edged patches where the large-scale noise is high.
-    stains = _noise_mix(rng, size_px, _octaves(rng.uniform(80.0, 200.0) * px_per_mm,
+    stains = noise_mix(rng, size_px, octave_layers(rng.uniform(80.0, 200.0) * px_per_mm,
                                                4.0 / 3.0, 2), "noise1")
     stains -= np.float32(4.0 * rng.uniform(0.1, 0.35))
     np.clip(stains, 0.0, 1.0, out=stains)
@@ -865,7 +569,7 @@ def _concrete(rng, size_px):
     shade -= stains
     # Pores (dark) and exposed aggregate (light and dark) are the finest detail;
     # polishing exposes more aggregate.
-    fine = _noise_mix(rng, size_px, [((_fine(rng.uniform(0.5, 1.0) * px_per_mm),) * 2,
+    fine = noise_mix(rng, size_px, [((fine_scale(rng.uniform(0.5, 1.0) * px_per_mm),) * 2,
                                       1.0 / 3.0)], "noise2")
     fine_amp = np.float32(rng.uniform(0.03, 0.07))
     spots = np.abs(fine, out=stains)
@@ -948,9 +652,9 @@ def _wall_color(rng):
 
 def _paint(rng, size_px, rgb, fine_amp, low_amp, px_per_mm):
     """Flat color with fine stipple and soft mottling, relative amplitudes as given."""
-    layers = [((_fine(rng.uniform(0.5, 1.5) * px_per_mm),) * 2, fine_amp / 3.0)]
-    layers += _octaves(rng.uniform(40.0, 120.0) * px_per_mm, low_amp / 3.0, 4, persistence=0.6)
-    shade = _noise_mix(rng, size_px, layers, "noise0")
+    layers = [((fine_scale(rng.uniform(0.5, 1.5) * px_per_mm),) * 2, fine_amp / 3.0)]
+    layers += octave_layers(rng.uniform(40.0, 120.0) * px_per_mm, low_amp / 3.0, 4, persistence=0.6)
+    shade = noise_mix(rng, size_px, layers, "noise0")
     shade += np.float32(1.0)
     np.maximum(shade, 0.0, out=shade)
     return _shade_to_rgb8(shade, rgb)

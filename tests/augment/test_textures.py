@@ -1,12 +1,12 @@
 import numpy as np
 import pytest
 
+from augment.render.noise import periodic_noise
 from augment.synth import textures
 from augment.synth.textures import (
     FLOOR_KINDS,
     ceiling_texture,
     floor_texture,
-    periodic_noise,
     wall_texture,
 )
 
