@@ -162,6 +162,9 @@ class FurnishResult(Measurement):
     erased : ErasedBoard or None
         The board's sheet filled with floor (:func:`augment.render.erase.erase_board`), the
         photo the furniture was rendered into; None with ``keep_board``.
+    look : PhotoLook or None
+        The photo's noise and sharpness given to the furniture
+        (:func:`augment.render.look.estimate_look`); None when nothing was rendered.
     report : dict
         What ``report.json`` holds (:func:`report_dict`).
     """
@@ -181,6 +184,7 @@ class FurnishResult(Measurement):
     styles: list = field(default_factory=list)
     layers: list = field(default_factory=list)
     erased: object = None
+    look: object = None
     report: dict = field(default_factory=dict)
 
 
@@ -379,8 +383,8 @@ def measure_report(m: Measurement) -> dict:
                       "warnings": list(m.warnings)})
 
 
-REPORT_KEYS = ("photo", "size_px", "versions", "calibration", "board", "floor", "height", "furniture", "suggestions",
-               "files", "timings_s", "warnings")
+REPORT_KEYS = ("photo", "size_px", "versions", "calibration", "board", "camera_look", "floor", "height", "furniture",
+               "suggestions", "files", "timings_s", "warnings")
 
 
 def report_dict(result: FurnishResult) -> dict:
@@ -389,7 +393,8 @@ def report_dict(result: FurnishResult) -> dict:
     wall height (with confidence, and ``used_m``), the furniture (source, items laid
     out, items dropped and why), per suggestion its energy, overlaps, area off the floor,
     walkability and how deep the worst item stands in another's clearance, seconds per
-    stage and the library versions."""
+    stage, the photo's noise and sharpness given to the furniture (``camera_look``) and
+    the library versions."""
     cal, height = result.calibration, result.height
     n = len(result.layouts)
     suggestions = []
@@ -413,6 +418,7 @@ def report_dict(result: FurnishResult) -> dict:
                   **({} if result.erased is None else {
                       "sheet_m": np.round(result.erased.sheet_m, 4), "covered": round(result.erased.covered, 4),
                       "texture_from_m": np.round(result.erased.source_m, 4)})},
+        "camera_look": None if result.look is None else result.look.to_json(),
         "floor": floor_report(result),
         "height": {**height.to_json(), "used_m": result.room_height_m},
         "furniture": {"source": result.source, "floor_polygon_m": np.round(result.spec.polygon_m, 4),
@@ -596,10 +602,12 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                     warnings.append(erased.warning)
                 base = m.image if erased is None else erased.image
                 lighting = render.estimate_lighting(base, m.calibration, m.segmentation.mask)
+                camera_look = render.estimate_look(m.image, m.calibration)  # the board's edges give the sharpness
                 staged, staged_layers = [], []
                 for lay, look in zip(layouts, styles):
                     done = render.render_staged(base, m.calibration, lay, gl, floor_mask=m.segmentation.mask,
-                                                floor_polygon=m.floor, lighting=lighting, seed=_seed(lay, seed),
+                                                floor_polygon=m.floor, lighting=lighting, look=camera_look,
+                                                seed=_seed(lay, seed),
                                                 style=look, assets=user_models, layer=layers)
                     staged.append(done.image)
                     if layers:
@@ -633,7 +641,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                            layouts=layouts, reports=reports, staged=staged, contact_sheet=sheet, overlays=pictures,
                            scenes_glb=scenes, layout_files=layout_files, styles=styles[:len(layouts)],
                            assets={k: str(v) if isinstance(v, (str, Path)) else "parts" for k, v in
-                                   (assets or {}).items()}, layers=staged_layers, erased=erased)
+                                   (assets or {}).items()}, layers=staged_layers, erased=erased,
+                           look=camera_look)
     result.report = report_dict(result)
     return result
 

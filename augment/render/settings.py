@@ -53,6 +53,7 @@ class StagedSettings:
     max_supersample: float = 2.0  # rendered pixels per photo pixel along each axis, at most
     min_render_scale: float = 0.6  # large photos are rendered at this scale at least, then upsampled
     margin_px: int = 6  # around the region furniture and shadows can reach
+    render_edge_px: float = 0.55  # a render's edge spread (Gaussian sigma) at one rendered pixel per photo pixel
 
 
 @dataclass

@@ -49,6 +49,7 @@ from layout.fileio import write_atomic
 from ..photo.io import JPEG_QUALITY, encode_image
 from .furniture import furniture_for, placed_items, world_from_item
 from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
+from .look import PhotoLook, apply_look, estimate_look
 from .settings import RENDER, StagedSettings
 from .surfaces import surface
 
@@ -906,7 +907,8 @@ def _render_scale(box_px, supersample, settings: StagedSettings):
 
 def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                   floor_mask: np.ndarray | None = None, floor_polygon=None,
-                  lighting: Lighting | None = None, seed: int = 0, style: str | None = None,
+                  lighting: Lighting | None = None, look: PhotoLook | None = None, seed: int = 0,
+                  style: str | None = None,
                   assets: dict | None = None,
                   supersample: float | None = None, self_shadows: bool = True, layer: bool = False,
                   settings: StagedSettings | None = None) -> Staged:
@@ -932,9 +934,13 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     lighting : Lighting, optional
         Estimated from the photo (:func:`estimate_lighting`) when None; pass it to reuse
         one estimate for several suggestions.
+    look : PhotoLook, optional
+        The photo's noise and sharpness, given to the furniture
+        (:func:`augment.render.look.estimate_look`, from ``image`` when None; pass the
+        estimate from the photo as taken when ``image`` has its board erased).
     seed : int
         Picks each item's design and materials, with the item's id: an item looks the same
-        in every suggestion of one style.
+        in every suggestion of one style. Also seeds the furniture's noise.
     style : str, optional
         A name of :data:`augment.render.styles.STYLES`: every item in its palette and
         materials; any material when None.
@@ -975,6 +981,8 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     K, dist, pose = _camera(calibration)
     if lighting is None:
         lighting = estimate_lighting(image, calibration, floor_mask, settings)
+    if look is None:
+        look = estimate_look(image, calibration if hasattr(calibration, "board") else None)
     placed = [(it, furniture_for(it, seed, assets, _FURNITURE, style)) for it in items]
     timings["build"] = time.perf_counter() - t0
 
@@ -1113,6 +1121,10 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                      for a in (rgba, low))
         gain = cv2.remap(gain, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
     timings["shadows"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    rgba = apply_look(rgba, look, settings.render_edge_px / s, seed)
+    timings["look"] = time.perf_counter() - t
 
     t = time.perf_counter()
     full_alpha = np.zeros((h, w), np.float32)

@@ -140,6 +140,9 @@ def test_report_is_complete(roomy):
     assert 0 <= floor.disputed_share < 0.1  # this floor is found well: no "uncertain" warning
     assert not any("floor found is uncertain" in w for w in report["warnings"]) and report["floor"]["doubt"] is None
     assert {"height_m", "confidence", "fallback", "used_m"} <= set(report["height"])
+    # room_4 is a clean render saved as JPEG: little noise, edges a pixel or two wide.
+    look = report["camera_look"]
+    assert max(look["noise_rgb"]) < 1.0 and 0.5 < look["blur_px"] < 2.5 and look["edges"] >= 12
     assert report["furniture"]["source"] == "preset living_room" and report["furniture"]["items"]
     assert [s["k"] for s in report["suggestions"]] == [1, 2, 3]
     for s in report["suggestions"]:
