@@ -139,7 +139,7 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     cols, rows = (int(np.ceil(v * small.ppm)) for v in extent)
     small_rgb, small_valid = small.sample(image, floor_mask, (0, 0, cols, rows), shrink=True)
     lab = cv2.cvtColor(small_rgb, cv2.COLOR_RGB2LAB).astype(np.float32)
-    printed, on = _printed(small, (rows, cols), board)
+    printed, on = _printed(small, (rows, cols), board, lab[..., 0], small_valid)
     colours = _print_colours(lab, small_valid, printed, on)
     sheet = _grow_to_paper(small, lab, small_valid, sheet, board, colours)
     short_m = float(np.min(sheet[1] - sheet[0]))
@@ -331,12 +331,17 @@ def _density_px_per_m(calibration, half_m) -> float:
     return best
 
 
-def _printed(view: _TopDown, shape, board) -> tuple[np.ndarray, np.ndarray]:
+def _printed(view: _TopDown, shape, board, lightness, valid) -> tuple[np.ndarray, np.ndarray]:
     """The print as :meth:`Board.image` lays it on the floor, in the view: (rows, cols)
-    float32 grey levels, and where the sheet is (bool)."""
+    float32 grey levels, and where the sheet is (bool).
+
+    A chessboard's pose is known up to a half turn, and a chessboard seen from above is
+    its print mirrored; either can swap its squares' colours but never the white margin.
+    The squares are swapped when the photo's ``lightness`` over them (where ``valid``)
+    runs against them."""
     rows, cols = shape
     k = max(4, int(np.ceil(board.square_m * view.ppm)))
-    sheet = board.image(px_per_square=k)
+    sheet = board.image(px_per_square=k).astype(np.float32)
     # Image pixel (u, v) is the board point ((u + 0.5) / px_per_m - w / 2, ...): an affine
     # map into the view.
     px_per_m = k / board.square_m
@@ -345,9 +350,16 @@ def _printed(view: _TopDown, shape, board) -> tuple[np.ndarray, np.ndarray]:
     offset = (-size / 2 - view.origin_m) * view.ppm + 0.5 * scale - 0.5
     warp = np.array([[scale, 0.0, offset[0]], [0.0, scale, offset[1]]])
     # Beyond the sheet as white as its margin: no edge of the print where none is printed.
-    printed = cv2.warpAffine(sheet.astype(np.float32), warp, (cols, rows), flags=cv2.INTER_LINEAR,
+    printed = cv2.warpAffine(sheet, warp, (cols, rows), flags=cv2.INTER_LINEAR,
                              borderMode=cv2.BORDER_CONSTANT, borderValue=255)
-    on = cv2.warpAffine(np.ones_like(sheet), warp, (cols, rows), flags=cv2.INTER_NEAREST) > 0
+    on = cv2.warpAffine(np.ones(sheet.shape, np.uint8), warp, (cols, rows), flags=cv2.INTER_NEAREST) > 0
+    pad_y, pad_x = ((n - (m + 1) * k) // 2 for n, m in zip(sheet.shape, (board.rows, board.cols)))
+    squares = np.zeros(sheet.shape, np.uint8)
+    squares[pad_y:sheet.shape[0] - pad_y, pad_x:sheet.shape[1] - pad_x] = 1
+    squares = cv2.warpAffine(squares, warp, (cols, rows), flags=cv2.INTER_NEAREST) > 0
+    seen = squares & valid
+    if seen.sum() > 20 and np.corrcoef(lightness[seen], printed[seen])[0, 1] < 0:
+        printed = np.where(squares, 255.0 - printed, printed).astype(np.float32)
     return printed, on
 
 
@@ -363,10 +375,6 @@ def _print_colours(lab, valid, printed, on):
     if white.sum() < 20 or black.sum() < 20:
         return None
     paper, ink = np.median(lab[white], axis=0), np.median(lab[black], axis=0)
-    if paper[0] < ink[0]:
-        # A checkerboard seen from above is its print mirrored: the colours swap.
-        white, black = black, white
-        paper, ink = ink, paper
     spread = max(float(np.median(np.linalg.norm(lab[white] - paper, axis=1))),
                  float(np.median(np.linalg.norm(lab[black] - ink, axis=1))))
     return paper, ink, max(12.0, 3.0 * 1.4826 * spread)
@@ -391,10 +399,7 @@ def _foreign(lab, valid, hole, printed, on, square_px, colours) -> np.ndarray:
     # Only windows the photo shows (a board cut off at the photo's edge).
     patterned = (var_p > 0.5 * float(np.percentile(var_p[on], 90))) & (box(valid.astype(np.float32)) > 0.9)
     ncc = cov / np.sqrt(var_o * var_p + 1e-6)
-    # A checkerboard may be seen mirrored (colours swapped): the correlation's sign says.
-    probe = patterned & hole
-    sign = -1.0 if probe.any() and np.median(ncc[probe]) < 0 else 1.0
-    core = (sign * ncc < 0.3) & patterned & hole & valid
+    core = (ncc < 0.3) & patterned & hole & valid
     size = max(3, int(round(square_px / 4)) | 1)
     core = cv2.morphologyEx(core.astype(np.uint8), cv2.MORPH_OPEN, np.ones((size, size), np.uint8)) > 0
     if core.sum() < square_px ** 2 / 4:

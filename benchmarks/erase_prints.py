@@ -1,0 +1,115 @@
+"""The board erased from prints as users make them: paper, margins, marks, shadows, floors.
+
+Run by hand: ``python benchmarks/erase_prints.py [--count 40] [--seed 9300] [--size 1280x960]``
+(a few minutes). Prints a row per case and writes ``results/erase_prints.{json,md}`` and
+``results/erase_prints_worst.png``.
+
+Each case (:func:`augment.synth.prints.pasted_board`, seeds ``[--seed, i]``) is a print on
+white, off-white or cream paper, with the A3 sheet's margin or trimmed to the squares,
+with ``stage board``'s ruler and caption or without, Stager's chessboard, its ChArUco
+board or OpenCV's 9x6 chessboard, on carpet, planks, laminate, tiles or concrete, half of
+them under a shadow's edge, blurred, noisy and saved as JPEG like a phone photo; and the
+same floor without it. The photo is calibrated from the board with the true focal length
+(as EXIF gives it) and the board erased with the drawn floor as the floor mask. Scored by
+:func:`augment.synth.prints.erasure_scores`: light, contrast, seam and bright spots
+against the floor that was there, each with its limit.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from results_io import RESULTS, machine, write  # noqa: E402
+
+from augment.camera.calibrate import calibrate_photo, exif_intrinsics  # noqa: E402
+from augment.errors import CalibrationError  # noqa: E402
+from augment.render.erase import erase_board  # noqa: E402
+from augment.synth.prints import CONTRAST_RANGE, LIGHT_MAX, SEAM_MAX, SPOT_LEVELS, erasure_scores, pasted_board  # noqa: E402,E501
+from layout.fileio import write_atomic  # noqa: E402
+
+
+def crop(images, sheet_px, pad=30, size=(260, 195)):
+    x0, y0 = np.floor(sheet_px.min(axis=0)).astype(int) - pad
+    x1, y1 = np.ceil(sheet_px.max(axis=0)).astype(int) + pad
+    h, w = images[0].shape[:2]
+    x0, y0, x1, y1 = max(0, x0), max(0, y0), min(w, x1), min(h, y1)
+    return np.hstack([cv2.resize(im[y0:y1, x0:x1], size, interpolation=cv2.INTER_AREA) for im in images])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--count", type=int, default=40)
+    parser.add_argument("--seed", type=int, default=9300)
+    parser.add_argument("--size", default="1280x960")
+    args = parser.parse_args(argv)
+    size = tuple(int(v) for v in args.size.split("x"))
+    rows, pictures = [], []
+    for i in range(args.count):
+        case = pasted_board(np.random.default_rng([args.seed, i]), size)
+        row = {"case": i, **case.case}
+        try:
+            cal = calibrate_photo(case.photo, case.board, intrinsics=exif_intrinsics(case.K[0, 0], size))
+        except CalibrationError:
+            rows.append({**row, "calibrated": False})
+            print(f"{i:3d} {case.case}: not calibrated", flush=True)
+            continue
+        start = time.perf_counter()
+        erased = erase_board(case.photo, cal, case.floor_mask)
+        row.update(calibrated=True, ms=1000 * (time.perf_counter() - start), **erasure_scores(case, erased.image))
+        rows.append(row)
+        pictures.append((row, crop([case.photo, erased.image, case.truth], case.sheet_px)))
+        print(f"{i:3d} {row['paper']:9s} {row['margin']:5s} {'marks' if row['marks'] else '     '} "
+              f"{row['pattern']:7s} {row['floor']:8s} {'shadow' if row['shadow'] else '      '}  light "
+              f"{row['light']:4.1f} contrast {row['contrast']:.2f} seam {row['seam']:.2f} spots {row['spots']}"
+              f"  {'ok' if row['ok'] else 'NOT OK'}  {row['ms']:.0f} ms", flush=True)
+
+    done = [r for r in rows if r["calibrated"]]
+    ok = [r for r in done if r["ok"]]
+
+    def share(key, value):
+        subset = [r for r in done if r[key] == value]
+        return f"{sum(r['ok'] for r in subset)}/{len(subset)}"
+
+    summary = {"cases": len(rows), "calibrated": len(done), "ok": len(ok),
+               "light_median": float(np.median([r["light"] for r in done])),
+               "light_p90": float(np.percentile([r["light"] for r in done], 90)),
+               "with_spots": sum(r["spots"] > 0 for r in done),
+               "ms_median": float(np.median([r["ms"] for r in done]))}
+    lines = ["# The board erased from prints as users make them", "",
+             f"{len(done)} of {len(rows)} cases calibrated (seed {args.seed}, {size[0]}x{size[1]}); "
+             f"**{len(ok)} of {len(done)} within every limit**. Limits: light (erased against the floor that was "
+             f"there, both blurred over a third of the sheet's size) at most {LIGHT_MAX:g} levels; local contrast "
+             f"{CONTRAST_RANGE[0]:g}-{CONTRAST_RANGE[1]:g} of the floor's; edges along the sheet's outline at most "
+             f"{SEAM_MAX:g} of the floor's; no speck of 3 px or more {SPOT_LEVELS:g} levels brighter than its "
+             f"surround and {SPOT_LEVELS / 2:g} than the floor's brightest.", "",
+             f"light median {summary['light_median']:.1f}, 90th percentile {summary['light_p90']:.1f} levels; "
+             f"cases with a bright spot: {summary['with_spots']}; erasure median {summary['ms_median']:.0f} ms.", "",
+             "| within limits, by | |", "|---|---|"]
+    for key, values in (("paper", ("white", "off-white", "cream")), ("margin", ("sheet", "none")),
+                        ("marks", (True, False)), ("pattern", ("stager", "charuco", "opencv")),
+                        ("floor", ("carpet", "wood", "laminate", "tiles", "concrete")), ("shadow", (True, False))):
+        lines.append(f"| {key} | " + ", ".join(f"{v}: {share(key, v)}" for v in values) + " |")
+    lines += ["", "Not calibrated: " + (", ".join(f"{r['case']} ({r['pattern']})" for r in rows if not r["calibrated"])
+                                        or "none"), "",
+              "`erase_prints_worst.png`: the six worst by light, each the photo, the erased photo and the truth."]
+    print("\n".join(lines))
+    worst = sorted(pictures, key=lambda p: -p[0]["light"] - 100 * (not p[0]["ok"]))[:6]
+    if worst:
+        sheet = np.vstack([p[1] for p in worst])
+        ok_png, data = cv2.imencode(".png", cv2.cvtColor(sheet, cv2.COLOR_RGB2BGR))
+        write_atomic(RESULTS / "erase_prints_worst.png", data.tobytes())
+    write("erase_prints", {"machine": machine(seed=args.seed, count=args.count), "summary": summary, "cases": rows},
+          lines)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
