@@ -44,6 +44,10 @@ class StagedSettings:
     shadow_samples: int = 10  # key-light directions averaged for a soft shadow
     ao_strength: float = 0.8  # share of the ambient light occlusion removes at most
     side_ao_weight: float = 0.45  # occlusion by the sides of things, relative to overhead
+    contact_height_m: float = 0.015  # parts whose underside is this close to the floor stand on it
+    contact_band_m: float = 0.02  # their foot: the part of them this close to their underside
+    contact_sigma_m: float = 0.012  # the contact shadow's spread beyond the foot's edge
+    contact_strength: float = 0.7  # share of all light the floor loses right at the foot's edge, at most
     ao_bins_m: np.ndarray = field(  # (k,) part heights grouped for ambient occlusion: one blur per group
         default_factory=lambda: np.array([0.0, 0.06, 0.15, 0.3, 0.55, 0.9, 1.5, 1e9]))
     floor_cell_max_px: int = 900  # floor raster: at most this many cells a side

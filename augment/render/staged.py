@@ -608,7 +608,8 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings)
     over the light's angular size (soft, and sharper near contact); ambient occlusion
     blurs each part's footprint by the height of its underside (a plate at height z hides
     a cosine-weighted share of sky that falls off over about z) and, less, by its height
-    (the sides of things hide the sky near their base)."""
+    (the sides of things hide the sky near their base); what stands on the floor darkens
+    a thin line around its foot (contact)."""
     lo, hi = np.asarray(extent_m[0], dtype=np.float64), np.asarray(extent_m[1], dtype=np.float64)
     size = hi - lo
     cell = max(settings.floor_cell_min_m, float(size.max()) / settings.floor_cell_max_px)
@@ -655,6 +656,16 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings)
             free *= 1.0 - weight * np.clip(blocked, 0, 1)
     ao = cv2.resize(1.0 - free, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
     ratio = 1.0 - lighting.key_fraction * shadow - (1.0 - lighting.key_fraction) * settings.ao_strength * ao
+    # Contact: right beside a leg or a base standing on the floor, the floor sees little of
+    # any light; a dark line a centimetre or two wide, at the full raster's resolution.
+    feet = [c.points[c.points[:, 2] < c.z_bottom + settings.contact_band_m] for c in casters
+            if c.z_bottom < settings.contact_height_m]
+    feet = [p for p in feet if len(p) >= 3]
+    if feet:
+        raster = np.zeros(shape, np.uint8)
+        _Footprints([_Caster(p, None, 0.0, 0.0) for p in feet]).fill(raster, grid)
+        contact = np.clip(_blur(raster.astype(np.float32), settings.contact_sigma_m / cell), 0, 1)
+        ratio = ratio * (1.0 - settings.contact_strength * contact)
     return np.power(np.clip(ratio, 0.02, 1.0), 1.0 / GAMMA).astype(np.float32), grid
 
 

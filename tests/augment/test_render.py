@@ -17,7 +17,7 @@ from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furnitur
                                       load_asset, placed_items)
 from augment.render.gl import Renderer
 from augment.render.settings import RENDER
-from augment.render.staged import Lighting, estimate_lighting, render_staged, write_jpeg
+from augment.render.staged import Lighting, _Caster, _floor_gain, estimate_lighting, render_staged, write_jpeg
 from layout.catalog import CATALOG
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -218,6 +218,24 @@ def test_floor_under_a_table_darkens_and_far_floor_is_untouched(renderer):
     assert far.sum() > 500
     fy, fx = ys.ravel()[far], xs.ravel()[far]
     assert np.array_equal(staged.image[fy, fx], image[fy, fx])
+
+
+def test_the_floor_darkens_in_a_thin_line_where_a_leg_stands_on_it():
+    """A leg 4 cm square lit from the side: on its lit side (no key shadow there) the
+    floor half a centimetre from its foot is darker than the same leg lifted 5 cm leaves
+    it, by 7 % or more; 8 cm away the two are alike (the contact line is thin)."""
+    light = Lighting((0.8, 0.8, 0.8), (0.7071, 0.0, -0.7071), 0.5, 0.05, (0.4, 0.4, 0.4), "test")
+
+    def gain_at(z0, distances_m):
+        leg = np.array([[x, y, z] for x in (-0.02, 0.02) for y in (-0.02, 0.02) for z in (z0, z0 + 0.4)])
+        gain, grid = _floor_gain([_Caster(leg, None, z0, z0 + 0.4)], light, ((-0.6, -0.6), (0.6, 0.6)),
+                                 RENDER.staged)
+        cells = np.floor(grid.to_px(np.array([[-0.02 - d, 0.0] for d in distances_m]))).astype(int)
+        return gain[cells[:, 1], cells[:, 0]]
+
+    standing, lifted = gain_at(0.0, (0.005, 0.08)), gain_at(0.05, (0.005, 0.08))
+    assert standing[0] < lifted[0] - 0.07 and standing[0] < 0.85
+    assert abs(standing[1] - lifted[1]) < 0.01
 
 
 def test_walls_in_the_mask_and_the_polygon_hide_what_stands_behind_them(renderer, room_small):
