@@ -218,22 +218,32 @@ def _label(tile: np.ndarray, text: str, size: int) -> np.ndarray:
     return np.asarray(img)
 
 
+def _studio_render(renderer, kind: str, cell):
+    """One catalog piece alone on the studio floor, framed in a ``cell`` (w, h) photo."""
+    size = CATALOG[kind].size_m
+    view = _studio_view(size, cell)
+    photo, floor = _backdrop(view)
+    item = PlacedItem(kind, (0.0, 0.0, size[2] / 2), 0.0, size, kind)
+    staged = render_staged(photo, view, [item], renderer, floor_mask=floor, lighting=_STUDIO_LIGHT,
+                           supersample=2.0, self_shadows=True)
+    return staged.image, item
+
+
+def _grid(tiles, columns):
+    """The tiles in rows of ``columns``, the last row filled with white."""
+    blank = np.full_like(tiles[0], 255)
+    return [np.hstack(tiles[i:i + columns] + [blank] * (columns - len(tiles[i:i + columns])))
+            for i in range(0, len(tiles), columns)]
+
+
 def gallery(path: Path, cell=(320, 240), columns=8) -> None:
     kinds = list(CATALOG)
     tiles = []
     with Renderer() as renderer:
         for kind in kinds:
-            size = CATALOG[kind].size_m
-            view = _studio_view(size, cell)
-            photo, floor = _backdrop(view)
-            item = PlacedItem(kind, (0.0, 0.0, size[2] / 2), 0.0, size, kind)
-            staged = render_staged(photo, view, [item], renderer, floor_mask=floor, lighting=_STUDIO_LIGHT,
-                                   supersample=2.0, self_shadows=True)
-            style = furniture_for(item).style
-            tiles.append(_label(staged.image, f"{kind.replace('_', ' ')} ({style})", 15))
-    rows = [np.hstack(tiles[i:i + columns] + [np.full_like(tiles[0], 255)] * (columns - len(tiles[i:i + columns])))
-            for i in range(0, len(tiles), columns)]
-    write_png(path, np.vstack(rows))
+            image, item = _studio_render(renderer, kind, cell)
+            tiles.append(_label(image, f"{kind.replace('_', ' ')} ({furniture_for(item).style})", 15))
+    write_png(path, np.vstack(_grid(tiles, columns)))
     print(f"wrote {path} ({len(kinds)} kinds)")
 
 
@@ -262,20 +272,9 @@ def surfaces_picture(path: Path, swatch_px=200, columns=9, close=(480, 360)) -> 
         tile = cv2.resize(srgb, (swatch_px, swatch_px), interpolation=cv2.INTER_AREA)
         tile = _label(np.vstack([tile, np.full((28, swatch_px, 3), 255, np.uint8)]), name.replace("wood:", ""), 15)
         tiles.append(tile)
-    blank = np.full_like(tiles[0], 255)
-    rows = [np.hstack(tiles[i:i + columns] + [blank] * (columns - len(tiles[i:i + columns])))
-            for i in range(0, len(tiles), columns)]
-    pieces = []
+    rows = _grid(tiles, columns)
     with Renderer() as renderer:
-        for kind in ("sofa", "dresser", "armchair"):
-            size = CATALOG[kind].size_m
-            view = _studio_view(size, close)
-            photo, floor = _backdrop(view)
-            item = PlacedItem(kind, (0.0, 0.0, size[2] / 2), 0.0, size, kind)
-            staged = render_staged(photo, view, [item], renderer, floor_mask=floor, lighting=_STUDIO_LIGHT,
-                                   supersample=2.0, self_shadows=True)
-            pieces.append(staged.image)
-    strip = np.hstack(pieces)
+        strip = np.hstack([_studio_render(renderer, kind, close)[0] for kind in ("sofa", "dresser", "armchair")])
     width = rows[0].shape[1]
     strip = cv2.resize(strip, (width, round(strip.shape[0] * width / strip.shape[1])), interpolation=cv2.INTER_AREA)
     write_jpeg(path, np.vstack(rows + [strip]), quality=90)

@@ -91,6 +91,9 @@ def _mat(rng, name, srgb255, roughness=0.7, metallic=0.0, spread=0.06, emissive=
                     surface=surface_name(name) if surface is None else surface)
 
 
+# The gaps between drawer and door fronts: narrow and deep, so dark whatever the wood.
+_RECESS = Material("recess", tuple(float(v) for v in _linear((30, 27, 25))), 0.95)
+
 # Palettes: (name, sRGB 0-255, roughness, metallic).
 WOODS = (("light oak", (196, 158, 112), 0.55), ("oak", (170, 128, 82), 0.55), ("walnut", (112, 74, 46), 0.5),
          ("dark walnut", (78, 52, 36), 0.5), ("pine", (214, 178, 128), 0.6), ("teak", (150, 98, 58), 0.5),
@@ -601,8 +604,10 @@ def _shell(shop, lo, hi, mat, opening, t=0.018):
 
 def _fronts(shop, x0, x1, z0, z1, y_face, mat, handle_mat, rows, cols, handle, gap=0.004, proud=0.012,
             vertical=False):
-    """Drawer or door fronts on the face ``y = y_face`` between x0..x1, z0..z1, with handles."""
+    """Drawer or door fronts on the face ``y = y_face`` between x0..x1, z0..z1, with handles,
+    and a dark recess behind them that shows in the gaps."""
     ws, hs = (x1 - x0) / cols, (z1 - z0) / rows
+    shop.box((x0, y_face - 0.001, z0), (x1, y_face + 0.001, z1), _RECESS, shadow=False)
     for i in range(cols):
         for j in range(rows):
             a, b = x0 + i * ws + gap / 2, x0 + (i + 1) * ws - gap / 2
@@ -724,6 +729,7 @@ def _nightstand(shop, rng, W, D, H):
         zm = base_h + (H - base_h) * 0.45
         _shell(shop, (-W / 2, -D / 2, base_h), (W / 2, y_face, H), body,
                (-W / 2 + 0.018, W / 2 - 0.018, base_h + 0.018, zm - 0.009, D * 0.75))
+        _books(shop, rng, -W / 2 + 0.03, W / 2 - 0.03, base_h + 0.018, zm - 0.02, y_face - D * 0.75, y_face - 0.02)
         _fronts(shop, -W / 2 + 0.01, W / 2 - 0.01, zm, H - 0.02, y_face, front, handle, 1, 1, "knob")
     else:
         shop.box((-W / 2, -D / 2, base_h), (W / 2, y_face, H), body, 0.004)
@@ -897,6 +903,8 @@ def _tv_stand(shop, rng, W, D, H):
     if style == "open":
         _shell(shop, (-W / 2, -D / 2, base_h), (W / 2, y_face, top), body,
                (-W / 2 + 0.018, -W / 6 - 0.009, base_h + 0.018, top - 0.018, D * 0.8))
+        # An open compartment holds things, or it reads as a dark hole.
+        _books(shop, rng, -W / 2 + 0.03, -W / 6 - 0.02, base_h + 0.018, top - 0.03, y_face - D * 0.8, y_face - 0.02)
         _fronts(shop, -W / 6, W / 2 - 0.01, base_h + 0.01, top - 0.01, y_face, body, handle, 1, 2, "none",
                 proud=0.012, vertical=True)
     else:

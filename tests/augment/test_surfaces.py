@@ -13,6 +13,7 @@ from augment.render.look import CLEAN
 from augment.render.staged import render_staged
 from augment.render.styles import STYLES, WEAVES
 from augment.render.surfaces import SIZE_PX, surface, surface_name
+from layout.catalog import CATALOG
 from tests.augment.test_render import LIGHT, _hull_mask, _project, _truth_calibration
 
 NAMES = [f"wood:{w}" for w in surfaces._WOODS] + list(surfaces._MAKERS)[1:]
@@ -131,3 +132,61 @@ def test_a_textured_surface_shows_grain_and_keeps_its_colour():
     assert top.sum() > 500
     assert oak.std(axis=0).mean() > 3.0 * plain.std(axis=0).mean() + 2.0
     np.testing.assert_allclose(oak.mean(axis=0), plain.mean(axis=0), rtol=0.04)
+
+
+def _first_hits(parts, origins, direction):
+    """The material name of the first part each ray (one ``direction``) meets ("" for
+    none): Moller-Trumbore against every triangle."""
+    best = np.full(len(origins), np.inf)
+    names = np.full(len(origins), "", dtype=object)
+    for part in parts:
+        tri = part.vertices[part.faces]  # (m, 3, 3)
+        e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+        p = np.cross(direction, e2)
+        det = np.einsum("ij,ij->i", e1, p)
+        ok = np.abs(det) > 1e-12
+        if not ok.any():
+            continue
+        tri, e1, e2, p, det = tri[ok], e1[ok], e2[ok], p[ok], det[ok]
+        s = origins[:, None, :] - tri[None, :, 0]  # (n, m, 3)
+        u = np.einsum("nmk,mk->nm", s, p) / det
+        q = np.cross(s, e1[None])
+        v = (q @ direction) / det
+        t = np.einsum("nmk,mk->nm", q, e2) / det
+        hit = (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+        t = np.where(hit, t, np.inf).min(axis=1)
+        closer = t < best
+        best[closer] = t[closer]
+        names[closer] = part.material.name
+    return names
+
+
+def test_open_compartments_hold_things_and_gaps_between_fronts_are_dark():
+    """Seen square-on (a piece's front faces +x in its frame), a column of rays across a
+    chest of three drawers meets the dark recess in the two gaps between them; a row of
+    rays across a TV stand meets books in its open compartment."""
+    front = np.array([-1.0, 0.0, 0.0])
+    W, D, H = CATALOG["dresser"].size_m
+    z = np.linspace(0.0, H, 2000)
+    seen = 0
+    for seed in range(12):
+        furniture = build_furniture("dresser", style_seed=seed)
+        if furniture.style == "sideboard":
+            continue  # doors side by side: no gap across this column
+        names = _first_hits(furniture.parts, np.column_stack([np.ones_like(z), np.full_like(z, -W / 4 + 0.013), z]),
+                            front)
+        runs = [k for k, (a, b) in enumerate(zip(names[:-1], names[1:])) if a != "recess" and b == "recess"]
+        assert len(runs) >= 2, (seed, furniture.style)
+        seen += 1
+    assert seen >= 4
+    W, D, H = CATALOG["tv_stand"].size_m
+    for seed in range(20):
+        furniture = build_furniture("tv_stand", style_seed=seed)
+        if furniture.style != "open":
+            continue
+        y = np.linspace(-W / 2, W / 2, 300)
+        names = _first_hits(furniture.parts, np.column_stack([np.ones_like(y), y, np.full_like(y, H / 2)]), front)
+        assert (names == "book").mean() > 0.12, names  # the compartment is a third of the width
+        break
+    else:
+        pytest.fail("no open TV stand in 20 seeds")
