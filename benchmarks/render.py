@@ -40,6 +40,7 @@ from augment.photo.io import read_photo  # noqa: E402
 from augment.floor.polygon import floor_polygon  # noqa: E402
 from augment.render.furniture import PlacedItem, furniture_for, placed_items  # noqa: E402
 from augment.render.gl import Renderer  # noqa: E402
+from augment.render.look import estimate_look  # noqa: E402
 from augment.render.staged import Lighting, estimate_lighting, render_staged, write_jpeg, write_png  # noqa: E402
 from augment.render.surfaces import surface  # noqa: E402
 from layout.catalog import CATALOG  # noqa: E402
@@ -99,7 +100,8 @@ def upscaled(image, calibration, mask, size):
     return big, cal, big_mask
 
 
-STAGES = ("lighting", "build", "render", "self_shadows", "occlusion", "shadows", "composite", "total")
+STAGES = ("lighting", "look_estimate", "build", "render", "self_shadows", "occlusion", "shadows", "look", "composite",
+          "total")
 
 
 def benchmark(repeats: int) -> None:
@@ -117,11 +119,14 @@ def benchmark(repeats: int) -> None:
                     t = time.perf_counter()
                     lighting = estimate_lighting(img, cal, msk)
                     t_light = time.perf_counter() - t
+                    t = time.perf_counter()
+                    look = estimate_look(img, cal)  # once per photo, as the pipeline does
+                    t_look = time.perf_counter() - t
                     staged = render_staged(img, cal, items, renderer, floor_mask=msk,
                                            floor_polygon=floor if layout_name == "visible floor" else None,
-                                           lighting=lighting)
-                    runs.append(dict(staged.timings_s, lighting=t_light,
-                                     total=staged.timings_s["total"] + t_light))
+                                           lighting=lighting, look=look)
+                    runs.append(dict(staged.timings_s, lighting=t_light, look_estimate=t_look,
+                                     total=staged.timings_s["total"] + t_light + t_look))
                 warm = runs[2:] if len(runs) > 2 else runs[1:]
                 med = {s: float(np.median([r.get(s, 0.0) for r in warm])) for s in STAGES}
                 rows.append(dict(photo=name, layout=layout_name, size=f"{size[0]}x{size[1]}", items=len(items),

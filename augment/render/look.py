@@ -39,7 +39,7 @@ class PhotoLook:
         Gaussian sigma of the photo's edge spread, photo pixels (the board's printed
         edges); 0 when unknown.
     edges : int
-        How many of the board's edges the blur was measured on (0: none).
+        How many profiles across the board's printed edges gave the blur (0: none).
     """
 
     noise_rgb: tuple
@@ -123,9 +123,9 @@ def estimate_blur(image: np.ndarray, calibration, step_px: float = 0.25) -> tupl
     """The photo's edge spread (Gaussian sigma, pixels) from the board's outer squares.
 
     The black squares along the edge of the printed pattern meet white paper (or the
-    floor) in a straight, sharp edge; a profile across the middle of each, perpendicular
-    in the photo, is fitted with a blurred step. Returns the median sigma and how many
-    edges gave a clean step ((0.0, 0) when fewer than 3 did).
+    floor) in a straight, sharp edge; two profiles across each, perpendicular in the
+    photo, are fitted with a blurred step. Returns the median sigma and how many
+    profiles gave a clean step ((0.0, 0) when fewer than 3 did).
     """
     board = calibration.board
     s = board.square_m
@@ -147,7 +147,7 @@ def estimate_blur(image: np.ndarray, calibration, step_px: float = 0.25) -> tupl
         across = 1 - along
         count = (board.cols if along == 0 else board.rows) + 1
         for k in range(count):
-            for t in (0.35, 0.5, 0.65):
+            for t in (0.35, 0.65):
                 p = np.zeros(3)
                 p[along] = -half[along] + (k + t) * s
                 p[across] = sign * half[across]
