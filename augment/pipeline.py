@@ -604,11 +604,11 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 lighting = render.estimate_lighting(base, m.calibration, m.segmentation.mask)
                 camera_look = render.estimate_look(m.image, m.calibration)  # the board's edges give the sharpness
                 staged, staged_layers = [], []
-                for lay, look in zip(layouts, styles):
+                for lay, style_name in zip(layouts, styles):
                     done = render.render_staged(base, m.calibration, lay, gl, floor_mask=m.segmentation.mask,
                                                 floor_polygon=m.floor, lighting=lighting, look=camera_look,
                                                 seed=_seed(lay, seed),
-                                                style=look, assets=user_models, layer=layers)
+                                                style=style_name, assets=user_models, layer=layers)
                     staged.append(done.image)
                     if layers:
                         staged_layers.append(done.layer if erased is None else
@@ -620,9 +620,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         with clock("scene"):
             cache = {}
             scenes = []
-            for lay, look in zip(layouts, styles):
+            for lay, style_name in zip(layouts, styles):
                 scenes.append(scene_glb(m.floor, room_height, lay, seed=_seed(lay, seed), cache=cache,
-                                        assets=user_models, style=look))
+                                        assets=user_models, style=style_name))
                 bar.step()
         with clock("overlays"):
             pictures = overlays(m, doors)

@@ -17,13 +17,12 @@ from numba import njit, prange
 from scipy.optimize import curve_fit
 from scipy.special import ndtr
 
+from .settings import RENDER, LookSettings
+
 # Immerkær's operator: the difference of two Laplacians, blind to planes and ramps; for
 # white noise of std s the mean of its absolute response is s * 6 / sqrt(pi / 2).
 _NOISE_KERNEL = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
 _NOISE_SCALE = math.sqrt(math.pi / 2.0) / 6.0
-# Noise is drawn once per render as a tile this large and repeated: a few levels of grain
-# show no period at 512 px, and a 12 MP layer gets it in milliseconds.
-_NOISE_TILE_PX = 512
 
 
 @dataclass(frozen=True)
@@ -54,24 +53,28 @@ class PhotoLook:
 CLEAN = PhotoLook((0.0, 0.0, 0.0), 0.0, 0)
 
 
-def estimate_noise(image: np.ndarray, block_px: int = 16, share: float = 0.1) -> tuple:
+def estimate_noise(image: np.ndarray, settings: LookSettings | None = None) -> tuple:
     """Per-channel noise std (8-bit levels) of an RGB photo.
 
-    The photo is cut into blocks of ``block_px`` square; the ``share`` of them with the
-    least structure (the gradient of the photo shrunk 4x, which noise hardly moves) are
-    the flattest parts (walls, ceiling, plain floor). Their mean response to a noise
-    operator that planes and ramps do not excite is the noise. Blocks with clipped pixels
-    (at most 4 or at least 251) are left out: clipping hides the noise.
+    The photo is cut into blocks (``settings.noise_block_px`` square); the share of them
+    with the least structure (the gradient of the photo shrunk 4x, which noise hardly
+    moves) are the flattest parts (walls, ceiling, plain floor). Their mean response to a
+    noise operator that planes and ramps do not excite is the noise. Blocks with clipped
+    pixels are left out: clipping hides the noise.
 
     Parameters
     ----------
     image : (h, w, 3) uint8
         Not modified.
+    settings : LookSettings, optional
+        Default ``RENDER.look``.
 
     Returns
     -------
     (3,) tuple of float
     """
+    settings = RENDER.look if settings is None else settings
+    block_px = settings.noise_block_px
     image = np.asarray(image)
     if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
         raise ValueError(f"image must be (h, w, 3) uint8, got shape {image.shape} dtype {image.dtype}")
@@ -79,7 +82,8 @@ def estimate_noise(image: np.ndarray, block_px: int = 16, share: float = 0.1) ->
     if rows * cols == 0:
         return (0.0, 0.0, 0.0)
     tiles = image[:rows * block_px, :cols * block_px].reshape(rows, block_px, cols, block_px, 3).swapaxes(1, 2)
-    unclipped = cv2.inRange(image[:rows * block_px, :cols * block_px], (5, 5, 5), (250, 250, 250))
+    low, high = settings.unclipped_levels
+    unclipped = cv2.inRange(image[:rows * block_px, :cols * block_px], (low,) * 3, (high,) * 3)
     clipped = cv2.resize(unclipped, (cols, rows), interpolation=cv2.INTER_AREA) < 255
     if clipped.all():
         return (0.0, 0.0, 0.0)
@@ -89,7 +93,7 @@ def estimate_noise(image: np.ndarray, block_px: int = 16, share: float = 0.1) ->
     gradient = np.hypot(cv2.Sobel(grey, cv2.CV_32F, 1, 0), cv2.Sobel(grey, cv2.CV_32F, 0, 1))
     structure = cv2.resize(gradient, (cols, rows), interpolation=cv2.INTER_AREA)
     structure[clipped] = np.inf
-    order = np.argsort(structure, axis=None)[:max(1, int(share * (~clipped).sum()))]
+    order = np.argsort(structure, axis=None)[:max(1, int(settings.noise_flat_share * (~clipped).sum()))]
     a = tiles[np.unravel_index(order, (rows, cols))].astype(np.float32)  # (n, B, B, 3)
     k = _NOISE_KERNEL
     response = sum(k[i, j] * a[:, i:block_px - 2 + i, j:block_px - 2 + j] for i in range(3) for j in range(3))
@@ -100,13 +104,14 @@ def _edge(d, low, high, centre, sigma):
     return low + (high - low) * ndtr((d - centre) / sigma)
 
 
-def edge_sigma(profile: np.ndarray, step_px: float = 1.0):
+def edge_sigma(profile: np.ndarray, step_px: float = 1.0, settings: LookSettings | None = None):
     """Gaussian sigma (pixels) of a dark-to-bright step sampled every ``step_px`` along
     ``profile`` (n,), and its contrast (levels); None when it is no clean step."""
+    settings = RENDER.look if settings is None else settings
     profile = np.asarray(profile, np.float64)
     d = np.arange(len(profile)) * step_px
     low, high = float(np.median(profile[:3])), float(np.median(profile[-3:]))
-    if high - low < 30.0:
+    if high - low < settings.edge_min_contrast:
         return None
     try:
         (lo, hi, c, s), _ = curve_fit(_edge, d, profile, p0=(low, high, d.mean(), 1.0),
@@ -114,19 +119,21 @@ def edge_sigma(profile: np.ndarray, step_px: float = 1.0):
     except (RuntimeError, ValueError):
         return None
     residual = float(np.sqrt(np.mean((_edge(d, lo, hi, c, s) - profile) ** 2)))
-    if residual > 0.08 * (hi - lo):
+    if residual > settings.edge_max_residual * (hi - lo):
         return None
     return float(s), float(hi - lo)
 
 
-def estimate_blur(image: np.ndarray, calibration, step_px: float = 0.25) -> tuple[float, int]:
+def estimate_blur(image: np.ndarray, calibration, settings: LookSettings | None = None) -> tuple[float, int]:
     """The photo's edge spread (Gaussian sigma, pixels) from the board's outer squares.
 
     The black squares along the edge of the printed pattern meet white paper (or the
     floor) in a straight, sharp edge; two profiles across each, perpendicular in the
     photo, are fitted with a blurred step. Returns the median sigma and how many
-    profiles gave a clean step ((0.0, 0) when fewer than 3 did).
+    profiles gave a clean step ((0.0, 0) when fewer than ``settings.edge_min_count`` did).
     """
+    settings = RENDER.look if settings is None else settings
+    step_px = settings.edge_step_px
     board = calibration.board
     s = board.square_m
     half = np.array([(board.cols + 1) * s / 2, (board.rows + 1) * s / 2])
@@ -142,7 +149,7 @@ def estimate_blur(image: np.ndarray, calibration, step_px: float = 0.25) -> tupl
     grey = cv2.cvtColor(np.asarray(image), cv2.COLOR_RGB2GRAY).astype(np.float32)
     h, w = grey.shape
     sigmas = []
-    # Each side of the pattern: (axis along the edge, fixed coordinate, outward sign).
+    # Each side of the pattern: (axis along the edge, outward sign).
     for along, sign in ((0, -1), (0, 1), (1, -1), (1, 1)):
         across = 1 - along
         count = (board.cols if along == 0 else board.rows) + 1
@@ -157,7 +164,7 @@ def estimate_blur(image: np.ndarray, calibration, step_px: float = 0.25) -> tupl
                 a, b, c = project([inside, p, outside])
                 normal = c - a
                 length = float(np.linalg.norm(normal))
-                if length < 8.0:
+                if length < settings.edge_min_span_px:
                     continue  # squares too small in the photo to see their edge
                 normal /= length
                 n_in, n_out = float(np.dot(b - a, normal)), float(np.dot(c - b, normal))
@@ -167,10 +174,10 @@ def estimate_blur(image: np.ndarray, calibration, step_px: float = 0.25) -> tupl
                     continue
                 profile = cv2.remap(grey, pts[:, 0].astype(np.float32)[None, :], pts[:, 1].astype(np.float32)[None, :],
                                     cv2.INTER_LINEAR)[0]
-                fit = edge_sigma(profile, step_px)
+                fit = edge_sigma(profile, step_px, settings)
                 if fit is not None:
                     sigmas.append(fit[0])
-    if len(sigmas) < 3:
+    if len(sigmas) < settings.edge_min_count:
         return 0.0, 0
     return float(np.median(sigmas)), len(sigmas)
 
@@ -190,7 +197,8 @@ def estimate_look(image: np.ndarray, calibration=None) -> PhotoLook:
     return PhotoLook(noise, blur, edges)
 
 
-def apply_look(rgba: np.ndarray, look: PhotoLook, render_blur_px: float, seed: int = 0) -> np.ndarray:
+def apply_look(rgba: np.ndarray, look: PhotoLook, render_blur_px: float, seed: int = 0,
+               settings: LookSettings | None = None) -> np.ndarray:
     """The rendered layer recorded as the photo's camera would have: blurred up to the
     photo's edge spread, and the photo's noise added where the furniture covers.
 
@@ -204,18 +212,21 @@ def apply_look(rgba: np.ndarray, look: PhotoLook, render_blur_px: float, seed: i
         The render's own edge spread (Gaussian sigma, photo pixels).
     seed : int
         Of the noise: the same seed gives the same staged photo.
+    settings : LookSettings, optional
+        Default ``RENDER.look``.
 
     Returns
     -------
     (h, w, 4) uint8
     """
+    settings = RENDER.look if settings is None else settings
     extra = math.sqrt(max(look.blur_px ** 2 - render_blur_px ** 2, 0.0))
-    out = cv2.GaussianBlur(rgba, (0, 0), extra) if extra > 0.1 else rgba.copy()
-    if max(look.noise_rgb) > 0.05:
+    out = cv2.GaussianBlur(rgba, (0, 0), extra) if extra > settings.min_extra_blur_px else rgba.copy()
+    if max(look.noise_rgb) > settings.min_noise_levels:
         rng = np.random.default_rng(seed)
-        tile = rng.standard_normal((_NOISE_TILE_PX, _NOISE_TILE_PX, 3), dtype=np.float32)
-        tile *= np.asarray(look.noise_rgb, np.float32)
-        _add_noise(out, tile, int(rng.integers(_NOISE_TILE_PX)), int(rng.integers(_NOISE_TILE_PX)))
+        n = settings.noise_tile_px
+        tile = rng.standard_normal((n, n, 3), dtype=np.float32) * np.asarray(look.noise_rgb, np.float32)
+        _add_noise(out, tile, int(rng.integers(n)), int(rng.integers(n)))
     return out
 
 

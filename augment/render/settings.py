@@ -80,6 +80,23 @@ class EraseSettings:
 
 
 @dataclass
+class LookSettings:
+    """The photo's noise and sharpness given to the furniture (:mod:`augment.render.look`)."""
+
+    noise_block_px: int = 16  # the photo is measured in blocks this large
+    noise_flat_share: float = 0.1  # the share of blocks with the least structure: where noise shows alone
+    unclipped_levels: tuple[int, int] = (5, 250)  # a block with a pixel outside these is clipped: no noise shows
+    noise_tile_px: int = 512  # noise drawn as a tile this large and repeated: no visible period at a few levels
+    min_noise_levels: float = 0.05  # below this std the layer gets no noise
+    edge_step_px: float = 0.25  # the board's edge profiles are sampled this finely
+    edge_min_contrast: float = 30.0  # a profile is a step when its ends differ by this many levels ...
+    edge_max_residual: float = 0.08  # ... and a blurred step fits it within this share of that difference
+    edge_min_span_px: float = 8.0  # profiles shorter than this in the photo are not read: squares too small
+    edge_min_count: int = 3  # fewer clean profiles than this: the sharpness is unknown
+    min_extra_blur_px: float = 0.1  # the layer is not blurred for less than this
+
+
+@dataclass
 class GltfSettings:
     """The suggestion's 3-D scene (:mod:`augment.render.gltf`)."""
 
@@ -95,6 +112,7 @@ class RenderSettings:
     furniture: FurnitureSettings = field(default_factory=FurnitureSettings)
     staged: StagedSettings = field(default_factory=StagedSettings)
     erase: EraseSettings = field(default_factory=EraseSettings)
+    look: LookSettings = field(default_factory=LookSettings)
     gltf: GltfSettings = field(default_factory=GltfSettings)
 
 

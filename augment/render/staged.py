@@ -919,8 +919,7 @@ def _render_scale(box_px, supersample, settings: StagedSettings):
 def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                   floor_mask: np.ndarray | None = None, floor_polygon=None,
                   lighting: Lighting | None = None, look: PhotoLook | None = None, seed: int = 0,
-                  style: str | None = None,
-                  assets: dict | None = None,
+                  style: str | None = None, assets: dict | None = None,
                   supersample: float | None = None, self_shadows: bool = True, layer: bool = False,
                   settings: StagedSettings | None = None) -> Staged:
     """Render furniture into a calibrated photo, with its shadows on the photo's floor.
