@@ -165,6 +165,8 @@ class FurnishResult(Measurement):
     look : PhotoLook or None
         The photo's noise and sharpness given to the furniture
         (:func:`augment.render.look.estimate_look`); None when nothing was rendered.
+    lighting : Lighting or None
+        The light the furniture was rendered in (:func:`augment.render.staged.estimate_lighting`).
     report : dict
         What ``report.json`` holds (:func:`report_dict`).
     """
@@ -185,6 +187,7 @@ class FurnishResult(Measurement):
     layers: list = field(default_factory=list)
     erased: object = None
     look: object = None
+    lighting: object = None
     report: dict = field(default_factory=dict)
 
 
@@ -383,8 +386,8 @@ def measure_report(m: Measurement) -> dict:
                       "warnings": list(m.warnings)})
 
 
-REPORT_KEYS = ("photo", "size_px", "versions", "calibration", "board", "camera_look", "floor", "height", "furniture",
-               "suggestions", "files", "timings_s", "warnings")
+REPORT_KEYS = ("photo", "size_px", "versions", "calibration", "board", "camera_look", "light", "floor", "height",
+               "furniture", "suggestions", "files", "timings_s", "warnings")
 
 
 def report_dict(result: FurnishResult) -> dict:
@@ -393,7 +396,8 @@ def report_dict(result: FurnishResult) -> dict:
     wall height (with confidence, and ``used_m``), the furniture (source, items laid
     out, items dropped and why), per suggestion its energy, overlaps, area off the floor,
     walkability and how deep the worst item stands in another's clearance, seconds per
-    stage, the photo's noise and sharpness given to the furniture (``camera_look``) and
+    stage, the photo's noise and sharpness given to the furniture (``camera_look``), the
+    light it was rendered in (``light``) and
     the library versions."""
     cal, height = result.calibration, result.height
     n = len(result.layouts)
@@ -419,6 +423,7 @@ def report_dict(result: FurnishResult) -> dict:
                       "sheet_m": np.round(result.erased.sheet_m, 4), "covered": round(result.erased.covered, 4),
                       "texture_from_m": np.round(result.erased.source_m, 4)})},
         "camera_look": None if result.look is None else result.look.to_json(),
+        "light": None if result.lighting is None else result.lighting.to_json(),
         "floor": floor_report(result),
         "height": {**height.to_json(), "used_m": result.room_height_m},
         "furniture": {"source": result.source, "floor_polygon_m": np.round(result.spec.polygon_m, 4),
@@ -601,8 +606,10 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 if erased is not None and erased.warning:
                     warnings.append(erased.warning)
                 base = m.image if erased is None else erased.image
-                lighting = render.estimate_lighting(base, m.calibration, m.segmentation.mask)
-                camera_look = render.estimate_look(m.image, m.calibration)  # the board's edges give the sharpness
+                # Both from the photo as taken: the board's white squares give the light, its edges the sharpness.
+                lighting = render.estimate_lighting(m.image, m.calibration, m.segmentation.mask,
+                                                    floor_polygon=m.floor)
+                camera_look = render.estimate_look(m.image, m.calibration)
                 staged, staged_layers = [], []
                 for lay, style_name in zip(layouts, styles):
                     done = render.render_staged(base, m.calibration, lay, gl, floor_mask=m.segmentation.mask,
@@ -642,7 +649,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                            scenes_glb=scenes, layout_files=layout_files, styles=styles[:len(layouts)],
                            assets={k: str(v) if isinstance(v, (str, Path)) else "parts" for k, v in
                                    (assets or {}).items()}, layers=staged_layers, erased=erased,
-                           look=camera_look)
+                           look=camera_look, lighting=lighting)
     result.report = report_dict(result)
     return result
 

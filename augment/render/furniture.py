@@ -37,7 +37,7 @@ from layout.fileio import path_problem
 from ..errors import FurnishError
 from .settings import RENDER
 from .styles import STYLES, WEAVES
-from .surfaces import surface_name
+from .surfaces import surface, surface_name
 
 # --------------------------------------------------------------------------------------
 # Materials
@@ -2084,9 +2084,18 @@ def furniture_for(item: PlacedItem, seed: int = 0, assets: dict | None = None, c
     return result
 
 
-def item_mesh(item: PlacedItem, seed: int = 0, assets: dict | None = None) -> trimesh.Trimesh:
-    """One placed item as a coloured ``trimesh.Trimesh`` in the floor frame (meters, z up)."""
-    return furniture_for(item, seed, assets).to_trimesh(world_from_item(item))
+def part_texture(part: Part):
+    """How a part is textured: (key, image, uv, albedo scale). A user asset's own texture
+    (its colour is in the image; scale None), or its material's surface detail at real
+    scale (uv in tiles; the colour divided by the texture's mean, so the part keeps it);
+    key "" and no image for an untextured part."""
+    m = part.material
+    if m.texture is not None:
+        return m.texture_key, m.texture, part.uv, None
+    if m.surface and part.uv is not None:
+        detail = surface(m.surface)
+        return f"surface {m.surface}", detail.image, part.uv / detail.tile_m, 1.0 / np.asarray(detail.mean_rgb)
+    return "", None, None, np.ones(3)
 
 
 def load_assets(assets) -> dict:

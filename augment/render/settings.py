@@ -57,6 +57,10 @@ class StagedSettings:
     max_supersample: float = 2.0  # rendered pixels per photo pixel along each axis, at most
     min_render_scale: float = 0.6  # large photos are rendered at this scale at least, then upsampled
     margin_px: int = 6  # around the region furniture and shadows can reach
+    sun_elevation_deg: float = 35.0  # the sun's height when its patches give only its direction
+    light_cell_m: float = 0.04  # the floor's light map: cell size ...
+    light_sigma_m: float = 0.3  # ... its blur (planks and tiles average out) ...
+    light_gain_range: tuple[float, float] = (0.3, 2.5)  # ... and how far the light there may differ from the median
     render_edge_px: float = 0.55  # a render's edge spread (Gaussian sigma) at one rendered pixel per photo pixel
 
 
@@ -77,6 +81,23 @@ class EraseSettings:
     max_splits: int = 2  # where no place beside the sheet is all floor, its halves look for one, and theirs
     map_step_px: int = 4  # the view's pixel maps are computed on this coarse grid, then interpolated
     covered_warn: float = 0.02  # the user is warned when something stands on more of the sheet than this
+
+
+@dataclass
+class SunSettings:
+    """The sun's direction from sunlit patches on the floor (:mod:`augment.render.sun`)."""
+
+    reach_m: float = 6.0  # the floor read, around the camera's foot
+    cell_m: float = 0.01  # the top-down view's cell ...
+    rim_m: float = 0.3  # ... covering the floor in view and this much around it ...
+    max_cells: int = 600  # ... grown so the view has at most this many cells a side
+    edge_sigma_m: float = 0.015  # the light is smoothed this much: a seam or grout line fades, a step stays
+    min_contrast: float = 1.5  # a sun's edge: light this many times brighter on one side (planks differ less)
+    min_median_contrast: float = 1.65  # ... and typically this much (a lamp's shadow edge is softer)
+    min_edge_m: float = 1.0  # sun's edges this long in all, at least
+    board_margin_m: float = 0.08  # the board's sheet, grown by this, is left out (its edges are steps too)
+    min_peak_share: float = 0.12  # an edge family this strong against the strongest
+    wall_tol_deg: float = 4.0  # edges this close to a wall's direction run along it
 
 
 @dataclass
@@ -113,6 +134,7 @@ class RenderSettings:
     staged: StagedSettings = field(default_factory=StagedSettings)
     erase: EraseSettings = field(default_factory=EraseSettings)
     look: LookSettings = field(default_factory=LookSettings)
+    sun: SunSettings = field(default_factory=SunSettings)
     gltf: GltfSettings = field(default_factory=GltfSettings)
 
 

@@ -47,11 +47,11 @@ from numba import njit, prange
 from layout.fileio import write_atomic
 
 from ..photo.io import JPEG_QUALITY, encode_image
-from .furniture import furniture_for, placed_items, world_from_item
+from .furniture import furniture_for, part_texture, placed_items, world_from_item
 from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from .look import PhotoLook, apply_look, estimate_look
 from .settings import RENDER, StagedSettings
-from .surfaces import surface
+from .sun import find_sun, wall_angles_rad
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 
@@ -80,7 +80,8 @@ class Lighting:
     floor_rgb : (3,) tuple of float
         Linear RGB of the floor in the photo (light bounced from it onto furniture).
     source : str
-        ``"window"`` (key light from the brightest window) or ``"default"``.
+        ``"sun"`` (the sun, its direction from the sunlit patches on the floor),
+        ``"window"`` (from the brightest window) or ``"default"``.
     """
 
     irradiance_rgb: tuple
@@ -89,6 +90,11 @@ class Lighting:
     softness_rad: float
     floor_rgb: tuple
     source: str
+
+    def to_json(self) -> dict:
+        return {"source": self.source, "direction": [round(float(v), 4) for v in self.direction],
+                "key_fraction": round(float(self.key_fraction), 3), "softness_rad": round(float(self.softness_rad), 3),
+                "irradiance_rgb": [round(float(v), 4) for v in self.irradiance_rgb]}
 
 
 def _to_linear(rgb_uint8) -> np.ndarray:
@@ -158,8 +164,35 @@ def _window(small, candidates, f_small):
     return centroids[k], math.sqrt(area / math.pi) / f_small
 
 
+def _first_hit(origin_xy, direction_xy, walls) -> float | None:
+    """Distance along a floor ray to the first wall segment (k, 2, 2) it meets, or None."""
+    p0, e = walls[:, 0], walls[:, 1] - walls[:, 0]
+    d = np.asarray(direction_xy, dtype=np.float64)
+    den = d[0] * e[:, 1] - d[1] * e[:, 0]
+    ok = np.abs(den) > 1e-12
+    w = p0 - np.asarray(origin_xy, dtype=np.float64)
+    t = np.where(ok, (w[:, 0] * e[:, 1] - w[:, 1] * e[:, 0]) / np.where(ok, den, 1), np.inf)
+    u = np.where(ok, (w[:, 0] * d[1] - w[:, 1] * d[0]) / np.where(ok, den, 1), -1)
+    hit = ok & (t > 1e-6) & (u >= 0) & (u <= 1)
+    return float(t[hit].min()) if hit.any() else None
+
+
+def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon):
+    """:func:`augment.render.sun.find_sun` on this photo (the board's sheet left out), or None."""
+    mask = np.asarray(floor_mask, dtype=bool)
+    if mask.shape != image.shape[:2]:
+        mask = cv2.resize(mask.astype(np.uint8), image.shape[1::-1], interpolation=cv2.INTER_NEAREST) > 0
+    walls_rad = None
+    if floor_polygon is not None:
+        poly = np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon), dtype=np.float64)
+        walls_rad = wall_angles_rad(poly, getattr(floor_polygon, "edge_kind", None))
+    sheet = np.asarray(calibration.board.outline_m(), dtype=np.float64)[:, :2]
+    grown = sheet + np.sign(sheet - sheet.mean(axis=0)) * RENDER.sun.board_margin_m
+    return find_sun(image, mask, np.linalg.inv(calibration.image_from_floor), cam_xy, walls_rad, grown)
+
+
 def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | None = None,
-                      settings: StagedSettings | None = None) -> Lighting:
+                      settings: StagedSettings | None = None, floor_polygon=None) -> Lighting:
     """Estimate exposure, colour and the key light's direction from a calibrated photo.
 
     Parameters
@@ -173,6 +206,9 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         Visible floor; else the floor is taken below the horizon, within 8 m.
     settings : StagedSettings, optional
         Default ``RENDER.staged`` (:mod:`augment.render.settings`).
+    floor_polygon : FloorPolygon or (n, 2) float, optional
+        The measured floor: its walls tell the sun's edges from the window's, and which
+        way the sunlight travels (:mod:`augment.render.sun`).
 
     Returns
     -------
@@ -219,15 +255,40 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         all_lum = float(floor_rgb @ [0.299, 0.587, 0.114])
         irradiance = irradiance * float(np.clip(all_lum / max(ring_lum, 1e-6), 0.6, 1.4))
 
-    # Key light: from the brightest window-like region that is not floor.
+    # Key light: the sun where the floor shows its patches, else the brightest window.
     R = pose[:3, :3]
+    cam_xy = (-R.T @ pose[:3, 3])[:2]
     forward = R.T @ np.array([0, 0, 1.0])
     found = _window(small, ~region_small, K[0, 0] * small_scale)
     horiz = forward[:2] / max(np.linalg.norm(forward[:2]), 1e-9)
+    walls = None if floor_polygon is None else wall_segments(floor_polygon)
+    window_xy = None
     if found is not None:
         (cx, cy), ang = found
         ray = R.T @ np.linalg.solve(K, [cx / small_scale, cy / small_scale, 1.0])
         toward = ray[:2] / max(np.linalg.norm(ray[:2]), 1e-9)
+        if walls is not None:  # the window's wall: the first one the ray meets
+            t_m = _first_hit(cam_xy, toward, walls)
+            window_xy = None if t_m is None else cam_xy + t_m * toward
+    patches = _sun_patches(image, region_small if floor_mask is None else floor_mask, calibration, cam_xy,
+                           floor_polygon)
+    if patches is not None:
+        axis = np.asarray(patches.axes_xy[0])
+        center = np.asarray(patches.center_m)
+        back_plus = None if walls is None else _first_hit(center, -axis, walls)
+        back_minus = None if walls is None else _first_hit(center, axis, walls)
+        if patches.downstream:  # the patches run into the wall they climb
+            sign = float(patches.downstream)
+        elif back_plus is not None or back_minus is not None:  # a window lights the floor near it
+            sign = 1.0 if (back_plus or np.inf) <= (back_minus or np.inf) else -1.0
+        elif window_xy is not None:  # from the window in view to the patches
+            sign = 1.0 if axis @ (center - window_xy) >= 0 else -1.0
+        else:  # away from the camera, as the default light
+            sign = 1.0 if axis @ horiz >= 0 else -1.0
+        elev = math.radians(settings.sun_elevation_deg)
+        direction = np.append(sign * axis * math.cos(elev), -math.sin(elev))
+        key, soft, source = 0.6, 0.03, "sun"
+    elif found is not None:
         elev = math.radians(35.0)
         direction = np.append(-toward * math.cos(elev), -math.sin(elev))
         # Sunlit floor (a bright patch well above the floor's median) means direct sun.
@@ -310,26 +371,67 @@ def _encode(linear):
     return np.column_stack([np.maximum(linear, 0.0) ** (1.0 / GAMMA), np.ones(len(linear))]).astype(np.float32)
 
 
-def _texture_of(part):
-    """(key, image, uv, albedo scale) of a part: a user asset's own texture (its colour
-    in the image), or its material's surface detail at real scale; key "" for none."""
-    m = part.material
-    if m.texture is not None:
-        return m.texture_key, m.texture, part.uv, None
-    if m.surface and part.uv is not None:
-        detail = surface(m.surface)
-        return f"surface {m.surface}", detail.image, part.uv / detail.tile_m, 1.0 / np.asarray(detail.mean_rgb)
-    return "", None, None, np.ones(3)
+@dataclass(frozen=True)
+class _LightMap:
+    """How much light the floor gets around each point, relative to its median: read off
+    the photo's own floor (a top-down raster, blurred), so furniture by a window is lit
+    brighter than furniture in a dim corner, as the floor beside each is."""
+
+    grid: "_FloorGrid"
+    gain: np.ndarray  # (rows, cols) float32
+
+    def at(self, xy) -> np.ndarray:
+        """Gain (n,) at floor points (n, 2+), bilinear; the edge's value beyond it."""
+        px = self.grid.to_px(xy) - 0.5
+        rows, cols = self.gain.shape
+        return cv2.remap(self.gain, px[:, 0].astype(np.float32).reshape(-1, 1),
+                         px[:, 1].astype(np.float32).reshape(-1, 1), cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_REPLICATE).ravel()
 
 
-def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings: StagedSettings):
+def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, hi_m,
+                    settings: StagedSettings) -> _LightMap | None:
+    """The floor's light around the furniture, from the photo (None without a floor mask
+    or with too little floor in view). ``lo_m``, ``hi_m``: the floor box to cover."""
+    if floor_mask is None:
+        return None
+    cell = settings.light_cell_m
+    lo = np.asarray(lo_m, dtype=np.float64)[:2]
+    shape = tuple(int(v) for v in np.maximum(1, np.ceil((np.asarray(hi_m)[:2] - lo) / cell))[::-1])
+    grid = _FloorGrid(lo, cell, shape)
+    rows, cols = np.mgrid[0:shape[0], 0:shape[1]]
+    xy = np.column_stack([lo[0] + (cols.ravel() + 0.5) * cell, lo[1] + (rows.ravel() + 0.5) * cell])
+    px, depth = _project(np.column_stack([xy, np.zeros(len(xy))]), K, pose, dist)
+    h, w = floor_mask.shape
+    ij = np.round(px).astype(np.int64)
+    ok = (depth > 0) & (ij[:, 0] >= 0) & (ij[:, 0] < w) & (ij[:, 1] >= 0) & (ij[:, 1] < h)
+    ok[ok] = floor_mask[ij[ok, 1], ij[ok, 0]]
+    if ok.sum() < 50:
+        return None
+    lum = np.zeros(len(xy), np.float32)
+    lum[ok] = _to_linear(image[ij[ok, 1], ij[ok, 0]].astype(np.float64)) @ [0.2126, 0.7152, 0.0722]
+    weight = ok.astype(np.float32).reshape(shape)
+    sigma = settings.light_sigma_m / cell
+    num = cv2.GaussianBlur(lum.reshape(shape), (0, 0), sigma)
+    den = cv2.GaussianBlur(weight, (0, 0), sigma)
+    # Far from any floor in view, the light of the floor at large (the median).
+    reference = max(float(np.asarray(lighting.floor_rgb) @ [0.2126, 0.7152, 0.0722]), 1e-6)
+    trust = np.clip(den / 0.2, 0.0, 1.0)
+    local = np.where(den > 1e-3, num / np.maximum(den, 1e-3), reference)
+    gain = trust * local / reference + (1.0 - trust)
+    return _LightMap(grid, np.clip(gain, *settings.light_gain_range).astype(np.float32))
+
+
+def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings: StagedSettings,
+                      light_map: _LightMap | None = None):
     """The furniture as pyrender meshes in the floor frame, lit: (all light, key light
-    alone), one primitive per texture (all untextured parts share one)."""
+    alone), one primitive per texture (all untextured parts share one). ``light_map``
+    scales each vertex's light by the floor's light below it."""
     groups: dict = {}
     for item, furniture in placed:
         T = world_from_item(item)
         for part in furniture.parts:
-            key, image, uv, scale = _texture_of(part)
+            key, image, uv, scale = part_texture(part)
             groups.setdefault(key, (image, []))[1].append((part, T, item.size_m[2], uv, scale))
     fills, keys = [], []
     for tex_key, (image, members) in groups.items():
@@ -352,6 +454,9 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
         emissive = np.repeat(np.array([p[4] for p in per], dtype=np.float64), sizes, axis=0)
         ao = _vertex_occlusion(v[:, 2] - np.concatenate(hs), n, np.repeat([p[5] for p in per], sizes))
         fill, key = _vertex_light(v, n, albedo, rough, metal, emissive, ao, lighting, cam_pos, forward_xy, settings)
+        if light_map is not None:
+            gain = light_map.at(v)[:, None]
+            fill, key = fill * gain, key * gain
         positions, normals = v.astype(np.float32), n.astype(np.float32)
         indices = np.concatenate(fs).astype(np.uint32)
         uv = np.concatenate([m[3] for m in members]).astype(np.float32) if tex_key else None
@@ -990,7 +1095,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     walls = None if floor_polygon is None else wall_segments(floor_polygon)
     K, dist, pose = _camera(calibration)
     if lighting is None:
-        lighting = estimate_lighting(image, calibration, floor_mask, settings)
+        lighting = estimate_lighting(image, calibration, floor_mask, settings, floor_polygon)
     if look is None:
         look = estimate_look(image, calibration if hasattr(calibration, "board") else None)
     placed = [(it, furniture_for(it, seed, assets, _FURNITURE, style)) for it in items]
@@ -1032,7 +1137,11 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     cam_pos = -R.T @ tvec
     cam_xy = cam_pos[:2]
     forward_xy = R[2, :2] / max(float(np.linalg.norm(R[2, :2])), 1e-9)
-    fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy, settings)
+    corners = np.concatenate([world_from_item(it)[:2, 3][None] + np.array([[-1, -1], [1, 1]]) * max(it.size_m[:2])
+                              for it, _ in placed])
+    light_map = floor_light_map(image, floor_mask, K, dist, pose, lighting, corners.min(axis=0) - 0.5,
+                                corners.max(axis=0) + 0.5, settings)
+    fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy, settings, light_map)
     camera, camera_gl = pyrender_camera(Kr), gl_from_cv_pose(np.linalg.inv(pose))
     flags = pyrender.RenderFlags.RGBA | pyrender.RenderFlags.FLAT
     full, depth = renderer.render(_flat_scene(fulls, camera, camera_gl), rw, rh, flags=flags)

@@ -13,7 +13,7 @@ import numpy as np
 from layout.geometry import triangulate_polygon
 
 from ..camera.board import Board
-from ..render.furniture import PlacedItem, item_mesh
+from ..render.furniture import PlacedItem, furniture_for, part_texture, world_from_item
 from ..render.gl import Scene as GLScene
 from ..render.gl import gl_from_cv_pose, pyrender, pyrender_camera
 from . import textures
@@ -177,6 +177,45 @@ def _random_tint(rng, base, spread):
     return np.clip(np.asarray(base) + rng.normal(0, spread, 3), 0.02, 1.0)
 
 
+def furniture_meshes(pieces) -> list:
+    """Furniture for the physically based renderer: every part with its material's colour,
+    roughness, metalness and surface detail at real scale, as staged photos show them.
+
+    Parameters
+    ----------
+    pieces : iterable of (Furniture, (4, 4) array)
+        Each piece and its pose in the world (its item frame to the world's).
+
+    Returns
+    -------
+    list of pyrender.Mesh
+        One per material, so a furnished room adds a few dozen draw calls.
+    """
+    groups: dict = {}
+    for furniture, pose in pieces:
+        for part in furniture.parts:
+            key, image, uv, scale = part_texture(part)
+            groups.setdefault((key, part.material), (image, scale, []))[2].append((part.transformed(pose), uv))
+    textures_made: dict = {}
+    meshes = []
+    for (key, m), (image, scale, members) in groups.items():
+        if key and key not in textures_made:
+            textures_made[key] = pyrender.Texture(source=image, source_channels="RGB")
+        counts = np.cumsum([0] + [len(p.vertices) for p, _ in members[:-1]])
+        color = np.ones(3) if scale is None else np.asarray(m.color_rgb) * scale
+        material = pyrender.MetallicRoughnessMaterial(
+            baseColorFactor=np.append(color, 1.0), baseColorTexture=textures_made.get(key),
+            metallicFactor=float(m.metallic), roughnessFactor=float(m.roughness),
+            emissiveFactor=np.asarray(m.emissive_rgb, dtype=np.float64), doubleSided=True)
+        meshes.append(pyrender.Mesh([pyrender.Primitive(
+            positions=np.concatenate([p.vertices for p, _ in members]).astype(np.float32),
+            normals=np.concatenate([p.normals for p, _ in members]).astype(np.float32),
+            texcoord_0=np.concatenate([uv for _, uv in members]).astype(np.float32) if key else None,
+            indices=np.concatenate([p.faces + c for (p, _), c in zip(members, counts)]).astype(np.uint32),
+            material=material, mode=pyrender.GLTF.TRIANGLES)]))
+    return meshes
+
+
 @dataclass
 class Scene:
     """A renderable scene: the pyrender scene, its segmentation map and what was sampled."""
@@ -320,12 +359,15 @@ def _light_pose(direction, position=(0.0, 0.0, 0.0)):
 
 def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                 world_from_board: np.ndarray, texture_px: int = 512, baseboard_m=BASEBOARD_M,
-                trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True) -> Scene:
+                trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True,
+                pieces=()) -> Scene:
     """Sample materials and lights and assemble the scene seen by ``shot`` (baseboards
     drawn ``baseboard_m`` (low, high) tall; the trim painted the floor's colour, 0.5-1.3
     of its brightness, with the chance ``trim_like_floor``, else a dark colour with the
     chance ``trim_dark``). Without ``board_drawn`` the board is left out and everything
-    else drawn as with it: the floor the board hides, as the truth of its removal."""
+    else drawn as with it: the floor the board hides, as the truth of its removal.
+    ``pieces`` (Furniture, (4, 4) world pose) stand in the room besides, drawing nothing
+    from ``rng``."""
     info: dict = {}
     sky = np.clip([0.92, 0.95, 1.0] + rng.normal(0, 0.03, 3), 0.8, 1.0)
     scene = GLScene(bg_color=np.append(sky, 1.0))
@@ -391,12 +433,14 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
             add(b.mesh(_material(rng, _random_tint(rng, base, spread), closed=True)), SEG_OTHER)
 
     # Furniture (catalog kinds), built as the renderer builds it for staged photos.
+    placed = []
     for c in room.clutter:
         if c.kind in FURNITURE_KINDS:
             item = PlacedItem(c.kind, (c.center_m[0], c.center_m[1], c.size_m[2] / 2), c.yaw_rad + np.pi / 2,
                               c.size_m)
-            mesh = item_mesh(item, seed=int(rng.integers(1 << 30)))
-            add(pyrender.Mesh.from_trimesh(mesh, smooth=False), SEG_OTHER)
+            placed.append((furniture_for(item, seed=int(rng.integers(1 << 30))), world_from_item(item)))
+    for mesh in furniture_meshes(placed + list(pieces)):
+        add(mesh, SEG_OTHER)
 
     # The board: printed paper, slightly off-white, matte.
     sheet = board.image(px_per_square=32 if texture_px <= 256 else 64)

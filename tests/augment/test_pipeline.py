@@ -154,6 +154,22 @@ def test_report_is_complete(roomy):
     assert {"stager", "numpy", "opencv", "onnxruntime", "pyrender"} <= set(report["versions"])
 
 
+def test_the_light_is_read_off_the_board_as_photographed(roomy):
+    """The furniture's light has the colour of the board's white squares in the photo as
+    taken (the staged photos have them erased: filled with floor)."""
+    result, _ = roomy
+    board, H = result.calibration.board, result.calibration.image_from_floor
+    i, j = np.meshgrid(np.arange(board.cols + 1), np.arange(board.rows + 1))
+    centers = np.column_stack([(i.ravel() - board.cols / 2) * board.square_m,
+                               (j.ravel() - board.rows / 2) * board.square_m, np.ones(i.size)]) @ H.T
+    px = np.round(centers[:, :2] / centers[:, 2:]).astype(int)
+    rgb = np.array([result.image[y - 1:y + 2, x - 1:x + 2].reshape(-1, 3).mean(axis=0) for x, y in px])
+    white = np.median((rgb[rgb.sum(axis=1) > np.median(rgb.sum(axis=1))] / 255.0) ** 2.2, axis=0)
+    light = np.array(result.report["light"]["irradiance_rgb"])
+    np.testing.assert_allclose(light / light[1], white / white[1], rtol=0.03)
+    assert result.report["light"]["source"] in ("sun", "window", "default")
+
+
 def test_each_suggestion_has_its_own_style_unless_one_is_asked(roomy, tmp_path, capsys):
     """By default the three suggestions take three styles (their staged photos differ in
     their pieces' materials); --style gives every suggestion one."""

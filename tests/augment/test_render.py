@@ -13,9 +13,10 @@ import trimesh
 from augment.camera.board import Board
 from augment.camera.calibration import Calibration, Intrinsics
 from augment.photo.io import read_photo
-from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furniture, furniture_from_asset, item_mesh,
-                                      load_asset, placed_items)
+from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furniture, furniture_for, furniture_from_asset,
+                                      load_asset, placed_items, world_from_item)
 from augment.render.gl import Renderer
+from augment.render.look import CLEAN
 from augment.render.settings import RENDER
 from augment.render.staged import Lighting, _Caster, _floor_gain, estimate_lighting, render_staged, write_jpeg
 from layout.catalog import CATALOG
@@ -308,7 +309,7 @@ def test_styles_vary_and_seeds_repeat():
 def test_placed_item_mesh_in_the_floor_frame():
     """Front toward the yaw: a yaw of 90 degrees puts the depth along y."""
     item = PlacedItem("dresser", (1.0, 2.0, 0.4), np.pi / 2, (1.0, 0.5, 0.8), "d")
-    lo, hi = item_mesh(item).bounds
+    lo, hi = furniture_for(item).to_trimesh(world_from_item(item)).bounds
     assert np.allclose(lo, [0.5, 1.75, 0.0], atol=1e-3) and np.allclose(hi, [1.5, 2.25, 0.8], atol=1e-3)
 
 
@@ -390,6 +391,33 @@ def test_key_light_comes_from_the_window():
     cam = (-pose[:3, :3].T @ pose[:3, 3])[:2]
     d = np.array(lighting.direction)
     assert d[2] < 0 and float(d[:2] @ (window - cam)) < 0
+
+
+def test_furniture_takes_the_light_of_the_floor_it_stands_on(renderer):
+    """The floor on one side of the board made 1.6 times as bright (linear): a table
+    standing there is lit 1.6 times as bright, one on the other side as before."""
+    image, mask, calibration = _truth_calibration("room_2", 0.5)
+    h, w = mask.shape
+    ys, xs = np.mgrid[0:h, 0:w]
+    pts = np.stack([xs, ys, np.ones_like(xs)], axis=-1).reshape(-1, 3) @ np.linalg.inv(calibration.image_from_floor).T
+    floor_x = (pts[:, 0] / pts[:, 2]).reshape(h, w)
+    floor_y = (pts[:, 1] / pts[:, 2]).reshape(h, w)
+    bright = mask & (floor_x > 0)
+    linear = (image / 255.0) ** 2.2
+    linear[bright] *= 1.6
+    lit = np.clip(255 * np.minimum(linear, 1.0) ** (1 / 2.2) + 0.5, 0, 255).astype(np.uint8)
+    means = {}
+    for side, sel in (("bright", mask & (floor_x > 0.8)), ("dim", mask & (floor_x < -0.8))):
+        x, y = float(np.median(floor_x[sel])), float(np.median(floor_y[sel]))
+        item = [PlacedItem("side_table", (x, y, 0.275), 0.0, (0.45, 0.45, 0.55), "t")]
+        for photo in ("as taken", "lit"):
+            done = render_staged(image if photo == "as taken" else lit, calibration, item, renderer, floor_mask=mask,
+                                 lighting=LIGHT, look=CLEAN, self_shadows=False)
+            solid = done.alpha > 0.99
+            assert solid.sum() > 200
+            means[side, photo] = float(((done.image[solid] / 255.0) ** 2.2).mean())
+    assert means["bright", "lit"] / means["bright", "as taken"] == pytest.approx(1.6, rel=0.1)
+    assert means["dim", "lit"] / means["dim", "as taken"] == pytest.approx(1.0, abs=0.05)
 
 
 def test_bad_inputs_are_named(renderer, room_small):

@@ -1,0 +1,226 @@
+"""The sun's direction from the sunlit patches on the photo's floor.
+
+Sunlight through a window lands on the floor as a bright patch whose straight edges are the
+shadows of the window's frame: its jambs and mullions (vertical) cast edges that run along
+the sun's direction on the floor, its sill, head and transoms (horizontal, along the wall)
+cast edges parallel to that wall. Seen from above (the floor rectified by the calibration),
+the patch's edges therefore come in two families. The one not parallel to a wall of the
+room gives the sun's azimuth; the other family tells which wall the window is on, and so
+which way the light travels. How high the sun stands is not read here.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from .settings import RENDER, SunSettings
+
+
+@dataclass(frozen=True)
+class SunOnFloor:
+    """Sunlit patches found on the floor.
+
+    Attributes
+    ----------
+    axes_xy : tuple of (2,) float
+        Unit vectors on the floor (floor frame) along which the patches' edges run, the
+        likeliest azimuth of the sun (up to its sign) first: one or two.
+    along_wall : bool
+        Of two edge families, exactly one runs along a wall of the room: the other is
+        the sun's (what makes the first axis certain).
+    edge_m : float
+        Length of the sun's edges found, meters (about).
+    contrast : float
+        Median step of light across them, sunlit floor over shade (linear): read over
+        the edges' flanks too, it falls short of the full step.
+    center_m : (2,) float
+        Where they are: their mean point on the floor, meters.
+    downstream : int
+        +1 when the light travels along ``axes_xy[0]``, -1 against it, 0 when the floor
+        does not tell (the patches' far end runs into a wall; their near end never does).
+    """
+
+    axes_xy: tuple
+    along_wall: bool
+    edge_m: float
+    contrast: float
+    center_m: tuple
+    downstream: int
+
+
+def _to_linear(rgb_uint8) -> np.ndarray:
+    return (np.asarray(rgb_uint8, dtype=np.float32) / 255.0) ** 2.2
+
+
+def wall_angles_rad(polygon_m: np.ndarray, edge_kinds=None) -> np.ndarray:
+    """The room's wall directions (k,), radians in [0, pi): the peaks of the boundary edges'
+    angles weighted by their length (a rectangular room gives two, 90 degrees apart)."""
+    poly = np.asarray(polygon_m, dtype=np.float64)
+    d = np.roll(poly, -1, axis=0) - poly
+    keep = np.ones(len(poly), bool) if edge_kinds is None else np.asarray(edge_kinds) == "boundary"
+    length = np.hypot(d[:, 0], d[:, 1])[keep]
+    if length.sum() <= 0:
+        return np.zeros(0)
+    hist = np.bincount((np.degrees(np.arctan2(d[keep, 1], d[keep, 0])) % 180).astype(int) % 180,
+                       weights=length, minlength=180)
+    hist = _circular_smooth(hist, 2.0)
+    return np.radians(_peaks(hist, 0.25, 20))
+
+
+def _circular_smooth(hist: np.ndarray, sigma_bins: float) -> np.ndarray:
+    k = np.arange(-int(4 * sigma_bins), int(4 * sigma_bins) + 1)
+    kernel = np.exp(-0.5 * (k / sigma_bins) ** 2)
+    padded = np.concatenate([hist[-len(k):], hist, hist[:len(k)]])
+    return np.convolve(padded, kernel / kernel.sum(), mode="same")[len(k):len(k) + len(hist)]
+
+
+def _peaks(hist: np.ndarray, min_share: float, min_apart_deg: float) -> np.ndarray:
+    """Angles (degrees, bin centres refined) of a 180-bin circular histogram's peaks, the
+    strongest first: at least ``min_share`` of the top one and ``min_apart_deg`` apart."""
+    n = len(hist)
+    is_peak = (hist >= np.roll(hist, 1)) & (hist > np.roll(hist, -1)) & (hist > 0)
+    order = [i for i in np.argsort(-hist) if is_peak[i]]
+    found = []
+    for i in order:
+        if hist[i] < min_share * hist[order[0]]:
+            break
+        if all(min(abs(i - j), n - abs(i - j)) >= min_apart_deg for j in found):
+            found.append(i)
+    out = []
+    for i in found:  # parabolic refinement
+        a, b, c = hist[(i - 1) % n], hist[i], hist[(i + 1) % n]
+        den = a - 2 * b + c
+        out.append((i + (0.5 * (a - c) / den if den != 0 else 0.0)) % n)
+    return np.array(out)
+
+
+def _axis_gap_deg(a_rad: float, b_rad: float) -> float:
+    """Angle between two undirected directions, degrees in [0, 90]."""
+    d = abs(math.degrees(a_rad - b_rad)) % 180.0
+    return min(d, 180.0 - d)
+
+
+def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.ndarray, camera_xy_m,
+             walls_rad=None, exclude_m=None, settings: SunSettings | None = None) -> SunOnFloor | None:
+    """Sunlit patches on the floor and the direction their edges give, or None when the
+    floor shows none.
+
+    Parameters
+    ----------
+    image : (h, w, 3) uint8
+        The photo, RGB. Not modified.
+    floor_mask : (h, w) bool
+        The floor in view.
+    floor_from_image : (3, 3) float
+        Homography from pixels (x, y, 1) to floor points (x, y, 1), meters (lens
+        distortion already removed, or small).
+    camera_xy_m : (2,) float
+        The camera's foot on the floor: only the floor within ``settings.reach_m`` of it is read.
+    walls_rad : (k,) float, optional
+        The room's wall directions (:func:`wall_angles_rad`).
+    exclude_m : (k, 2) float, optional
+        A convex region of the floor to leave out (the board's sheet), meters.
+    settings : SunSettings, optional
+        Default ``RENDER.sun``.
+
+    Returns
+    -------
+    SunOnFloor or None
+    """
+    settings = RENDER.sun if settings is None else settings
+    h, w = floor_mask.shape
+    image_from_floor = np.linalg.inv(floor_from_image)
+    # The floor in view, from above: its box from a coarse sample of the mask's pixels.
+    ys, xs = np.nonzero(floor_mask[::8, ::8])
+    if len(xs) < 20:
+        return None
+    pts = np.column_stack([xs * 8.0, ys * 8.0, np.ones(len(xs))]) @ floor_from_image.T
+    ok = pts[:, 2] > 0
+    xy = pts[ok, :2] / pts[ok, 2:]
+    xy = xy[np.hypot(*(xy - np.asarray(camera_xy_m)[:2]).T) < settings.reach_m]
+    if len(xy) < 20:
+        return None
+    # A rim beyond the floor: the walls and things it runs into (see _downstream).
+    lo, hi = xy.min(axis=0) - settings.rim_m, xy.max(axis=0) + settings.rim_m
+    cell = max(settings.cell_m, float(np.max(hi - lo)) / settings.max_cells)
+    cols, rows = (np.ceil((hi - lo) / cell).astype(int) + 1)
+    gx, gy = np.meshgrid(lo[0] + np.arange(cols) * cell, lo[1] + np.arange(rows) * cell)
+    p = np.stack([gx, gy, np.ones_like(gx)], axis=-1) @ image_from_floor.T
+    front = p[..., 2] > 1e-9
+    map_x = np.where(front, p[..., 0] / np.where(front, p[..., 2], 1), -1).astype(np.float32)
+    map_y = np.where(front, p[..., 1] / np.where(front, p[..., 2], 1), -1).astype(np.float32)
+    lum = _to_linear(image) @ np.array([0.2126, 0.7152, 0.0722], np.float32)
+    top = cv2.remap(lum, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    valid = cv2.remap(floor_mask.astype(np.uint8), map_x, map_y, cv2.INTER_NEAREST,
+                      borderMode=cv2.BORDER_CONSTANT, borderValue=0) > 0
+    valid &= top > 1e-4
+    in_view = front & (map_x >= 0) & (map_x <= w - 1) & (map_y >= 0) & (map_y <= h - 1)
+    standing = in_view & ~valid  # walls and things in view (not the photo's edge)
+    if valid.sum() < 400:
+        return None
+    if exclude_m is not None:  # the board: its paper's edges are the sharpest steps on the floor
+        corners = (np.asarray(exclude_m, dtype=np.float64) - lo) / cell
+        cv2.fillConvexPoly(valid.view(np.uint8), np.round(corners).astype(np.int32), 0)
+    # Steps of light (the sun's edges), not lines (seams, grout): the slope of the log
+    # light smoothed over a few centimetres; an ideal step of height A seen through a
+    # Gaussian of sigma s has slope A / (s sqrt(2 pi)) at its centre.
+    sigma = max(1.0, settings.edge_sigma_m / cell)
+    log = cv2.GaussianBlur(np.log(np.maximum(top, 1e-4)), (0, 0), sigma)
+    dx = cv2.Sobel(log, cv2.CV_32F, 1, 0, ksize=3) / 8.0
+    dy = cv2.Sobel(log, cv2.CV_32F, 0, 1, ksize=3) / 8.0
+    step = np.hypot(dx, dy) * sigma * math.sqrt(2 * math.pi)
+    margin = int(math.ceil(3 * sigma)) + 2
+    inner = cv2.erode(valid.astype(np.uint8), np.ones((2 * margin + 1, 2 * margin + 1), np.uint8)) > 0
+    edges = inner & (step >= math.log(settings.min_contrast))
+    length_m = float(edges.sum()) * cell / (2.5 * sigma)  # an edge is about 2.5 sigma wide
+    if length_m < settings.min_edge_m:
+        return None
+    weight = step[edges]
+    edge_deg = (np.degrees(np.arctan2(dy[edges], dx[edges])) + 90.0) % 180.0
+    hist = np.bincount(edge_deg.astype(int) % 180, weights=weight, minlength=180)
+    peaks = _peaks(_circular_smooth(hist, 2.0), settings.min_peak_share, 20)
+    if len(peaks) == 0:
+        return None
+    contrast = float(math.exp(np.median(weight)))
+    if contrast < settings.min_median_contrast:
+        return None
+    rc = np.argwhere(edges).mean(axis=0)
+    center = (float(lo[0] + rc[1] * cell), float(lo[1] + rc[0] * cell))
+    walls = np.zeros(0) if walls_rad is None else np.asarray(walls_rad, dtype=np.float64)
+
+    def on_wall(a_deg):
+        return any(_axis_gap_deg(math.radians(a_deg), wr) <= settings.wall_tol_deg for wr in walls)
+
+    two = list(peaks[:2])
+    free = [a for a in two if not on_wall(a)]
+    if len(walls) and not free:  # steps along the walls only: planks, tiles, a wall's shade
+        return None
+    along_wall = len(two) == 2 and len(free) == 1
+    if along_wall:
+        two = free + [a for a in two if a != free[0]]
+    axes = tuple((math.cos(math.radians(a)), math.sin(math.radians(a))) for a in two)
+    downstream = _downstream(log, edges, valid, standing, axes[0], margin)
+    return SunOnFloor(axes, bool(along_wall), length_m, contrast, center, downstream)
+
+
+def _downstream(log, edges, valid, standing, axis_xy, margin) -> int:
+    """Which way along ``axis_xy`` the light travels, +1 or -1, or 0 when the floor does
+    not tell: a window's sill stands above the floor, so its patch never reaches the
+    window's wall, while the far end of a patch runs into the wall it climbs."""
+    lit = valid & (log > np.median(log[edges]))
+    lit = cv2.morphologyEx(lit.astype(np.uint8), cv2.MORPH_OPEN, np.ones((5, 5), np.uint8)) > 0
+    if lit.sum() < 100:
+        return 0
+    rows, cols = np.nonzero(lit)
+    along = cols * axis_xy[0] + rows * axis_xy[1]
+    lo_s, hi_s = np.quantile(along, [0.1, 0.9])
+    near_wall = cv2.dilate(standing.astype(np.uint8), np.ones((2 * margin + 3, 2 * margin + 3), np.uint8)) > 0
+    touch = near_wall[rows, cols]
+    ends = (along >= hi_s).sum(), (along <= lo_s).sum()
+    plus, minus = touch[along >= hi_s].sum() / max(ends[0], 1), touch[along <= lo_s].sum() / max(ends[1], 1)
+    if max(plus, minus) < 0.1 or abs(plus - minus) < 0.1:
+        return 0
+    return 1 if plus > minus else -1

@@ -1,0 +1,305 @@
+"""Staged photos against the truth: the synthetic photographer furnishes the room itself.
+
+Run by hand: ``python benchmarks/realism.py [--count 40] [--seed 9700] [--old d0f695e]``
+(about half an hour). Writes ``results/realism.{json,md}`` and ``results/realism_worst.png``.
+
+Each case (seed ``[--seed, i]``, sizes from 1280x960 to 4032x3024, the living room, bedroom,
+dining room and office presets in turn) is an empty synthetic room with the board on the
+floor, saved as a phone would (JPEG, the 35 mm focal length in EXIF). ``stage furnish``'s
+pipeline (:func:`augment.pipeline.furnish`) calibrates, segments, solves one layout and
+stages it. The photographer then renders the same room, camera, lights and degradation
+once more with that layout's furniture standing in it (the same pieces, materials and
+styles, placed in the world by the true board pose) and without the board: the truth of
+the staged photo, lit by physically based shading with shadow maps of the sun and the
+ceiling lights, a different renderer from the staged photo's.
+
+Scores, per case:
+* ``delta_e``: median CIEDE2000 between the staged photo and the truth over the truth's
+  furniture pixels (where the furniture stands nearer than the empty room), eroded by 2 px
+  per 1280 px of width so misregistered outlines do not dominate.
+* ``shadow_iou``: IoU of the floor pixels darkened by more than 10 % (linear luminance,
+  smoothed by a Gaussian of 1 px per 1280) in the truth (furnished / empty) and in the
+  staged photo (staged / board erased), over the floor that shows in both, off the
+  board's sheet; cases with neither shadow are left out.
+* ``light_error_deg`` (rooms with sun): the angle on the floor plane between the sun's
+  direction and the key light the renderer estimated.
+
+The same layouts are rendered by the renderer of ``--old`` (a git revision: today's
+renderer when issue 51 was filed), run in a subprocess from a worktree of that revision,
+into the same board-erased photos with the same calibration, floor and layout.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import pickle
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+OLD_DRIVER = "--old-driver" in sys.argv
+if not OLD_DRIVER:  # the old driver imports the old revision's augment, from PYTHONPATH
+    sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(HERE))
+
+SIZES = ((1280, 960), (1600, 1200), (2016, 1512), (4032, 3024))
+ROOMS = ("living_room", "bedroom", "dining_room", "office")
+TARGETS = {"delta_e_median": ("<=", 6.0), "shadow_iou_median": (">=", 0.7), "light_error_deg_median": ("<=", 15.0)}
+FILM_DIAGONAL_MM = 43.27
+
+
+def old_driver(folder: Path) -> int:
+    """Render every ``case_*.pkl`` in ``folder`` with the revision on PYTHONPATH."""
+    from augment.render.gl import Renderer
+    from augment.render.staged import estimate_lighting, render_staged
+
+    renderer = Renderer()
+    for path in sorted(folder.glob("case_*.pkl")):
+        case = pickle.loads(path.read_bytes())
+        t = time.perf_counter()
+        lighting = estimate_lighting(case["image"], case["calibration"], case["mask"])
+        done = render_staged(case["image"], case["calibration"], {"items": case["items"]}, renderer,
+                             floor_mask=case["mask"], floor_polygon=case["floor"], lighting=lighting,
+                             seed=case["seed"])
+        np.savez_compressed(path.with_suffix(".old.npz"), image=done.image, alpha=done.alpha,
+                            direction=np.asarray(lighting.direction), seconds=time.perf_counter() - t)
+    renderer.close()
+    return 0
+
+
+def write_phone_jpeg(path: Path, image: np.ndarray, focal_px: float, quality: int):
+    """JPEG with the 35 mm equivalent focal length in EXIF, as a phone writes it."""
+    from PIL import Image
+
+    exif = Image.Exif()
+    exif.get_ifd(0x8769)[0xA405] = int(round(focal_px * FILM_DIAGONAL_MM / math.hypot(*image.shape[1::-1])))
+    Image.fromarray(image).save(path, quality=quality, exif=exif)
+
+
+def floor_in_world(truth: dict, camera_from_floor: np.ndarray) -> np.ndarray:
+    """(4, 4) world_from_floor: the calibration's floor frame is the board's, up to the
+    board's symmetry (a checkerboard reads the same turned a half), which the estimated
+    pose tells; its small errors are the calibration's and stay in the comparison."""
+    world_from_board = np.asarray(truth["board"]["world_from_board"])
+    M = np.linalg.inv(world_from_board) @ np.linalg.inv(np.asarray(truth["camera_from_world"])) @ camera_from_floor
+    turn = round(math.atan2(M[1, 0], M[0, 0]) / (math.pi / 2)) * (math.pi / 2)
+    c, s = round(math.cos(turn)), round(math.sin(turn))
+    return world_from_board @ np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+
+
+def linear_luminance(rgb: np.ndarray) -> np.ndarray:
+    x = rgb.astype(np.float32) / 255.0
+    return ((x ** 2.2) @ np.array([0.2126, 0.7152, 0.0722], np.float32)).astype(np.float32)
+
+
+def scores(truth_f, truth_e, staged, erased, staged_alpha, sheet, floor_f, sun_world, est_world) -> dict:
+    """The three scores of one case (see the module docstring); NaN where undefined."""
+    from skimage.color import deltaE_ciede2000, rgb2lab
+
+    h, w = staged.shape[:2]
+    unit = w / 1280.0
+    depth_e = np.where(truth_e.depth_m > 0, truth_e.depth_m, np.inf)
+    furniture = (truth_f.depth_m > 0) & (truth_f.depth_m < depth_e - 0.01)
+    r = max(1, round(2 * unit))
+    core = cv2.erode(furniture.astype(np.uint8), np.ones((2 * r + 1, 2 * r + 1), np.uint8)) > 0
+    out = {"furniture_px": int(furniture.sum())}
+    if core.sum() >= 50:
+        d = deltaE_ciede2000(rgb2lab(truth_f.image[core]), rgb2lab(staged[core]))
+        out["delta_e"] = float(np.median(d))
+    else:
+        out["delta_e"] = math.nan
+
+    sigma = max(0.8, unit)
+    def darkened(a, b):
+        ratio = cv2.GaussianBlur(linear_luminance(a), (0, 0), sigma) / np.maximum(
+            cv2.GaussianBlur(linear_luminance(b), (0, 0), sigma), 1e-4)
+        return ratio < 0.9
+    grow = np.ones((2 * r + 1, 2 * r + 1), np.uint8)
+    near = cv2.dilate((furniture | (staged_alpha > 0.5)).astype(np.uint8), grow) > 0
+    region = floor_f & ~near & ~(cv2.dilate(sheet.astype(np.uint8), grow) > 0)
+    t, s = darkened(truth_f.image, truth_e.image) & region, darkened(staged, erased) & region
+    union = int((t | s).sum())
+    out["shadow_truth_px"], out["shadow_staged_px"] = int(t.sum()), int(s.sum())
+    out["shadow_iou"] = float((t & s).sum() / union) if union >= 0.0005 * h * w else math.nan
+    out["light_error_deg"] = math.nan
+    if sun_world is not None:
+        a, b = np.asarray(sun_world[:2]), np.asarray(est_world[:2])
+        cos = float(a @ b / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-12))
+        out["light_error_deg"] = math.degrees(math.acos(np.clip(cos, -1, 1)))
+    return out
+
+
+def _crop(images, mask, height=260):
+    ys, xs = np.nonzero(mask)
+    if len(xs) == 0:
+        ys, xs = np.array([0, images[0].shape[0] - 1]), np.array([0, images[0].shape[1] - 1])
+    pad = int(0.08 * images[0].shape[1])
+    h, w = images[0].shape[:2]
+    x0, x1 = max(0, xs.min() - pad), min(w, xs.max() + pad)
+    y0, y1 = max(0, ys.min() - pad), min(h, ys.max() + pad)
+    width = max(1, round(height * (x1 - x0) / max(1, y1 - y0)))
+    return [cv2.resize(im[y0:y1, x0:x1], (min(width, 520), height), interpolation=cv2.INTER_AREA) for im in images]
+
+
+def _median(rows, key):
+    v = np.array([r[key] for r in rows if key in r and not math.isnan(r[key])])
+    return (float(np.median(v)), len(v)) if len(v) else (math.nan, 0)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--count", type=int, default=40)
+    parser.add_argument("--seed", type=int, default=9700)
+    parser.add_argument("--old", default="d0f695e", help="git revision of the renderer to compare with")
+    parser.add_argument("--old-driver", type=Path, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.old_driver:
+        return old_driver(args.old_driver)
+
+    from results_io import RESULTS, machine, write
+
+    from augment.camera.board import Board
+    from augment.errors import StagerError
+    from augment.pipeline import furnish
+    from augment.render.furniture import furniture_for, placed_items, world_from_item
+    from augment.render.gl import Renderer
+    from augment.render.look import estimate_look
+    from augment.render.staged import estimate_lighting, render_staged
+    from augment.synth import FLOOR, render_sample
+    from layout.fileio import write_atomic
+
+    work = Path(tempfile.mkdtemp(prefix="realism-"))
+    old_tree = work / "old"
+    subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(old_tree), args.old], check=True)
+    renderer = Renderer()
+    rows, kept, cal_poses = [], {}, {}
+    try:
+        for i in range(args.count):
+            size, room = SIZES[i % len(SIZES)], ROOMS[(i // len(SIZES)) % len(ROOMS)]
+            seed = [args.seed, i]
+            row = {"case": i, "size": f"{size[0]}x{size[1]}", "room": room}
+            t = time.perf_counter()
+            empty = render_sample(seed, renderer, size, clutter=False)
+            truth = empty.truth
+            photo = work / f"case_{i:02d}.jpg"
+            write_phone_jpeg(photo, empty.image, truth["K"][0][0], truth["photo"]["jpeg_quality"])
+            try:
+                result = furnish(photo, Board(), room=room, suggestions=1, seed=i, renderer=renderer)
+            except StagerError as error:
+                row["refused"] = str(error)
+                rows.append(row)
+                print(f"case {i:2d} {row['size']:>9} {room:<12} refused: {error}", flush=True)
+                continue
+            lay, style = result.layouts[0], result.styles[0]
+            lay_seed = i if lay.seed is None else int(lay.seed)
+            items = placed_items(lay)
+            world_from_floor = floor_in_world(truth, result.calibration.camera_from_floor)
+            pieces = [(furniture_for(it, lay_seed, style=style), world_from_floor @ world_from_item(it))
+                      for it in items]
+            truth_f = render_sample(seed, renderer, size, clutter=False, board_drawn=False, pieces=pieces)
+            t_truth = time.perf_counter() - t
+
+            cal, mask = result.calibration, result.segmentation.mask
+            base = result.erased.image
+            lighting = estimate_lighting(result.image, cal, mask, floor_polygon=result.floor)
+            t = time.perf_counter()
+            new = render_staged(base, cal, lay, renderer, floor_mask=mask, floor_polygon=result.floor,
+                                lighting=lighting, look=estimate_look(result.image, cal), seed=lay_seed, style=style)
+            row["new_render_s"] = time.perf_counter() - t
+            assert np.array_equal(new.image, result.staged[0]), "the re-render differs from the pipeline's"
+            sun = next((np.asarray(lt["direction"]) for lt in truth["render"]["lights"] if lt["kind"] == "sun"), None)
+            est = world_from_floor[:3, :3] @ np.asarray(lighting.direction)
+            sheet = result.erased.full_alpha() > 0.01
+            floor_f = truth_f.labels == FLOOR
+            row.update(items=len(items), style=style, sun=sun is not None, light_source=lighting.source,
+                       truth_s=t_truth)
+            row["new"] = scores(truth_f, empty, new.image, base, new.alpha, sheet, floor_f, sun, est)
+            case = {"image": base, "calibration": cal, "mask": mask, "floor": result.floor,
+                    "items": [{"kind": it.kind, "position_m": list(it.position_m), "yaw_rad": it.yaw_rad,
+                               "size_m": list(it.size_m), "id": it.id} for it in items], "seed": lay_seed}
+            (work / f"case_{i:02d}.pkl").write_bytes(pickle.dumps(case))
+            cal_poses[i] = cal.camera_from_floor
+            kept[i] = (truth_f, empty, new.image, base, sheet, floor_f, sun)
+            print(f"case {i:2d} {row['size']:>9} {room:<12} {style:<12} new dE {row['new']['delta_e']:5.2f} "
+                  f"shadow IoU {row['new']['shadow_iou']:.2f} light {row['new']['light_error_deg']:6.1f}", flush=True)
+            rows.append(row)
+
+        # Today's renderer of --old, on the same inputs, in one process.
+        env = dict(os.environ, PYTHONPATH=str(old_tree))
+        subprocess.run([sys.executable, str(Path(__file__).resolve()), "--old-driver", str(work)], env=env,
+                       cwd=str(old_tree), check=True)
+        pictures = []
+        for row in rows:
+            i = row["case"]
+            if i not in kept:
+                continue
+            old = np.load(work / f"case_{i:02d}.old.npz")
+            truth_f, empty, new_image, base, sheet, floor_f, sun = kept[i]
+            world_from_floor = floor_in_world(empty.truth, cal_poses[i])
+            est = world_from_floor[:3, :3] @ old["direction"]
+            row["old"] = scores(truth_f, empty, old["image"], base, old["alpha"], sheet, floor_f, sun, est)
+            row["old_render_s"] = float(old["seconds"])
+            pictures.append((row["new"]["delta_e"], i, _crop([truth_f.image, new_image, old["image"]],
+                                                             truth_f.depth_m < np.where(empty.depth_m > 0,
+                                                                                        empty.depth_m, np.inf) - 0.01)))
+    finally:
+        renderer.close()
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(old_tree)], check=False)
+
+    summary = {}
+    for which in ("new", "old"):
+        done = [r[which] for r in rows if which in r]
+        summary[which] = {}
+        for key in ("delta_e", "shadow_iou", "light_error_deg"):
+            med, n = _median(done, key)
+            summary[which][f"{key}_median"] = med
+            summary[which][f"{key}_cases"] = n
+    passed = {k: (summary["new"][k] <= v if op == "<=" else summary["new"][k] >= v) for k, (op, v) in TARGETS.items()}
+    data = {"machine": machine(count=args.count, seed=args.seed, old=args.old), "targets": TARGETS,
+            "summary": summary, "passed": passed, "cases": rows}
+    refused = [r for r in rows if "refused" in r]
+    md = ["# Realism: staged photos against the synthetic photographer's truth", "",
+          f"`python benchmarks/realism.py --count {args.count} --seed {args.seed} --old {args.old}` "
+          f"({data['machine']['date']}, {data['machine']['cpu_count']} cores). {len(rows) - len(refused)} of "
+          f"{len(rows)} cases staged; {len(refused)} refused by the pipeline.", "",
+          "| measure | target | new | cases | old renderer | cases |", "|---|---|---|---|---|---|"]
+    for key, (op, v) in TARGETS.items():
+        short = key.replace("_median", "")
+        md.append(f"| {key} | {op} {v:g} | {summary['new'][key]:.3g} | {summary['new'][short + '_cases']} | "
+                  f"{summary['old'][key]:.3g} | {summary['old'][short + '_cases']} |")
+    md += ["", "| case | size | room | style | sun | key light from | dE new / old | shadow IoU new / old | "
+           "light error new / old ° |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if "refused" in r:
+            md.append(f"| {r['case']} | {r['size']} | {r['room']} | refused: {r['refused'][:80]} | | | | | |")
+            continue
+        n, o = r["new"], r.get("old", {})
+        md.append(f"| {r['case']} | {r['size']} | {r['room']} | {r['style']} | {'yes' if r['sun'] else ''} | "
+                  f"{r['light_source']} | {n['delta_e']:.1f} / {o.get('delta_e', math.nan):.1f} | "
+                  f"{n['shadow_iou']:.2f} / {o.get('shadow_iou', math.nan):.2f} | "
+                  f"{n['light_error_deg']:.0f} / {o.get('light_error_deg', math.nan):.0f} |")
+    md += ["", "`realism_worst.png`: the six cases with the largest ΔE, each truth | new | old renderer."]
+    write("realism", data, md)
+    worst = sorted((p for p in pictures if not math.isnan(p[0])), key=lambda p: -p[0])[:6]
+    if worst:
+        width = max(sum(c.shape[1] for c in p[2]) for p in worst)
+        strips = [np.pad(np.hstack(p[2]), ((0, 6), (0, width - sum(c.shape[1] for c in p[2])), (0, 0)),
+                         constant_values=255) for p in worst]
+        ok, png = cv2.imencode(".png", cv2.cvtColor(np.vstack(strips), cv2.COLOR_RGB2BGR))
+        write_atomic(RESULTS / "realism_worst.png", png.tobytes())
+    shutil.rmtree(work, ignore_errors=True)
+    print("\n".join(md[:10]))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
