@@ -57,7 +57,10 @@ class StagedSettings:
     max_supersample: float = 2.0  # rendered pixels per photo pixel along each axis, at most
     min_render_scale: float = 0.6  # large photos are rendered at this scale at least, then upsampled
     margin_px: int = 6  # around the region furniture and shadows can reach
+    sun_from_floor: bool = True  # the key light from sunlit patches on the floor when they show (else a window's)
     sun_elevation_deg: float = 35.0  # the sun's height when its patches give only its direction
+    sun_key_range: tuple[float, float] = (0.3, 0.9)  # the sun's share of the light in the sun, at least and most
+    sun_softness_rad: float = 0.01  # the sun's shadows: its disc, and a window's edge blur
     light_cell_m: float = 0.04  # the floor's light map: cell size ...
     light_sigma_m: float = 0.3  # ... its blur (planks and tiles average out) ...
     light_gain_range: tuple[float, float] = (0.3, 2.5)  # ... and how far the light there may differ from the median
@@ -93,7 +96,8 @@ class SunSettings:
     max_cells: int = 600  # ... grown so the view has at most this many cells a side
     edge_sigma_m: float = 0.015  # the light is smoothed this much: a seam or grout line fades, a step stays
     min_contrast: float = 1.5  # a sun's edge: light this many times brighter on one side (planks differ less)
-    min_median_contrast: float = 1.65  # ... and typically this much (a lamp's shadow edge is softer)
+    min_median_contrast: float = 1.65  # ... and sun over shade this much across them (medians)
+    lit_level: float = 0.6  # in the sun: floor this far from the shade's light to the sun's (log)
     min_edge_m: float = 1.0  # sun's edges this long in all, at least
     board_margin_m: float = 0.08  # the board's sheet, grown by this, is left out (its edges are steps too)
     min_peak_share: float = 0.12  # an edge family this strong against the strongest

@@ -51,7 +51,7 @@ from .furniture import furniture_for, part_texture, placed_items, world_from_ite
 from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from .look import PhotoLook, apply_look, estimate_look
 from .settings import RENDER, StagedSettings
-from .sun import find_sun, wall_angles_rad
+from .sun import find_sun, first_hit_m, wall_angles_rad
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 
@@ -82,6 +82,10 @@ class Lighting:
     source : str
         ``"sun"`` (the sun, its direction from the sunlit patches on the floor),
         ``"window"`` (from the brightest window) or ``"default"``.
+    sun : SunOnFloor or None
+        With the sun (:func:`augment.render.sun.find_sun`): where the floor is in the sun.
+        Then the key light reaches only what stands in its beam (traced back along the
+        light to the floor), and ``key_fraction`` is its share of the light in the sun.
     """
 
     irradiance_rgb: tuple
@@ -90,6 +94,7 @@ class Lighting:
     softness_rad: float
     floor_rgb: tuple
     source: str
+    sun: object = field(default=None, compare=False, repr=False)
 
     def to_json(self) -> dict:
         return {"source": self.source, "direction": [round(float(v), 4) for v in self.direction],
@@ -162,19 +167,6 @@ def _window(small, candidates, f_small):
     if area < 0.003 * lum.size:
         return None
     return centroids[k], math.sqrt(area / math.pi) / f_small
-
-
-def _first_hit(origin_xy, direction_xy, walls) -> float | None:
-    """Distance along a floor ray to the first wall segment (k, 2, 2) it meets, or None."""
-    p0, e = walls[:, 0], walls[:, 1] - walls[:, 0]
-    d = np.asarray(direction_xy, dtype=np.float64)
-    den = d[0] * e[:, 1] - d[1] * e[:, 0]
-    ok = np.abs(den) > 1e-12
-    w = p0 - np.asarray(origin_xy, dtype=np.float64)
-    t = np.where(ok, (w[:, 0] * e[:, 1] - w[:, 1] * e[:, 0]) / np.where(ok, den, 1), np.inf)
-    u = np.where(ok, (w[:, 0] * d[1] - w[:, 1] * d[0]) / np.where(ok, den, 1), -1)
-    hit = ok & (t > 1e-6) & (u >= 0) & (u <= 1)
-    return float(t[hit].min()) if hit.any() else None
 
 
 def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon):
@@ -268,15 +260,15 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         ray = R.T @ np.linalg.solve(K, [cx / small_scale, cy / small_scale, 1.0])
         toward = ray[:2] / max(np.linalg.norm(ray[:2]), 1e-9)
         if walls is not None:  # the window's wall: the first one the ray meets
-            t_m = _first_hit(cam_xy, toward, walls)
+            t_m = first_hit_m(cam_xy, toward, walls)
             window_xy = None if t_m is None else cam_xy + t_m * toward
-    patches = _sun_patches(image, region_small if floor_mask is None else floor_mask, calibration, cam_xy,
-                           floor_polygon)
+    patches = None if not settings.sun_from_floor else _sun_patches(
+        image, region_small if floor_mask is None else floor_mask, calibration, cam_xy, floor_polygon)
     if patches is not None:
         axis = np.asarray(patches.axes_xy[0])
         center = np.asarray(patches.center_m)
-        back_plus = None if walls is None else _first_hit(center, -axis, walls)
-        back_minus = None if walls is None else _first_hit(center, axis, walls)
+        back_plus = None if walls is None else first_hit_m(center, -axis, walls)
+        back_minus = None if walls is None else first_hit_m(center, axis, walls)
         if patches.downstream:  # the patches run into the wall they climb
             sign = float(patches.downstream)
         elif back_plus is not None or back_minus is not None:  # a window lights the floor near it
@@ -287,7 +279,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
             sign = 1.0 if axis @ horiz >= 0 else -1.0
         elev = math.radians(settings.sun_elevation_deg)
         direction = np.append(sign * axis * math.cos(elev), -math.sin(elev))
-        key, soft, source = 0.6, 0.03, "sun"
+        key = float(np.clip(1.0 - 1.0 / patches.contrast, *settings.sun_key_range))
+        soft, source = settings.sun_softness_rad, "sun"
     elif found is not None:
         elev = math.radians(35.0)
         direction = np.append(-toward * math.cos(elev), -math.sin(elev))
@@ -300,7 +293,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         direction = np.append(horiz * math.cos(elev), -math.sin(elev))
         key, soft, source = 0.3, 0.3, "default"
     return Lighting(tuple(float(v) for v in irradiance), tuple(float(v) for v in direction), key, soft,
-                    tuple(float(v) for v in floor_rgb), source)
+                    tuple(float(v) for v in floor_rgb), source, patches if source == "sun" else None)
 
 
 # --------------------------------------------------------------------------------------
@@ -410,6 +403,8 @@ def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, 
         return None
     lum = np.zeros(len(xy), np.float32)
     lum[ok] = _to_linear(image[ij[ok, 1], ij[ok, 0]].astype(np.float64)) @ [0.2126, 0.7152, 0.0722]
+    if lighting.sun is not None:  # the light in the shade: the sun's beam is traced apart
+        lum /= 1.0 + (_sun_contrast(lighting) - 1.0) * (lighting.sun.sunlit(xy) > 0.5)
     weight = ok.astype(np.float32).reshape(shape)
     sigma = settings.light_sigma_m / cell
     num = cv2.GaussianBlur(lum.reshape(shape), (0, 0), sigma)
@@ -420,6 +415,20 @@ def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, 
     local = np.where(den > 1e-3, num / np.maximum(den, 1e-3), reference)
     gain = trust * local / reference + (1.0 - trust)
     return _LightMap(grid, np.clip(gain, *settings.light_gain_range).astype(np.float32))
+
+
+def _sun_contrast(lighting: Lighting) -> float:
+    """The sunlit floor's light over the shade's, as the key share says."""
+    return 1.0 / max(1.0 - lighting.key_fraction, 1e-3)
+
+
+def _in_beam(points_m, lighting: Lighting) -> np.ndarray:
+    """(n,) 1 where the sun reaches points (n, 3), 0 where not: the light through a
+    point would land on the floor further along, sunlit in the photo of the empty room
+    if the point is in the beam; the share in the sun where that floor is not seen."""
+    d = np.asarray(lighting.direction, dtype=np.float64)
+    t = np.maximum(points_m[:, 2], 0.0) / max(-d[2], 1e-3)
+    return lighting.sun.sunlit(points_m[:, :2] + t[:, None] * d[:2])
 
 
 def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings: StagedSettings,
@@ -454,8 +463,15 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
         emissive = np.repeat(np.array([p[4] for p in per], dtype=np.float64), sizes, axis=0)
         ao = _vertex_occlusion(v[:, 2] - np.concatenate(hs), n, np.repeat([p[5] for p in per], sizes))
         fill, key = _vertex_light(v, n, albedo, rough, metal, emissive, ao, lighting, cam_pos, forward_xy, settings)
-        if light_map is not None:
-            gain = light_map.at(v)[:, None]
+        gain = np.ones((len(v), 1)) if light_map is None else light_map.at(v)[:, None]
+        if lighting.sun is not None:
+            # The light map is the shade's: with the sun's share f of the light in the sun,
+            # shade = (1 - f) x sun, so both terms scale by 1 / (1 - f) = contrast.
+            c = _sun_contrast(lighting)
+            if light_map is None:  # the floor at large: a share in the sun
+                gain = gain / (1.0 + (c - 1.0) * lighting.sun.lit_share)
+            fill, key = fill * gain * c, key * gain * c * _in_beam(v, lighting)[:, None]
+        else:
             fill, key = fill * gain, key * gain
         positions, normals = v.astype(np.float32), n.astype(np.float32)
         indices = np.concatenate(fs).astype(np.uint32)
@@ -760,7 +776,12 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings)
             blocked = _blur(raster.astype(np.float32), sigma_of(z) / coarse.cell_m)
             free *= 1.0 - weight * np.clip(blocked, 0, 1)
     ao = cv2.resize(1.0 - free, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
-    ratio = 1.0 - lighting.key_fraction * shadow - (1.0 - lighting.key_fraction) * settings.ao_strength * ao
+    f_key = lighting.key_fraction
+    if lighting.sun is not None:  # only the floor in the sun loses the sun
+        rows, cols = np.mgrid[0:shape[0], 0:shape[1]]
+        centers = np.column_stack([lo[0] + (cols.ravel() + 0.5) * cell, lo[1] + (rows.ravel() + 0.5) * cell])
+        f_key = (f_key * lighting.sun.sunlit(centers)).reshape(shape).astype(np.float32)
+    ratio = 1.0 - f_key * shadow - (1.0 - f_key) * settings.ao_strength * ao
     # Contact: right beside a leg or a base standing on the floor, the floor sees little of
     # any light; a dark line a centimetre or two wide, at the full raster's resolution.
     feet = [c.points[c.points[:, 2] < c.z_bottom + settings.contact_band_m] for c in casters

@@ -11,7 +11,7 @@ which way the light travels. How high the sun stands is not read here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -34,13 +34,18 @@ class SunOnFloor:
     edge_m : float
         Length of the sun's edges found, meters (about).
     contrast : float
-        Median step of light across them, sunlit floor over shade (linear): read over
-        the edges' flanks too, it falls short of the full step.
+        The sunlit floor's light over the shaded floor's (linear; medians on the two
+        sides of the edges): the sun's share of the light in the sun is ``1 - 1 / contrast``.
     center_m : (2,) float
         Where they are: their mean point on the floor, meters.
     downstream : int
         +1 when the light travels along ``axes_xy[0]``, -1 against it, 0 when the floor
         does not tell (the patches' far end runs into a wall; their near end never does).
+    lit_share : float
+        Share of the floor seen that is in the sun.
+    lo_m, cell_m, lit, seen
+        The top-down view: its corner (2,) and cell (meters), and rasters (rows, cols) of
+        the floor in the sun and of the floor seen.
     """
 
     axes_xy: tuple
@@ -49,6 +54,22 @@ class SunOnFloor:
     contrast: float
     center_m: tuple
     downstream: int
+    lit_share: float
+    lo_m: tuple
+    cell_m: float
+    lit: np.ndarray = field(compare=False, repr=False)
+    seen: np.ndarray = field(compare=False, repr=False)
+
+    def sunlit(self, xy) -> np.ndarray:
+        """1.0 where floor points (n, 2+) lie in the sun, 0.0 where in shade, and the
+        share in the sun where the photo does not show the floor."""
+        ij = np.floor((np.asarray(xy, dtype=np.float64)[..., :2] - self.lo_m) / self.cell_m).astype(np.int64)
+        rows, cols = self.lit.shape
+        inside = (ij[..., 0] >= 0) & (ij[..., 0] < cols) & (ij[..., 1] >= 0) & (ij[..., 1] < rows)
+        out = np.full(ij.shape[:-1], self.lit_share, dtype=np.float64)
+        r, c = ij[inside, 1], ij[inside, 0]
+        out[inside] = np.where(self.seen[r, c], self.lit[r, c], self.lit_share)
+        return out
 
 
 def _to_linear(rgb_uint8) -> np.ndarray:
@@ -152,8 +173,10 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     front = p[..., 2] > 1e-9
     map_x = np.where(front, p[..., 0] / np.where(front, p[..., 2], 1), -1).astype(np.float32)
     map_y = np.where(front, p[..., 1] / np.where(front, p[..., 2], 1), -1).astype(np.float32)
-    lum = _to_linear(image) @ np.array([0.2126, 0.7152, 0.0722], np.float32)
-    top = cv2.remap(lum, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    # Only the view from above is linearized: a 12 MP photo costs no more than a small one.
+    top_rgb = cv2.remap(np.ascontiguousarray(image), map_x, map_y, cv2.INTER_LINEAR,
+                        borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    top = _to_linear(top_rgb) @ np.array([0.2126, 0.7152, 0.0722], np.float32)
     valid = cv2.remap(floor_mask.astype(np.uint8), map_x, map_y, cv2.INTER_NEAREST,
                       borderMode=cv2.BORDER_CONSTANT, borderValue=0) > 0
     valid &= top > 1e-4
@@ -184,9 +207,6 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     peaks = _peaks(_circular_smooth(hist, 2.0), settings.min_peak_share, 20)
     if len(peaks) == 0:
         return None
-    contrast = float(math.exp(np.median(weight)))
-    if contrast < settings.min_median_contrast:
-        return None
     rc = np.argwhere(edges).mean(axis=0)
     center = (float(lo[0] + rc[1] * cell), float(lo[1] + rc[0] * cell))
     walls = np.zeros(0) if walls_rad is None else np.asarray(walls_rad, dtype=np.float64)
@@ -202,18 +222,39 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     if along_wall:
         two = free + [a for a in two if a != free[0]]
     axes = tuple((math.cos(math.radians(a)), math.sin(math.radians(a))) for a in two)
-    downstream = _downstream(log, edges, valid, standing, axes[0], margin)
-    return SunOnFloor(axes, bool(along_wall), length_m, contrast, center, downstream)
+    # The light on either side of the edges, 3 sigma off along their slope: sun and shade.
+    r, c = np.nonzero(edges)
+    g = np.hypot(dx[r, c], dy[r, c])
+    k = 3.0 * sigma
+    rows, cols = valid.shape
+    sides = []
+    for sgn in (1.0, -1.0):
+        rr = np.clip(np.round(r + sgn * k * dy[r, c] / g).astype(int), 0, rows - 1)
+        cc = np.clip(np.round(c + sgn * k * dx[r, c] / g).astype(int), 0, cols - 1)
+        keep = valid[rr, cc]
+        sides.append(float(np.median(log[rr[keep], cc[keep]])) if keep.any() else math.nan)
+    sun_log, shade_log = sides
+    if not sun_log - shade_log > math.log(settings.min_median_contrast):
+        return None
+    contrast = float(math.exp(sun_log - shade_log))
+    # In the sun: floor nearly as bright as the sunny side of the edges, in patches that
+    # the edges bound (a bright stretch of floor without a sharp edge is lamplight).
+    lit = valid & (log > shade_log + settings.lit_level * (sun_log - shade_log))
+    lit = cv2.morphologyEx(lit.astype(np.uint8), cv2.MORPH_OPEN, np.ones((5, 5), np.uint8))
+    n, labels = cv2.connectedComponents(lit, connectivity=8)
+    bounded = np.unique(labels[cv2.dilate(edges.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0])
+    lit = np.isin(labels, bounded[bounded > 0])
+    if lit.sum() < 100:
+        return None
+    downstream = _downstream(lit, standing, axes[0], margin)
+    return SunOnFloor(axes, bool(along_wall), length_m, contrast, center, downstream,
+                      float(lit.sum() / valid.sum()), (float(lo[0]), float(lo[1])), float(cell), lit, valid)
 
 
-def _downstream(log, edges, valid, standing, axis_xy, margin) -> int:
+def _downstream(lit, standing, axis_xy, margin) -> int:
     """Which way along ``axis_xy`` the light travels, +1 or -1, or 0 when the floor does
     not tell: a window's sill stands above the floor, so its patch never reaches the
     window's wall, while the far end of a patch runs into the wall it climbs."""
-    lit = valid & (log > np.median(log[edges]))
-    lit = cv2.morphologyEx(lit.astype(np.uint8), cv2.MORPH_OPEN, np.ones((5, 5), np.uint8)) > 0
-    if lit.sum() < 100:
-        return 0
     rows, cols = np.nonzero(lit)
     along = cols * axis_xy[0] + rows * axis_xy[1]
     lo_s, hi_s = np.quantile(along, [0.1, 0.9])
@@ -224,3 +265,16 @@ def _downstream(log, edges, valid, standing, axis_xy, margin) -> int:
     if max(plus, minus) < 0.1 or abs(plus - minus) < 0.1:
         return 0
     return 1 if plus > minus else -1
+
+
+def first_hit_m(origin_xy, direction_xy, walls) -> float | None:
+    """Distance along a floor ray to the first wall segment (k, 2, 2) it meets, or None."""
+    p0, e = walls[:, 0], walls[:, 1] - walls[:, 0]
+    d = np.asarray(direction_xy, dtype=np.float64)
+    den = d[0] * e[:, 1] - d[1] * e[:, 0]
+    ok = np.abs(den) > 1e-12
+    w = p0 - np.asarray(origin_xy, dtype=np.float64)
+    t = np.where(ok, (w[:, 0] * e[:, 1] - w[:, 1] * e[:, 0]) / np.where(ok, den, 1), np.inf)
+    u = np.where(ok, (w[:, 0] * d[1] - w[:, 1] * d[0]) / np.where(ok, den, 1), -1)
+    hit = ok & (t > 1e-6) & (u >= 0) & (u <= 1)
+    return float(t[hit].min()) if hit.any() else None

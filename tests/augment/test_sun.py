@@ -3,6 +3,7 @@ photographer's sunny rooms."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -10,8 +11,9 @@ import pytest
 from augment.camera.board import Board
 from augment.camera.calibrate import calibrate_photo, exif_intrinsics
 from augment.render.gl import Renderer
-from augment.render.staged import estimate_lighting
-from augment.render.sun import find_sun, wall_angles_rad
+from augment.render.settings import RENDER
+from augment.render.staged import Lighting, _Caster, _floor_gain, _in_beam, estimate_lighting
+from augment.render.sun import SunOnFloor, find_sun, wall_angles_rad
 
 # A camera 3 m above the floor looking straight down: 6 mm of floor a pixel, x right, y down.
 W, H, MM = 640, 480, 0.006
@@ -100,8 +102,49 @@ def test_sun_direction_in_a_synthetic_room(renderer):
     got_xy = np.asarray(lighting.direction[:2])
     angle = math.degrees(math.acos(np.clip(true_xy @ got_xy / np.linalg.norm(true_xy) / np.linalg.norm(got_xy), -1, 1)))
     assert lighting.source == "sun" and angle < 5.0
+    windows_only = replace(RENDER.staged, sun_from_floor=False)
+    assert estimate_lighting(sample.image, cal, sample.floor_mask, windows_only, floor_polygon=outline).source != "sun"
     # Without the sun the floor shows no patches and the light is the window's or the default.
     dim = render_sample([9600, 16], renderer, size_px=(1280, 960), clutter=False)
     assert not any(lt["kind"] == "sun" for lt in dim.truth["render"]["lights"])
     cal = calibrate_photo(dim.image, Board(), intrinsics=exif_intrinsics(dim.truth["K"][0][0], (1280, 960)))
     assert estimate_lighting(dim.image, cal, dim.floor_mask).source != "sun"
+
+
+def _sun_over(lit_where, share=0.5):
+    """A SunOnFloor over the square (-2, -2)-(2, 2) m, 1 cm cells, lit where
+    ``lit_where(x, y)``; all of it seen."""
+    n = 400
+    y, x = (np.mgrid[0:n, 0:n] + 0.5) * 0.01 - 2.0
+    lit = lit_where(x, y)
+    return SunOnFloor(((1.0, 0.0),), True, 2.0, 2.5, (0.0, 0.0), 1, share, (-2.0, -2.0), 0.01, lit,
+                      np.ones_like(lit))
+
+
+def test_only_what_stands_in_the_beam_gets_the_sun():
+    """Light travelling +x, 45 degrees down; the floor sunlit for x < 0. A point 1 m up at
+    x = -1.5 is in the beam (the light through it lands at x = -0.5, sunlit in the empty
+    room); 1 m up at x = -0.5 it is not (it would land at x = 0.5), though the floor below
+    it is sunlit; off the floor seen, the share in the sun."""
+    d = (math.sqrt(0.5), 0.0, -math.sqrt(0.5))
+    sun = _sun_over(lambda x, y: x < 0, share=0.3)
+    light = Lighting((0.8, 0.8, 0.8), d, 0.6, 0.01, (0.4, 0.4, 0.4), "sun", sun)
+    got = _in_beam(np.array([[-1.5, 0.0, 1.0], [-0.5, 0.0, 1.0], [-0.3, 0.0, 0.0], [0.5, 0.0, 0.0], [9.0, 0.0, 0.0]]),
+                   light)
+    np.testing.assert_allclose(got, [1.0, 0.0, 1.0, 0.0, 0.3])
+
+
+def test_a_box_in_the_shade_casts_no_sun_shadow():
+    """A 40 cm box with the sun from -x at 45 degrees: 30 cm behind it the floor loses most
+    of the sun where the floor is sunlit, and none of it where the floor is in shade."""
+    d = (math.sqrt(0.5), 0.0, -math.sqrt(0.5))
+    box = np.array([[x, y, z] for x in (-0.2, 0.2) for y in (-0.2, 0.2) for z in (0.0, 0.4)])
+    at = np.array([[0.3, 0.0]])
+    gains = {}
+    for name, lit_where in (("sunlit", lambda x, y: np.ones_like(x, bool)),
+                            ("shade", lambda x, y: np.zeros_like(x, bool))):
+        light = Lighting((0.8, 0.8, 0.8), d, 0.6, 0.01, (0.4, 0.4, 0.4), "sun", _sun_over(lit_where))
+        gain, grid = _floor_gain([_Caster(box, None, 0.0, 0.4)], light, ((-1, -1), (1, 1)), RENDER.staged)
+        cell = np.floor(grid.to_px(at)).astype(int)[0]
+        gains[name] = float(gain[cell[1], cell[0]])
+    assert gains["sunlit"] < 0.8 and gains["shade"] > 0.95
