@@ -300,7 +300,11 @@ def main(argv=None) -> int:
                   f"{n['shadow_iou']:.2f} / {w['shadow_iou']:.2f} / {o.get('shadow_iou', math.nan):.2f} | "
                   f"{n['light_error_deg']:.0f} / {w['light_error_deg']:.0f} / "
                   f"{o.get('light_error_deg', math.nan):.0f} |")
-    md += ["", "`realism_worst.png`: the six cases with the largest ΔE, each truth | new | old renderer."]
+    md += ["", "`realism_worst.png`: the six cases with the largest ΔE, each truth | new | old renderer.", "",
+           "Caveats: the truth's ambient and fill light are unshadowed (pyrender has no ambient occlusion), so its "
+           "floor darkens only under the sun and the ceiling spots; the renderer's occlusion under furniture, which "
+           "real rooms show, counts against it in shadow IoU. The old renderer reads its light off the board-erased "
+           "photo, as the pipeline then did."]
     write("realism", data, md)
     worst = sorted((p for p in pictures if not math.isnan(p[0])), key=lambda p: -p[0])[:6]
     if worst:
