@@ -51,7 +51,7 @@ from .furniture import furniture_for, part_texture, placed_items, world_from_ite
 from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from .look import PhotoLook, apply_look, estimate_look
 from .settings import RENDER, StagedSettings
-from .sun import find_sun, first_hit_m, wall_angles_rad
+from .sun import find_sun, first_hit_m, linear_luminance, wall_angles_rad
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 
@@ -84,8 +84,9 @@ class Lighting:
         ``"window"`` (from the brightest window) or ``"default"``.
     sun : SunOnFloor or None
         With the sun (:func:`augment.render.sun.find_sun`): where the floor is in the sun.
-        Then the key light reaches only what stands in its beam (traced back along the
-        light to the floor), and ``key_fraction`` is its share of the light in the sun.
+        Then the key light reaches only what stands in its beam (where the light through
+        a point lands on sunlit floor), and ``key_fraction`` is its share of the light in
+        the sun.
     """
 
     irradiance_rgb: tuple
@@ -376,7 +377,6 @@ class _LightMap:
     def at(self, xy) -> np.ndarray:
         """Gain (n,) at floor points (n, 2+), bilinear; the edge's value beyond it."""
         px = self.grid.to_px(xy) - 0.5
-        rows, cols = self.gain.shape
         return cv2.remap(self.gain, px[:, 0].astype(np.float32).reshape(-1, 1),
                          px[:, 1].astype(np.float32).reshape(-1, 1), cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_REPLICATE).ravel()
@@ -392,8 +392,7 @@ def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, 
     lo = np.asarray(lo_m, dtype=np.float64)[:2]
     shape = tuple(int(v) for v in np.maximum(1, np.ceil((np.asarray(hi_m)[:2] - lo) / cell))[::-1])
     grid = _FloorGrid(lo, cell, shape)
-    rows, cols = np.mgrid[0:shape[0], 0:shape[1]]
-    xy = np.column_stack([lo[0] + (cols.ravel() + 0.5) * cell, lo[1] + (rows.ravel() + 0.5) * cell])
+    xy = grid.centers_m()
     px, depth = _project(np.column_stack([xy, np.zeros(len(xy))]), K, pose, dist)
     h, w = floor_mask.shape
     ij = np.round(px).astype(np.int64)
@@ -402,7 +401,7 @@ def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, 
     if ok.sum() < 50:
         return None
     lum = np.zeros(len(xy), np.float32)
-    lum[ok] = _to_linear(image[ij[ok, 1], ij[ok, 0]].astype(np.float64)) @ [0.2126, 0.7152, 0.0722]
+    lum[ok] = linear_luminance(image[ij[ok, 1], ij[ok, 0]])
     if lighting.sun is not None:  # the light in the shade: the sun's beam is traced apart
         lum /= 1.0 + (_sun_contrast(lighting) - 1.0) * (lighting.sun.sunlit(xy) > 0.5)
     weight = ok.astype(np.float32).reshape(shape)
@@ -660,6 +659,12 @@ class _FloorGrid:
         """Continuous raster coordinates (col, row) of floor points; cell centers at +0.5."""
         return (np.asarray(xy)[..., :2] - self.origin_m) / self.cell_m
 
+    def centers_m(self) -> np.ndarray:
+        """(rows * cols, 2) floor points of the cell centres, row by row."""
+        rows, cols = np.mgrid[0:self.shape[0], 0:self.shape[1]]
+        return np.column_stack([self.origin_m[0] + (cols.ravel() + 0.5) * self.cell_m,
+                                self.origin_m[1] + (rows.ravel() + 0.5) * self.cell_m])
+
     def floor_from_raster(self) -> np.ndarray:
         """3x3 map from raster (col, row, 1), cell centers at integers, to floor (x, y, 1)."""
         return np.array([[self.cell_m, 0, self.origin_m[0] + 0.5 * self.cell_m],
@@ -778,9 +783,7 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings)
     ao = cv2.resize(1.0 - free, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
     f_key = lighting.key_fraction
     if lighting.sun is not None:  # only the floor in the sun loses the sun
-        rows, cols = np.mgrid[0:shape[0], 0:shape[1]]
-        centers = np.column_stack([lo[0] + (cols.ravel() + 0.5) * cell, lo[1] + (rows.ravel() + 0.5) * cell])
-        f_key = (f_key * lighting.sun.sunlit(centers)).reshape(shape).astype(np.float32)
+        f_key = (f_key * lighting.sun.sunlit(grid.centers_m())).reshape(shape).astype(np.float32)
     ratio = 1.0 - f_key * shadow - (1.0 - f_key) * settings.ao_strength * ao
     # Contact: right beside a leg or a base standing on the floor, the floor sees little of
     # any light; a dark line a centimetre or two wide, at the full raster's resolution.

@@ -72,8 +72,11 @@ class SunOnFloor:
         return out
 
 
-def _to_linear(rgb_uint8) -> np.ndarray:
-    return (np.asarray(rgb_uint8, dtype=np.float32) / 255.0) ** 2.2
+def linear_luminance(rgb_uint8) -> np.ndarray:
+    """Luminance (...,) float32 in linear light of sRGB-ish pixels (..., 3) uint8 (the
+    renderer's 2.2 power, Rec. 709 weights)."""
+    return ((np.asarray(rgb_uint8, dtype=np.float32) / 255.0) ** 2.2) @ np.array([0.2126, 0.7152, 0.0722],
+                                                                                 np.float32)
 
 
 def wall_angles_rad(polygon_m: np.ndarray, edge_kinds=None) -> np.ndarray:
@@ -176,7 +179,7 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     # Only the view from above is linearized: a 12 MP photo costs no more than a small one.
     top_rgb = cv2.remap(np.ascontiguousarray(image), map_x, map_y, cv2.INTER_LINEAR,
                         borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-    top = _to_linear(top_rgb) @ np.array([0.2126, 0.7152, 0.0722], np.float32)
+    top = linear_luminance(top_rgb)
     valid = cv2.remap(floor_mask.astype(np.uint8), map_x, map_y, cv2.INTER_NEAREST,
                       borderMode=cv2.BORDER_CONSTANT, borderValue=0) > 0
     valid &= top > 1e-4
@@ -241,7 +244,7 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     # the edges bound (a bright stretch of floor without a sharp edge is lamplight).
     lit = valid & (log > shade_log + settings.lit_level * (sun_log - shade_log))
     lit = cv2.morphologyEx(lit.astype(np.uint8), cv2.MORPH_OPEN, np.ones((5, 5), np.uint8))
-    n, labels = cv2.connectedComponents(lit, connectivity=8)
+    _, labels = cv2.connectedComponents(lit, connectivity=8)
     bounded = np.unique(labels[cv2.dilate(edges.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0])
     lit = np.isin(labels, bounded[bounded > 0])
     if lit.sum() < 100:
