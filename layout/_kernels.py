@@ -63,6 +63,11 @@ Z_TOUCH_M = 1e-6
 # A corner pushed back inside the floor lands this far inside, so it tests as inside.
 INSIDE_M = 1e-7
 
+# The photo's frame (frame_item): rounds over its planes per pass, and the share of
+# the turn to the narrow side taken per push.
+FRAME_ROUNDS = 4
+FRAME_TURN = 0.1
+
 
 # --------------------------------------------------------------------------- helpers
 
@@ -931,6 +936,53 @@ def boundary_item(R, P, pos, yaw, i, project):
 
 
 @njit(cache=True, error_model="numpy")
+def frame_item(R, P, pos, yaw, i, project):
+    """Keep item i's 3-D box inside the space the photo shows (the camera's frustum,
+    its lower edge raised to keep the foreground clear): per plane n . p + d >= 0 of
+    ``R.planes``, the box's deepest corner (a support function, so exact for boxes) is
+    pushed in along the plane's floor direction, and the item turned a little to
+    show the plane its narrow side (a wide sofa fits the band a downward photo shows
+    only side-on to it). A few rounds, as one plane's push may leave another's.
+    Returns the squared violation before projection, in meters."""
+    violation = 0.0
+    b = P.body[i]
+    hw = 0.5 * P.size[i, 0]
+    hd = 0.5 * P.size[i, 1]
+    hh = 0.5 * P.size[i, 2]
+    for rep in range(FRAME_ROUNDS if project else 1):
+        moved = False
+        for k in range(R.planes.shape[0]):
+            nx, ny, nz, d = R.planes[k, 0], R.planes[k, 1], R.planes[k, 2], R.planes[k, 3]
+            c = math.cos(yaw[i])
+            s = math.sin(yaw[i])
+            gap = (nx * pos[i, 0] + ny * pos[i, 1] + nz * pos[i, 2] + d
+                   - support(hd, hw, c, s, nx, ny) - hh * abs(nz))
+            if gap >= 0.0:
+                continue
+            if rep == 0:
+                violation += gap * gap
+            horizontal = nx * nx + ny * ny
+            if not project or horizontal <= 1e-9:
+                continue
+            moved = True
+            # The narrow side toward the plane: depth along n when the item is wider than deep.
+            along = math.atan2(ny, nx) if hw >= hd else math.atan2(ny, nx) + 0.5 * math.pi
+            turn = wrap(along - yaw[i])
+            if turn > 0.5 * math.pi:
+                turn -= math.pi
+            elif turn < -0.5 * math.pi:
+                turn += math.pi
+            da = FRAME_TURN * turn
+            dx = -(gap - INSIDE_M) * nx / horizontal
+            dy = -(gap - INSIDE_M) * ny / horizontal
+            if move(b, dx, dy, 0.0, da, pos, yaw, P.mstart):
+                carry(b, dx, dy, 0.0, da, pos, yaw, P.mstart, P.mlist)
+        if not moved:
+            break
+    return violation
+
+
+@njit(cache=True, error_model="numpy")
 def project_boundary(R, P, pos, yaw):
     """The layout boundary alone, every movable body (:func:`floor_pass`)."""
     floor_pass(R, P, pos, yaw, np.empty((0, 2)), 0.0, body_sides(P, pos, np.int64(1)), np.int64(0), np.bool_(False))
@@ -939,10 +991,12 @@ def project_boundary(R, P, pos, yaw):
 @njit(cache=True, error_model="numpy")
 def residual_boundary(R, P, pos, yaw, out):
     for i in range(P.role.shape[0]):
+        out[i] = 0.0
         if P.bounded[i] and not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
-            out[i] = -math.sqrt(boundary_item(R, P, pos, yaw, i, False))
-        else:
-            out[i] = 0.0
+            out[i] = boundary_item(R, P, pos, yaw, i, False)
+        if P.bounded[i] and R.planes.shape[0] > 0:
+            out[i] += frame_item(R, P, pos, yaw, i, False)
+        out[i] = -math.sqrt(out[i])
 
 
 # ------------------------------------------------- collision and accessibility
@@ -1650,14 +1704,17 @@ def project_access_split(P, pairs, pos, yaw, cs, acc, jac, k, model):
 
 @njit(cache=True, error_model="numpy")
 def floor_pass(R, P, pos, yaw, cs, k_access, side, t, access):
-    """The clearances on the floor (with ``access``), then the layout boundary, for
-    the particles whose body lies on side ``t`` (:func:`body_sides`)."""
+    """The clearances on the floor (with ``access``), then the layout boundary (the
+    photo's frame, then the floor), for the particles whose body lies on side ``t``
+    (:func:`body_sides`)."""
     if access:
         for i in range(P.role.shape[0]):
             if side[i] == t and P.role[i] == ITEM and P.access_max[i] > 0.0:
                 if not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i] + P.access_max[i]):
                     access_in_floor(R, P, pos, yaw, cs, i, k_access, True)
     for i in range(P.role.shape[0]):
+        if side[i] == t and P.bounded[i] and R.planes.shape[0] > 0:
+            frame_item(R, P, pos, yaw, i, True)
         if side[i] == t and P.bounded[i] and not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
             boundary_item(R, P, pos, yaw, i, True)
 

@@ -117,6 +117,8 @@ class LayoutBuilder:
         self._c = {k: [] for k in DEFAULT_STIFFNESS}
         self._doors = []
         self._windows = []
+        self._camera = None
+        self._camera_rules = None
 
     # ------------------------------------------------------------------ particles
 
@@ -251,6 +253,18 @@ class LayoutBuilder:
         self._p.append(rec)
         bucket.append((segment, len(self._p) - 1))
         return len(self._p) - 1
+
+    def set_camera(self, camera, rules=None):
+        """Lay out for a photo: every item's box stays in the space ``camera``
+        (:class:`layout.camera.Camera`) shows, the foreground clear
+        (:meth:`~layout.camera.Camera.frame_planes`), and the restarts judge what it
+        hides and shows from behind (:func:`layout.camera.judge`)."""
+        from .camera import CAMERA, Camera
+
+        if not isinstance(camera, Camera):
+            raise LayoutError(f"camera: expected a layout.camera.Camera, got {type(camera).__name__}")
+        self._camera = camera
+        self._camera_rules = CAMERA if rules is None else rules
 
     # ---------------------------------------------------------------- constraints
 
@@ -577,6 +591,10 @@ class LayoutBuilder:
             floor_clearance_m=clearance,
             floor_grid_origin_m=grid_origin,
             floor_grid_cell_m=np.array([grid_cell]),
+            floor_frame_planes=(np.zeros((0, 4)) if self._camera is None
+                                else self._camera.frame_planes(self._camera_rules)),
+            camera=self._camera,
+            camera_rules=self._camera_rules,
             wall_height_m=self.wall_height_m,
             door_segments_m=np.array([d[0] for d in doors], np.float64).reshape(len(doors), 2, 2),
             door_particles=np.array([d[1] for d in doors], np.int32),

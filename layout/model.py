@@ -28,7 +28,7 @@ WallOrientations = namedtuple("WallOrientations", "item angle k0 schedule")
 Orientations = namedtuple("Orientations", "pairs angle mode k0 schedule")
 Stacks = namedtuple("Stacks", "pairs k0 schedule")
 Curves = namedtuple("Curves", "group kind params start members spacing anchor_fixed k0 schedule")
-Room = namedtuple("Room", "polygon edge_normal reflex clearance grid_origin grid_cell wall")
+Room = namedtuple("Room", "polygon edge_normal reflex clearance grid_origin grid_cell wall planes")
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,6 +73,10 @@ class Model:
     #   the grid cell has at least (0 outside or on a wall); a quick inside test
     floor_grid_origin_m: np.ndarray  # (2,) lower-left corner of cell (0, 0)
     floor_grid_cell_m: np.ndarray  # (1,) cell size
+    floor_frame_planes: np.ndarray  # (k, 4) n_x, n_y, n_z, d: the space the photo shows is
+    #   n . p + d >= 0 (unit n, meters; layout.camera.Camera.frame_planes); (0, 4) without a camera
+    camera: object  # layout.camera.Camera or None: the photo's camera, for the criteria it judges by
+    camera_rules: object  # layout.camera.CameraRules the planes and the criteria follow (None without)
     wall_height_m: float
     door_segments_m: np.ndarray  # (d, 2, 2) door openings on the walls
     door_particles: np.ndarray  # (d,) int32 obstacle particle of each door's zone
@@ -176,7 +180,8 @@ class Model:
                 get("stack", Stacks),
                 get("curve", Curves),
                 Room(self.floor_polygon_m, self.floor_edge_normal, self.floor_reflex, self.floor_clearance_m,
-                     self.floor_grid_origin_m, self.floor_grid_cell_m, self.floor_edge_wall),
+                     self.floor_grid_origin_m, self.floor_grid_cell_m, self.floor_edge_wall,
+                     self.floor_frame_planes),
             )
             object.__setattr__(self, "_packed", cached)
         return cached

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import metrics, plot
+from . import camera, metrics, plot
 from .errors import LayoutError
 from .fileio import folder_problem, replaced_input, staged_folder
 from .geometry import SIDE_NAMES
@@ -45,7 +45,8 @@ def evaluate(layout) -> dict:
         inside each door's swing zone) and ``door_blockers`` (ids of the items there,
         per door); ``clearances``: ``deepest_m``, how far the worst item stands inside
         another's clearance (0 if none), and ``pairs`` as ``[id, id, depth_m]`` of those
-        more than ``MIN_INTRUSION_M`` in (:func:`layout.solver.clearance_intrusions`).
+        more than ``MIN_INTRUSION_M`` in (:func:`layout.solver.clearance_intrusions`);
+        ``camera`` when the layout was made for a photo (:func:`layout.camera.judge`).
 
     Notes
     -----
@@ -91,6 +92,7 @@ def evaluate(layout) -> dict:
             "pairs": [[m.names[a], m.names[b], float(d)] for (a, b), d in zip(intruding, depth)
                       if d > MIN_INTRUSION_M],
         },
+        **({} if m.camera is None else {"camera": camera.judge(layout)}),
     }
 
 

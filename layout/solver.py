@@ -134,8 +134,17 @@ class Layout:
 
 
 def _inside(polygon_m, points_m):
-    """(k,) bool: which of the (k, 2) points lie inside the polygon."""
-    return np.array([K.inside_polygon(polygon_m, x, y) for x, y in points_m], bool)
+    """(k,) bool: which of the (k, 2) points lie inside the polygon (even-odd rule, one
+    pass per edge over all the points)."""
+    pts = np.asarray(points_m, dtype=np.float64).reshape(-1, 2)
+    x, y = pts[:, 0], pts[:, 1]
+    inside = np.zeros(len(pts), bool)
+    poly = np.asarray(polygon_m, dtype=np.float64)
+    for (x1, y1), (x2, y2) in zip(poly, np.roll(poly, -1, axis=0)):
+        crosses = (y1 > y) != (y2 > y)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inside ^= crosses & (x < x1 + (y - y1) * (x2 - x1) / (y2 - y1))
+    return inside
 
 
 def _random_inside(polygon_m, k, rng):
@@ -199,6 +208,29 @@ def initial_state(model: Model, rng: np.random.Generator, stratify_from: int = S
         if model.particle_body[top] == top:
             pos[top, :2] = pos[base, :2]
             pos[top, 2] = pos[base, 2] + 0.5 * (model.particle_size_m[base, 2] + model.particle_size_m[top, 2])
+    return State(pos, yaw)
+
+
+def turned_state(layout: Layout, angle_rad: float, mirror: bool = False) -> State:
+    """A start for another arrangement: ``layout`` turned by ``angle_rad`` about its
+    floor's centroid (mirrored across the floor's x axis through it first, with
+    ``mirror``); the solver then pulls it back onto the floor. From it the solver finds
+    the layout's turned counterpart where the floor allows one, which random starts
+    that all fall into the same minimum do not."""
+    m = layout.model
+    center = m.floor_polygon_m.mean(axis=0)
+    pos = layout.position_m.copy()
+    yaw = layout.yaw_rad.copy()
+    rel = pos[:, :2] - center
+    if mirror:
+        rel[:, 1] = -rel[:, 1]
+        yaw = -yaw
+    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    pos[:, :2] = center + rel @ np.array([[c, s], [-s, c]])
+    yaw = yaw + angle_rad
+    fixed = m.particle_inv_mass == 0.0
+    pos[fixed] = layout.position_m[fixed]
+    yaw[fixed] = layout.yaw_rad[fixed]
     return State(pos, yaw)
 
 
@@ -449,11 +481,16 @@ def _walkable(model, pos, yaw) -> bool:
 
 
 def _cell_size(model: Model) -> float:
-    """Spatial-hash cell: about two typical padded footprints."""
-    items = model.items
-    size = model.particle_size_m[items]
-    reach = 0.5 * np.hypot(size[:, 0], size[:, 1]) + model.particle_access_depth_m[items].max(1)
-    return float(max(0.25, 2.0 * np.median(reach)))
+    """Spatial-hash cell: about two typical padded footprints (kept with the frozen model,
+    asked for on every run)."""
+    cached = model.__dict__.get("_cell_m")
+    if cached is None:
+        items = model.items
+        size = model.particle_size_m[items]
+        reach = 0.5 * np.hypot(size[:, 0], size[:, 1]) + model.particle_access_depth_m[items].max(1)
+        cached = float(max(0.25, 2.0 * np.median(reach)))
+        object.__setattr__(model, "_cell_m", cached)
+    return cached
 
 
 def energy_terms(model: Model, state: State, collision: str = "box") -> dict:

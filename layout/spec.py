@@ -31,6 +31,13 @@ Only the fields listed here are allowed: a misspelt field is an error, not ignor
     that are not walls, e.g. where a photo cut the floor off: items stay inside
     them, but none is put against them.
 
+``[camera]`` (optional)
+    The photo the layout is made for (:mod:`layout.camera`): ``K`` (3 x 3 intrinsics,
+    pixels), ``camera_from_floor`` (4 x 4, floor frame to OpenCV camera axes, meters),
+    ``size_px`` ([width, height]). Every item then stays whole in the frame and out of
+    the foreground, and the restarts prefer layouts that hide nothing and show seating
+    from its good side.
+
 ``[solver]`` (optional)
     Settings of :class:`layout.Solver`: ``max_iterations``, ``min_iterations``,
     ``restarts``, ``polish_rounds``, ``energy_every``, ``threads_from``,
@@ -121,7 +128,7 @@ from .fileio import path_problem
 from .geometry import edge_distances, polygon_area
 from .solver import Solver
 
-TOP_LEVEL = ("room", "solver", "groups", "items", "constraints")
+TOP_LEVEL = ("room", "camera", "solver", "groups", "items", "constraints")
 ROOM_FIELDS = ("polygon", "height", "preset", "doors", "windows", "open_edges")
 DOOR_FIELDS = ("at", "width", "clearance", "height")
 WINDOW_FIELDS = ("at", "width", "sill", "height", "clearance")
@@ -271,6 +278,8 @@ class Spec:
         :func:`build` for another floor).
     open_edges : tuple of int
         Edges of ``polygon_m`` (counter-clockwise order) that are not walls.
+    camera : layout.camera.Camera or None
+        The photo the layout is made for.
     """
 
     path: Path
@@ -285,6 +294,7 @@ class Spec:
     constraints: tuple
     constraint_tables: tuple = ()
     open_edges: tuple = ()
+    camera: object = None
 
 
 class _Reader:
@@ -955,6 +965,7 @@ def _parse(r, path, doc):
         for o in doors + windows:
             _check_on_wall(r, polygon, o)
 
+    camera = _read_camera(r, doc["camera"]) if "camera" in doc else None
     settings = r.table(doc.get("solver", {}), "solver", tuple(SOLVER_FIELDS))
     kwargs = {}
     for key, typ in SOLVER_FIELDS.items():
@@ -979,7 +990,7 @@ def _parse(r, path, doc):
                           f"(one of: {', '.join(_preset_names())})")
     spec = Spec(path=path, polygon_m=polygon, height_m=height, preset=preset, doors=doors,
                 windows=windows, solver=solver, groups=(), items=(), constraints=(),
-                constraint_tables=tuple(constraint_tables), open_edges=tuple(open_edges))
+                constraint_tables=tuple(constraint_tables), open_edges=tuple(open_edges), camera=camera)
     if preset is not None:
         if polygon is None:
             return spec  # furnished by build(), once the floor is known
@@ -990,6 +1001,27 @@ def _parse(r, path, doc):
         groups, items, constraints = _furnish(r, group_tables, item_tables, constraint_tables)
     return dataclasses.replace(spec, groups=tuple(groups), items=tuple(items),
                                constraints=tuple(constraints))
+
+
+def _read_camera(r, value):
+    from .camera import Camera
+
+    t = r.table(value, "camera", ("K", "camera_from_floor", "size_px"), ("K", "camera_from_floor", "size_px"))
+
+    def matrix(field, rows, meaning):
+        if not isinstance(t[field], list) or len(t[field]) != rows:
+            raise r.error("camera", f"{field} = {_show(t[field])} must be {rows} rows of {rows} numbers ({meaning})")
+        return [r.vector(row, "camera", field, rows, meaning) for row in t[field]]
+
+    K = matrix("K", 3, "the intrinsics, pixels")
+    T = matrix("camera_from_floor", 4, "floor meters to camera, OpenCV axes")
+    if not isinstance(t["size_px"], list) or len(t["size_px"]) != 2:
+        raise r.error("camera", f"size_px = {_show(t['size_px'])} must be [width, height] in pixels")
+    size = tuple(r.integer(v, "camera", "size_px", minimum=2) for v in t["size_px"])
+    try:
+        return Camera(K, T, size)
+    except LayoutError as e:
+        raise r.error("camera", str(e)) from None
 
 
 def _preset_names():
@@ -1064,6 +1096,8 @@ def build(spec: Spec, *, polygon_m=None):
             polygon = LayoutBuilder(poly, height).polygon_m
     with r.context(None if polygon_m is None else where):
         b = LayoutBuilder(polygon, height, open_edges=spec.open_edges if polygon_m is None else ())
+    if spec.camera is not None:
+        b.set_camera(spec.camera)
     groups, items, constraints = spec.groups, spec.items, spec.constraints
     if spec.preset is not None and (polygon_m is not None or not items):
         g_tables, i_tables, c_tables = _preset_tables(spec, b.polygon_m)

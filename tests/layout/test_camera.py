@@ -1,0 +1,142 @@
+"""The photo's camera in the layout: the frame as planes, the judgement, the solver."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from layout import LayoutBuilder, Solver
+from layout.camera import CAMERA, Camera, CameraRules, in_view_share, judge
+from layout.errors import LayoutError
+from layout.spec import build, spec_from_dict
+
+K = [[500.0, 0.0, 320.0], [0.0, 500.0, 240.0], [0.0, 0.0, 1.0]]
+
+
+def looking_along_x(height_m: float, pitch_down_deg: float = 0.0, at=(0.0, 0.0)) -> np.ndarray:
+    """camera_from_floor of a camera at ``at``, ``height_m`` up, looking along +x, tilted down."""
+    p = math.radians(pitch_down_deg)
+    # Camera axes in the floor frame: x right = -y; z ahead = (cos p, 0, -sin p); y down = z x x.
+    ahead = np.array([math.cos(p), 0.0, -math.sin(p)])
+    right = np.array([0.0, -1.0, 0.0])
+    down = np.cross(ahead, right)
+    R = np.stack([right, down, ahead])
+    center = np.array([at[0], at[1], height_m])
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = -R @ center
+    return T
+
+
+def level_camera(**rules):
+    return Camera(K, looking_along_x(1.5), (640, 480))
+
+
+def test_projection_of_a_hand_placed_point():
+    cam = level_camera()
+    uv, z = cam.project([[5.0, 0.0, 1.5], [5.0, 1.0, 0.5]])
+    np.testing.assert_allclose(uv, [[320.0, 240.0], [320.0 - 100.0, 240.0 + 100.0]])
+    np.testing.assert_allclose(z, [5.0, 5.0])
+    np.testing.assert_allclose(cam.center_m, [0.0, 0.0, 1.5])
+
+
+def test_frame_planes_are_the_image_edges_and_the_foreground_line():
+    """Level camera 1.5 m up, f = 500 px, 640 x 480: a floor point at distance x shows at row
+    240 + 750 / x, so the foreground line (row 480 * 0.85 = 408) lies 750 / 168 = 4.464 m out;
+    the margin (1 % of 640 = 6.4 px) moves the left edge to u = 6.4, i.e. y = 313.6 x / 500."""
+    rules = CameraRules(foreground=0.15, margin=0.01)
+    planes = Camera(K, looking_along_x(1.5), (640, 480)).frame_planes(rules)
+    np.testing.assert_allclose(np.linalg.norm(planes[:, :3], axis=1), 1.0)
+
+    def inside(p):
+        return bool(np.all(planes[:, :3] @ p + planes[:, 3] >= 0))
+
+    x_fore = 750.0 / 168.0
+    assert not inside([x_fore - 0.01, 0.0, 0.0]) and inside([x_fore + 0.01, 0.0, 0.0])
+    y_left = 313.6 * 10.0 / 500.0
+    assert inside([10.0, y_left - 0.01, 1.5]) and not inside([10.0, y_left + 0.01, 1.5])
+    # The top edge: row 6.4 is 233.6 px above the centre, so 233.6 / 500 m up per metre out.
+    z_top = 1.5 + 233.6 * 10.0 / 500.0
+    assert inside([10.0, 0.0, z_top - 0.01]) and not inside([10.0, 0.0, z_top + 0.01])
+    assert not inside([-1.0, 0.0, 1.0])  # behind the camera
+
+
+def _room(camera=None, items=(("box", (0.6, 0.6, 2.2)),)):
+    b = LayoutBuilder([[0, -3], [9, -3], [9, 3], [0, 3]], 3.0)
+    ids = [b.add_item(name, size, kind=name) for name, size in items]
+    if camera is not None:
+        b.set_camera(camera)
+    return b.finalize(), ids
+
+
+def test_the_solver_keeps_a_tall_item_whole_in_the_frame():
+    """A 2.2 m box in a 9 x 6 m room seen by a level camera (1.5 m up): near the camera its
+    top leaves the frame and the first 4.5 m are foreground. Without the camera some random
+    starts leave it cut; with it, none does."""
+    cam = Camera(K, looking_along_x(1.5), (640, 480))
+    plain, _ = _room()
+    framed, (box,) = _room(cam)
+    cut_plain = [bool(judge(Solver().solve(plain, seed=s), camera=cam)["cut"]) for s in range(8)]
+    assert any(cut_plain)
+    for s in range(8):
+        lay = Solver().solve(framed, seed=s)
+        assert judge(lay)["cut"] == [], s
+        corners = lay.position_m[box] + np.array([[dx, dy, dz] for dx in (-.3, .3) for dy in (-.3, .3)
+                                                  for dz in (-1.1, 1.1)])
+        uv, _ = cam.project(corners)
+        assert uv[:, 0].min() >= -1 and uv[:, 0].max() <= 641 and uv[:, 1].min() >= -1
+        assert uv[:, 1].max() <= 480 * (1 - CAMERA.foreground) + 1
+
+
+def test_no_place_in_view_for_what_the_frame_cannot_hold():
+    """Pitched 40 degrees down from 1.2 m the top edge meets the floor-level ray at about
+    1.2 / tan(40 - 25.6 deg) = 4.7 m (half the vertical view is atan(240 / 500)), and the
+    foreground takes the near floor: a 2 m wardrobe is cut wherever it stands in a 4 m deep
+    room, a coffee table is not."""
+    cam = Camera(K, looking_along_x(1.2, 40.0), (640, 480))
+    poly = [[0, -2], [4, -2], [4, 2], [0, 2]]
+    assert in_view_share(cam, poly, (1.2, 0.6, 2.0)) == 0.0
+    assert in_view_share(cam, poly, (1.1, 0.6, 0.45)) > 0.05
+
+
+def test_judge_finds_hidden_and_from_behind():
+    cam = Camera(K, looking_along_x(1.2, 10.0), (640, 480))
+    b = LayoutBuilder([[0, -3], [12, -3], [12, 3], [0, 3]], 3.0)
+    front = b.add_item("wall_of_boxes", (2.0, 0.5, 2.0), kind="bookcase")
+    back = b.add_item("hidden_chair", (0.8, 0.8, 0.9), kind="armchair")
+    sofa = b.add_item("sofa", (2.0, 0.9, 0.85), kind="sofa")
+    b.set_camera(cam)
+    model = b.finalize()
+    pos = model.particle_init_position_m.copy()
+    yaw = np.zeros(model.n)
+    pos[front] = [8.0, 0.0, 1.0]
+    pos[back] = [9.5, 0.0, 0.45]  # right behind the boxes, seen from the camera
+    pos[sofa] = [5.0, 2.0, 0.425]  # nearer than the floor's middle (6 m)
+    yaw[sofa] = 0.0  # facing +x, away from the camera: its back is toward the lens
+    from layout.solver import Layout
+
+    lay = Layout.from_state(model, pos, yaw, {}, np.zeros(0), 0, 0, None, 0.0)
+    j = judge(lay)
+    assert j["hidden"] == ["hidden_chair"] and j["visible"]["hidden_chair"] < 0.1
+    assert j["visible"]["wall_of_boxes"] == 1.0
+    assert j["from_behind"] == ["sofa"]
+    yaw[sofa] = math.pi  # turned to face the camera
+    assert judge(Layout.from_state(model, pos, yaw, {}, np.zeros(0), 0, 0, None, 0.0))["from_behind"] == []
+
+
+def test_a_spec_names_its_camera():
+    T = looking_along_x(1.5).tolist()
+    doc = {"room": {"polygon": [[0, -3], [9, -3], [9, 3], [0, 3]], "height": 3.0},
+           "camera": {"K": K, "camera_from_floor": T, "size_px": [640, 480]},
+           "items": [{"id": "box", "size": [0.6, 0.6, 2.2]}]}
+    model, _ = build(spec_from_dict(doc, where="my.toml"))
+    assert model.camera is not None and model.floor_frame_planes.shape == (4, 4)
+    bad = {**doc, "camera": {**doc["camera"], "K": [[0, 0, 320], [0, 500, 240], [0, 0, 1]]}}
+    with pytest.raises(LayoutError, match=r"my.toml: camera: camera.K = .*positive focal lengths"):
+        spec_from_dict(bad, where="my.toml")
+    below = {**doc, "camera": {**doc["camera"], "camera_from_floor": looking_along_x(-1.0).tolist()}}
+    with pytest.raises(LayoutError, match=r"my.toml: camera: .*stands -1.00 m above the floor"):
+        spec_from_dict(below, where="my.toml")
+    with pytest.raises(LayoutError, match=r"my.toml: camera: size_px = \[640\] must be \[width, height\]"):
+        spec_from_dict({**doc, "camera": {**doc["camera"], "size_px": [640]}}, where="my.toml")
