@@ -88,6 +88,7 @@ from .render.furniture import load_assets
 from .render.gltf import scene_glb
 from .render.styles import STYLES
 from .room.fit import dropped_summary, furniture_for_floor, furniture_source, solve_suggestions
+from .room.openings import find_doors
 from .room.height import measure_height
 
 DEFAULT_SUGGESTIONS = 4
@@ -327,7 +328,7 @@ def measure(photo, board, *, camera=None, model=None, floor_mask=None, clicks=No
 
 def overlays(m: Measurement, doors=None) -> dict:
     """The three overlays of a measurement, ``{file name: (h, w, 3) uint8}``; ``doors``
-    are the ones the user marked."""
+    are the ones the user marked or, without, those found in the photo."""
     seg = m.segmentation
     return {"overlay_calibration.png": calibration_overlay(m.image, m.calibration),
             "overlay_floor.png": floor_overlay(m.image, seg.mask, m.floor, m.calibration, seg.doubted, seg.clicks,
@@ -410,6 +411,8 @@ def report_dict(result: FurnishResult) -> dict:
             "overlap_area_m2": rep["overlaps"]["area_m2"], "outside_m2": rep["outside_m2"],
             "traversable": rep["traversable"], "unreachable": rep["unreachable"],
             "clearance_intrusion_m": rep["clearances"]["deepest_m"],
+            **({"camera": rep["camera"]} if "camera" in rep else {}),
+            "furniture": [lay.model.names[i] for i in lay.items],
             "files": {"staged": f"staged_{k}.jpg", "layout": f"layout_{k}.json", "plan": f"plan_{k}.png",
                       "scene": f"scene_{k}.glb", **({"layer": f"staged_{k}_layer.png"} if result.layers else {})}})
     return _jsonable({
@@ -468,8 +471,8 @@ def suggestion_styles(style: str | None, seed: int, suggestions: int) -> list[st
 
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
             seed: int = 0, style: str | None = None, layout=None, camera=None, model=None, floor_mask=None,
-            clicks=None, doors=None, assets: dict | None = None, layers: bool = False, keep_board: bool = False,
-            progress: bool = False, reporter=None, renderer=None) -> FurnishResult:
+            clicks=None, doors=None, auto_doors: bool = True, assets: dict | None = None, layers: bool = False,
+            keep_board: bool = False, progress: bool = False, reporter=None, renderer=None) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
     Parameters
@@ -510,6 +513,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         Doors to keep clear: per door the photo pixels x1, y1, x2, y2 of the feet of its
         two sides (:func:`doors_on_floor`). Each swing zone, as deep as the door is
         wide, stays free of furniture.
+    auto_doors : bool
+        Without ``doors``, find the doors in the photo (:func:`augment.room.openings.find_doors`)
+        and keep them clear the same way.
     assets : dict, optional
         Kind -> the user's model of that kind, rendered and put in the scenes instead of
         Stager's own, stretched onto each item's box: a GLB, glTF or OBJ path (y up,
@@ -574,6 +580,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         if m.floor.caveat:
             warnings.append(f"furniture is placed on the floor in view only ({m.floor.caveat})")
         room_height = float(m.height.height_m)
+        found_px = []
         if layout is not None:
             fitted, layouts, dropped = fixed_spec, [fixed_layout], []
             reports = [layout_report.evaluate(fixed_layout)]
@@ -583,13 +590,16 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             bar.step(1 + suggestions)
         else:
             with clock("furniture"):
+                if auto_doors and (doors is None or not len(doors)):
+                    found_px = [f.feet_px.ravel() for f in find_doors(m.image, m.calibration, m.floor)]
                 fitted, dropped = furniture_for_floor(source, m.floor, room_height, photo, doors=doors,
+                                                      found_doors=found_px,
                                                       calibration=m.calibration, asset_kinds=user_models,
                                                       warnings=warnings)
             bar.step()
             with clock("layout"):
                 fitted, layouts, reports = solve_suggestions(fitted, suggestions, seed, m.floor.area_m2, dropped,
-                                                             bar)
+                                                             bar, warnings)
         if dropped:
             warnings.append(f"left out {len(dropped)} item(s) that do not fit the measured floor: "
                             + dropped_summary(dropped))
@@ -632,7 +642,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                                         assets=user_models, style=style_name))
                 bar.step()
         with clock("overlays"):
-            pictures = overlays(m, doors)
+            pictures = overlays(m, doors if doors is not None and len(doors) else found_px)
             sheet = contact_sheet(staged)
         bar.step()
         with clock("plans"):  # only what the plans take beyond the stages above

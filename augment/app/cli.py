@@ -281,7 +281,10 @@ def _parser():
     f.add_argument("--door", type=_door, action="append", default=[], metavar="X1,Y1,X2,Y2",
                    help="a door to keep clear: the photo pixels of the feet of its two sides, where they "
                         "meet the floor (as in the floor overlay); its swing zone, as deep as the door is "
-                        "wide, stays free of furniture. Repeat for more doors")
+                        "wide, stays free of furniture. Repeat for more doors. Without it, the doors "
+                        "found in the photo are kept clear")
+    f.add_argument("--no-auto-doors", dest="auto_doors", action="store_false",
+                   help="do not look for doors in the photo (keep clear only those given with --door)")
     f.add_argument("--asset", type=_asset, action="append", default=[], metavar="KIND=FILE",
                    help="your own model of a furniture kind (GLB, glTF or OBJ; y up, front toward +z), "
                         "stretched onto each item of that kind; repeat for more kinds "
@@ -731,6 +734,7 @@ def _furnish_cmd(args):
                 result = furnish(photo, board, room=args.room, spec=args.spec, suggestions=suggestions,
                                  seed=args.seed, camera=args.camera, model=shared.get("model", args.model),
                                  floor_mask=args.floor_mask, clicks=args.clicks, doors=args.door,
+                                 auto_doors=args.auto_doors,
                                  assets=dict(args.asset), layers=args.layers, keep_board=args.keep_board,
                                  style=args.style, layout=args.layout, renderer=shared.get("renderer"),
                                  progress=not args.quiet and sys.stderr.isatty())

@@ -19,6 +19,8 @@ import numpy as np
 
 from layout import report as layout_report
 from layout.builder import LayoutBuilder
+from layout.camera import Camera, in_view_share
+from layout.camera import faults as camera_faults
 from layout.errors import LayoutError
 from layout.geometry import polygon_area
 from layout.presets import DEFAULT_ROOM, PRESETS
@@ -194,7 +196,7 @@ def _units(spec) -> list[list]:
     return units
 
 
-def fit_spec(spec, polygon_m, height_m: float):
+def fit_spec(spec, polygon_m, height_m: float, camera=None):
     """Fit a spec's furniture to a measured floor.
 
     The room becomes ``polygon_m`` and ``height_m`` (the spec's doors and windows, in
@@ -212,6 +214,9 @@ def fit_spec(spec, polygon_m, height_m: float):
         The floor, meters, counter-clockwise.
     height_m : float
         Wall height, meters.
+    camera : layout.camera.Camera, optional
+        The photo's camera: a unit that would be cut by the photo's edge or stand in its
+        foreground wherever it stood (:func:`layout.camera.in_view_share`) is dropped too.
 
     Returns
     -------
@@ -245,6 +250,11 @@ def fit_spec(spec, polygon_m, height_m: float):
         w, d = unit[0].kind.size_m[:2] if len(unit) == 1 else _unit_rect(unit, groups)
         if not _rect_fits(poly, w, d):
             drop(unit, f"its footprint {w:.2f} x {d:.2f} m fits the {area:.1f} m\u00b2 floor at no angle")
+        elif camera is not None:
+            top = max(i.kind.size_m[2] + i.elevation_m for i in unit)
+            if in_view_share(camera, poly, (w, d, top)) == 0.0:
+                drop(unit, f"{top:.2f} m tall, it would be cut by the photo's edge or stand in its foreground "
+                           "wherever it stood (a photo taken from higher or farther back shows more)")
     stacked = _stacked_tops(spec.constraints)
     budget, used = fit.max_fill * area, 0.0
     for unit in _units(spec):
@@ -335,60 +345,166 @@ def _layout_floor(floor, height_m: float, photo: Path) -> np.ndarray:
 
 
 def _clean(rep: dict) -> bool:
-    # A door the user marked is kept clear as the floor's edge is kept.
+    # A door is kept clear as the floor's edge is kept; no item stands deep in another's
+    # clearance (a sofa across a TV stand's front); no piece is cut by the photo's edge or
+    # stands in its foreground.
+    from layout.solver import ACCESS_CLEAR_M
+
     return (rep["overlaps"]["count"] == 0 and rep["outside_m2"] == 0.0
-            and all(a <= ROOM.fit.door_graze_m2 for a in rep["door_clearance_m2"]))
+            and all(a <= ROOM.fit.door_graze_m2 for a in rep["door_clearance_m2"])
+            and rep["clearances"]["deepest_m"] <= ACCESS_CLEAR_M
+            and not rep.get("camera", {}).get("cut"))
 
 
-def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress):
-    """Solve ``suggestions`` layouts, suggestion K from seed ``seed + K - 1``; one that
-    collides, leaves the floor or repeats an earlier suggestion (closer than
-    ``ROOM.fit.min_difference_m``, :func:`layout.diversity`) is solved again from seed
-    ``seed + K - 1 + N``, then ``+ 2N`` (``ROOM.fit.seed_tries`` in all). A twin is kept when
-    no try gives anything else (a floor may allow only so many arrangements). When a
-    suggestion has no clean layout, the least important unit (the spec's last) is
-    dropped and all are solved again."""
+def layout_camera(calibration) -> Camera:
+    """The photo's camera as the layout sees it (:class:`layout.camera.Camera`)."""
+    return Camera(calibration.intrinsics.K, calibration.camera_from_floor, tuple(calibration.size_px))
+
+
+# Starts for another arrangement when random ones repeat an earlier suggestion
+# (layout.solver.turned_state): half a turn, mirrored, a quarter turn each way.
+TURNS = ((math.pi, False), (0.0, True), (0.5 * math.pi, False), (-0.5 * math.pi, False))
+# Closer than this (layout.diversity) to an earlier suggestion, a try is that suggestion again.
+PINNED_M = 0.01
+
+
+def _differs(a, b, min_m: float) -> bool:
+    """Two suggestions are different arrangements: other furniture, or the same moved
+    by at least ``min_m`` on average (:func:`layout.diversity`)."""
     from layout import diversity
+
+    ka = sorted(a.model.kinds[i] for i in a.items)
+    kb = sorted(b.model.kinds[i] for i in b.items)
+    return ka != kb or diversity([a, b]) >= min_m
+
+
+def _rule_faults(lay) -> int:
+    """How many rules a clean layout still breaks by more than a glance shows: a
+    wall-bound item off its wall,
+    a facing off by more than ``ROOM.fit.rule_angle_deg``, a distance or a place ("in
+    front of", "beside") off by more than ``ROOM.fit.rule_distance_m``."""
+    from layout.solver import State, residuals
+
+    fit = ROOM.fit
+    r = residuals(lay.model, State(lay.position_m, lay.yaw_rad))
+    return int(np.sum(np.abs(r["wall_distance"]) > fit.rule_distance_m)
+               + np.sum(np.abs(r["distance"]) > fit.rule_distance_m)
+               + np.sum(np.sqrt(2.0 * np.abs(r["heat"])) > fit.rule_distance_m)
+               + np.sum(np.abs(r["orientation"]) > np.radians(fit.rule_angle_deg)))
+
+
+class _Pick:
+    """The best try of one suggestion: clean first, then different from the earlier
+    suggestions, then with the fewest faults (the camera's, :func:`_rule_faults`)."""
+
+    def __init__(self, earlier: list):
+        self.earlier = earlier
+        self.best = None
+        self.cut = None  # the cut pieces of the unclean try that cut fewest
+        self.pinned = 0  # clean tries that came back exactly as an earlier suggestion
+
+    def offer(self, lay) -> bool:
+        """Consider a try; True once it is all one could want."""
+        rep = layout_report.evaluate(lay)
+        if not _clean(rep):
+            now = set(rep.get("camera", {}).get("cut", ()))
+            self.cut = now if self.cut is None or len(now) < len(self.cut) else self.cut
+            return False
+        # A repeat is worth nothing to the user; a fault, a little less than a perfect one.
+        key = (not all(_differs(old, lay, ROOM.fit.min_difference_m) for old in self.earlier),
+               camera_faults(rep.get("camera", {})) + _rule_faults(lay))
+        self.pinned += any(not _differs(old, lay, PINNED_M) for old in self.earlier)
+        if self.best is None or key < self.best[0]:
+            self.best = (key, lay, rep)
+        return key == (False, 0)
+
+    @property
+    def twin(self) -> bool:
+        return self.best is not None and self.best[0][0]
+
+
+def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress,
+                      notes: list | None = None):
+    """Solve ``suggestions`` layouts, suggestion K from seed ``seed + K - 1``.
+
+    A try that collides, leaves the floor, blocks a door or is cut by the photo's edge
+    is not clean; of the clean ones the first that is a different arrangement from the
+    earlier suggestions (:func:`_differs`) and has no fault (the camera finds nothing
+    hidden and no seating seen from behind, :func:`layout.camera.judge`; the rules hold,
+    :func:`_rule_faults`) is kept, else a different one with the fewest faults. Tries go on from seed
+    ``seed + K - 1 + N``, then ``+ 2N`` (``ROOM.fit.seed_tries`` in all). When all of
+    them repeat an earlier suggestion, the first suggestion turned and mirrored
+    (:data:`TURNS`) is tried as a start, then the furniture without one of its less
+    important units (another subset); a twin is kept, with a line in ``notes``, when
+    nothing gives anything else.
+
+    When a suggestion has no clean layout, the least important unit with an item cut
+    by the photo's edge is dropped, else the least important unit (the spec's last),
+    and all are solved again."""
+    from layout.solver import turned_state
     from layout.spec import build
 
     fit = ROOM.fit
+    notes = [] if notes is None else notes
     while True:
         model, solver = build(spec)
-        layouts, reports, failed = [], [], None
+        solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts))
+        layouts, reports, failed, cut, said = [], [], None, None, []
         for k in range(suggestions):
-            twin = None
+            pick = _Pick(layouts)
             for t in range(fit.seed_tries):
-                lay = solver.solve(model, seed=seed + k + t * suggestions)
-                rep = layout_report.evaluate(lay)
-                if not _clean(rep):
-                    continue
-                if all(diversity([old, lay]) >= fit.min_difference_m for old in layouts):
+                # Twice the very same arrangement: the photo pins it, other seeds will not help.
+                if pick.offer(solver.solve(model, seed=seed + k + t * suggestions)) or pick.pinned >= 2:
                     break
-                twin = twin or (lay, rep)
-            else:
-                lay, rep = twin if twin is not None else (lay, rep)
+            pick.pinned = 0
+            for angle, mirror in TURNS if pick.twin else ():
+                if pick.offer(solver.solve(model, seed=seed + k, state=turned_state(layouts[0], angle, mirror))) \
+                        or not pick.twin or pick.pinned >= 2:
+                    break
+            if pick.twin:
+                for unit in _units(spec)[:0:-1]:
+                    smaller, _ = _drop(spec, [i.id for i in unit])
+                    sub_model, _ = build(smaller)
+                    if pick.offer(solver.solve(sub_model, seed=seed + k)) or not pick.twin:
+                        break
             progress.step()
-            if not _clean(rep):
-                failed = k + 1
+            if pick.best is None:
+                failed, cut = k + 1, pick.cut
                 break
-            layouts.append(lay)
-            reports.append(rep)
+            layouts.append(pick.best[1])
+            reports.append(pick.best[2])
+            kinds = sorted(pick.best[1].model.kinds[i] for i in pick.best[1].items)
+            full = sorted(i.kind.name for i in spec.items)
+            if pick.twin:
+                said.append(f"suggestion {k + 1} repeats an earlier one: the floor in view leaves no other "
+                            "arrangement of this furniture")
+            elif kinds != full:
+                left = sorted(set(i.id for i in spec.items) - set(pick.best[1].model.names))
+                said.append(f"suggestion {k + 1} leaves out {', '.join(left)} to differ from the others: the floor "
+                            "in view leaves room for one arrangement of all of it")
         if failed is None:
+            notes.extend(said)
             return spec, layouts, reports
         units = _units(spec)
-        reason = (f"suggestion {failed} could not place everything without overlaps or leaving the "
-                  f"{area_m2:.1f} m\u00b2 floor")
         kinds = {i.id: i.kind.name for i in spec.items}
-        if len(units) == 1:
-            dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason} for i in units[0])
+        by_cut = [u for u in units if (cut or set()) & {i.id for i in u}]
+        if by_cut:
+            reason = "the photo's edge or its foreground would cut it wherever it stood with the rest"
+            gone_units = by_cut[-1:]
+        else:
+            reason = (f"suggestion {failed} could not place everything without overlaps or leaving the "
+                      f"{area_m2:.1f} m\u00b2 floor")
+            gone_units = units[-1:]
+        if len(gone_units) == len(units):
+            dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason} for u in units for i in u)
             raise too_small(area_m2, dropped)
-        spec, gone = _drop(spec, [i.id for i in units[-1]])
+        spec, gone = _drop(spec, [i.id for u in gone_units for i in u])
         dropped.extend({"id": i, "kind": kinds[i], "reason": reason} for i in sorted(gone))
         progress.grow(suggestions)
 
 
-def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=None, calibration=None,
-                        asset_kinds=(), warnings: list):
+def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=None, found_doors=(),
+                        calibration=None, asset_kinds=(), warnings: list):
     """The furniture to lay out on a measured floor (the pipeline's ``furniture`` stage).
 
     Parameters
@@ -403,6 +519,9 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
     doors : (n, 4) array_like, optional
         The doors the user marked (:func:`augment.room.doors.doors_on_floor`); needs
         ``calibration``.
+    found_doors : (n, 4) array_like
+        Doors found in the photo (:func:`augment.room.openings.find_doors`), the same way;
+        one that will not do as a door of the layout's floor is left out, not refused.
     asset_kinds : iterable of str
         Kinds the user gave models of: a warning names those no item shows.
     warnings : list
@@ -424,9 +543,19 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
     poly = _layout_floor(floor, height_m, where)
     edges = open_edges(poly, floor)
     spec = _spec_for_floor(source, poly, height_m, warnings, edges)
-    fitted, dropped = fit_spec(spec, poly, height_m)
+    camera = layout_camera(calibration) if calibration is not None and ROOM.fit.for_camera else None
+    fitted, dropped = fit_spec(spec, poly, height_m, camera)
+    fitted = dataclasses.replace(fitted, camera=camera)
     if doors is not None and len(doors):
         fitted = dataclasses.replace(fitted, doors=doors_on_floor(doors, calibration, poly, edges))
+    found = []
+    for d in np.asarray(found_doors, dtype=np.float64).reshape(-1, 4):
+        try:
+            found += [dataclasses.replace(o, where=f"found {o.where}")
+                      for o in doors_on_floor([d], calibration, poly, edges)]
+        except FurnishError:
+            continue
+    fitted = dataclasses.replace(fitted, doors=fitted.doors + tuple(found))
     if not fitted.items:
         raise too_small(floor.area_m2, dropped)
     kinds = {i.kind.name for i in fitted.items}

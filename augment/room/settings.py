@@ -51,6 +51,10 @@ class FitSettings:
     wall_margin_m: float = 0.05  # layouts keep this far inside the measured floor: its outline strays; baseboards
     max_fill: float = 0.5  # summed footprint of floor-standing items: at most this share of the floor
     seed_tries: int = 3  # seeds tried per suggestion before an item is dropped
+    restarts: int = 4  # at most this many solver restarts per try: the tries and the drops do the rest
+    rule_distance_m: float = 0.15  # a rule's distance or place off by more than this is a fault of a try
+    rule_angle_deg: float = 15.0  # ... and a facing off by more than this
+    for_camera: bool = True  # lay out for the photo's camera (layout.camera); False: as a plan seen from above
     min_difference_m: float = 0.3  # a suggestion this close to an earlier one (diversity) is a twin
     fit_cell_m: float = 0.02  # raster cell of the "does this footprint fit the floor" test
     fit_angles: int = 36  # orientations tried, over 180 degrees
@@ -61,11 +65,35 @@ class FitSettings:
 
 
 @dataclass
+class DoorSettings:
+    """Doors found in the photo (:mod:`augment.room.openings`); lengths in meters."""
+
+    step_m: float = 0.02  # a wall is sampled front-on this finely
+    top_m: float = 2.2  # ... from the floor up to this height (a door is 2.0-2.1 m)
+    wall_from_m: float = 0.15  # the wall's own colour: the median between these heights (a door or
+    wall_to_m: float = 0.7  # ... a radiator is a small part of a wall), below the windows' sills
+    min_difference: float = 10.0  # a sample differs from the wall by this CIELAB distance
+    leaf_from_m: float = 0.15  # a door leaf is judged from above the skirting board's height
+    sill_m: float = 0.7  # ... and must differ below this too (a window's sill is higher)
+    min_seen_m: float = 0.6  # at least this much of a column's leaf must be in view,
+    top_band_m: float = 0.1  # ... and its highest samples in view, this deep, differ too
+    min_share: float = 0.85  # share of a column's samples that differ, up and below the sill
+    width_m: tuple[float, float] = (0.6, 1.4)  # a door leaf with its casing, single or wide
+    line_step: float = 2.0  # a vertical line: lightness (CIELAB L) steps this much per sample across it
+    line_share: float = 0.8  # ... in this share of its column's samples in view
+    side_share: float = 0.5  # a door of its own colour has such a line at a side in this share at least
+    line_margin: int = 4  # ... and stands this many samples off the wall's ends (its corners)
+    wall_turn_deg: float = 20.0  # the outline's edges form one wall while they turn less than this,
+    jog_m: float = 0.3  # ... or by any angle over an edge shorter than this (round a threshold)
+
+
+@dataclass
 class RoomSettings:
     """The room stage's settings, one section per module."""
 
     height: HeightSettings = field(default_factory=HeightSettings)
     fit: FitSettings = field(default_factory=FitSettings)
+    doors: DoorSettings = field(default_factory=DoorSettings)
 
 
 ROOM = RoomSettings()

@@ -98,6 +98,30 @@ def test_furniture_stands_on_the_true_floor(roomy):
         assert share >= FOOTPRINT_IN_FLOOR, f"suggestion {k}: {100 * share:.1f} % of footprint pixels on the floor"
 
 
+def test_every_piece_is_whole_in_the_photo_and_out_of_its_foreground(roomy):
+    """room_4 looks down at the floor: the sofa's back and the TV stand reach past the top
+    edge where they stand against the far wall. Each suggestion's boxes, projected with the
+    photo's calibration and its lens distortion, lie inside the photo and above the
+    foreground line, and the report says so."""
+    from layout.camera import CAMERA, box_corners_3d
+
+    result, _ = roomy
+    cal = result.calibration
+    w, h = cal.size_px
+    T = cal.camera_from_floor
+    for k, lay in enumerate(result.layouts, start=1):
+        m = lay.model
+        items = [i for i in lay.items if m.particle_collides[i]]
+        corners = box_corners_3d(lay.position_m[items], lay.yaw_rad[items], m.particle_size_m[items])
+        px, _ = cv2.projectPoints(corners.reshape(-1, 3), cv2.Rodrigues(T[:3, :3])[0], T[:3, 3],
+                                  cal.intrinsics.K, cal.intrinsics.distortion)
+        px = px.reshape(-1, 2)
+        assert px[:, 0].min() > -2 and px[:, 0].max() < w + 2 and px[:, 1].min() > -2, k
+        assert px[:, 1].max() < h * (1 - CAMERA.foreground) + 2, k
+        assert result.reports[k - 1]["camera"]["cut"] == []
+        assert result.report["suggestions"][k - 1]["camera"]["cut"] == []
+
+
 def test_no_overlaps_and_nothing_off_the_floor(roomy):
     result, _ = roomy
     for lay, rep in zip(result.layouts, result.reports):
@@ -275,12 +299,24 @@ def test_keep_board_leaves_it(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     monkeypatch.setattr(layout.solver, "compiled", lambda: False)
     out = tmp_path / "kept"
-    code, stdout, err = run(["furnish", ROOMY, "--suggestions", "1", "--keep-board", "--out", out], capsys)
+    code, stdout, err = run(["furnish", ROOMY, "--suggestions", "1", "--keep-board", "--layers", "--out", out],
+                            capsys)
     assert code == 0, err
     assert err.startswith("note: the first run on this machine compiles the layout solver (numba)"), err
     assert "board       kept in the staged photos (--keep-board)" in stdout
-    staged = cv2.cvtColor(cv2.imread(str(out / "staged_1.jpg")), cv2.COLOR_BGR2RGB)
-    assert _board_found(staged)
+    # Where no furniture stands in front of it, the sheet is the photo's own, under the
+    # furniture's shadow perhaps (erased, it would be floor).
+    photo = cv2.imread(str(ROOMY)).astype(float)
+    staged = cv2.imread(str(out / "staged_1.jpg")).astype(float)
+    alpha = cv2.imread(str(out / "staged_1_layer.png"), cv2.IMREAD_UNCHANGED)[..., 3]
+    found, corners = cv2.findChessboardCorners(cv2.imread(str(ROOMY), cv2.IMREAD_GRAYSCALE), (7, 5))
+    assert found
+    sheet = np.zeros(alpha.shape, np.uint8)
+    cv2.fillConvexPoly(sheet, cv2.convexHull(corners.reshape(-1, 2)).astype(np.int32), 1)
+    bare = (sheet == 1) & (alpha < 250)
+    assert bare.sum() > 0.3 * sheet.sum()
+    assert np.corrcoef(staged[bare].mean(axis=1), photo[bare].mean(axis=1))[0, 1] > 0.85
+    assert staged[bare].std(axis=0).mean() > 40  # black and white squares, not floor
     assert json.loads((out / "report.json").read_text())["board"] == {"erased": False}
 
 
@@ -351,12 +387,13 @@ def test_a_layout_is_rendered_again_as_it_stands(roomy, tmp_path, capsys, monkey
     assert json.loads((restyled / "report.json").read_text())["suggestions"][0]["style"] == "industrial"
     assert _positions(restyled / "layout_1.json") == _positions(first / "layout_2.json")
     other = cv2.imread(str(restyled / "staged_1.jpg")).astype(float)
-    # Another look where the furniture stands, the photo itself nowhere else.
+    # Another look where the furniture stands, the photo itself nowhere else (only where
+    # one style's design reaches past the other's: legs, arms, a thinner top).
     changed = np.abs(other - staged[0]).max(axis=2) > 40
     photo = cv2.imread(str(ROOMY)).astype(float)
     assert changed.mean() > 0.05
     for render in (staged[0], other):
-        assert (changed & (np.abs(render - photo).max(axis=2) < 8)).mean() < 0.01
+        assert (changed & (np.abs(render - photo).max(axis=2) < 8)).mean() < 0.02
 
 
 def test_bad_layouts_are_refused(roomy, tmp_path, out_with_a_file, capsys):
@@ -389,6 +426,7 @@ def test_bad_layouts_are_refused(roomy, tmp_path, out_with_a_file, capsys):
     for it in doc["items"]:
         it["position_m"][0] += 6.0
     doc["room"]["polygon_m"] = [[x + 6.0, y] for x, y in doc["room"]["polygon_m"]]
+    doc["room"]["doors_m"] = [[[x + 6.0, y] for x, y in d] for d in doc["room"]["doors_m"]]
     bad.write_text(json.dumps(doc))
     moved = furnish(ROOMY, Board(), layout=bad)
     assert any(w.startswith(f"layout {bad}: ") and "stands off the floor measured in this photo" in w
@@ -443,8 +481,8 @@ def test_a_users_model_replaces_a_kind(roomy, tmp_path, capsys):
     assert code == 0, err
     # The sofa is the red box, in the photo and in the scene; the piano is said to be unused.
     staged = cv2.cvtColor(cv2.imread(str(out / "staged_1.jpg")), cv2.COLOR_BGR2RGB)
-    assert _red_pixels(staged) > 5000
-    assert _red_pixels(roomy[0].staged[0]) < 50
+    # (The same suggestion in Stager's own furniture has red only in the books on its shelf.)
+    assert _red_pixels(staged) > 5000 + _red_pixels(roomy[0].staged[0])
     scene = trimesh.load(out / "scene_1.glb", force="scene")
     sofa = scene.geometry["sofa"]
     assert len(sofa.vertices) == len(trimesh.load(red, force="mesh").vertices)
@@ -458,7 +496,7 @@ def test_a_users_model_replaces_a_kind(roomy, tmp_path, capsys):
     a = layer[..., 3:].astype(np.float32) / 255.0
     laid = a * layer[..., :3] + (1.0 - a) * photo
     assert np.abs(laid - staged).mean() < 2.0
-    assert 0.01 < (a > 0).mean() < 0.6 and np.all(laid[a[..., 0] == 0] == photo[a[..., 0] == 0])
+    assert 0.01 < (a > 0).mean() < 0.8 and np.all(laid[a[..., 0] == 0] == photo[a[..., 0] == 0])
 
 
 def test_bad_asset_flags(tmp_path, capsys):
@@ -622,7 +660,8 @@ def test_spec_items_that_do_not_fit_are_dropped_with_a_warning(tmp_path):
     result = furnish(ROOMY, Board(), spec=spec, suggestions=1)
     assert [i.id for i in result.spec.items] == ["sofa"]
     assert {d["id"] for d in result.dropped} == {"wardrobe", "pool"}
-    assert not result.spec.constraints and not result.spec.doors
+    # The spec's own doors are of its own room; the door found in the photo is kept clear.
+    assert not result.spec.constraints and all(o.where.startswith("found door") for o in result.spec.doors)
     warnings = " ".join(result.warnings)
     assert "door" in warnings and "wardrobe" in warnings and "pool" in warnings and "sofa" in warnings
     assert "1 door(s) and 0 window(s)" in warnings and "mark the photo's doors to keep them clear: --door" in warnings
@@ -719,15 +758,15 @@ def test_open_edges_of_the_shrunk_floor_follow_the_measured_ones():
 
 def test_furniture_goes_against_walls_not_the_photos_edge(roomy):
     """room_4's floor meets the photo's edge on three sides: those are open edges in the
-    layouts, and the sofa and the TV stand (against a wall by default) are nearer a
-    real wall than any open edge."""
+    layouts, and the TV stand (against a wall by default) is nearer a real wall than any
+    open edge."""
     result, _ = roomy
     for lay in result.layouts:
         m = lay.model
         room = lay.to_dict()["room"]
         assert room["open_edges"], "no open edge on a photo whose floor leaves the frame"
         for i in m.items:
-            if m.kinds[i] not in ("sofa", "tv_stand"):
+            if m.kinds[i] != "tv_stand":
                 continue
             dist = edge_distances(lay.position_m[i, None, :2], m.floor_polygon_m)[0]
             assert dist[m.floor_edge_wall].min() < dist[~m.floor_edge_wall].min(), m.kinds[i]
@@ -743,24 +782,38 @@ def test_contact_sheet_layout(rng):
 
 def test_a_repeated_suggestion_is_solved_again_from_another_seed(monkeypatch):
     """Seeds 0 and 1 are made to give the same layout: suggestion 2 must come from the
-    next seed tried (1 + N) instead; and when every try repeats, the twin is kept."""
+    next seed tried (1 + N) instead. When every seed and every turned start repeats it,
+    suggestion 2 leaves out the least important unit, and says so; with one unit only,
+    the twin is kept, and said to be one."""
     from layout import Solver, diversity
+    from layout.spec import build
 
     real = Solver.solve
     spec = load_spec(Path(__file__).resolve().parents[2] / "samples" / "living_room.toml")
 
-    def run(twin_seeds):
+    def run(spec, twin_seeds):
+        # A twin seed gives seed 0's layout, from any start.
         monkeypatch.setattr(Solver, "solve", lambda self, model, seed=None, state=None:
-                            real(self, model, seed=0 if seed in twin_seeds else seed))
-        _, layouts, _ = fit.solve_suggestions(spec, 2, 0, 20.0, [], pipeline._Progress(False, 2))
-        return layouts
+                            real(self, model, seed=0) if seed in twin_seeds else real(self, model, seed, state))
+        notes = []
+        _, layouts, _ = fit.solve_suggestions(spec, 2, 0, 20.0, [], pipeline._Progress(False, 2), notes)
+        return layouts, notes
 
-    first, second = run({1})
-    assert diversity([first, second]) >= ROOM.fit.min_difference_m
+    (first, second), notes = run(spec, {1})
+    assert diversity([first, second]) >= ROOM.fit.min_difference_m and notes == []
     np.testing.assert_array_equal(second.position_m, real(Solver(**{**spec.solver.__dict__}), first.model,
                                                           seed=1 + 2).position_m)
-    first, second = run({1, 3, 5})  # every try for suggestion 2 repeats suggestion 1
+    (first, second), notes = run(spec, {1, 3, 5})  # every try for suggestion 2 repeats suggestion 1
+    last = fit._units(spec)[-1]
+    assert sorted(second.model.names) == sorted(set(first.model.names) - {i.id for i in last})
+    assert notes == [f"suggestion 2 leaves out {', '.join(sorted(i.id for i in last))} to differ from the "
+                     "others: the floor in view leaves room for one arrangement of all of it"]
+    alone, _ = fit._drop(spec, [i.id for u in fit._units(spec)[1:] for i in u])
+    (first, second), notes = run(alone, {1, 3, 5})
     np.testing.assert_array_equal(second.position_m, first.position_m)
+    assert notes == ["suggestion 2 repeats an earlier one: the floor in view leaves no other arrangement of "
+                     "this furniture"]
+    assert build(alone)[0].n == first.model.n
 
 
 def test_furniture_keeps_to_the_users_floor_mask(tmp_path, capsys):
@@ -831,3 +884,60 @@ def test_a_marked_door_is_kept_clear(tmp_path, capsys):
     cal = calibrate_file(ROOMY.with_name("room_1.jpg"), Board())
     with pytest.raises(FurnishError, match="above the horizon"):
         room_doors.doors_on_floor([[600, 10, 700, 10]], cal, np.array([[0, 0], [4, 0], [4, 4], [0, 4.0]]))
+
+
+def _true_doors_on_the_layout_floor(photo: Path, calibration) -> list:
+    """The photographer's doors (its truth, world frame) in the calibration's floor frame,
+    the board's up to its half-turn symmetry, which the estimated pose settles."""
+    truth = json.loads(photo.with_suffix(".json").read_text())
+    world_from_board = np.asarray(truth["board"]["world_from_board"])
+    M = np.linalg.inv(world_from_board) @ np.linalg.inv(np.asarray(truth["camera_from_world"])) \
+        @ calibration.camera_from_floor
+    turn = round(np.arctan2(M[1, 0], M[0, 0]) / (np.pi / 2)) * (np.pi / 2)
+    c, s = round(np.cos(turn)), round(np.sin(turn))
+    floor_from_world = np.linalg.inv(world_from_board @ np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0],
+                                                                  [0, 0, 0, 1.0]]))
+    return [(np.column_stack([d["segment_m"], np.zeros(2), np.ones(2)]) @ floor_from_world.T)[:, :2]
+            for d in truth["room"]["doors"]]
+
+
+def test_the_door_in_the_photo_is_found_and_kept_clear(roomy):
+    """room_4 has one door, green, on the wall with the radiator: it is found within 15 cm
+    of the photographer's door and as wide within 15 cm, no other (the radiator is not a
+    door); every suggestion keeps its swing zone clear, and the report and the floor
+    overlay show it."""
+    from augment.room.openings import find_doors
+
+    result, _ = roomy
+    (true,) = _true_doors_on_the_layout_floor(ROOMY, result.calibration)
+    (found,) = find_doors(result.image, result.calibration, result.floor)
+    assert np.linalg.norm(found.segment_m.mean(axis=0) - true.mean(axis=0)) < 0.15
+    assert abs(np.linalg.norm(found.segment_m[1] - found.segment_m[0]) - np.linalg.norm(true[1] - true[0])) < 0.15
+    np.testing.assert_allclose(found.feet_px, result.calibration.pixels_from_floor(found.segment_m))
+    (door,) = result.report["furniture"]["doors"]
+    assert door["marked"].startswith("found door ")
+    for lay, rep in zip(result.layouts, result.reports):
+        assert len(lay.model.door_segments_m) == 1
+        assert rep["door_clearance_m2"][0] <= ROOM.fit.door_graze_m2
+    # The overlay draws the door's feet in the door colour.
+    overlay = result.overlays["overlay_floor.png"]
+    (x1, y1), (x2, y2) = found.feet_px
+    mid = overlay[int(round((y1 + y2) / 2)), int(round((x1 + x2) / 2))]
+    assert np.abs(mid.astype(int) - DRAW.floor.door_color).max() < 40
+
+
+def test_no_door_is_found_where_there_is_none():
+    """room_1: a window with a radiator under it on a wooden floor, no door in view."""
+    from augment.room.openings import find_doors
+
+    m = pipeline.measure(CRAMPED, Board())
+    assert _true_doors_on_the_layout_floor(CRAMPED, m.calibration)  # its door is behind the camera
+    assert find_doors(m.image, m.calibration, m.floor) == []
+
+
+def test_no_auto_doors_keeps_only_the_users(tmp_path, capsys):
+    out = tmp_path / "plain"
+    code, _, err = run(["furnish", ROOMY, "--suggestions", "1", "--no-auto-doors", "--out", out, "-q"], capsys)
+    assert code == 0, err
+    report = json.loads((out / "report.json").read_text())
+    assert report["furniture"]["doors"] == []

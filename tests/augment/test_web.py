@@ -254,8 +254,8 @@ height = 2.5
 id = "reading_chair"
 kind = "armchair"
 [[items]]
-id = "lamp"
-kind = "floor_lamp"
+id = "side"
+kind = "side_table"
 """
     response = client.post("/api/jobs", files={"photo": ("room_4.jpg", PHOTO.read_bytes(), "image/jpeg"),
                                                "spec": ("my room.toml", spec, "text/plain")},
@@ -265,8 +265,8 @@ kind = "floor_lamp"
     assert state["status"] == "done", state
     assert state["options"]["spec"] is True and state["options"]["room"] is None
     report = client.get(f"/api/jobs/{state['id']}/files/report.json").json()
-    assert report["furniture"]["items"] == ["reading_chair", "lamp"]
-    assert report["furniture"]["kinds"] == ["armchair", "floor_lamp"]
+    assert report["furniture"]["items"] == ["reading_chair", "side"]
+    assert report["furniture"]["kinds"] == ["armchair", "side_table"]
 
 
 def test_a_layout_sent_is_rendered_again_in_another_style(finished):

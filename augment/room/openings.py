@@ -1,0 +1,203 @@
+"""Doors found in the photo, so the layouts keep them clear without the user marking them.
+
+Every wall of the measured floor is a vertical plane through its foot line, so the
+calibration maps the wall to the photo: :func:`find_doors` samples each wall in view as
+a front-on strip (2 cm a sample, from the floor to 2.2 m), takes the wall's own colour
+(the median where a wall is usually bare, 0.9-1.7 m up), and looks for a door leaf: a run
+of columns, as wide as a door, whose colour differs from the wall's from the floor up as
+far as the photo shows (at least 1 m of it), where a window (a sill above the floor) or a
+radiator (below 0.7 m) differs only in part of the height. The feet of the run's two
+sides are the door, as a user would mark it (:func:`augment.room.doors.doors_on_floor`).
+
+A door painted the wall's colour shows no such run and is missed; ``--door`` marks it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from .settings import ROOM
+
+
+@dataclass(frozen=True)
+class FoundDoor:
+    """A door found on a wall of the measured floor.
+
+    Attributes
+    ----------
+    feet_px : (2, 2) float64
+        Photo pixels of the feet of its two sides (as ``--door`` takes them).
+    segment_m : (2, 2) float64
+        The same on the floor, meters.
+    score : float
+        Share of its columns that differ from the wall all the way up (0-1).
+    """
+
+    feet_px: np.ndarray
+    segment_m: np.ndarray
+    score: float
+
+
+def _wall_strip(lab: np.ndarray, calibration, a: np.ndarray, b: np.ndarray, step_m: float, top_m: float):
+    """The wall standing on the floor edge a -> b, sampled front-on: (z, s, 3) Lab colours
+    (rows from the floor up) and a (z, s) mask of the samples inside the photo."""
+    length = float(np.linalg.norm(b - a))
+    s = np.arange(0.5 * step_m, length, step_m)
+    z = np.arange(0.5 * step_m, top_m, step_m)
+    u = (b - a) / length
+    S, Z = np.meshgrid(s, z)
+    pts = np.stack([a[0] + S * u[0], a[1] + S * u[1], Z], axis=-1).reshape(-1, 3)
+    cam = pts @ calibration.camera_from_floor[:3, :3].T + calibration.camera_from_floor[:3, 3]
+    px = calibration.pixels_from_floor(pts).reshape(len(z), len(s), 2).astype(np.float32)
+    h, w = lab.shape[:2]
+    inside = ((cam[:, 2] > 0.1).reshape(len(z), len(s)) & (px[..., 0] >= 0) & (px[..., 0] <= w - 1)
+              & (px[..., 1] >= 0) & (px[..., 1] <= h - 1))
+    strip = cv2.remap(lab, px[..., 0], px[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return strip, inside, s
+
+
+def _walls(poly: np.ndarray, edge_kind, settings) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The walls along the floor's outline, as (start, end) foot points: runs of wall
+    edges that turn by less than ``settings.wall_turn_deg``, or by any angle over an edge
+    shorter than ``settings.jog_m`` (the outline steps round a door's threshold or a
+    casing), fitted with one straight line each."""
+    m = len(poly)
+    wall = [kind == "boundary" for kind in edge_kind]
+    if not any(wall):
+        return []
+    start = next((k for k in range(m) if not wall[k - 1] or not wall[k]), 0)
+    chains, chain = [], []
+    for q in range(m):
+        k = (start + q) % m
+        if not wall[k]:
+            if chain:
+                chains.append(chain)
+            chain = []
+            continue
+        if chain:
+            # The chain's direction is its longest edge's; a short edge that turns away
+            # belongs to it when the edge after it turns back (a jog, not a corner).
+            main = max(chain, key=lambda e: np.linalg.norm(poly[(e + 1) % m] - poly[e]))
+            d0 = poly[(main + 1) % m] - poly[main]
+            d1 = poly[(k + 1) % m] - poly[k]
+            after = poly[(k + 2) % m] - poly[(k + 1) % m]
+            jog = (np.linalg.norm(d1) < settings.jog_m and wall[(k + 1) % m]
+                   and _turn_deg(d0, after) <= settings.wall_turn_deg)
+            if _turn_deg(d0, d1) > settings.wall_turn_deg and not jog:
+                chains.append(chain)
+                chain = []
+        chain.append(k)
+    if chain:
+        chains.append(chain)
+    out = []
+    for chain in chains:
+        pts = np.array([poly[chain[0]]] + [poly[(k + 1) % m] for k in chain])
+        center = pts.mean(axis=0)
+        direction = np.linalg.svd(pts - center)[2][0]
+        if direction @ (pts[-1] - pts[0]) < 0:
+            direction = -direction
+        t = (pts - center) @ direction
+        out.append((center + t.min() * direction, center + t.max() * direction))
+    return out
+
+
+def _turn_deg(d0: np.ndarray, d1: np.ndarray) -> float:
+    return abs(float(np.degrees(np.arctan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1))))
+
+
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """(start, end) index pairs of the runs of True, end exclusive."""
+    edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
+def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
+    """The doors standing on the walls of ``floor`` in ``image``.
+
+    Parameters
+    ----------
+    image : (h, w, 3) uint8
+        The photo, RGB, as calibrated. Not modified.
+    calibration : Calibration
+    floor : FloorPolygon
+        Its edges of kind ``"boundary"`` are walls.
+
+    Returns
+    -------
+    list of FoundDoor
+        Left to right along each wall, walls in the polygon's order.
+    """
+    settings = ROOM.doors
+    lab = cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2LAB).astype(np.float32)
+    lab[..., 0] *= 100.0 / 255.0
+    lab[..., 1:] -= 128.0
+    step = settings.step_m
+    poly = np.asarray(floor.polygon_m, dtype=np.float64)
+    lo_w, hi_w = settings.width_m
+    found = []
+    for a, b in _walls(poly, floor.edge_kind, settings):
+        if np.linalg.norm(b - a) < lo_w:
+            continue
+        strip, inside, s = _wall_strip(lab, calibration, a, b, step, settings.top_m)
+        z = (np.arange(strip.shape[0]) + 0.5) * step
+        bare = inside & (z[:, None] >= settings.wall_from_m) & (z[:, None] <= settings.wall_to_m)
+        if bare.sum() < 20:
+            continue
+        wall = np.median(strip[bare], axis=0)
+        differs = np.linalg.norm(strip - wall, axis=-1) > settings.min_difference
+        low = inside & (z[:, None] >= settings.leaf_from_m)
+        seen = low.sum(axis=0)
+        # How far up each column shows; a call needs at least min_seen_m of leaf in view.
+        share = np.where(seen > 0, (differs & low).sum(axis=0) / np.maximum(seen, 1), 0.0)
+        tall = seen * step >= settings.min_seen_m
+        foot = inside[: int(settings.sill_m / step)] & (z[: int(settings.sill_m / step), None] >= settings.leaf_from_m)
+        foot_share = (differs[: len(foot)] & foot).sum(axis=0) / np.maximum(foot.sum(axis=0), 1)
+        # The highest samples in view differ too: a radiator's top shows wall above it.
+        top_z = np.where(low.any(axis=0), np.max(np.where(low, z[:, None], 0.0), axis=0), 0.0)
+        top = low & (z[:, None] >= top_z - settings.top_band_m)
+        top_share = (differs & top).sum(axis=0) / np.maximum(top.sum(axis=0), 1)
+        leaf = tall & (share >= settings.min_share) & (foot_share >= settings.min_share) & (
+            top_share >= settings.min_share)
+        leaf = cv2.morphologyEx(leaf.astype(np.uint8)[None], cv2.MORPH_CLOSE, np.ones((1, 3), np.uint8))[0] > 0
+        # A door the wall's colour: the casing's two sides, vertical lines from the floor up.
+        lines = _upright_lines(strip[..., 0], low, tall, settings, settings.line_share)
+        # A leaf of its own colour has a hard edge at a side at least (light on a wall fades).
+        edges = _upright_lines(strip[..., 0], low, tall, settings, settings.side_share)
+        spans = [(i0, i1, float(share[i0:i1].mean())) for i0, i1 in _runs(leaf)
+                 if lo_w <= (i1 - i0) * step <= hi_w and any(min(abs(e - i0), abs(e - i1)) <= 3 for e in edges)]
+        for i, j in ((i, j) for i in lines for j in lines if lo_w <= (j - i) * step <= hi_w):
+            if not any(i0 - 3 <= i and j <= i1 + 3 for i0, i1, _ in spans):
+                spans.append((i, j + 1, 0.5))
+        spans = _without_overlaps(spans)
+        u = (b - a) / np.linalg.norm(b - a)
+        for i0, i1, score in spans:
+            seg = np.stack([a + s[i0] * u - 0.5 * step * u, a + s[i1 - 1] * u + 0.5 * step * u])
+            found.append(FoundDoor(calibration.pixels_from_floor(seg), seg, score))
+    return found
+
+
+def _upright_lines(lightness: np.ndarray, low: np.ndarray, tall: np.ndarray, settings, min_share: float
+                   ) -> list[int]:
+    """Columns of the wall strip where a vertical line runs up from the floor: a step in
+    lightness across the column in most samples in view (a casing's edge, a leaf's
+    shadow), the strongest of its neighbours, off the wall's ends."""
+    step_l = np.zeros_like(lightness)
+    step_l[:, 1:-1] = np.abs(lightness[:, 2:] - lightness[:, :-2]) / 2.0
+    share = np.where(low.sum(axis=0) > 0, ((step_l > settings.line_step) & low).sum(axis=0)
+                     / np.maximum(low.sum(axis=0), 1), 0.0)
+    share[: settings.line_margin] = 0.0
+    share[-settings.line_margin:] = 0.0
+    keep = tall & (share >= min_share)
+    peaks = [i for i in np.flatnonzero(keep) if share[i] >= share[max(i - 2, 0): i + 3].max()]
+    return peaks
+
+
+def _without_overlaps(spans: list) -> list:
+    """Of overlapping (start, end, score) spans, the best scored."""
+    kept = []
+    for sp in sorted(spans, key=lambda t: -t[2]):
+        if all(sp[1] <= k[0] or sp[0] >= k[1] for k in kept):
+            kept.append(sp)
+    return sorted(kept)
