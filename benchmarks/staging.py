@@ -258,8 +258,8 @@ def main(argv=None) -> int:
         k = int(np.argmax([sum(not r[c] for c in CHECKS if r[c] is not None) for r in rows]))
         img = np.ascontiguousarray(res.staged[k])
         label = f"{e['photo']} #{k + 1}: " + ", ".join(c for c in CHECKS if rows[k][c] is False)
-        cv2.putText(img, label, (12, 36), cv2.FONT_HERSHEY_SIMPLEX, 0.9, (0, 0, 0), 5, cv2.LINE_AA)
-        cv2.putText(img, label, (12, 36), cv2.FONT_HERSHEY_SIMPLEX, 0.9, (255, 255, 255), 2, cv2.LINE_AA)
+        cv2.putText(img, label, (90, 40), cv2.FONT_HERSHEY_SIMPLEX, 0.9, (0, 0, 0), 5, cv2.LINE_AA)
+        cv2.putText(img, label, (90, 40), cv2.FONT_HERSHEY_SIMPLEX, 0.9, (255, 255, 255), 2, cv2.LINE_AA)
         images.append(cv2.resize(img, (640, 480), interpolation=cv2.INTER_AREA))
     if images:
         sheet = contact_sheet(images)

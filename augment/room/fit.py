@@ -361,6 +361,11 @@ def layout_camera(calibration) -> Camera:
     return Camera(calibration.intrinsics.K, calibration.camera_from_floor, tuple(calibration.size_px))
 
 
+NO_ROOM_IN_VIEW = ("the photo shows too little above the floor for any piece to stand whole in it; laid out "
+                   "without the camera, so pieces may be cut by the photo's edge (step back, or hold the camera "
+                   "higher and level)")
+
+
 # Starts for another arrangement when random ones repeat an earlier suggestion
 # (layout.solver.turned_state): half a turn, mirrored, a quarter turn each way.
 TURNS = ((math.pi, False), (0.0, True), (0.5 * math.pi, False), (-0.5 * math.pi, False))
@@ -440,12 +445,14 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
 
     When a suggestion has no clean layout, the least important unit with an item cut
     by the photo's edge is dropped, else the least important unit (the spec's last),
-    and all are solved again."""
+    and all are solved again. Rather than drop the last unit for the camera's sake, all
+    are laid out again without the camera, with a line in ``notes``."""
     from layout.solver import turned_state
     from layout.spec import build
 
     fit = ROOM.fit
     notes = [] if notes is None else notes
+    original, dropped_before = spec, len(dropped)
     while True:
         model, solver = build(spec)
         solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts))
@@ -465,13 +472,18 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 for unit in _units(spec)[:0:-1]:
                     smaller, _ = _drop(spec, [i.id for i in unit])
                     sub_model, _ = build(smaller)
-                    if pick.offer(solver.solve(sub_model, seed=seed + k)) or not pick.twin:
+                    for t in range(fit.seed_tries):
+                        if pick.offer(solver.solve(sub_model, seed=seed + k + t * suggestions)) or not pick.twin:
+                            break
+                    if not pick.twin:
                         break
             progress.step()
             if pick.best is None:
                 failed, cut = k + 1, pick.cut
                 break
-            layouts.append(pick.best[1])
+            # Its seed names the suggestion (it picks the designs and the default style, here
+            # and when layout_K.json is rendered again), whichever try's start it came from.
+            layouts.append(dataclasses.replace(pick.best[1], seed=seed + k))
             reports.append(pick.best[2])
             kinds = sorted(pick.best[1].model.kinds[i] for i in pick.best[1].items)
             full = sorted(i.kind.name for i in spec.items)
@@ -496,6 +508,12 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                       f"{area_m2:.1f} m\u00b2 floor")
             gone_units = units[-1:]
         if len(gone_units) == len(units):
+            if spec.camera is not None:
+                # Better pieces cut by the photo's edge than no staged photo: all again, as a plan.
+                notes.append(NO_ROOM_IN_VIEW)
+                spec = dataclasses.replace(original, camera=None)
+                del dropped[dropped_before:]
+                continue
             dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason} for u in units for i in u)
             raise too_small(area_m2, dropped)
         spec, gone = _drop(spec, [i.id for u in gone_units for i in u])
@@ -545,16 +563,23 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
     spec = _spec_for_floor(source, poly, height_m, warnings, edges)
     camera = layout_camera(calibration) if calibration is not None and ROOM.fit.for_camera else None
     fitted, dropped = fit_spec(spec, poly, height_m, camera)
+    if camera is not None and not fitted.items:
+        # Better pieces cut by the photo's edge than no staged photo at all.
+        fitted, dropped = fit_spec(spec, poly, height_m)
+        camera = None
+        warnings.append(NO_ROOM_IN_VIEW)
     fitted = dataclasses.replace(fitted, camera=camera)
     if doors is not None and len(doors):
         fitted = dataclasses.replace(fitted, doors=doors_on_floor(doors, calibration, poly, edges))
     found = []
     for d in np.asarray(found_doors, dtype=np.float64).reshape(-1, 4):
         try:
-            found += [dataclasses.replace(o, where=f"found {o.where}")
-                      for o in doors_on_floor([d], calibration, poly, edges)]
-        except FurnishError:
-            continue
+            door = [dataclasses.replace(o, where=f"found {o.where}")
+                    for o in doors_on_floor([d], calibration, poly, edges)]
+            LayoutBuilder(poly, height_m, open_edges=edges).add_door(door[0].at_m, door[0].width_m)
+        except (FurnishError, LayoutError):
+            continue  # not a door of this floor's walls (wider than its wall, say): a false find
+        found += door
     fitted = dataclasses.replace(fitted, doors=fitted.doors + tuple(found))
     if not fitted.items:
         raise too_small(floor.area_m2, dropped)
