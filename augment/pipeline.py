@@ -580,6 +580,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         if m.floor.caveat:
             warnings.append(f"furniture is placed on the floor in view only ({m.floor.caveat})")
         room_height = float(m.height.height_m)
+        # The doors kept clear: the user's, else those found in the photo (drawn on the overlay too).
+        marked = doors is not None and len(doors) > 0
         found_px = []
         if layout is not None:
             fitted, layouts, dropped = fixed_spec, [fixed_layout], []
@@ -590,7 +592,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             bar.step(1 + suggestions)
         else:
             with clock("furniture"):
-                if auto_doors and (doors is None or not len(doors)):
+                if auto_doors and not marked:
                     found_px = [f.feet_px.ravel() for f in find_doors(m.image, m.calibration, m.floor)]
                 fitted, dropped = furniture_for_floor(source, m.floor, room_height, photo, doors=doors,
                                                       found_doors=found_px,
@@ -642,7 +644,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                                         assets=user_models, style=style_name))
                 bar.step()
         with clock("overlays"):
-            pictures = overlays(m, doors if doors is not None and len(doors) else found_px)
+            pictures = overlays(m, doors if marked else found_px)
             sheet = contact_sheet(staged)
         bar.step()
         with clock("plans"):  # only what the plans take beyond the stages above

@@ -43,12 +43,13 @@ ROOT = HERE.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(HERE))
 
+from realism import floor_in_world, write_phone_jpeg  # noqa: E402  (the photos and the board pose as realism.py)
+
 ROOMS = ("living_room", "bedroom", "office", "dining_room")
 SUGGESTIONS = 4
 CHECKS = ("foreground_clear", "whole", "visible", "good_side", "doors_clear", "rules_met", "different")
 TARGET = 0.95
 DOOR_MATCH_M = 0.3  # a found door this close to a true one is that door (its error is reported)
-FILM_DIAGONAL_MM = 43.27
 
 
 class _Quiet:
@@ -61,8 +62,6 @@ class _Quiet:
 
 def _photos(count: int, seed: int, work: Path):
     """(name, path, preset, truth or None) of the sample photos and the renders."""
-    from PIL import Image
-
     from augment.render.gl import Renderer
     from augment.synth import render_sample
 
@@ -71,30 +70,16 @@ def _photos(count: int, seed: int, work: Path):
         for i in range(count):
             sample = render_sample([seed, i], renderer, (1280, 960), clutter=False)
             path = work / f"render_{i:02d}.jpg"
-            exif = Image.Exif()
-            focal_px = sample.truth["K"][0][0]
-            exif.get_ifd(0x8769)[0xA405] = int(round(focal_px * FILM_DIAGONAL_MM / math.hypot(1280, 960)))
-            Image.fromarray(sample.image).save(path, quality=sample.truth["photo"]["jpeg_quality"], exif=exif)
+            write_phone_jpeg(path, sample.image, sample.truth["K"][0][0], sample.truth["photo"]["jpeg_quality"])
             out.append((f"render {seed}/{i}", path, ROOMS[i % len(ROOMS)], sample.truth))
     return out
 
 
 def _doors_in_layout_frame(truth, calibration) -> list:
-    """The true doors' segments in the calibration's floor frame (the board's, up to its
-    half-turn symmetry, which the estimated pose settles)."""
-    world_from_board = np.asarray(truth["board"]["world_from_board"])
-    M = np.linalg.inv(world_from_board) @ np.linalg.inv(np.asarray(truth["camera_from_world"])) \
-        @ calibration.camera_from_floor
-    turn = round(math.atan2(M[1, 0], M[0, 0]) / (math.pi / 2)) * (math.pi / 2)
-    c, s = round(math.cos(turn)), round(math.sin(turn))
-    world_from_floor = world_from_board @ np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
-    floor_from_world = np.linalg.inv(world_from_floor)
-    doors = []
-    for d in truth["room"]["doors"]:
-        seg = np.asarray(d["segment_m"], dtype=np.float64)
-        pts = np.column_stack([seg, np.zeros(2), np.ones(2)]) @ floor_from_world.T
-        doors.append(pts[:, :2])
-    return doors
+    """The true doors' segments in the calibration's floor frame (:func:`realism.floor_in_world`)."""
+    floor_from_world = np.linalg.inv(floor_in_world(truth, calibration.camera_from_floor))
+    return [(np.column_stack([d["segment_m"], np.zeros(2), np.ones(2)]) @ floor_from_world.T)[:, :2]
+            for d in truth["room"]["doors"]]
 
 
 def _doors_in_view(doors, calibration, floor) -> list:
@@ -137,7 +122,7 @@ def _rules_met(lay) -> bool:
 
 
 def _checks(layouts, camera, calibration, doors) -> list[dict]:
-    from augment.room.fit import _differs
+    from augment.room.fit import apart_m
     from layout.camera import CAMERA, box_corners_3d, judge
     from layout.metrics import convex_intersection_area
 
@@ -162,7 +147,7 @@ def _checks(layouts, camera, calibration, doors) -> list[dict]:
             "doors_clear": None if not zones else all(
                 convex_intersection_area(zn, f) <= 0.01 for zn in zones for f in footprints),
             "rules_met": _rules_met(lay),
-            "different": all(_differs(lay, other, 0.3) for q, other in enumerate(layouts) if q != k),
+            "different": all(apart_m(lay, other) >= 0.3 for q, other in enumerate(layouts) if q != k),
             "hidden": j["hidden"], "from_behind": j["from_behind"], "cut": j["cut"],
         })
     return rows

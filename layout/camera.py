@@ -137,7 +137,8 @@ class Camera:
 
 def box_corners_3d(position_m, yaw_rad, size_m) -> np.ndarray:
     """(n, 8, 3) corners of boxes centred at ``position_m`` (n, 3), turned by ``yaw_rad``,
-    ``size_m`` (n, 3) width, depth, height (depth along the facing, layout.geometry)."""
+    ``size_m`` (n, 3) width, depth, height (depth along the facing, layout.geometry);
+    the even-numbered corners are the lower ones."""
     pos = np.asarray(position_m, dtype=np.float64).reshape(-1, 3)
     size = np.asarray(size_m, dtype=np.float64).reshape(-1, 3)
     yaw = np.asarray(yaw_rad, dtype=np.float64).reshape(-1)
@@ -155,7 +156,6 @@ def in_view_share(camera: Camera, polygon_m, size_m, rules: CameraRules | None =
     directions) where a box of ``size_m`` (width, depth, height; standing on the floor)
     has its footprint on the floor and lies whole in the space ``camera`` shows: 0 when
     the photo has no place for it."""
-    from .geometry import box_corners
     from .solver import _inside
 
     poly = np.asarray(polygon_m, dtype=np.float64)
@@ -172,8 +172,7 @@ def in_view_share(camera: Camera, polygon_m, size_m, rules: CameraRules | None =
     for yaw in np.linspace(0.0, 2.0 * np.pi, yaws, endpoint=False):
         corners = box_corners_3d(np.column_stack([pts, np.full(n, h / 2)]), np.full(n, yaw), np.tile([w, d, h], (n, 1)))
         in_frame = ((corners @ planes[:, :3].T + planes[:, 3]) >= 0.0).all(axis=(1, 2))
-        feet = box_corners(pts[in_frame], np.full(int(in_frame.sum()), yaw), np.full(int(in_frame.sum()), w),
-                           np.full(int(in_frame.sum()), d))
+        feet = corners[in_frame][:, ::2, :2]  # the lower four corners (box_corners_3d's order)
         ok += int(_inside(poly, feet.reshape(-1, 2)).reshape(-1, 4).all(axis=1).sum())
     return ok / (n * yaws)
 

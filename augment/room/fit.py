@@ -373,14 +373,14 @@ TURNS = ((math.pi, False), (0.0, True), (0.5 * math.pi, False), (-0.5 * math.pi,
 PINNED_M = 0.01
 
 
-def _differs(a, b, min_m: float) -> bool:
-    """Two suggestions are different arrangements: other furniture, or the same moved
-    by at least ``min_m`` on average (:func:`layout.diversity`)."""
+def apart_m(a, b) -> float:
+    """How far apart two suggestions are as arrangements: infinitely with other
+    furniture, else how far the same furniture moved on average (:func:`layout.diversity`)."""
     from layout import diversity
 
     ka = sorted(a.model.kinds[i] for i in a.items)
     kb = sorted(b.model.kinds[i] for i in b.items)
-    return ka != kb or diversity([a, b]) >= min_m
+    return math.inf if ka != kb else diversity([a, b])
 
 
 def _rule_faults(lay) -> int:
@@ -416,9 +416,9 @@ class _Pick:
             self.cut = now if self.cut is None or len(now) < len(self.cut) else self.cut
             return False
         # A repeat is worth nothing to the user; a fault, a little less than a perfect one.
-        key = (not all(_differs(old, lay, ROOM.fit.min_difference_m) for old in self.earlier),
-               camera_faults(rep.get("camera", {})) + _rule_faults(lay))
-        self.pinned += any(not _differs(old, lay, PINNED_M) for old in self.earlier)
+        nearest = min((apart_m(old, lay) for old in self.earlier), default=math.inf)
+        key = (nearest < ROOM.fit.min_difference_m, camera_faults(rep.get("camera", {})) + _rule_faults(lay))
+        self.pinned += nearest < PINNED_M
         if self.best is None or key < self.best[0]:
             self.best = (key, lay, rep)
         return key == (False, 0)
@@ -432,12 +432,13 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                       notes: list | None = None):
     """Solve ``suggestions`` layouts, suggestion K from seed ``seed + K - 1``.
 
-    A try that collides, leaves the floor, blocks a door or is cut by the photo's edge
-    is not clean; of the clean ones the first that is a different arrangement from the
-    earlier suggestions (:func:`_differs`) and has no fault (the camera finds nothing
-    hidden and no seating seen from behind, :func:`layout.camera.judge`; the rules hold,
-    :func:`_rule_faults`) is kept, else a different one with the fewest faults. Tries go on from seed
-    ``seed + K - 1 + N``, then ``+ 2N`` (``ROOM.fit.seed_tries`` in all). When all of
+    A try that collides, leaves the floor, blocks a door, stands deep in a clearance or
+    is cut by the photo's edge is not clean; of the clean ones the first that is a
+    different arrangement from the earlier suggestions (:func:`apart_m` at least
+    ``ROOM.fit.min_difference_m``) and has no fault (the camera finds nothing hidden and
+    no seating seen from behind, :func:`layout.camera.judge`; the rules hold,
+    :func:`_rule_faults`) is kept, else a different one with the fewest faults. Tries go
+    on from seed ``seed + K - 1 + N``, then ``+ 2N`` (``ROOM.fit.seed_tries`` in all). When all of
     them repeat an earlier suggestion, the first suggestion turned and mirrored
     (:data:`TURNS`) is tried as a start, then the furniture without one of its less
     important units (another subset); a twin is kept, with a line in ``notes``, when

@@ -107,6 +107,12 @@ def _turn_deg(d0: np.ndarray, d1: np.ndarray) -> float:
     return abs(float(np.degrees(np.arctan2(d0[0] * d1[1] - d0[1] * d1[0], d0 @ d1))))
 
 
+def _column_share(flags: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """Per column of a wall strip, the share of its ``where`` samples that are ``flags``
+    (0 where it has none)."""
+    return (flags & where).sum(axis=0) / np.maximum(where.sum(axis=0), 1)
+
+
 def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
     """(start, end) index pairs of the runs of True, end exclusive."""
     edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
@@ -150,16 +156,14 @@ def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
         low = inside & (z[:, None] >= settings.leaf_from_m)
         seen = low.sum(axis=0)
         # How far up each column shows; a call needs at least min_seen_m of leaf in view.
-        share = np.where(seen > 0, (differs & low).sum(axis=0) / np.maximum(seen, 1), 0.0)
         tall = seen * step >= settings.min_seen_m
-        foot = inside[: int(settings.sill_m / step)] & (z[: int(settings.sill_m / step), None] >= settings.leaf_from_m)
-        foot_share = (differs[: len(foot)] & foot).sum(axis=0) / np.maximum(foot.sum(axis=0), 1)
+        foot = low & (z[:, None] < settings.sill_m)
         # The highest samples in view differ too: a radiator's top shows wall above it.
-        top_z = np.where(low.any(axis=0), np.max(np.where(low, z[:, None], 0.0), axis=0), 0.0)
+        top_z = np.max(np.where(low, z[:, None], 0.0), axis=0)
         top = low & (z[:, None] >= top_z - settings.top_band_m)
-        top_share = (differs & top).sum(axis=0) / np.maximum(top.sum(axis=0), 1)
-        leaf = tall & (share >= settings.min_share) & (foot_share >= settings.min_share) & (
-            top_share >= settings.min_share)
+        share = _column_share(differs, low)
+        leaf = tall & (share >= settings.min_share) & (_column_share(differs, foot) >= settings.min_share) & (
+            _column_share(differs, top) >= settings.min_share)
         leaf = cv2.morphologyEx(leaf.astype(np.uint8)[None], cv2.MORPH_CLOSE, np.ones((1, 3), np.uint8))[0] > 0
         # A door the wall's colour: the casing's two sides, vertical lines from the floor up.
         lines = _upright_lines(strip[..., 0], low, tall, settings, settings.line_share)
@@ -185,8 +189,7 @@ def _upright_lines(lightness: np.ndarray, low: np.ndarray, tall: np.ndarray, set
     shadow), the strongest of its neighbours, off the wall's ends."""
     step_l = np.zeros_like(lightness)
     step_l[:, 1:-1] = np.abs(lightness[:, 2:] - lightness[:, :-2]) / 2.0
-    share = np.where(low.sum(axis=0) > 0, ((step_l > settings.line_step) & low).sum(axis=0)
-                     / np.maximum(low.sum(axis=0), 1), 0.0)
+    share = _column_share(step_l > settings.line_step, low)
     share[: settings.line_margin] = 0.0
     share[-settings.line_margin:] = 0.0
     keep = tall & (share >= min_share)
