@@ -675,33 +675,35 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
 SUGGESTION_FILES = (*layout_report.SUGGESTION_FILES, "staged_{k}.jpg", "staged_{k}_layer.png", "scene_{k}.glb")
 
 
-def _write_files(result: FurnishResult, folder: Path) -> list[str]:
-    """Every output file into ``folder``; returns their names."""
+def output_files(result: FurnishResult) -> dict[str, bytes]:
+    """Every output file of ``result``, encoded: name -> bytes (what :func:`write_outputs`
+    writes; a batch worker hands these to the driver that writes the folder)."""
     import json
 
-    names = []
-
-    def put(name, data):
-        (folder / name).write_bytes(data.encode() if isinstance(data, str) else data)
-        names.append(name)
-
+    files = {}
     for k, img in enumerate(result.staged, start=1):
-        put(f"staged_{k}.jpg", encode_image(img, ".jpg"))
+        files[f"staged_{k}.jpg"] = encode_image(img, ".jpg")
     for k, rgba in enumerate(result.layers, start=1):
-        put(f"staged_{k}_layer.png", encode_image(rgba, ".png"))
-    put("staged_all.jpg", encode_image(result.contact_sheet, ".jpg"))
+        files[f"staged_{k}_layer.png"] = encode_image(rgba, ".png")
+    files["staged_all.jpg"] = encode_image(result.contact_sheet, ".jpg")
     for name, data in result.layout_files.items():
-        put(name, data)
+        files[name] = data.encode() if isinstance(data, str) else data
     for k, glb in enumerate(result.scenes_glb, start=1):
-        put(f"scene_{k}.glb", glb)
+        files[f"scene_{k}.glb"] = glb
     for name, img in result.overlays.items():
-        put(name, encode_image(img, ".png"))
-    put("report.json", json.dumps(result.report, indent=2, allow_nan=False) + "\n")
-    return names
+        files[name] = encode_image(img, ".png")
+    files["report.json"] = (json.dumps(result.report, indent=2, allow_nan=False) + "\n").encode()
+    return files
 
 
 def write_outputs(result: FurnishResult, out_dir, inputs=()) -> list[Path]:
-    """Write every output file of ``result`` into ``out_dir``, all or none.
+    """Write every output file of ``result`` into ``out_dir``, all or none
+    (:func:`write_files` of :func:`output_files`)."""
+    return write_files(output_files(result), out_dir, inputs)
+
+
+def write_files(files: dict, out_dir, inputs=()) -> list[Path]:
+    """Write ``files`` (name -> bytes, :func:`output_files`) into ``out_dir``, all or none.
 
     The files are made in a temporary folder beside ``out_dir`` and then moved in (a new
     ``out_dir`` is renamed into place whole), so a failure leaves ``out_dir`` as it was.
@@ -729,7 +731,9 @@ def write_outputs(result: FurnishResult, out_dir, inputs=()) -> list[Path]:
     try:
         stale = layout_report.earlier_suggestion_files(out, SUGGESTION_FILES, inputs)
         with staged_folder(out, stale=stale) as staging:
-            names = _write_files(result, staging)
+            for name, data in files.items():
+                (staging / name).write_bytes(data)
+            names = list(files)
             if (clash := replaced_input([out / name for name in names], inputs)) is not None:
                 raise FurnishError(f"output folder {out}: {clash[0].name} there is the input {clash[1]}, which "
                                    "Stager never overwrites; nothing was changed in it; write the outputs to "

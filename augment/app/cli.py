@@ -10,7 +10,9 @@
     stage furnish PHOTO... [--board 7x5] [--square 45] [--room NAME | --spec FILE | --layout FILE] [-n 4]
                   [--seed 0] [--camera profile.json] [--model M.onnx] [--asset KIND=FILE ...]
                   [--style NAME] [--layers] [--out DIR] [--quiet]
-    stage serve [--host 127.0.0.1] [--port 8000] [--workers N] [--jobs DIR]
+    stage batch INPUT --out DIR [--room NAME | --spec FILE] [-n 4] [--style NAME] [--address ADDR]
+                [--workers N] [--retries 2] [--quiet]
+    stage serve [--host 127.0.0.1] [--port 8000] [--workers N] [--jobs DIR] [--address ADDR]
 
 ``--board`` counts inner corners, ``COLSxROWS`` for a plain checkerboard (the default
 7x5), ``charuco:COLSxROWS`` for a ChArUco board (ArUco markers of DICT_4X4_50 in the
@@ -23,7 +25,8 @@ the floor (mask, overlay, and the floor polygon in meters when the board is foun
 ``measure`` does both and measures the wall height: "measure my room" without furniture;
 ``furnish`` goes on to lay out furniture (a room preset, default living_room, or a spec
 file) on the measured floor and renders each suggestion into the photo
-(:mod:`augment.pipeline` lists the files it writes); ``serve`` runs the web app
+(:mod:`augment.pipeline` lists the files it writes); ``batch`` does it for a folder or
+manifest of photos on Ray workers (:mod:`augment.app.batch`); ``serve`` runs the web app
 (:mod:`augment.app.web`) that does what ``furnish`` does from a browser.
 
 Exit status: 0 success, 2 bad input (one ``error:`` line on stderr saying what and
@@ -50,24 +53,14 @@ from layout.fileio import path_problem
 from layout.presets import PRESETS
 
 from ..camera.board import (CHARUCO_DICTIONARY, DEFAULT_BOARD, DEFAULT_INNER_CORNERS, DEFAULT_PAPER, DEFAULT_SQUARE_MM,
-                            MIN_SQUARE_MM, PAPER_MM, parse_board)
+                            PAPER_MM, parse_board)
 from ..render.styles import STYLES
+from .values import count as _count
+from .values import square_mm as _square_mm
+from .values import whole as _whole
 
 DEFAULT_PROFILE = "profile.json"
 DEFAULT_BOARD_PDF = "board.pdf"
-
-
-def _square_mm(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not MIN_SQUARE_MM <= value < 1000:
-        # 1e-300 mm ran on, to "the board is seen almost face-on".
-        raise argparse.ArgumentTypeError(
-            f"{text!r}: expected the side of one printed square in millimeters, {MIN_SQUARE_MM:g} to 1000, e.g. "
-            f"{DEFAULT_SQUARE_MM:g}")
-    return value
 
 
 def _paper(text: str) -> str:
@@ -303,6 +296,43 @@ def _parser():
     f.add_argument("--quiet", "-q", action="store_true",
                    help="print nothing but errors and warnings (no progress bar either)")
 
+    a = sub.add_parser("batch", help="furnish a folder or manifest of photos on Ray (this machine or a cluster)",
+                       description="Furnish every photo of INPUT (a folder of photos, or a manifest: CSV with a "
+                                   "header line, or JSONL, with the fields photo and optionally board, square, "
+                                   "room, spec, camera, suggestions, seed, style per photo; paths from the "
+                                   "manifest's folder) on Ray workers, one per core, each with its own floor "
+                                   "model and GL context. Each photo's files go to DIR/<photo name>/ as `stage "
+                                   "furnish` writes them, all or none; DIR/results.jsonl gets one line per "
+                                   "photo as it finishes. Run it again on the same DIR to go on after an "
+                                   "interruption: photos done are skipped.")
+    a.add_argument("input", type=path_arg, metavar="INPUT", help="a folder of photos, or a .csv / .jsonl manifest")
+    a.add_argument("--out", "-o", type=path_arg, required=True, metavar="DIR", help="output folder (created)")
+    _add_board_args(a)
+    what = a.add_mutually_exclusive_group()
+    what.add_argument("--room", choices=tuple(PRESETS), default=None, metavar="NAME",
+                      help=f"room preset: {', '.join(PRESETS)} (default living_room)")
+    what.add_argument("--spec", type=path_arg, default=None, metavar="FILE.toml", help="a layout spec")
+    a.add_argument("--suggestions", "-n", type=_count, default=4, metavar="N",
+                   help="layout suggestions per photo (default 4)")
+    a.add_argument("--seed", type=seed_arg, default=0, help="seed of suggestion 1 (default 0)")
+    a.add_argument("--style", choices=tuple(STYLES), default=None, metavar="NAME",
+                   help=f"the furniture's look: {', '.join(STYLES)} (default: a different one per suggestion)")
+    a.add_argument("--camera", type=path_arg, default=None, metavar="PROFILE.json",
+                   help="camera profile from `stage calibrate`, for every photo")
+    a.add_argument("--no-auto-doors", dest="auto_doors", action="store_false",
+                   help="do not look for doors in the photos")
+    a.add_argument("--address", default=None, metavar="ADDRESS",
+                   help="a Ray cluster to run on: host:port or ray://host:port (as `ray start --head` prints), "
+                        "or auto; default: a Ray of this machine's own, started and stopped by Stager")
+    a.add_argument("--workers", type=_count, default=None, metavar="N",
+                   help="workers, one photo at a time each (default one per CPU of the cluster)")
+    a.add_argument("--retries", type=lambda t: _whole(t, 0, 10), default=2, metavar="N",
+                   help="times a photo is tried again when its worker dies under it (default 2)")
+    a.add_argument("--worker-memory", type=lambda t: _whole(t, 256, 1_000_000, ", e.g. 4096"), default=4096,
+                   metavar="MB", help="a worker using more memory than this after a photo is replaced (default "
+                                      "4096)")
+    a.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors (no progress bar)")
+
     s = sub.add_parser("serve", help="run the web app: upload a photo in a browser, get staged images",
                        description="Serve the web page and its API (augment.app.web; OpenAPI page at /docs) until "
                                    "interrupted. Photos are furnished in worker processes; finished jobs and "
@@ -312,23 +342,13 @@ def _parser():
     s.add_argument("--port", type=_port, default=8000, help="port (default 8000)")
     s.add_argument("--workers", type=_count, default=None, metavar="N",
                    help="worker processes, each furnishing one photo at a time (default one per core)")
+    s.add_argument("--address", default=None, metavar="ADDRESS",
+                   help="furnish on this Ray cluster's workers (host:port or ray://host:port, as `ray start "
+                        "--head` prints, or auto) instead of worker processes of this machine; --workers then "
+                        "defaults to one per CPU of the cluster")
     s.add_argument("--jobs", type=path_arg, default=Path("out") / "jobs", metavar="DIR",
                    help="folder for uploads and results (default out/jobs; created)")
     return p
-
-
-def _whole(text: str, lo: int, hi: int, example: str = "") -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = lo - 1
-    if not lo <= value <= hi:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number from {lo} to {hi}{example}")
-    return value
-
-
-def _count(text: str) -> int:
-    return _whole(text, 1, 100)
 
 
 def _port(text: str) -> int:
@@ -814,6 +834,42 @@ def _print_warnings(warnings, seg, mask_hint: str, prefix: str = "") -> None:
               f"(and --floor-at / --not-floor-at X,Y elsewhere), or {mask_hint}", file=sys.stderr)
 
 
+def _batch_cmd(args):
+    from .batch import RESULTS, read_tasks, run_batch
+
+    if path_problem(args.input, "folder") is not None:
+        if (problem := path_problem(args.input, missing="no such file or folder")) is not None:
+            raise UsageError(f"input {args.input}: {problem}; give a folder of photos or a .csv / .jsonl manifest")
+        if args.input.suffix.lower() not in (".csv", ".jsonl"):
+            raise UsageError(f"input {args.input}: not a folder, and a manifest's name ends in .csv or .jsonl")
+    _prepare_dir_out(args.out)
+    _mkdir(args.out, "--out", args.out)
+    for flag, path, hint in (("--camera", args.camera, CAMERA_HINT),
+                             ("--spec", args.spec, "write one (see `layout solve --help`)")):
+        _check_input_file(flag, path, hint)
+    board = _board(args)
+    defaults = {"board": (board.cols, board.rows, board.kind), "square": board.square_mm, "room": args.room,
+                "spec": args.spec, "camera": args.camera, "suggestions": args.suggestions, "seed": args.seed,
+                "style": args.style, "auto_doors": args.auto_doors}
+    next(iter(read_tasks(args.input, defaults)), None)  # a manifest's columns checked before Ray starts
+    say = (lambda line: None) if args.quiet else (lambda line: print(line, file=sys.stderr))
+    summary = run_batch(args.input, args.out, defaults, address=args.address, workers=args.workers,
+                        retries=args.retries, worker_mb=args.worker_memory,
+                        progress=not args.quiet and sys.stderr.isatty(), say=say)
+    results = args.out / RESULTS
+    if summary.interrupted:
+        print(f"stopped: {summary.done} photos done, {summary.left} left; run the same command again to go on "
+              f"(photos done are skipped; each line of {results} says how a photo went)", file=sys.stderr)
+        return 130
+    if not args.quiet:
+        finished = summary.done + summary.refused + summary.failed
+        print(f"furnished {summary.done} of {finished + summary.skipped} photos into {args.out}/ in "
+              f"{summary.seconds:.0f} s" + (f" ({summary.skipped} done before, skipped)" if summary.skipped else "")
+              + (f"; {summary.refused} refused" if summary.refused else "")
+              + (f"; {summary.failed} failed" if summary.failed else "") + f"; one line per photo in {results}")
+    return 1 if summary.failed else EXIT_INPUT if summary.refused else EXIT_OK
+
+
 def _serve_cmd(args):
     try:
         from .web import serve
@@ -822,7 +878,7 @@ def _serve_cmd(args):
     _prepare_dir_out(args.jobs, "--jobs")
     _check_listen(args.host, args.port)
     _mkdir(args.jobs, "--jobs", args.jobs)
-    serve(args.host, args.port, workers=args.workers, jobs_dir=args.jobs)
+    serve(args.host, args.port, workers=args.workers, jobs_dir=args.jobs, address=args.address)
     return EXIT_OK
 
 
@@ -879,7 +935,7 @@ def main(argv=None) -> int:
         parser.print_help()
         return EXIT_OK
     commands = {"board": _board_cmd, "calibrate": _calibrate_cmd, "check": _check_cmd, "segment": _segment_cmd,
-                "measure": _measure_cmd, "furnish": _furnish_cmd, "serve": _serve_cmd}
+                "measure": _measure_cmd, "furnish": _furnish_cmd, "batch": _batch_cmd, "serve": _serve_cmd}
     return dispatch(commands[args.command], args, "stage")
 
 

@@ -21,7 +21,7 @@ import statistics
 import threading
 import time
 import uuid
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,15 +41,16 @@ STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "ren
 # The worker process
 # --------------------------------------------------------------------------------------
 
-_renderer = None          # one GL context per worker process, made on its first job
+_worker = None            # the worker process's Worker: one GL context, one floor model, all its jobs
 _progress_path = None     # the running job's progress.json
 
 
 class _FileProgress:
-    """``furnish``'s progress reporter in a worker: the current stage and the steps
-    done, written to the job's ``progress.json`` (replaced atomically)."""
+    """``furnish``'s progress reporter for a job: the current stage and the steps done,
+    written to the job's ``progress.json`` (replaced atomically)."""
 
-    def __init__(self, total: int):
+    def __init__(self, total: int, path: Path | None = None):
+        self.path = path or _progress_path
         self.total, self.done, self.current, self.finished = int(total), 0, None, []
         self._write()
 
@@ -70,96 +71,153 @@ class _FileProgress:
     def close(self) -> None:
         pass
 
+    def heard(self, progress: dict) -> None:
+        """A remote worker's report (``{"stage", "done", "total"}``)."""
+        if progress["stage"] is not None:
+            self.stage(progress["stage"])
+        self.done, self.total = progress["done"], progress["total"]
+        self._write()
+
     def _write(self) -> None:
-        _write_progress({"stage": self.current, "finished": self.finished, "done": self.done,
-                         "total": self.total + 1})  # + 1: writing the files
+        _write_progress(self.path, {"stage": self.current, "finished": self.finished, "done": self.done,
+                                    "total": self.total + 1})  # + 1: writing the files
 
 
-def _write_progress(state: dict) -> None:
-    tmp = _progress_path.with_suffix(".tmp")
+def _write_progress(path: Path, state: dict) -> None:
+    tmp = path.with_suffix(".tmp")
     try:
         tmp.write_text(json.dumps(state))
-        os.replace(tmp, _progress_path)
+        os.replace(tmp, path)
     except FileNotFoundError:
         pass  # the job was deleted while it ran: nobody waits for its progress
 
 
-def _run_job(job_dir: str, options: dict) -> dict:
-    """Furnish one job's photo into ``job_dir/out`` (in a worker process).
-
-    Returns ``{"files": [...], "warnings": [...], "doubt": ...}`` (``doubt``:
-    ``Segmentation.doubt_json``), or ``{"error": {"kind", "message"}}``
-    for bad input (a :class:`~augment.errors.StagerError`). A bug raises.
-    """
-    global _renderer, _progress_path
-    from .. import pipeline
-    from ..camera.board import Board
-    from ..render.gl import Renderer
-
-    start = time.perf_counter()
+def job_work(job_dir, options: dict) -> tuple[dict, dict] | None:
+    """What a worker needs for a job: its input files (role -> (name shown, bytes, file
+    name), :meth:`augment.app.worker.Worker.furnish`) and options; None when the job was
+    deleted before it started."""
     job = Path(job_dir)
     if not (job / "input").is_dir():
-        return {"error": {"kind": "cancelled", "message": "the job was deleted before it started"}, "seconds": 0.0}
-    _progress_path = job / "progress.json"
-    if _renderer is None:
-        _renderer = Renderer()
-    photo = job / "input" / options["photo"]
-    camera = job / "input" / options["camera"] if options.get("camera") else None
-    spec = job / "input" / options["spec"] if options.get("spec") else None
-    layout = job / "input" / options["layout"] if options.get("layout") else None
-    floor_mask = job / "input" / options["floor_mask"] if options.get("floor_mask") else None
-    # No server path in what the user gets back: each input by the name it was sent under.
+        return None
     names = options.get("names") or {}
-    shown = [(photo, names.get("photo", "the photo")), (camera, names.get("camera", "the camera profile")),
-             (spec, names.get("spec", "the spec file")), (layout, names.get("layout", "the layout file")),
-             (floor_mask, names.get("floor_mask", "the floor mask"))]
-    clicks = options.get("clicks") or None
-    doors = options.get("doors") or None
+    inputs = {}
+    for role, default in (("photo", "the photo"), ("camera", "the camera profile"), ("spec", "the spec file"),
+                          ("layout", "the layout file"), ("floor_mask", "the floor mask")):
+        if options.get(role):
+            inputs[role] = (names.get(role, default), (job / "input" / options[role]).read_bytes(), options[role])
+    work = {"board": (*options["board"], options["square"], options["kind"]),
+            **{k: options.get(k) for k in ("room", "suggestions", "seed", "style", "clicks", "doors", "keep_board")}}
+    return inputs, work
+
+
+def finish_job(job_dir, answer: dict) -> dict:
+    """A worker's answer for a job: its files written to ``<job>/out``, and what
+    ``Job.result`` keeps (``files``, ``warnings``, ``styles``, ``doubt``, ``seconds``;
+    or ``error`` with ``kind`` and ``message``)."""
+    from ..pipeline import write_files
+
+    job = Path(job_dir)
+    if answer["status"] == "refused":
+        return {"error": {"kind": answer["kind"], "message": answer["error"]}, "seconds": answer["seconds"]}
+    progress = job / "progress.json"
     try:
-        result = pipeline.furnish(photo, Board(*options["board"], options["square"], kind=options["kind"]),
-                                  room=options["room"], spec=spec, layout=layout,
-                                  suggestions=options["suggestions"], seed=options["seed"], camera=camera,
-                                  floor_mask=floor_mask, clicks=clicks, doors=doors,
-                                  keep_board=options["keep_board"], style=options.get("style"),
-                                  reporter=_FileProgress,
-                                  renderer=_renderer)
-        result.report = _scrub(result.report, shown, job)
-        result.warnings[:] = _scrub(result.warnings, shown, job)
-        state = json.loads(_progress_path.read_text())
-        _write_progress(dict(state, stage="write", finished=list(STAGES[:-1])))
-        paths = pipeline.write_outputs(result, job / "out")
+        state = json.loads(progress.read_text())
+    except (FileNotFoundError, json.JSONDecodeError):
+        state = {"done": 0, "total": 1}
+    _write_progress(progress, dict(state, stage="write", finished=list(STAGES[:-1])))
+    try:
+        paths = write_files(answer["files"], job / "out")
     except StagerError as error:
-        message = str(error).replace(str(photo), "the photo")
-        for path, name in ((camera, "the camera profile"), (spec, "the spec file"), (layout, "the layout file"),
-                           (floor_mask, "the floor mask")):
-            if path is not None:
-                # "floor mask PATH: ..." reads "the floor mask: ...", not "floor mask the floor mask".
-                message = message.replace(f"{name[4:]} {path}", name).replace(str(path), name)
-        return {"error": {"kind": error.kind, "message": message},
-                "seconds": time.perf_counter() - start}
-    state = json.loads(_progress_path.read_text())
-    _write_progress(dict(state, stage=None, finished=list(STAGES), done=state["total"]))
-    return {"files": [p.name for p in paths], "warnings": list(result.warnings), "styles": list(result.styles),
-            "doubt": result.segmentation.doubt_json(), "seconds": time.perf_counter() - start}
+        return {"error": {"kind": error.kind, "message": str(error).replace(str(job), "the job")},
+                "seconds": answer["seconds"]}
+    _write_progress(progress, dict(state, stage=None, finished=list(STAGES), done=state["total"]))
+    return {"files": [p.name for p in paths], "warnings": answer["warnings"], "styles": answer["styles"],
+            "doubt": answer["doubt"], "seconds": answer["seconds"]}
+
+
+def _run_job(job_dir: str, options: dict) -> dict:
+    """Furnish one job's photo into ``job_dir/out`` (in a worker process); returns
+    :func:`finish_job`'s result. A bug raises."""
+    global _worker, _progress_path
+    from .worker import Worker
+
+    work = job_work(job_dir, options)
+    if work is None:
+        return {"error": {"kind": "cancelled", "message": "the job was deleted before it started"}, "seconds": 0.0}
+    _progress_path = Path(job_dir) / "progress.json"
+    if _worker is None:
+        _worker = Worker(threads=None)
+    return finish_job(job_dir, _worker.furnish(*work, reporter=_FileProgress))
 
 
 # --------------------------------------------------------------------------------------
 # The queue (in the server process)
 # --------------------------------------------------------------------------------------
 
-def _scrub(value, shown, job: Path):
-    """``value`` (JSON-like) with every input's server path replaced by the name the user
-    sent it under, and what else names the job's folder without it."""
-    if isinstance(value, dict):
-        return {k: _scrub(v, shown, job) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_scrub(v, shown, job) for v in value]
-    if isinstance(value, str):
-        for path, name in shown:
-            if path is not None:
-                value = value.replace(str(path), name)
-        return value.replace(f"{job}/", "").replace(str(job), "the job")
-    return value
+class RayPool:
+    """Jobs run on Ray actors (:class:`augment.app.cluster.StageWorker`) instead of
+    worker processes, with the ``submit`` and ``shutdown`` of a ProcessPoolExecutor.
+
+    The inputs travel to the actor as bytes and the files come back, so the actors may
+    be on other machines; the progress streams back stage by stage. An actor that dies
+    under a job is replaced here (``heals``), and the job fails with
+    ``BrokenProcessPool`` for the queue to try it again.
+    """
+
+    heals = True
+
+    def __init__(self, workers: int):
+        import queue as queues
+
+        from .cluster import actor_class
+
+        self._actors = queues.Queue()
+        for _ in range(workers):
+            self._actors.put(actor_class().remote())
+        self._all = list(self._actors.queue)
+        self._threads = ThreadPoolExecutor(workers, thread_name_prefix="ray-job")
+
+    def submit(self, fn, job_dir: str, options: dict) -> Future:
+        assert fn is _run_job  # the one kind of work the queue hands out
+        return self._threads.submit(self._run, job_dir, options)
+
+    def _run(self, job_dir: str, options: dict) -> dict:
+        import ray
+
+        from .cluster import actor_class
+
+        work = job_work(job_dir, options)
+        if work is None:
+            return {"error": {"kind": "cancelled", "message": "the job was deleted before it started"},
+                    "seconds": 0.0}
+        actor = self._actors.get()
+        progress, answer = None, None
+        try:
+            for ref in actor.furnish_stages.options(num_returns="streaming").remote(*work):
+                item = ray.get(ref)
+                if "progress" in item:
+                    if progress is None:
+                        progress = _FileProgress(item["progress"]["total"], Path(job_dir) / "progress.json")
+                    progress.heard(item["progress"])
+                else:
+                    answer = item["answer"]
+        except ray.exceptions.RayActorError:
+            ray.kill(actor, no_restart=True)
+            self._all.remove(actor)
+            actor = actor_class().remote()
+            self._all.append(actor)
+            raise BrokenProcessPool("the Ray worker furnishing the photo stopped") from None
+        finally:
+            self._actors.put(actor)
+        return finish_job(job_dir, answer)
+
+    def shutdown(self, wait: bool = True, cancel_futures: bool = False) -> None:
+        import ray
+
+        self._threads.shutdown(wait=wait, cancel_futures=cancel_futures)
+        for actor in self._all:
+            ray.kill(actor, no_restart=True)
+        ray.shutdown()
 
 
 def retry_after_s(job_seconds, workers: int) -> int:
@@ -240,13 +298,17 @@ class JobQueue:
         Finished jobs and their files are deleted this long after they finish.
     max_queued : int
         Jobs that may wait for a free worker; beyond, :meth:`busy_s` says how long to wait.
+    ray : bool
+        Run the jobs on the Ray cluster joined (:func:`augment.app.cluster.connect`),
+        ``workers`` actors, instead of worker processes of this machine.
     """
 
-    def __init__(self, jobs_dir: Path, workers: int, keep_minutes: float, max_queued: int):
+    def __init__(self, jobs_dir: Path, workers: int, keep_minutes: float, max_queued: int, ray: bool = False):
         self.jobs_dir = Path(jobs_dir)
         self.workers = int(workers)
         self.keep_s = float(keep_minutes) * 60
         self.max_queued = int(max_queued)
+        self.ray = bool(ray)
         self.jobs: dict[str, Job] = {}
         self._pool: ProcessPoolExecutor | None = None
         self._lock = threading.RLock()
@@ -260,7 +322,9 @@ class JobQueue:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
 
-    def _new_pool(self) -> ProcessPoolExecutor:
+    def _new_pool(self):
+        if self.ray:
+            return RayPool(self.workers)
         return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"))
 
     def busy_s(self) -> int | None:
@@ -302,7 +366,8 @@ class JobQueue:
         def done(future: Future) -> None:
             died = not future.cancelled() and isinstance(future.exception(), BrokenProcessPool)
             if died and job.attempts < MAX_ATTEMPTS and not job.delete_when_done and self._pool is not None:
-                self._replace_pool(pool)
+                if not getattr(pool, "heals", False):
+                    self._replace_pool(pool)
                 self._run(job, on_done)
                 return
             _finish(job, future)

@@ -30,8 +30,9 @@ described on the app's OpenAPI page (``/docs``):
 results, as after an upload (a job sent through the API can be watched in a browser), with
 its options and photo loaded so that it can be corrected and furnished again.
 
-Jobs run in a pool of worker processes (one per core by default), each with one GL
-context reused for all its jobs (:class:`augment.render.gl.Renderer`); at most ``workers +
+Jobs run in a pool of worker processes (one per core by default), or on the actors of
+a Ray cluster (``stage serve --address``, :class:`augment.app.jobs.RayPool`), each with
+one GL context reused for all its jobs (:class:`augment.render.gl.Renderer`); at most ``workers +
 max_queued`` jobs are waiting or running, beyond that ``POST /api/jobs`` answers 503 with
 ``Retry-After``. Safety: the upload's size is limited (413); its header is read before it
 is decoded, so more than :data:`MAX_PIXELS` pixels (a decompression bomb) is refused
@@ -250,7 +251,7 @@ def _page() -> str:
 
 
 def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: int | None = None,
-               keep_minutes: float = 60, max_queued: int | None = None):
+               keep_minutes: float = 60, max_queued: int | None = None, address: str | None = None):
     """The web app.
 
     Parameters
@@ -260,12 +261,16 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
     max_upload_mb : float
         Largest request accepted, megabytes (413 beyond).
     workers : int, optional
-        Worker processes; default one per core.
+        Worker processes; default one per core (with ``address``: Ray actors, one per
+        CPU of the cluster).
     keep_minutes : float
         Finished jobs and their files are deleted this long after they finish.
     max_queued : int, optional
         Jobs that may wait for a free worker (default ``2 * workers``); beyond that,
         ``POST /api/jobs`` answers 503 with ``Retry-After``.
+    address : str, optional
+        A Ray cluster (:func:`augment.app.cluster.connect`) whose actors run the jobs,
+        instead of worker processes of this machine.
 
     Returns
     -------
@@ -273,12 +278,16 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
     """
     jobs_dir = Path(jobs_dir)
     jobs_dir.mkdir(parents=True, exist_ok=True)
-    workers = (os.cpu_count() or 1) if workers is None else int(workers)
-    if workers < 1:
+    if workers is not None and int(workers) < 1:
         raise ValueError(f"workers = {workers}: at least 1")
+    if address is not None:
+        from .cluster import connect
+
+        workers = connect(address, workers)
+    workers = (os.cpu_count() or 1) if workers is None else int(workers)
     max_queued = 2 * workers if max_queued is None else int(max_queued)
     max_bytes = int(max_upload_mb * 1e6)
-    queue = JobQueue(jobs_dir, workers, keep_minutes, max_queued)
+    queue = JobQueue(jobs_dir, workers, keep_minutes, max_queued, ray=address is not None)
 
     async def sweeper():
         while True:
@@ -580,14 +589,15 @@ def _version() -> str:
     return __version__
 
 
-def serve(host: str = "127.0.0.1", port: int = 8000, workers: int | None = None, jobs_dir=DEFAULT_JOBS_DIR) -> None:
+def serve(host: str = "127.0.0.1", port: int = 8000, workers: int | None = None, jobs_dir=DEFAULT_JOBS_DIR,
+          address: str | None = None) -> None:
     """Run the app with uvicorn until interrupted."""
     import uvicorn
 
     # The workers say what is wrong with a photo themselves; OpenCV's lines would only crowd the log.
     os.environ.setdefault("OPENCV_LOG_LEVEL", "SILENT")
 
-    uvicorn.run(create_app(jobs_dir, workers=workers), host=host, port=port)
+    uvicorn.run(create_app(jobs_dir, workers=workers, address=address), host=host, port=port)
 
 
 __all__ = ["create_app", "check_photo", "serve", "UploadError", "MAX_PIXELS", "STAGES"]

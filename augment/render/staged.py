@@ -894,9 +894,10 @@ class _Bounded(dict):
             del self[next(iter(self))]
 
 
-# Per photo: the same mask and camera for every suggestion. Furniture: per item style.
+# Per photo: the same mask and camera for every suggestion. Furniture: per item and style,
+# enough for one photo's suggestions; more only grows a batch worker (photos share no piece).
 _OCCLUDERS = _Bounded(4)
-_FURNITURE = _Bounded(256)
+_FURNITURE = _Bounded(64)
 
 
 def _mask_occluders_cached(floor_mask, K, pose, settings):

@@ -242,13 +242,15 @@ def test_rewrite_replaces_files_and_failure_leaves_the_folder_alone(roomy, tmp_p
     assert (out / "staged_1.jpg").read_bytes() != b"old" and (out / "mine.txt").read_text() == "keep me"
     before = _listing(out)
 
-    real = pipeline._write_files
+    real, written = Path.write_bytes, []
 
-    def half_then_fail(res, folder):
-        real(res, folder)
-        raise OSError(28, "No space left on device")
+    def half_then_fail(path, data):
+        written.append(path.name)
+        real(path, data)
+        if len(written) == 3:
+            raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(pipeline, "_write_files", half_then_fail)
+    monkeypatch.setattr(Path, "write_bytes", half_then_fail)
     with pytest.raises(FurnishError, match="No space left"):
         write_outputs(result, out)
     assert _listing(out) == before

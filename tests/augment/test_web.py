@@ -238,7 +238,7 @@ def test_board_not_found_says_which_board_to_print(finished):
     state = _wait(client, response.json()["id"])
     assert state["status"] == "failed" and state["files"] == []
     assert state["error"]["kind"] == "calibration"
-    assert "no 9x6 checkerboard found in the photo" in state["error"]["message"]
+    assert "no 9x6 checkerboard found in room_4.jpg" in state["error"]["message"]  # the name it was sent under
     assert str(finished[6]) not in state["error"]["message"]        # no server paths in messages
     assert state["error"]["board"] == {"board": "9x6", "square": 30.0, "pdf": "/api/board.pdf?board=9x6&square=30"}
     assert state["stages"]["calibrate"] == "failed"
@@ -326,7 +326,7 @@ def test_a_floor_mask_of_ones_own_replaces_the_floor_found(finished):
     assert np.isclose(report["floor"]["floor_fraction"], (floor > 127).mean())
     assert states[1]["status"] == "failed" and states[1]["error"]["kind"] == "segmentation"
     message = states[1]["error"]["message"]
-    assert message.startswith("the floor mask: the board's center") and "inverted" in message, message
+    assert message.startswith("the floor mask mine.png: the board's center") and "inverted" in message, message
 
 
 def test_clicks_correct_the_floor_found(finished):

@@ -1,0 +1,33 @@
+"""The checks of values that both ``stage`` flags and a batch manifest's fields take."""
+from __future__ import annotations
+
+import argparse
+
+from ..camera.board import DEFAULT_SQUARE_MM, MIN_SQUARE_MM
+
+
+def square_mm(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not MIN_SQUARE_MM <= value < 1000:
+        # 1e-300 mm ran on, to "the board is seen almost face-on".
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: expected the side of one printed square in millimeters, {MIN_SQUARE_MM:g} to 1000, e.g. "
+            f"{DEFAULT_SQUARE_MM:g}")
+    return value
+
+
+def whole(text: str, lo: int, hi: int, example: str = "") -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = lo - 1
+    if not lo <= value <= hi:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number from {lo} to {hi}{example}")
+    return value
+
+
+def count(text: str) -> int:
+    return whole(text, 1, 100)
