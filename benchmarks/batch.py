@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import statistics
 import subprocess
@@ -66,10 +67,17 @@ def defaults(suggestions: int) -> dict:
             "suggestions": suggestions, "seed": 0, "style": None, "auto_doors": True}
 
 
+CPU_S = []  # the CPU seconds (user + system) of each command timed
+
+
 def timed(command: list[str]) -> float:
+    """Wall seconds of ``command``; its CPU seconds go to ``CPU_S``."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     done = subprocess.run(command, capture_output=True, text=True)
     seconds = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    CPU_S.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
     if done.returncode not in (0, 2):
         raise SystemExit(f"{' '.join(command)} failed:\n{done.stderr[-2000:]}")
     return seconds
@@ -83,6 +91,8 @@ def throughput(work: Path, label: str, size, count: int) -> dict:
     row["loop_s"] = sum(timed([STAGE, "furnish", str(p), "-q", "--out", str(work / label / "loop" / p.stem)])
                         for p in photos)
     row["one_process_s"] = timed([STAGE, "furnish", *map(str, photos), "-q", "--out", str(work / label / "one")])
+    # How many cores the one process keeps busy on average: what two workers can gain over it.
+    row["one_process_cores_used"] = CPU_S[-1] / row["one_process_s"]
     summary = run_batch(photos[0].parent, work / label / "batch", defaults(4), workers=WORKERS)
     assert summary.done == count, summary
     row["batch_s"] = summary.seconds
@@ -156,6 +166,10 @@ def main(argv=None) -> int:
            f"{small['one_process_s_per_photo']:.2f} s against {small['batch_steady_s_per_photo']:.2f} s, "
            f"{small['steady_speedup_vs_one_process']:.2f}x at 1280x960; {big['one_process_s_per_photo']:.2f} s "
            f"against {big['batch_steady_s_per_photo']:.2f} s, {big['steady_speedup_vs_one_process']:.2f}x at 12 MP.",
+           f"The one process keeps {small['one_process_cores_used']:.2f} cores busy on average at 1280x960 "
+           f"({big['one_process_cores_used']:.2f} at 12 MP: onnxruntime, numba's parallel loops, Mesa's "
+           f"threads, a second thread for plans): two single-threaded workers on {os.cpu_count()} cores can gain "
+           f"at most about {os.cpu_count() / small['one_process_cores_used']:.2f}x over it.",
            f"Driver's own time per photo (reading the photo, handing it out, writing its folder): "
            f"{small['driver_ms_per_photo']:.0f} ms at 1280x960, {big['driver_ms_per_photo']:.0f} ms at 12 MP "
            "(target under 50 ms).", ""]

@@ -843,7 +843,6 @@ def _batch_cmd(args):
         if args.input.suffix.lower() not in (".csv", ".jsonl"):
             raise UsageError(f"input {args.input}: not a folder, and a manifest's name ends in .csv or .jsonl")
     _prepare_dir_out(args.out)
-    _mkdir(args.out, "--out", args.out)
     for flag, path, hint in (("--camera", args.camera, CAMERA_HINT),
                              ("--spec", args.spec, "write one (see `layout solve --help`)")):
         _check_input_file(flag, path, hint)
@@ -852,6 +851,7 @@ def _batch_cmd(args):
                 "spec": args.spec, "camera": args.camera, "suggestions": args.suggestions, "seed": args.seed,
                 "style": args.style, "auto_doors": args.auto_doors}
     next(iter(read_tasks(args.input, defaults)), None)  # a manifest's columns checked before Ray starts
+    _mkdir(args.out, "--out", args.out)
     say = (lambda line: None) if args.quiet else (lambda line: print(line, file=sys.stderr))
     summary = run_batch(args.input, args.out, defaults, address=args.address, workers=args.workers,
                         retries=args.retries, worker_mb=args.worker_memory,

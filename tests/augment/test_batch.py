@@ -237,3 +237,15 @@ def test_the_web_app_hands_its_jobs_to_the_cluster(cluster, photos, tmp_path):
         assert refused["status"] == "failed" and refused["error"]["kind"] == "calibration"
         assert "no 9x6 checkerboard found in hall.jpg" in refused["error"]["message"]
         assert str(tmp_path) not in json.dumps(states)
+
+
+def test_input_that_will_not_do_is_one_error_before_anything_is_made(tmp_path, capsys):
+    out = tmp_path / "out"
+    (tmp_path / "m.csv").write_text("img,room\na.jpg,bedroom\n")
+    (tmp_path / "empty").mkdir()
+    for given, words in ((tmp_path / "nope", "no such file or folder"), (tmp_path / "m.csv", "column 'img'"),
+                         (tmp_path / "empty", "holds no photos")):
+        assert main(["batch", str(given), "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("error: ") and words in err and err.count("\n") == 1, err
+        assert not out.exists()
