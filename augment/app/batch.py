@@ -271,8 +271,8 @@ def run_batch(source: Path, out_dir: Path, defaults: dict, *, address: str | Non
         total += 1
         skipped += task.error is None and done_before(out_dir, task.stem)
     summary = Summary(skipped=skipped)
-    results = _Results(out_dir / RESULTS)
     n_workers = connect(address, workers)
+    results = _Results(out_dir / RESULTS)
     Actor = actor_class()
     bar = tqdm(total=total - skipped, unit="photo", disable=not progress, dynamic_ncols=True, smoothing=0.1)
 

@@ -99,6 +99,8 @@ def connect(address: str | None, workers: int | None) -> int:
     cluster."""
     import ray
 
+    if address not in (None, "auto"):
+        _reachable(address)
     quiet = {"log_to_driver": False, "logging_level": logging.ERROR, "configure_logging": True}
     try:
         if address is None:
@@ -110,6 +112,20 @@ def connect(address: str | None, workers: int | None) -> int:
                          "start one with `ray start --head` and give the address it prints, or leave "
                          "--address out to run on this machine") from None
     return int(workers or max(1, int(ray.cluster_resources().get("CPU", 1))))
+
+
+def _reachable(address: str) -> None:
+    """Refuse at once an address nothing listens on (Ray itself would retry for minutes)."""
+    import socket
+
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    try:
+        socket.create_connection((host, int(port)), timeout=5).close()
+    except (OSError, ValueError) as error:
+        reason = "give it as host:port" if isinstance(error, ValueError) else (error.strerror or str(error))
+        raise UsageError(f"--address {address}: no Ray cluster answers there ({reason}); start one with "
+                         "`ray start --head` and give the address it prints, or leave --address out to run "
+                         "on this machine") from None
 
 
 def start_failure(error) -> UsageError:

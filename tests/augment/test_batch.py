@@ -249,3 +249,12 @@ def test_input_that_will_not_do_is_one_error_before_anything_is_made(tmp_path, c
         err = capsys.readouterr().err
         assert err.startswith("error: ") and words in err and err.count("\n") == 1, err
         assert not out.exists()
+
+
+def test_an_address_where_no_cluster_answers_is_one_error_at_once(photos, tmp_path, capsys):
+    t0 = time.monotonic()
+    for address in ("127.0.0.1:1", "127.0.0.1:port"):
+        assert main(["batch", str(photos), "--out", str(tmp_path / "out"), "--address", address]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"error: --address {address}: no Ray cluster answers there") and err.count("\n") == 1
+    assert time.monotonic() - t0 < 30  # Ray alone would retry for minutes
