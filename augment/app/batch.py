@@ -279,7 +279,7 @@ def run_batch(source: Path, out_dir: Path, defaults: dict, *, address: str | Non
     # The actors: each starts with a probe (``where``); one is given a photo only once it
     # answers, so an actor that cannot be placed (its node gone) holds none.
     probes, idle, where = {}, deque(), {}
-    busy = {}   # ObjectRef -> (actor, task, inputs, attempt, t_submit)
+    busy = {}   # ObjectRef -> (actor, task, inputs, attempt)
     redo = deque()  # (task, attempt) whose worker died
 
     def new_actor():
@@ -344,7 +344,7 @@ def run_batch(source: Path, out_dir: Path, defaults: dict, *, address: str | Non
                     break
                 task, inputs, attempt = item
                 actor = idle.popleft()
-                busy[actor.furnish.remote(inputs, _worker_options(task))] = (actor, task, inputs, attempt, t0)
+                busy[actor.furnish.remote(inputs, _worker_options(task))] = (actor, task, inputs, attempt)
                 summary.driver_s += time.perf_counter() - t0
             if not busy and (exhausted and not redo):
                 break
@@ -365,7 +365,7 @@ def run_batch(source: Path, out_dir: Path, defaults: dict, *, address: str | Non
                             raise start_failure(error) from None
                         new_actor()
                     continue
-                actor, task, inputs, attempt, _ = busy.pop(ref)
+                actor, task, inputs, attempt = busy.pop(ref)
                 try:
                     answer = ray.get(ref)
                 except ray.exceptions.RayActorError:

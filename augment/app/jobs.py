@@ -12,6 +12,7 @@ profile, the spec, the layout), ``<id>/out/`` (the files of :func:`augment.pipel
 """
 from __future__ import annotations
 
+import functools
 import json
 import math
 import multiprocessing
@@ -42,15 +43,14 @@ STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "ren
 # --------------------------------------------------------------------------------------
 
 _worker = None            # the worker process's Worker: one GL context, one floor model, all its jobs
-_progress_path = None     # the running job's progress.json
 
 
 class _FileProgress:
     """``furnish``'s progress reporter for a job: the current stage and the steps done,
     written to the job's ``progress.json`` (replaced atomically)."""
 
-    def __init__(self, total: int, path: Path | None = None):
-        self.path = path or _progress_path
+    def __init__(self, total: int, path: Path):
+        self.path = path
         self.total, self.done, self.current, self.finished = int(total), 0, None, []
         self._write()
 
@@ -138,16 +138,16 @@ def finish_job(job_dir, answer: dict) -> dict:
 def _run_job(job_dir: str, options: dict) -> dict:
     """Furnish one job's photo into ``job_dir/out`` (in a worker process); returns
     :func:`finish_job`'s result. A bug raises."""
-    global _worker, _progress_path
+    global _worker
     from .worker import Worker
 
     work = job_work(job_dir, options)
     if work is None:
         return {"error": {"kind": "cancelled", "message": "the job was deleted before it started"}, "seconds": 0.0}
-    _progress_path = Path(job_dir) / "progress.json"
     if _worker is None:
         _worker = Worker(threads=None)
-    return finish_job(job_dir, _worker.furnish(*work, reporter=_FileProgress))
+    return finish_job(job_dir, _worker.furnish(*work, reporter=functools.partial(
+        _FileProgress, path=Path(job_dir) / "progress.json")))
 
 
 # --------------------------------------------------------------------------------------

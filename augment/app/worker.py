@@ -91,7 +91,6 @@ class Worker:
             numba.set_num_threads(min(int(threads), numba.config.NUMBA_NUM_THREADS))
         self.model = FloorModel(DEFAULT_MODEL, threads=threads)
         self._renderer = None
-        self.photos = 0
 
     def close(self) -> None:
         if self._renderer is not None:
@@ -164,7 +163,6 @@ class Worker:
                         "seconds": time.perf_counter() - start}
             result.report = scrub(result.report, names)
             files = pipeline.output_files(result)
-            self.photos += 1
             return {"status": "done", "files": files, "warnings": scrub(list(result.warnings), names),
                     "styles": list(result.styles), "doubt": result.segmentation.doubt_json(),
                     "timings_s": {k: round(v, 3) for k, v in result.timings_s.items()},
