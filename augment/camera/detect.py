@@ -385,6 +385,10 @@ def _find_rectified(gray: np.ndarray, points: np.ndarray, board: Board, box: tup
         lo, hi = corners_box.min(axis=0) * spacing, corners_box.max(axis=0) * spacing
         to_view = np.hstack([A, (-lo - A @ center)[:, None]])
         size = tuple(int(v) for v in np.ceil(hi - lo) + 1)
+        if max(size) > CAMERA.detect.rectified_max_px:
+            # Saddle points nearly on one line stretch the view across it without bound
+            # (one such view took 22 GB in the detector).
+            continue
         view = cv2.warpAffine(gray, to_view, size, flags=cv2.INTER_CUBIC, borderMode=cv2.BORDER_CONSTANT,
                               borderValue=around)
         corners, detector = _find_chessboard(view, board)

@@ -31,6 +31,7 @@ class DetectSettings:
     crop_margin: float = 0.3  # a crop reaches this x the group's extent past it on each side
     crop_zoom_below_px: int = 16  # corner spacing under which a crop is also tried enlarged 2x
     rectified_spacings_px: tuple[float, ...] = (28.0, 20.0, 40.0)  # corner spacing of a far board's unsquashed view
+    rectified_max_px: int = 2048  # a view larger than this a side is a stray line of saddles, not a board
 
 
 @dataclass

@@ -778,3 +778,27 @@ def test_a_board_of_many_corners_is_looked_for_in_bounded_memory():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root, preexec_fn=limit)
     assert done.returncode == 0, done.stderr[-500:]
     assert "no 100x100 checkerboard found" in done.stdout and "use --board 7x5" in done.stdout, done.stdout
+
+
+def test_saddle_points_on_one_line_make_no_giant_view(monkeypatch):
+    """A "board" of saddle points nearly on one line: evening out their spread stretches
+    the view across the line without bound (one photo's took 22 GB in the detector). No
+    view past ``CAMERA.detect.rectified_max_px`` a side is made, and nothing is found."""
+    sizes = []
+    real_warp = cv2.warpAffine
+
+    def warp(image, matrix, size, **kwargs):
+        sizes.append(size)
+        return real_warp(image, matrix, size, **kwargs)
+
+    monkeypatch.setattr(detect.cv2, "warpAffine", warp)
+    gray = np.full((600, 800), 128, np.uint8)
+    x = np.linspace(100, 700, 35)
+    points = np.column_stack([x, 300 + 0.01 * np.sin(x)])
+    corners, _ = detect._find_rectified(gray, points, Board(), (40, 200, 760, 400))
+    assert corners is None
+    assert all(max(size) <= CAMERA.detect.rectified_max_px for size in sizes)
+    # An even spread is rectified as before.
+    grid = np.stack(np.meshgrid(np.arange(7) * 30.0 + 200, np.arange(5) * 12.0 + 300), -1).reshape(-1, 2)
+    detect._find_rectified(gray, grid, Board(), (150, 260, 450, 400))
+    assert sizes and max(max(s) for s in sizes) <= CAMERA.detect.rectified_max_px
