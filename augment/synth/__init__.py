@@ -88,7 +88,7 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
                   board: Board | None = None, clutter: bool = True, photographic: bool = True,
                   board_hidden: float = 0.0, furnished: float = 0.0, baseboard_m=BASEBOARD_M,
                   trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True,
-                  pieces=()) -> Sample:
+                  pieces=(), low_sun: float = 0.0, two_floors: float = 0.0) -> Sample:
     """Render one synthetic room photo with its ground truth.
 
     Parameters
@@ -130,6 +130,13 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     pieces : sequence of (Furniture, (4, 4) array)
         Furniture to stand in the room as it is, at its pose in the world (e.g. a staged
         layout's, for the truth of a staged photo); the random stream stays the same.
+    low_sun : float
+        Chance of a low, strong sun through a window onto the floor in view: bright bands
+        and patches, the floor stage's hardest light (0: never, and the random stream is
+        the same as without this option).
+    two_floors : float
+        Chance that part of the floor, past a straight or stepped threshold away from the
+        board, is of a second material (0: never, and the random stream is the same).
     """
     board = Board() if board is None else board
     rng = np.random.default_rng(seed)
@@ -159,7 +166,7 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         room = replace(room, clutter=room.clutter + (_board_cover(board, world_from_board, board_hidden),))
 
     built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px), baseboard_m,
-                        trim_like_floor, trim_dark, board_drawn, pieces)
+                        trim_like_floor, trim_dark, board_drawn, pieces, low_sun, two_floors)
     width, height = size_px
     flags = pyrender.RenderFlags.SHADOWS_DIRECTIONAL | pyrender.RenderFlags.SHADOWS_SPOT
     # Small frames cannot show a 2048-texel shadow map's detail; it would cost half the time.

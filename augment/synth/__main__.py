@@ -61,6 +61,11 @@ def main(argv=None) -> int:
                              "(default 0; the skirting check's hardest boards)")
     parser.add_argument("--trim-dark", type=float, default=0.0, metavar="P",
                         help="chance that they are painted a dark colour instead (default 0)")
+    parser.add_argument("--low-sun", type=float, default=0.0, metavar="P",
+                        help="chance of a low, strong sun through a window onto the floor in view (default 0)")
+    parser.add_argument("--two-floors", type=float, default=0.0, metavar="P",
+                        help="chance that part of the floor is of a second material, past a straight or "
+                             "stepped threshold (default 0)")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="render processes (default: one per core)")
     parser.add_argument("--sheet", type=Path, default=None,
@@ -76,8 +81,10 @@ def main(argv=None) -> int:
         parser.error(f"--furnished {args.furnished}: must be a chance between 0 and 1, e.g. 0.7")
     if not 0.0 <= args.trim_like_floor <= 1.0:
         parser.error(f"--trim-like-floor {args.trim_like_floor}: must be a chance between 0 and 1, e.g. 0.5")
-    if not 0.0 <= args.trim_dark <= 1.0:
-        parser.error(f"--trim-dark {args.trim_dark}: must be a chance between 0 and 1, e.g. 0.5")
+    for flag, value in (("--trim-dark", args.trim_dark), ("--low-sun", args.low_sun),
+                        ("--two-floors", args.two_floors)):
+        if not 0.0 <= value <= 1.0:
+            parser.error(f"{flag} {value}: must be a chance between 0 and 1, e.g. 0.5")
     low, high = args.baseboard_m
     if not 0.0 < low <= high <= 0.5:
         parser.error(f"--baseboard-m {low:g} {high:g}: give a low and a high height in meters, "
@@ -93,7 +100,7 @@ def main(argv=None) -> int:
 
     options = dict(seed=args.seed, size=args.size, out=args.out, clutter=args.clutter, furnished=args.furnished,
                    baseboard_m=(low, high), trim_like_floor=args.trim_like_floor,
-                   trim_dark=args.trim_dark,
+                   trim_dark=args.trim_dark, low_sun=args.low_sun, two_floors=args.two_floors,
                    board=Board(args.board.cols, args.board.rows, args.square, kind=args.board.kind))
     workers = max(1, min(args.workers, args.count))
     start = time.perf_counter()

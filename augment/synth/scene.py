@@ -357,17 +357,120 @@ def _light_pose(direction, position=(0.0, 0.0, 0.0)):
     return pose
 
 
+def _second_floor(rng, room: Room, shot: Shot, board_center_m, board_radius_m):
+    """Where a second floor material lies: a half of the room beyond a straight or stepped
+    threshold across the view or beside the board (walls are axis-aligned, thresholds run
+    along them), never under the board. Returns a test ``(k, 2) points -> (k,) bool`` and
+    the threshold's coordinates, which the floor's cells must split at, and whether it is
+    stepped."""
+    forward = shot.world_from_camera[:2, 2]
+    across = rng.random() < 0.6
+    axis = int(np.argmax(np.abs(forward))) if across else int(np.argmin(np.abs(forward)))
+    sign = float(np.sign(forward[axis])) if across else float(rng.choice([-1.0, 1.0]))
+    # Between the board and the wall it faces, leaving half a meter of the second floor at
+    # least; with less room than that there (the region is then empty), the caller redraws.
+    room_m = sign * (room.polygon_m[:, axis].max() if sign > 0 else room.polygon_m[:, axis].min())
+    room_m -= sign * board_center_m[axis] + board_radius_m
+    reach = rng.uniform(0.15, 0.85) * (room_m - 0.5) if room_m > 0.8 else room_m + 1.0
+    line = board_center_m[axis] + sign * (board_radius_m + reach)
+    # A stepped threshold (a doorway's recess, an alcove): past ``step`` along the line
+    # it moves farther from the board.
+    stepped = rng.random() < 0.4
+    step = board_center_m[1 - axis] + rng.uniform(-1.5, 1.5) if stepped else np.inf
+    line2 = line + sign * rng.uniform(0.3, 1.2) if stepped else line
+
+    def inside(points_m):
+        p = np.atleast_2d(points_m)
+        at = np.where(p[:, 1 - axis] < step, line, line2)
+        return sign * (p[:, axis] - at) > 0
+
+    cuts = {axis: [line, line2], 1 - axis: [step] if stepped else []}
+    return inside, cuts, stepped
+
+
+def _floor_cells(polygon_m, cuts):
+    """The floor polygon (axis-aligned walls) cut into rectangles at its own vertices'
+    coordinates and at ``cuts`` ({axis: [coordinate, ...]}): (k, 4, 2) corners."""
+    lines = []
+    for axis in (0, 1):
+        values = np.concatenate([polygon_m[:, axis], [c for c in cuts.get(axis, []) if np.isfinite(c)]])
+        lo, hi = polygon_m[:, axis].min(), polygon_m[:, axis].max()
+        lines.append(np.unique(np.clip(values, lo, hi)))
+    cells = []
+    for x0, x1 in zip(lines[0][:-1], lines[0][1:]):
+        for y0, y1 in zip(lines[1][:-1], lines[1][1:]):
+            if x1 - x0 > 1e-6 and y1 - y0 > 1e-6:
+                cells.append([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    cells = np.array(cells, dtype=np.float64).reshape(-1, 4, 2)
+    return cells[contains(polygon_m, cells.mean(axis=1))]
+
+
+def _threshold_strips(cells, second, width_m):
+    """Flat strips (k, 4, 2) on the edges where a cell of one floor meets one of the other."""
+    strips = []
+    for i, a in enumerate(cells):
+        for j in np.flatnonzero(second != second[i]):
+            if j < i:
+                continue
+            b = cells[j]
+            for axis in (0, 1):
+                other = 1 - axis
+                for edge in (a[:, axis].max(),):
+                    if abs(b[:, axis].min() - edge) < 1e-9 or abs(b[:, axis].max() - a[:, axis].min()) < 1e-9:
+                        at = edge if abs(b[:, axis].min() - edge) < 1e-9 else a[:, axis].min()
+                        lo = max(a[:, other].min(), b[:, other].min())
+                        hi = min(a[:, other].max(), b[:, other].max())
+                        if hi - lo > 1e-6:
+                            q = np.zeros((4, 2))
+                            q[:, axis] = [at - width_m / 2, at + width_m / 2, at + width_m / 2, at - width_m / 2]
+                            q[:, other] = [lo, lo, hi, hi]
+                            strips.append(q)
+    return np.array(strips).reshape(-1, 4, 2)
+
+
+def _low_sun(rng, room: Room, shot: Shot):
+    """A low, strong sun through one of the windows, aimed so its patch on the floor lies in
+    view: the sunlit bands and patches that floor segmentation finds hardest. None when
+    the room has no window."""
+    windows = [o for o in room.openings if o.kind == "window"]
+    if not windows:
+        return None
+    width, height = shot.size_px
+    best = None
+    for _ in range(40):
+        o = windows[rng.integers(len(windows))]
+        n = np.append(inward_normal(room.polygon_m, o.wall), 0.0)
+        azimuth = rng.uniform(-1.1, 1.1)
+        c, s = np.cos(azimuth), np.sin(azimuth)
+        horizontal = np.array([c * n[0] - s * n[1], s * n[0] + c * n[1], 0.0])
+        elevation = rng.uniform(np.radians(6), np.radians(32))
+        d = np.cos(elevation) * horizontal - [0, 0, np.sin(elevation)]
+        a, b = o.segment_m(room.polygon_m)
+        src = np.append((a + b) / 2, (o.bottom_m + o.top_m) / 2)
+        patch = src + d * (src[2] / -d[2])
+        best = d
+        if not contains(room.polygon_m, patch[None, :2])[0]:
+            continue
+        px, depth = shot.project(patch[None])
+        if depth[0] > 0 and 0 <= px[0, 0] < width and 0 <= px[0, 1] < height:
+            return d
+    return best
+
+
 def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                 world_from_board: np.ndarray, texture_px: int = 512, baseboard_m=BASEBOARD_M,
                 trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True,
-                pieces=()) -> Scene:
+                pieces=(), low_sun: float = 0.0, two_floors: float = 0.0) -> Scene:
     """Sample materials and lights and assemble the scene seen by ``shot`` (baseboards
     drawn ``baseboard_m`` (low, high) tall; the trim painted the floor's colour, 0.5-1.3
     of its brightness, with the chance ``trim_like_floor``, else a dark colour with the
     chance ``trim_dark``). Without ``board_drawn`` the board is left out and everything
     else drawn as with it: the floor the board hides, as the truth of its removal.
     ``pieces`` (Furniture, (4, 4) world pose) stand in the room besides, drawing nothing
-    from ``rng``."""
+    from ``rng``. With the chance ``low_sun`` a low, strong sun shines through a window
+    onto the floor in view (:func:`_low_sun`); with the chance ``two_floors`` part of the
+    floor is of a second material past a threshold (:func:`_second_floor`). Either at 0
+    draws nothing, so the random stream stays as it was."""
     info: dict = {}
     sky = np.clip([0.92, 0.95, 1.0] + rng.normal(0, 0.03, 3), 0.8, 1.0)
     scene = GLScene(bg_color=np.append(sky, 1.0))
@@ -387,9 +490,54 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     offset = rng.uniform(0, 1, 2)
     rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
     floor = _Batch()
-    floor.polygon(poly, 0.0, True, lambda xy: xy @ rot / tile_m + offset)
-    add(floor.mesh(_material(rng, np.ones(3), image, roughness=(0.35, 0.9))), SEG_FLOOR)
+    floor_material = _material(rng, np.ones(3), image, roughness=(0.35, 0.9))
     info["floor_material"] = kind
+    if two_floors > 0 and rng.random() < two_floors:
+        sheet_m = np.hypot(*board.size_m) / 2 + 0.1
+        # Redrawn until the second floor covers a tenth of the floor in view at least.
+        lo, hi = poly.min(axis=0), poly.max(axis=0)
+        grid = np.stack(np.meshgrid(np.arange(lo[0], hi[0], 0.1), np.arange(lo[1], hi[1], 0.1)), -1).reshape(-1, 2)
+        grid = grid[contains(poly, grid)]
+        px, depth = shot.project(np.column_stack([grid, np.zeros(len(grid))]))
+        seen = grid[(depth > 0) & (px[:, 0] >= 0) & (px[:, 0] < shot.size_px[0]) & (px[:, 1] >= 0)
+                    & (px[:, 1] < shot.size_px[1])]
+        best = -1.0
+        for _ in range(10):
+            drawn = _second_floor(rng, room, shot, world_from_board[:2, 3], sheet_m)
+            share = drawn[0](seen).mean() if len(seen) else 0.0
+            if share > best:
+                best, (inside, cuts, stepped) = share, drawn
+            if share >= 0.1:
+                break
+        cells = _floor_cells(poly, cuts)
+        second = inside(cells.mean(axis=1))
+        kind2 = textures.FLOOR_KINDS[(textures.FLOOR_KINDS.index(kind) + rng.integers(1, len(textures.FLOOR_KINDS)))
+                                     % len(textures.FLOOR_KINDS)]
+        image2, tile2_m = textures.floor_texture(kind2, _own(rng), texture_px)
+        angle2 = rng.choice([0.0, np.pi / 2]) + rng.normal(0, 0.02)
+        rot2 = np.array([[np.cos(angle2), -np.sin(angle2)], [np.sin(angle2), np.cos(angle2)]])
+        other = _Batch()
+        for cell, there in zip(cells, second):
+            lift = np.column_stack([cell, np.zeros(4)])
+            if there:
+                other.quad(lift, [0, 0, 1.0], cell @ rot2 / tile2_m)
+            else:
+                floor.quad(lift, [0, 0, 1.0], cell @ rot / tile_m + offset)
+        if other.positions:
+            add(other.mesh(_material(rng, np.ones(3), image2, roughness=(0.35, 0.9))), SEG_FLOOR)
+            strips = _threshold_strips(cells, second, rng.uniform(0.02, 0.06)) if rng.random() < 0.5 else ()
+            if len(strips):
+                strip = _Batch()
+                for q in strips:
+                    strip.quad(np.column_stack([q, np.full(4, 0.001)]), [0, 0, 1.0])
+                color = _random_tint(rng, [0.55, 0.5, 0.42], 0.12)
+                add(strip.mesh(_material(rng, color, roughness=(0.3, 0.7))), SEG_FLOOR)
+            share = float(sum(np.ptp(c[:, 0]) * np.ptp(c[:, 1]) for c in cells[second]))
+            info["second_floor"] = {"material": kind2, "area_m2": round(share, 3), "strip": bool(len(strips)),
+                                    "stepped": stepped}
+    if not floor.positions:
+        floor.polygon(poly, 0.0, True, lambda xy: xy @ rot / tile_m + offset)
+    add(floor.mesh(floor_material), SEG_FLOOR)
 
     # Walls and ceiling
     wall_img, wall_tile = textures.wall_texture(_own(rng), max(64, texture_px // 2))
@@ -464,13 +612,16 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     warm = kelvin_rgb(rng.uniform(2700, 4500))
     daylight = kelvin_rgb(rng.uniform(5000, 7500))
     sun_dir, sun_on_board = _sun_direction(rng, room, world_from_board[:2, 3])
+    strong = low_sun > 0 and rng.random() < low_sun and (low := _low_sun(rng, room, shot)) is not None
+    if strong:
+        sun_dir, sun_on_board = low, False
     lights = []
     if sun_dir is not None:
-        intensity = float(rng.uniform(2.0, 5.0)) * exposure
+        intensity = float(rng.uniform(4.0, 10.0) if strong else rng.uniform(2.0, 5.0)) * exposure
         scene.add(pyrender.DirectionalLight(color=daylight, intensity=intensity), pose=_light_pose(sun_dir),
                   name="light0-sun")
         lights.append({"kind": "sun", "direction": sun_dir.round(4).tolist(), "intensity": intensity,
-                       "edge_on_board": sun_on_board})
+                       "edge_on_board": sun_on_board, **({"low": True} if strong else {})})
     lo, hi = poly.min(axis=0), poly.max(axis=0)
     n_ceiling = rng.integers(1 if sun_dir is None else 0, 3)
     placed = 0

@@ -7,6 +7,8 @@ import cv2
 import numpy as np
 import pytest
 
+from skimage.measure import points_in_poly
+
 from augment.camera.board import Board
 from augment.render.gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from augment.synth import CEILING, FLOOR, render_labels, render_sample, write_sample
@@ -386,3 +388,74 @@ def test_cli_rejects_a_bad_baseboard_range(tmp_path, capsys):
     assert exit_info.value.code == 2
     assert "--baseboard-m 0.3 0.1" in capsys.readouterr().err
     assert not (tmp_path / "new").exists()  # refused before anything was written
+
+
+def test_floor_cells_cover_an_l_shaped_room_and_split_at_the_threshold():
+    """By hand: a 4 x 3 m L-room missing its 2 x 1 m corner, cut at x = 1.5 m: the cells
+    cover its 10 m^2 exactly, and those past the threshold its 2.5 x 2 + 0.5 x 1 m."""
+    from augment.synth.scene import _floor_cells
+
+    room = np.array([[0, 0], [4, 0], [4, 2], [2, 2], [2, 3], [0, 3]], float)
+    cells = _floor_cells(room, {0: [1.5], 1: []})
+    area = np.ptp(cells[:, :, 0], axis=1) * np.ptp(cells[:, :, 1], axis=1)
+    assert area.sum() == pytest.approx(10.0)
+    past = cells.mean(axis=1)[:, 0] > 1.5
+    assert area[past].sum() == pytest.approx(2.5 * 2 + 0.5 * 1)
+    # A cut outside the room changes nothing.
+    assert np.ptp(_floor_cells(room, {0: [9.0], 1: [np.inf]})[:, :, 0], axis=1).sum() > 0
+
+
+@pytest.mark.parametrize("seed", [3, 8])
+def test_two_floors_keep_one_floor_mask_and_leave_the_board_on_the_first(renderer, seed):
+    """A second floor material past a threshold is floor like the first: the same room
+    and camera give the same floor mask; the second floor is in view, away from the
+    board, and the photo's floor there differs from the floor around the board."""
+    from augment.synth.scene import _second_floor
+
+    default = render_sample(seed, renderer, size_px=(320, 240), photographic=False)
+    two = render_sample(seed, renderer, size_px=(320, 240), photographic=False, two_floors=1.0)
+    assert two.truth["room"] == default.truth["room"]
+    assert "second_floor" in two.truth["render"] and "second_floor" not in default.truth["render"]
+    assert two.truth["render"]["second_floor"]["area_m2"] > 0.5
+    assert iou_of(two.floor_mask, default.floor_mask) > 0.99
+    # The threshold is drawn never under the board, for any draw.
+    rng = np.random.default_rng(0)
+    room = random_room(rng)
+    handling = random_handling(rng, (640, 480))
+    shot = random_shot(rng, room, handling)
+    center = room.polygon_m.mean(axis=0)
+    for _ in range(50):
+        inside, _, _ = _second_floor(rng, room, shot, center, 0.4)
+        ring = center + 0.4 * np.column_stack([np.cos(np.linspace(0, 6.3, 16)), np.sin(np.linspace(0, 6.3, 16))])
+        assert not inside(ring).any()
+
+
+def iou_of(a, b):
+    return (a & b).sum() / (a | b).sum()
+
+
+def test_low_sun_lands_on_the_floor_in_view(renderer):
+    """A low, strong sun: 6-32 degrees above the horizon, through a window, aimed so that
+    the sunlit patch of a window's middle lies in the room and in view (when some draw
+    of 40 gets it there: on most photos)."""
+    landed = []
+    for seed in range(8):
+        t = render_sample(seed, renderer, size_px=(320, 240), photographic=False, low_sun=1.0).truth
+        suns = [light for light in t["render"]["lights"] if light["kind"] == "sun"]
+        if not t["room"]["windows"]:
+            assert not any(light.get("low") for light in suns)
+            continue
+        assert len(suns) == 1 and suns[0]["low"]
+        d = np.array(suns[0]["direction"])
+        assert 6 <= np.degrees(np.arcsin(-d[2])) <= 32
+        K, camera_from_world = np.array(t["K"]), np.array(t["camera_from_world"])
+        seen = []
+        for w in t["room"]["windows"]:
+            src = np.append(np.mean(w["segment_m"], axis=0), (w["bottom_m"] + w["top_m"]) / 2)
+            patch = src + d * src[2] / -d[2]
+            cam = camera_from_world[:3, :3] @ patch + camera_from_world[:3, 3]
+            u, v, _ = K @ cam / cam[2]
+            inside = points_in_poly(patch[None, :2], np.array(t["room"]["polygon_m"]))[0]
+            seen.append(cam[2] > 0 and 0 <= u < 320 and 0 <= v < 240 and inside)
+        landed.append(any(seen))
+    assert len(landed) >= 5 and np.mean(landed) >= 0.75, landed
