@@ -3,8 +3,8 @@
 Training needs torch (``pip install -e '.[train]'``); Stager itself runs the exported
 model with onnxruntime only.
 
-Recipe (what ``models/floor_segnet.onnx`` was made with; the model card in
-``models/README.md`` gives the time it took)::
+The base recipe below; the shipped ``models/floor_segnet.onnx`` is that base fine-tuned
+(``--init BASE.onnx``) on the hard cases of real empty rooms, as ``models/README.md`` gives::
 
     python -m augment.synth --count 1679 --seed 100 --size 320x240 --out data/floor_train_l --quiet
     python -m augment.synth --count 500 --seed 101 --size 240x320 --out data/floor_train_p --quiet
@@ -52,9 +52,10 @@ MEAN_RGB = (0.485, 0.456, 0.406)
 STD_RGB = (0.229, 0.224, 0.225)
 # Long side of the network input; the short side keeps the photo's aspect, rounded to 32.
 INPUT_LONG_PX = 256
-# At run time the model also looks at the photo a little larger and averages the two:
-# on real rooms that finds floor the training size misses (dark corners, under tables).
-RUN_LONG_PX = (INPUT_LONG_PX, 320)
+# At run time the model also looks at the photo larger and averages the three: on real
+# rooms that finds floor the training size misses (dark corners, under tables), and far
+# strips of floor past a threshold are a few pixels tall at the training size.
+RUN_LONG_PX = (INPUT_LONG_PX, 320, 448)
 TRAIN_SHAPES = {"landscape": (192, 256), "portrait": (256, 192)}  # (rows, cols)
 LITE0_FROZEN_BLOCKS = 3  # --arch lite0 trains from its fourth block on
 # Parameter names of FloorLiteNet's encoder (the pretrained part), as in the ImageNet file.
@@ -185,6 +186,56 @@ class FloorLiteNet(nn.Module):
             y = F.interpolate(y, size=feature.shape[-2:], mode="bilinear", align_corners=False)
             y = smooth(y + lateral(feature))
         return F.interpolate(self.head(y), size=size, mode="bilinear", align_corners=False)
+
+
+def load_onnx(model: nn.Module, path: Path) -> None:
+    """Start ``model`` from an exported ONNX model of the same architecture (the shipped
+    one, whose torch weights are not shipped). The export folded each batch norm into
+    the convolution before it, so a folded pair comes back as the convolution's weight
+    and a batch norm that only adds the folded bias; its running statistics are lost,
+    so fine-tuning must keep batch norms in eval mode (:func:`freeze_batch_norms`)."""
+    import onnx
+    from onnx import numpy_helper
+
+    graph = onnx.load(str(path)).graph
+    tensors = {t.name: numpy_helper.to_array(t) for t in graph.initializer}
+    convs = [[tensors[name] for name in node.input[1:] if name in tensors] for node in graph.node
+             if node.op_type == "Conv"]
+    # Convolutions in the order the forward pass runs them, each with the batch norm after it.
+    order: list[list] = []
+    hooks = [m.register_forward_hook(lambda m, i, o: order.append([m])) for m in model.modules()
+             if isinstance(m, nn.Conv2d)]
+    hooks += [m.register_forward_hook(lambda m, i, o: order[-1].append(m)) for m in model.modules()
+              if isinstance(m, nn.BatchNorm2d)]
+    with torch.no_grad():
+        model.eval()(torch.zeros(1, 3, *TRAIN_SHAPES["landscape"]))
+    for hook in hooks:
+        hook.remove()
+    if len(order) != len(convs):
+        raise SystemExit(f"{path}: {len(convs)} convolutions, the model has {len(order)}: another architecture")
+    with torch.no_grad():
+        for pair, (weight, *bias) in zip(order, convs):
+            conv = pair[0]
+            if tuple(conv.weight.shape) != weight.shape:
+                raise SystemExit(f"{path}: a convolution of shape {weight.shape}, the model's is "
+                                 f"{tuple(conv.weight.shape)}: another architecture")
+            conv.weight.copy_(torch.from_numpy(np.array(weight)))
+            bias = torch.from_numpy(np.array(bias[0])) if bias else torch.zeros(weight.shape[0])
+            if len(pair) > 1:
+                bn = pair[1]
+                bn.weight.fill_(1.0)
+                bn.bias.copy_(bias)
+                bn.running_mean.zero_()
+                bn.running_var.fill_(1.0 - bn.eps)
+            else:
+                conv.bias.copy_(bias)
+
+
+def freeze_batch_norms(model: nn.Module) -> None:
+    """Batch norms use their running statistics (kept, not updated) while the rest trains."""
+    for m in model.modules():
+        if isinstance(m, nn.BatchNorm2d):
+            m.eval()
 
 
 # ----------------------------------------------------------------------------- data
@@ -406,7 +457,8 @@ def main(argv=None) -> int:
                         help="lite0: the pretrained encoder learns at this fraction of --lr (small: it keeps "
                              "more of what real photos taught it)")
     parser.add_argument("--init", type=Path, default=None,
-                        help="start from these torch weights (a .pt written beside an earlier run's .onnx)")
+                        help="start from these weights: a .pt written beside an earlier run's .onnx, or an "
+                             ".onnx of the same architecture (the shipped model), whose batch norms stay frozen")
     parser.add_argument("--out", type=Path, default=Path("models/floor_segnet.onnx"))
     args = parser.parse_args(argv)
 
@@ -436,8 +488,11 @@ def main(argv=None) -> int:
                 p.requires_grad = False
     else:
         model = FloorSegNet()
-    if args.init is not None:
+    if args.init is not None and args.init.suffix == ".onnx":
+        load_onnx(model, args.init)
+    elif args.init is not None:
         model.load_state_dict(torch.load(args.init, map_location="cpu", weights_only=True))
+    frozen_norms = args.init is not None and args.init.suffix == ".onnx"
     n_params = sum(p.numel() for p in model.parameters())
     print(f"{total} training images ({', '.join(f'{k}: {len(v[0])}' for k, v in sets.items())}), "
           f"{n_params / 1e6:.2f} M parameters", flush=True)
@@ -455,6 +510,8 @@ def main(argv=None) -> int:
     log = []
     for epoch in range(args.epochs):
         model.train()
+        if frozen_norms:
+            freeze_batch_norms(model)
         running = []
         for step in range(steps_per_epoch):
             kind = kinds[rng.choice(len(kinds), p=weights / weights.sum())]

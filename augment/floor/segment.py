@@ -571,6 +571,7 @@ def _refined(small, scale, probability, calibration, method, refine, clicks):
         _seed_geometry(trimap, shape_small, scale, calibration)
         _apply_clicks(trimap, clicked_floor, clicked_other, clicked_near)
         small_mask = _grabcut(small, trimap, FLOOR.segment.grabcut_iterations)
+        small_mask = _restore_dropped(small_mask, probability, calibration, scale, clicked_other)
         name = "onnx+grabcut"
     elif method == "onnx":
         small_mask = probability > 0.5
@@ -587,6 +588,40 @@ def _refined(small, scale, probability, calibration, method, refine, clicks):
         name = "grabcut"
     mask_small = _clean(small_mask, calibration, scale, probability, clicked_floor) & ~clicked_other
     return mask_small, name, clicked_floor, clicked_other, clicked_near
+
+
+def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, scale: float,
+                     clicked_other: np.ndarray) -> np.ndarray:
+    """Give back the regions the model calls floor that GrabCut dropped whole.
+
+    GrabCut's colour model of the floor is learnt from the floor it is sure of, around
+    the board: a second floor material past a threshold (tiles beyond carpet, planks in
+    an alcove) fits it badly and is dropped, though the model calls it floor. GrabCut is
+    for the model's soft edges, a few working pixels; a region of
+    ``FLOOR.segment.restore_min_m2`` or more on the floor, thicker than an edge
+    (``FLOOR.segment.restore_edge_px``), below the horizon and touching the floor kept,
+    is the model's call to make. A region the user clicked as not floor stays out."""
+    if calibration is None:
+        return mask
+    dropped = (probability > 0.5) & ~mask & ~clicked_other
+    dropped &= below_horizon(mask.shape, calibration.scaled(scale).horizon, 1.0)
+    edge = FLOOR.segment.restore_edge_px
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * edge + 1, 2 * edge + 1))
+    core = cv2.erode(dropped.astype(np.uint8), kernel)
+    if not core.any():
+        return mask
+    n, labels = cv2.connectedComponents(core, connectivity=8)
+    footprint = _believed_footprint_m2(mask.shape, calibration.scaled(scale))
+    area = np.bincount(labels.ravel(), footprint.ravel(), minlength=n)
+    near = cv2.dilate(mask.astype(np.uint8), kernel, iterations=2) > 0
+    touching = np.zeros(n, bool)
+    touching[np.unique(labels[near & (labels > 0)])] = True
+    keep = touching & (area >= FLOOR.segment.restore_min_m2)
+    keep[0] = False
+    if not keep.any():
+        return mask
+    grown = cv2.dilate(np.isin(labels, np.flatnonzero(keep)).astype(np.uint8), kernel) > 0
+    return mask | (grown & dropped)
 
 
 def _cut_clicked(cut: np.ndarray, marks: np.ndarray) -> np.ndarray:

@@ -28,6 +28,8 @@ class SegmentSettings:
     min_part_m2: float = 0.05  # a part cut off from the board's floor with less floor than this is a leak or a sliver
     min_part_share: float = 0.005  # so is one of fewer pixels than this share of the main region's (a far sliver)
     disputed_share_warn: float = 0.10  # above this share of the floor disputed by model and mask, floor is uncertain
+    restore_min_m2: float = 0.3  # a region the model calls floor and GrabCut dropped whole, this large, is floor
+    restore_edge_px: int = 2  # ... when thicker than this either side: GrabCut's edge corrections are thinner
     spur_width_px: int = 5  # mask lines thinner than this and farther than spur_reach_px from the model's floor go
     spur_reach_px: int = 25  # GrabCut's spurs up walls reach farther; a sliver of floor behind a far carton, less
     board_margin: float = 1.3  # the board grown this much about its center is floor for sure: it lies on open floor
