@@ -256,7 +256,7 @@ class _Clock:
 # measure
 # --------------------------------------------------------------------------------------
 
-def measure(photo, board, *, camera=None, model=None, floor_mask=None, clicks=None,
+def measure(photo, board, *, camera=None, model=None, floor_mask=None, clicks=None, height_m=None,
             clock: _Clock | None = None) -> Measurement:
     """Measure the room in a photo: the camera, the floor and the wall height.
 
@@ -276,6 +276,9 @@ def measure(photo, board, *, camera=None, model=None, floor_mask=None, clicks=No
     clicks : (n, 3) array_like, optional
         The user's corrections of the floor found (x, y photo pixels, 1 floor or 0 not
         floor; :func:`augment.floor.segment.segment_floor`). Not with ``floor_mask``.
+    height_m : float, optional
+        The wall height the user knows, used when the photo does not show it (the ceiling
+        out of view; :func:`augment.room.height.measure_height`).
     clock : optional
         Times the stages (``calibrate``, ``segment``, ``floor``, ``height``) and steps a
         progress bar after each; a silent one when None.
@@ -319,7 +322,7 @@ def measure(photo, board, *, camera=None, model=None, floor_mask=None, clicks=No
                                "the board") from None
     clock.progress.step()
     with clock("height"):
-        height = measure_height(image, calibration, floor_mask=seg.mask)
+        height = measure_height(image, calibration, floor_mask=seg.mask, given_m=height_m)
         if height.fallback:
             warnings.append(f"wall height not measured: {height.reason}")
     clock.progress.step()
@@ -472,7 +475,8 @@ def suggestion_styles(style: str | None, seed: int, suggestions: int) -> list[st
 def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: int = DEFAULT_SUGGESTIONS,
             seed: int = 0, style: str | None = None, layout=None, camera=None, model=None, floor_mask=None,
             clicks=None, doors=None, auto_doors: bool = True, assets: dict | None = None, layers: bool = False,
-            keep_board: bool = False, progress: bool = False, reporter=None, renderer=None) -> FurnishResult:
+            keep_board: bool = False, height_m=None, progress: bool = False, reporter=None,
+            renderer=None) -> FurnishResult:
     """Furnish a photo of an empty room: every stage, results in memory.
 
     Parameters
@@ -527,6 +531,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         Leave the board in the staged photos. By default its sheet is filled with the
         floor around it (:func:`augment.render.erase.erase_board`) before the furniture is
         rendered in; the overlays always show the photo as it is.
+    height_m : float, optional
+        The wall height, used when the photo does not show it (:func:`measure`).
     progress : bool
         A progress bar on stderr.
     reporter : callable, optional
@@ -575,7 +581,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     background = ThreadPoolExecutor(max_workers=1, thread_name_prefix="furnish")
     render_module = background.submit(importlib.import_module, "augment.render.staged")
     try:
-        m = measure(photo, board, camera=camera, model=model, floor_mask=floor_mask, clicks=clicks, clock=clock)
+        m = measure(photo, board, camera=camera, model=model, floor_mask=floor_mask, clicks=clicks,
+                    height_m=height_m, clock=clock)
         warnings = list(m.warnings)
         if m.floor.caveat:
             warnings.append(f"furniture is placed on the floor in view only ({m.floor.caveat})")

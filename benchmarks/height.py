@@ -104,7 +104,28 @@ def _photo(sample) -> np.ndarray:
 
 def _entry(result, truth_h: float) -> dict:
     return {"height_m": result.height_m, "err": result.height_m / truth_h - 1, "fallback": result.fallback,
-            "confidence": result.confidence, "reason": result.reason}
+            "confidence": result.confidence, "reason": result.reason, "at_least_m": result.at_least_m}
+
+
+def door_tops_in_view(sample) -> list[float]:
+    """The heights of the doors whose head (its middle) and a foot show in the photo: not
+    hidden (the render's depth there within 5 % of the point's) and inside the frame."""
+    t = sample.truth
+    K, camera_from_world = np.array(t["K"]), np.array(t["camera_from_world"])
+    rows, cols = sample.depth_m.shape
+    tops = []
+    for door in t["room"]["doors"]:
+        a, b = np.array(door["segment_m"])
+        points = np.array([[*(a + b) / 2, door["top_m"]], [*a, 0.0], [*b, 0.0]])
+        cam = points @ camera_from_world[:3, :3].T + camera_from_world[:3, 3]
+        seen = []
+        for p in cam:
+            u, v = (K @ p)[:2] / p[2]
+            inside = p[2] > 0 and 0 <= u < cols and 0 <= v < rows
+            seen.append(inside and abs(sample.depth_m[int(v), int(u)] / p[2] - 1) < 0.05)
+        if seen[0] and (seen[1] or seen[2]):
+            tops.append(float(door["top_m"]))
+    return tops
 
 
 def measure(args, template: Calibration) -> tuple[list[dict], dict]:
@@ -119,6 +140,7 @@ def measure(args, template: Calibration) -> tuple[list[dict], dict]:
             ceiling = float(np.mean(sample.labels == CEILING))
             row = {"seed": [args.seed, i], "height_true_m": truth_h, "ceiling_fraction": ceiling,
                    "eligible": ceiling >= ELIGIBLE_CEILING, "pitch_deg": t["camera"]["pitch_down_deg"],
+                   "door_tops_m": door_tops_in_view(sample),
                    "camera_height_m": t["camera"]["height_m"]}
             cal = truth_calibration(template, t)
             times = []
@@ -195,6 +217,14 @@ def summarize(rows: list[dict]) -> dict:
             "not_eligible_measured": len(wrong),
             "not_eligible_err_abs_median": float(np.median(wrong)) if wrong else None,
         }
+        # Photos that show a door's top but not the ceiling: a lower bound, not a height.
+        doors = [r for r in done if not r["eligible"] and r["door_tops_m"]]
+        bounded = [r for r in doors if r[mode]["fallback"] and r[mode]["at_least_m"] is not None]
+        out[mode].update({
+            "door_only": len(doors), "door_only_bounded": len(bounded),
+            "door_only_bound_over_door_median": float(np.median([r[mode]["at_least_m"] / max(r["door_tops_m"]) - 1
+                                                                 for r in bounded])) if bounded else None,
+            "door_only_bound_above_truth": sum(r[mode]["at_least_m"] > r["height_true_m"] for r in bounded)})
     out["board_refused"] = sum("board_refused" in r for r in rows)
     out["exif_refused"] = sum("exif_refused" in r for r in rows)
     return out
@@ -204,7 +234,7 @@ def _cell(entry: dict | None) -> str:
     if entry is None:
         return ""
     if entry["fallback"]:
-        return "fallback"
+        return "fallback" + (f" (\u2265 {entry['at_least_m']:.2f} m)" if entry.get("at_least_m") else "")
     return f"{100 * entry['err']:+.1f} % ({entry['confidence']:.2f})"
 
 
@@ -215,15 +245,17 @@ def _pct(x) -> str:
 def report(args, rows: list[dict], summary: dict, extra: dict) -> list[str]:
     md = [f"## Wall height on {len(rows)} synthetic photos ({args.size[0]}x{args.size[1]}, pitch "
           f"{args.pitch[0]:g}-{args.pitch[1]:g} degrees down, seeds [{args.seed}, i])", "",
-          "Each cell: height error (confidence), or fallback. Eligible: the ceiling is in view "
+          "Each cell: height error (confidence), or fallback (with the lower bound when one). Eligible: the "
+          "ceiling is in view "
           f"(at least {100 * ELIGIBLE_CEILING:.1f} % of the photo).", "",
-          "| seed | H m | ceiling | eligible | " + " | ".join(MODES) + " | board calibration |",
-          "|---|---|---|---|" + "---|" * len(MODES) + "---|"]
+          "| seed | H m | ceiling | eligible | door tops m | " + " | ".join(MODES) + " | board calibration |",
+          "|---|---|---|---|---|" + "---|" * len(MODES) + "---|"]
     for r in rows:
         board = (f"refused: {r['board_refused']}" if "board_refused" in r
                  else f"focal {100 * r['focal_err']:+.1f} %")
         md.append(f"| {r['seed'][1]} | {r['height_true_m']:.2f} | {100 * r['ceiling_fraction']:.1f} % | "
-                  f"{'yes' if r['eligible'] else 'no'} | " + " | ".join(_cell(r.get(m)) for m in MODES)
+                  f"{'yes' if r['eligible'] else 'no'} | {', '.join(f'{h:.2f}' for h in r['door_tops_m'])} | "
+                  + " | ".join(_cell(r.get(m)) for m in MODES)
                   + f" | {board} |")
     md += ["", "| mode | photos | eligible | measured | fell back | median abs err | p90 abs err | max abs err | "
                "measured though not eligible (median abs err) |",
@@ -233,6 +265,14 @@ def report(args, rows: list[dict], summary: dict, extra: dict) -> list[str]:
         md.append(f"| {mode} | {s['photos']} | {s['eligible']} | {s['eligible_measured']} | {s['eligible_fallback']} | "
                   f"{_pct(s['err_abs_median'])} | {_pct(s['err_abs_p90'])} | {_pct(s['err_abs_max'])} | "
                   f"{s['not_eligible_measured']} ({_pct(s['not_eligible_err_abs_median'])}) |")
+    md += ["", "Photos that show a door's top (and a foot) but not the ceiling: the height is not measured, "
+               "but the tallest whole vertical edge on the floor bounds it from below.", "",
+           "| mode | door-only photos | bounded | bound over the door's top (median) | bound above the true height |",
+           "|---|---|---|---|---|"]
+    for mode in MODES:
+        s = summary[mode]
+        md.append(f"| {mode} | {s['door_only']} | {s['door_only_bounded']} | "
+                  f"{_pct(s['door_only_bound_over_door_median'])} | {s['door_only_bound_above_truth']} |")
     md += ["", f"Board calibration refused {summary['board_refused']} of {len(rows)} photos (single view), "
            f"{summary['exif_refused']} with the true focal length. Targets: median < {100 * TARGET_MEDIAN:.0f} %, "
            f"p90 < {100 * TARGET_P90:.0f} % on eligible photos."]

@@ -26,7 +26,7 @@ from .cluster import actor_class, connect, start_failure
 
 RESULTS = "results.jsonl"
 # The fields a manifest row may give; paths in it are read from the manifest's folder.
-MANIFEST_FIELDS = ("photo", "board", "square", "room", "spec", "camera", "suggestions", "seed", "style")
+MANIFEST_FIELDS = ("photo", "board", "square", "room", "spec", "camera", "suggestions", "seed", "style", "height")
 DEFAULT_RETRIES = 2
 # A worker past this resident memory after a photo is replaced by a fresh one.
 DEFAULT_WORKER_MB = 4096
@@ -103,7 +103,7 @@ def _field(name: str, value, base: Path):
 
     from ..camera.board import parse_board
     from ..render.styles import STYLES
-    from .values import count, square_mm
+    from .values import count, height_m, square_mm
 
     text = str(value).strip()
     try:
@@ -111,6 +111,8 @@ def _field(name: str, value, base: Path):
             return parse_board(text)
         if name == "square":
             return square_mm(text)
+        if name == "height":
+            return height_m(text)
         if name in ("suggestions",):
             return count(text)
         if name == "seed":
@@ -134,7 +136,7 @@ def read_tasks(source: Path, defaults: dict):
     :class:`Task` at a time, in order.
 
     ``defaults``: the command's options (``board`` (cols, rows, kind), ``square``,
-    ``room``, ``spec``, ``camera``, ``suggestions``, ``seed``, ``style``,
+    ``room``, ``spec``, ``camera``, ``suggestions``, ``seed``, ``style``, ``height``,
     ``auto_doors``), which a manifest row's fields replace. A row that will not do
     becomes a task with its ``error``; a manifest whose columns will not do raises
     :class:`UsageError`, before anything is done.
@@ -173,7 +175,7 @@ def read_tasks(source: Path, defaults: dict):
 def _options(defaults: dict, given: dict) -> dict:
     """The options a photo is furnished with: the command's, a row's in their place."""
     options = {k: defaults.get(k) for k in ("board", "square", "room", "spec", "camera", "suggestions", "seed",
-                                            "style", "auto_doors")}
+                                            "style", "height", "auto_doors")}
     options.update({k: v for k, v in given.items() if k != "photo"})
     if "room" in given:
         options["spec"] = None
@@ -214,7 +216,8 @@ def _worker_options(task: Task) -> dict:
     cols, rows, kind = o["board"]
     square = o["square"] if o.get("square") is not None else DEFAULT_SQUARE_MM
     return {"board": (cols, rows, square, kind), "room": o.get("room"), "suggestions": o.get("suggestions") or 4,
-            "seed": o.get("seed") or 0, "style": o.get("style"), "auto_doors": o.get("auto_doors", True)}
+            "seed": o.get("seed") or 0, "style": o.get("style"), "auto_doors": o.get("auto_doors", True),
+            "height_m": o.get("height")}
 
 
 # --------------------------------------------------------------------------------------

@@ -56,6 +56,7 @@ from ..camera.board import (CHARUCO_DICTIONARY, DEFAULT_BOARD, DEFAULT_INNER_COR
                             PAPER_MM, parse_board)
 from ..render.styles import STYLES
 from .values import count as _count
+from .values import height_m as _height_m
 from .values import square_mm as _square_mm
 from .values import whole as _whole
 
@@ -122,6 +123,12 @@ def _add_floor_args(p) -> None:
                        help="your own floor mask (white = floor), used instead of finding the floor: the "
                             "floor.png `stage segment` wrote, corrected in an image editor")
     _add_click_args(p)
+
+
+def _add_height_arg(p) -> None:
+    p.add_argument("--height", type=_height_m, default=None, metavar="M",
+                   help="the wall height in meters, used when the photo does not show it (the ceiling out of "
+                        "view; default: 2.5, or the top of a door in view if higher)")
 
 
 def _click_flag(click) -> str:
@@ -239,6 +246,7 @@ def _parser():
     m.add_argument("--camera", type=path_arg, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate`")
     _add_floor_args(m)
+    _add_height_arg(m)
     m.add_argument("--out", "-o", type=path_arg, default=None, metavar="DIR",
                    help="output folder (default out/<photo name>; created)")
     m.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
@@ -271,6 +279,7 @@ def _parser():
     f.add_argument("--camera", type=path_arg, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate`")
     _add_floor_args(f)
+    _add_height_arg(f)
     f.add_argument("--door", type=_door, action="append", default=[], metavar="X1,Y1,X2,Y2",
                    help="a door to keep clear: the photo pixels of the feet of its two sides, where they "
                         "meet the floor (as in the floor overlay); its swing zone, as deep as the door is "
@@ -319,6 +328,7 @@ def _parser():
                    help=f"the furniture's look: {', '.join(STYLES)} (default: a different one per suggestion)")
     a.add_argument("--camera", type=path_arg, default=None, metavar="PROFILE.json",
                    help="camera profile from `stage calibrate`, for every photo")
+    _add_height_arg(a)
     a.add_argument("--no-auto-doors", dest="auto_doors", action="store_false",
                    help="do not look for doors in the photos")
     a.add_argument("--address", default=None, metavar="ADDRESS",
@@ -641,6 +651,13 @@ def _segment_cmd(args):
     return EXIT_OK
 
 
+def _height_state(height) -> str:
+    """How the wall height was come by, as the summary line says it."""
+    if not height.fallback:
+        return f"confidence {height.confidence:.2f}"
+    return "given with --height (the photo does not show it)" if height.given else "assumed (fallback)"
+
+
 def _measure_cmd(args):
     from ..photo.io import encode_image
     from ..pipeline import measure, measure_report, overlays
@@ -653,6 +670,7 @@ def _measure_cmd(args):
     if args.photo.is_file():
         _check_floor_mask(args.floor_mask)
     m = measure(args.photo, board, camera=args.camera, floor_mask=args.floor_mask, clicks=args.clicks,
+                height_m=args.height,
                 model=_load_model(args.model) if args.floor_mask is None else None)
     files = {out / "report.json": json.dumps(measure_report(m), indent=2) + "\n",
              **{out / name: encode_image(image, ".png") for name, image in overlays(m).items()}}
@@ -666,7 +684,7 @@ def _measure_cmd(args):
               f"({m.segmentation.method})")
         if polygon.caveat:
             print(f"note        {polygon.caveat}")
-        state = "assumed (fallback)" if height.fallback else f"confidence {height.confidence:.2f}"
+        state = _height_state(height)
         print(f"walls       {height.height_m:.2f} m high, {state}")
         print(f"wrote {out}/report.json and overlay_calibration.png, overlay_floor.png, overlay_height.png")
     _print_warnings(m.warnings, m.segmentation,
@@ -754,7 +772,7 @@ def _furnish_cmd(args):
                 result = furnish(photo, board, room=args.room, spec=args.spec, suggestions=suggestions,
                                  seed=args.seed, camera=args.camera, model=shared.get("model", args.model),
                                  floor_mask=args.floor_mask, clicks=args.clicks, doors=args.door,
-                                 auto_doors=args.auto_doors,
+                                 auto_doors=args.auto_doors, height_m=args.height,
                                  assets=dict(args.asset), layers=args.layers, keep_board=args.keep_board,
                                  style=args.style, layout=args.layout, renderer=shared.get("renderer"),
                                  progress=not args.quiet and sys.stderr.isatty())
@@ -794,7 +812,7 @@ def _print_furnished(result, out: Path, paths: list, quiet: bool, photo: Path | 
               f"RMS {cal.rms_px:.2f} px")
         print(f"floor       {floor.area_m2:.2f} m\u00b2 in view, {len(floor.polygon_m)} corners "
               f"({result.segmentation.method})")
-        state = "assumed (fallback)" if height.fallback else f"confidence {height.confidence:.2f}"
+        state = _height_state(height)
         print(f"walls       {result.room_height_m:.2f} m high, {state}")
         kinds = ", ".join(i.id for i in result.spec.items)
         print(f"furniture   {result.source}: {len(result.spec.items)} items ({kinds})")
@@ -849,7 +867,7 @@ def _batch_cmd(args):
     board = _board(args)
     defaults = {"board": (board.cols, board.rows, board.kind), "square": board.square_mm, "room": args.room,
                 "spec": args.spec, "camera": args.camera, "suggestions": args.suggestions, "seed": args.seed,
-                "style": args.style, "auto_doors": args.auto_doors}
+                "style": args.style, "auto_doors": args.auto_doors, "height": args.height}
     next(iter(read_tasks(args.input, defaults)), None)  # a manifest's columns checked before Ray starts
     _mkdir(args.out, "--out", args.out)
     say = (lambda line: None) if args.quiet else (lambda line: print(line, file=sys.stderr))

@@ -31,3 +31,18 @@ def whole(text: str, lo: int, hi: int, example: str = "") -> int:
 
 def count(text: str) -> int:
     return whole(text, 1, 100)
+
+
+# Wall heights a user may give: a low attic room to a loft's double height.
+HEIGHT_RANGE_M = (1.8, 6.0)
+
+
+def height_m(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    lo, hi = HEIGHT_RANGE_M
+    if not lo <= value <= hi:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected the wall height in meters, {lo:g} to {hi:g}, e.g. 2.6")
+    return value

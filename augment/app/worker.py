@@ -26,7 +26,7 @@ from layout.errors import StagerError
 INPUT_ROLES = {"photo": "the photo", "camera": "the camera profile", "spec": "the spec file",
                "layout": "the layout file", "floor_mask": "the floor mask"}
 # Options passed through to ``pipeline.furnish`` as they are.
-OPTIONS = ("room", "suggestions", "seed", "style", "clicks", "doors", "auto_doors", "keep_board")
+OPTIONS = ("room", "suggestions", "seed", "style", "clicks", "doors", "auto_doors", "keep_board", "height_m")
 
 
 def rss_mb() -> float:

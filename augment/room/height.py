@@ -94,6 +94,11 @@ class HeightResult:
         Each edge's weight in the estimate (length and junction support).
     inliers : (k,) bool
         The edges the estimate was taken from.
+    given : bool
+        True when ``height_m`` is the user's, taken because the photo does not show it.
+    at_least_m : float or None
+        When not measured: the top of the tallest whole vertical edge standing on the
+        floor (a door's or window's frame), which the walls reach at least.
     """
 
     height_m: float
@@ -107,10 +112,12 @@ class HeightResult:
     kinds: np.ndarray = field(repr=False)
     weights: np.ndarray = field(repr=False)
     inliers: np.ndarray = field(repr=False)
+    given: bool = False
+    at_least_m: float | None = None
 
     def to_json(self) -> dict:
         return {"height_m": self.height_m, "confidence": self.confidence, "fallback": self.fallback,
-                "reason": self.reason,
+                "given": self.given, "at_least_m": self.at_least_m, "reason": self.reason,
                 "segments": [{"kind": str(k), "base_px": b.round(2).tolist(), "top_px": t.round(2).tolist(),
                               "height_m": None if not np.isfinite(h) else round(float(h), 4),
                               "foot_m": None if not np.all(np.isfinite(f)) else f.round(4).tolist(),
@@ -678,7 +685,8 @@ KINDS = np.array(["edge", "ceiling"])       # HeightResult.kinds: a vertical edg
 
 
 def _result(c: dict | None, height_m: float, confidence: float, fallback: bool, reason: str,
-            weights: np.ndarray | None = None, inliers: np.ndarray | None = None) -> HeightResult:
+            weights: np.ndarray | None = None, inliers: np.ndarray | None = None, given: bool = False,
+            at_least_m: float | None = None) -> HeightResult:
     if c is None:
         c = dict(bases=np.zeros((0, 2)), tops=np.zeros((0, 2)), heights=np.zeros(0), feet=np.zeros((0, 2)),
                  kind=np.zeros(0, int))
@@ -688,12 +696,34 @@ def _result(c: dict | None, height_m: float, confidence: float, fallback: bool, 
                                                np.zeros(n, bool) if inliers is None else inliers)]
     for a in arrays:
         a.flags.writeable = False
-    return HeightResult(float(height_m), float(confidence), fallback, reason, *arrays)
+    return HeightResult(float(height_m), float(confidence), fallback, reason, *arrays, given=given,
+                        at_least_m=at_least_m)
 
 
-def _fallback(reason: str, c: dict | None = None) -> HeightResult:
-    fallback_m = ROOM.height.fallback_m
-    return _result(c, fallback_m, 0.0, True, f"{reason}: assuming {fallback_m} m")
+def _fallback(reason: str, c: dict | None = None, given_m: float | None = None,
+              at_least_m: float | None = None) -> HeightResult:
+    """The height not measured: the user's ``given_m``, else ``ROOM.height.fallback_m`` raised
+    to ``at_least_m`` (the top of something standing on the floor in view: walls reach higher)."""
+    if at_least_m is not None:
+        reason += f"; the tallest vertical edge standing on the floor in view (a door's or window's frame) " \
+                  f"reaches {at_least_m:.2f} m, so the walls are at least that high"
+    if given_m is not None:
+        return _result(c, given_m, 0.0, True, f"{reason}: using the given {given_m:g} m", given=True,
+                       at_least_m=at_least_m)
+    fallback_m = max(ROOM.height.fallback_m, at_least_m or 0.0)
+    return _result(c, fallback_m, 0.0, True, f"{reason}: assuming {fallback_m:g} m", at_least_m=at_least_m)
+
+
+def _lower_bound_m(c: dict, side: int) -> float | None:
+    """The top of the tallest whole vertical edge that stands on the floor (a door's
+    casing, a window's frame, a corner cut by the photo's top): the walls reach at least
+    that high. None when there is none of ``ROOM.height.bound_min_m`` or more."""
+    settings = ROOM.height
+    with np.errstate(invalid="ignore"):
+        whole = (c["kind"] == 0) & c["on_floor"] & c["base_in"] & c["top_in"] & np.isfinite(c["heights"]) \
+            & (c["heights"] >= settings.bound_min_m) & (c["heights"] <= settings.max_m) \
+            & (c["below"] >= settings.horizon_margin_fraction * side)
+    return float(c["heights"][whole].max()) if whole.any() else None
 
 
 def _combine(c: dict, valid: np.ndarray, side: int, verified: bool) -> HeightResult:
@@ -739,7 +769,7 @@ def _combine(c: dict, valid: np.ndarray, side: int, verified: bool) -> HeightRes
 
 def height_from_segments(segments_px: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray,
                          size_px: tuple[int, int], floor_mask: np.ndarray | None = None,
-                         image: np.ndarray | None = None) -> HeightResult:
+                         image: np.ndarray | None = None, given_m: float | None = None) -> HeightResult:
     """Wall height from line segments of a calibrated photo.
 
     Parameters
@@ -761,6 +791,8 @@ def height_from_segments(segments_px: np.ndarray, K: np.ndarray, camera_from_flo
         The photo, without lens distortion. Not modified. When given, edges are followed
         beyond their detected ends, a wall--ceiling line that stops mid-wall is told from a
         piece of a longer one, and without a mask the feet are checked by color (RGB only).
+    given_m : float, optional
+        The height the user knows, taken when the segments do not show it (:func:`measure_height`).
 
     Returns
     -------
@@ -777,19 +809,19 @@ def height_from_segments(segments_px: np.ndarray, K: np.ndarray, camera_from_flo
         if np.asarray(image).shape[:2] != (height, width):
             raise ValueError(f"image of shape {np.asarray(image).shape}: expected {(height, width)} like size_px")
         small, color, _ = prepare_lines(image)
-    return _measure(seg, K, pose, (width, height), floor_mask, small, color)
+    return _measure(seg, K, pose, (width, height), floor_mask, small, color, given_m)
 
 
-def _measure(seg, K, pose, size_px, floor_mask, small, color=None) -> HeightResult:
+def _measure(seg, K, pose, size_px, floor_mask, small, color=None, given_m=None) -> HeightResult:
     """Candidates, the checks each must pass, and the estimate (or the fallback)."""
     settings = ROOM.height
     width, height = size_px
     side = max(width, height)
     if len(seg) == 0:
-        return _fallback("no line segments found")
+        return _fallback("no line segments found", given_m=given_m)
     c = _candidates(seg, K, pose, (width, height), floor_mask, small, color)
     if len(c["bases"]) == 0:
-        return _fallback("no vertical edges found", c)
+        return _fallback("no vertical edges found", c, given_m)
     with np.errstate(invalid="ignore"):
         plausible = (c["heights"] >= settings.min_m) & (c["heights"] <= settings.max_m)
     valid = (plausible & c["on_floor"] & ~c["blocked"] & c["base_in"] & c["top_in"]
@@ -798,12 +830,12 @@ def _measure(seg, K, pose, size_px, floor_mask, small, color=None) -> HeightResu
     if not valid.any():
         return _fallback(f"none of {len(c['bases'])} candidate edges stands on the floor and reaches the ceiling "
                          f"in view at a plausible height ({settings.min_m}-{settings.max_m} m); the ceiling may be "
-                         "out of the photo", c)
+                         "out of the photo", c, given_m, _lower_bound_m(c, side) if floor_mask is not None else None)
     return _combine(c, valid, side, verified=floor_mask is not None)
 
 
-def measure_height(image: np.ndarray, calibration: Calibration, floor_mask: np.ndarray | None = None
-                   ) -> HeightResult:
+def measure_height(image: np.ndarray, calibration: Calibration, floor_mask: np.ndarray | None = None,
+                   given_m: float | None = None) -> HeightResult:
     """Wall height of the room in a calibrated photo, from its vertical edges.
 
     Parameters
@@ -817,12 +849,16 @@ def measure_height(image: np.ndarray, calibration: Calibration, floor_mask: np.n
         the floor begins count (window frames, which end at their sill, do not), and
         wall--ceiling lines are measured too. Without it the feet are checked by color
         only and the confidence is at most ``ROOM.height.unverified_confidence``.
+    given_m : float, optional
+        The height the user knows, taken when the photo does not show it (the ceiling out
+        of view); a height the photo shows is measured all the same.
 
     Returns
     -------
     HeightResult
-        ``height_m`` with a confidence, or ``ROOM.height.fallback_m`` with ``fallback=True``
-        and the reason when nothing trustworthy is in view.
+        ``height_m`` with a confidence; or, when nothing trustworthy is in view,
+        ``fallback=True``, the reason, and ``given_m``, else ``ROOM.height.fallback_m``
+        raised to the top of the tallest vertical edge standing on the floor (with a mask).
 
     Notes
     -----
@@ -844,4 +880,4 @@ def measure_height(image: np.ndarray, calibration: Calibration, floor_mask: np.n
         if len(seg):
             seg = cv2.undistortPoints(seg.reshape(-1, 1, 2), intr.K, intr.distortion, P=intr.K).reshape(-1, 4)
         small = color = None
-    return _measure(seg, K, pose, (width, height), floor_mask, small, color)
+    return _measure(seg, K, pose, (width, height), floor_mask, small, color, given_m)

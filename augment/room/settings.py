@@ -18,6 +18,7 @@ class HeightSettings:
 
     fallback_m: float = 2.5  # assumed when nothing trustworthy is in view
     min_m: float = 2.2  # rooms are at least 2.2 m high, doors 2.0-2.1 m: door frames fall below
+    bound_min_m: float = 1.8  # a whole edge on the floor this tall or more bounds the height from below (doors)
     max_m: float = 5.0  # ... and at most this: plausible wall heights
     merge_gap_fraction: float = 0.015  # pieces of one edge merge across gaps up to this
     bridge_gap_fraction: float = 0.12  # ... and up to this where the image shows the edge in the gap

@@ -21,7 +21,7 @@ from layout.errors import UsageError
 SAMPLES = Path(__file__).resolve().parents[2] / "samples" / "photos"
 SIZE_PX = (800, 600)  # the samples made smaller: a photo takes a worker about 2 s
 DEFAULTS = {"board": (7, 5, "chessboard"), "square": 45.0, "room": None, "spec": None, "camera": None,
-            "suggestions": 1, "seed": 0, "style": None, "auto_doors": True}
+            "suggestions": 1, "seed": 0, "style": None, "height": None, "auto_doors": True}
 
 
 @pytest.fixture(scope="module")
@@ -114,14 +114,15 @@ def test_a_manifest_with_bad_rows_refuses_them_and_does_the_rest(cluster, photos
 def test_manifest_rows_are_read_with_their_own_options(tmp_path):
     (tmp_path / "specs").mkdir()
     manifest = tmp_path / "m.jsonl"
-    manifest.write_text('{"photo": "a.jpg", "board": "charuco:9x6", "square": 30, "seed": 7}\n'
+    manifest.write_text('{"photo": "a.jpg", "board": "charuco:9x6", "square": 30, "seed": 7, "height": 2.7}\n'
                         '\n'
                         '{"photo": "/abs/b.jpg", "spec": "specs/s.toml", "style": "industrial"}\n'
                         '["c.jpg"]\n'
                         '{"photo": "d.jpg", "suggestions": 0}\n'
-                        '{"photo": "e.jpg", "colour": "red"}\n')
+                        '{"photo": "e.jpg", "colour": "red"}\n'
+                        '{"photo": "f.jpg", "height": "27"}\n')
     tasks = list(read_tasks(manifest, dict(DEFAULTS, room="bedroom")))
-    a, b, c, d, e = tasks
+    a, b, c, d, e, f = tasks
     assert a.error is None and a.photo == tmp_path / "a.jpg"
     assert (a.options["board"], a.options["square"], a.options["seed"], a.options["room"]) == \
         ((9, 6, "charuco"), 30.0, 7, "bedroom")
@@ -130,6 +131,8 @@ def test_manifest_rows_are_read_with_their_own_options(tmp_path):
     assert "line 4" in c.error and "JSON object" in c.error
     assert "line 5" in d.error and "suggestions" in d.error and "from 1 to 100" in d.error
     assert "line 6" in e.error and "'colour'" in e.error
+    assert a.options["height"] == 2.7 and b.options["height"] is None
+    assert "line 7: height '27': expected the wall height in meters, 1.8 to 6, e.g. 2.6" in f.error
     bad = tmp_path / "bad.csv"
     bad.write_text("image,room\na.jpg,bedroom\n")
     with pytest.raises(UsageError, match="column 'image'.*" + ", ".join(MANIFEST_FIELDS)):

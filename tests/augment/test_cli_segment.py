@@ -149,6 +149,11 @@ def test_measure_writes_the_report_and_three_overlays(tmp_path, capsys):
     for name in ("overlay_calibration.png", "overlay_floor.png", "overlay_height.png"):
         assert cv2.imread(str(tmp_path / "m" / name)).shape[0] == 960
     assert set(report["timings"]) == {"calibrate_s", "segment_s", "height_s"}
+    # The user's height stands in for the fallback, said so.
+    code, out, err = run(["measure", PHOTO, "--height", "2.7", "--out", tmp_path / "h"], capsys)
+    report = json.loads((tmp_path / "h" / "report.json").read_text())
+    assert code == 0 and report["height"]["given"] and report["height"]["height_m"] == 2.7
+    assert report["height"]["reason"].endswith("using the given 2.7 m") and "given with --height" in out
 
 
 def _painted_rectangle(width_m: float, depth_m: float, scale: float = 1.0) -> np.ndarray:

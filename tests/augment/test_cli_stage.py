@@ -91,6 +91,9 @@ def test_outputs_and_inputs_that_cannot_be_are_refused(tmp_path, capsys):
         in err
     code, _, err = run(["check", photo, "--board", "9x6", "--square", "25", "--camera", tmp_path], capsys)
     assert code == 2 and f"--camera {tmp_path}: is a folder; make a camera profile" in err
+    code, _, err = run(["measure", photo, "--height", "250", "--out", tmp_path / "m"], capsys)
+    assert code == 2 and "--height: '250': expected the wall height in meters, 1.8 to 6, e.g. 2.6" in err
+    assert not (tmp_path / "m").exists()
 
 
 @pytest.mark.parametrize("name", ["left05", "left13"])

@@ -145,6 +145,30 @@ def test_floor_mask_rejects_window_frames():
     assert H.height_from_segments(window_only, K, CAMERA_FROM_FLOOR, SIZE, floor_mask=mask).fallback
 
 
+def test_a_door_in_view_bounds_the_height_from_below_and_a_given_height_is_used():
+    """The ceiling out of view, a door's frame (2.05 m) standing on the floor: not a
+    measurement, but the walls are at least 2.05 m; the fallback is 2.5 m, or the
+    user's height when given, and a door taller than the fallback raises it. A height
+    the photo shows is measured whatever the user gives."""
+    room, mask = hand_built_room(), room_floor_mask()
+    door = np.vstack([room["door"], room["lines"][2]])
+    result = H.height_from_segments(door, K, CAMERA_FROM_FLOOR, SIZE, floor_mask=mask)
+    assert result.fallback and result.height_m == ROOM.height.fallback_m
+    assert "reaches 2.05 m, so the walls are at least that high: assuming 2.5 m" in result.reason
+    assert result.at_least_m == pytest.approx(2.05, rel=0.01) and result.to_json()["at_least_m"] == result.at_least_m
+    given = H.height_from_segments(door, K, CAMERA_FROM_FLOOR, SIZE, floor_mask=mask, given_m=2.8)
+    assert given.fallback and given.height_m == 2.8 and given.reason.endswith("using the given 2.8 m")
+    tall = np.vstack([verticals([[ROOM_X_M[1], 0.6], [ROOM_X_M[1], 1.5]], 0.0, 2.6),
+                      horizontal([ROOM_X_M[1], 0.6, 2.6], [ROOM_X_M[1], 1.5, 2.6])])
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(ROOM.height, "min_m", 2.7)  # 2.6 m is then a door, not a wall
+        raised = H.height_from_segments(tall, K, CAMERA_FROM_FLOOR, SIZE, floor_mask=mask)
+    assert raised.fallback and raised.height_m == pytest.approx(2.6, rel=1e-6)
+    seen = np.vstack([room["corners"], room["door"], room["lines"][:3]])
+    measured = H.height_from_segments(seen, K, CAMERA_FROM_FLOOR, SIZE, floor_mask=mask, given_m=3.1)
+    assert not measured.fallback and abs(measured.height_m / ROOM_H_M - 1) < 0.01
+
+
 def test_tilted_segments_are_not_vertical():
     """Edges leaning 5 degrees in 3D fail the 3D test (yet pass the paper's cos > 0.9), and
     alone they give no height."""
