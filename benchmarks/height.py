@@ -52,6 +52,7 @@ from augment.draw.height import height_overlay  # noqa: E402
 from augment.floor.model import FloorModel  # noqa: E402
 from augment.floor.segment import segment_floor  # noqa: E402
 from augment.synth import CEILING, render_sample  # noqa: E402
+from augment.synth.camera import Shot  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
 
 ELIGIBLE_CEILING = 0.002          # fraction of the photo that must show ceiling
@@ -111,18 +112,15 @@ def door_tops_in_view(sample) -> list[float]:
     """The heights of the doors whose head (its middle) and a foot show in the photo: not
     hidden (the render's depth there within 5 % of the point's) and inside the frame."""
     t = sample.truth
-    K, camera_from_world = np.array(t["K"]), np.array(t["camera_from_world"])
-    rows, cols = sample.depth_m.shape
+    shot = Shot(np.array(t["K"]), np.linalg.inv(np.array(t["camera_from_world"])), tuple(t["size_px"]))
     tops = []
     for door in t["room"]["doors"]:
         a, b = np.array(door["segment_m"])
         points = np.array([[*(a + b) / 2, door["top_m"]], [*a, 0.0], [*b, 0.0]])
-        cam = points @ camera_from_world[:3, :3].T + camera_from_world[:3, 3]
-        seen = []
-        for p in cam:
-            u, v = (K @ p)[:2] / p[2]
-            inside = p[2] > 0 and 0 <= u < cols and 0 <= v < rows
-            seen.append(inside and abs(sample.depth_m[int(v), int(u)] / p[2] - 1) < 0.05)
+        px, depth = shot.project(points)
+        seen = shot.in_view(points)
+        u, v = px[seen].astype(int).T
+        seen[seen] = np.abs(sample.depth_m[v, u] / depth[seen] - 1) < 0.05
         if seen[0] and (seen[1] or seen[2]):
             tops.append(float(door["top_m"]))
     return tops

@@ -6,11 +6,16 @@ import argparse
 from ..camera.board import DEFAULT_SQUARE_MM, MIN_SQUARE_MM
 
 
-def square_mm(text: str) -> float:
+def _number(text: str) -> float:
+    """``text`` as a float; NaN (which no range admits) when it is none."""
     try:
-        value = float(text)
+        return float(text)
     except ValueError:
-        value = float("nan")
+        return float("nan")
+
+
+def square_mm(text: str) -> float:
+    value = _number(text)
     if not MIN_SQUARE_MM <= value < 1000:
         # 1e-300 mm ran on, to "the board is seen almost face-on".
         raise argparse.ArgumentTypeError(
@@ -38,10 +43,7 @@ HEIGHT_RANGE_M = (1.8, 6.0)
 
 
 def height_m(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
+    value = _number(text)
     lo, hi = HEIGHT_RANGE_M
     if not lo <= value <= hi:
         raise argparse.ArgumentTypeError(f"{text!r}: expected the wall height in meters, {lo:g} to {hi:g}, e.g. 2.6")

@@ -46,6 +46,12 @@ class Shot:
         uv = cam @ self.K.T
         return uv[:, :2] / uv[:, 2:3], cam[:, 2]
 
+    def in_view(self, points_m: np.ndarray) -> np.ndarray:
+        """Whether each world point (k, 3) lies in front of the camera and inside the frame (k,)."""
+        px, depth = self.project(points_m)
+        width, height = self.size_px
+        return (depth > 0) & (px[:, 0] >= 0) & (px[:, 0] < width) & (px[:, 1] >= 0) & (px[:, 1] < height)
+
 
 def camera_matrix(width_px: int, height_px: int, hfov_rad: float) -> np.ndarray:
     """Square pixels, principal point at the image center, horizontal FOV ``hfov_rad``."""

@@ -407,24 +407,25 @@ def _floor_cells(polygon_m, cuts):
 
 def _threshold_strips(cells, second, width_m):
     """Flat strips (k, 4, 2) on the edges where a cell of one floor meets one of the other."""
+    lo, hi = cells.min(axis=1), cells.max(axis=1)  # (k, 2) each
     strips = []
-    for i, a in enumerate(cells):
-        for j in np.flatnonzero(second != second[i]):
-            if j < i:
-                continue
-            b = cells[j]
+    for i in np.flatnonzero(second):
+        for j in np.flatnonzero(~second):
             for axis in (0, 1):
                 other = 1 - axis
-                for edge in (a[:, axis].max(),):
-                    if abs(b[:, axis].min() - edge) < 1e-9 or abs(b[:, axis].max() - a[:, axis].min()) < 1e-9:
-                        at = edge if abs(b[:, axis].min() - edge) < 1e-9 else a[:, axis].min()
-                        lo = max(a[:, other].min(), b[:, other].min())
-                        hi = min(a[:, other].max(), b[:, other].max())
-                        if hi - lo > 1e-6:
-                            q = np.zeros((4, 2))
-                            q[:, axis] = [at - width_m / 2, at + width_m / 2, at + width_m / 2, at - width_m / 2]
-                            q[:, other] = [lo, lo, hi, hi]
-                            strips.append(q)
+                # The two meet along a line of constant ``axis`` and overlap along ``other``.
+                if abs(hi[i, axis] - lo[j, axis]) < 1e-9:
+                    at = hi[i, axis]
+                elif abs(hi[j, axis] - lo[i, axis]) < 1e-9:
+                    at = lo[i, axis]
+                else:
+                    continue
+                start, end = max(lo[i, other], lo[j, other]), min(hi[i, other], hi[j, other])
+                if end - start > 1e-6:
+                    q = np.zeros((4, 2))
+                    q[:, axis] = [at - width_m / 2, at + width_m / 2, at + width_m / 2, at - width_m / 2]
+                    q[:, other] = [start, start, end, end]
+                    strips.append(q)
     return np.array(strips).reshape(-1, 4, 2)
 
 
@@ -435,7 +436,6 @@ def _low_sun(rng, room: Room, shot: Shot):
     windows = [o for o in room.openings if o.kind == "window"]
     if not windows:
         return None
-    width, height = shot.size_px
     best = None
     for _ in range(40):
         o = windows[rng.integers(len(windows))]
@@ -449,10 +449,7 @@ def _low_sun(rng, room: Room, shot: Shot):
         src = np.append((a + b) / 2, (o.bottom_m + o.top_m) / 2)
         patch = src + d * (src[2] / -d[2])
         best = d
-        if not contains(room.polygon_m, patch[None, :2])[0]:
-            continue
-        px, depth = shot.project(patch[None])
-        if depth[0] > 0 and 0 <= px[0, 0] < width and 0 <= px[0, 1] < height:
+        if contains(room.polygon_m, patch[None, :2])[0] and shot.in_view(patch[None])[0]:
             return d
     return best
 
@@ -498,9 +495,7 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
         lo, hi = poly.min(axis=0), poly.max(axis=0)
         grid = np.stack(np.meshgrid(np.arange(lo[0], hi[0], 0.1), np.arange(lo[1], hi[1], 0.1)), -1).reshape(-1, 2)
         grid = grid[contains(poly, grid)]
-        px, depth = shot.project(np.column_stack([grid, np.zeros(len(grid))]))
-        seen = grid[(depth > 0) & (px[:, 0] >= 0) & (px[:, 0] < shot.size_px[0]) & (px[:, 1] >= 0)
-                    & (px[:, 1] < shot.size_px[1])]
+        seen = grid[shot.in_view(np.column_stack([grid, np.zeros(len(grid))]))]
         best = -1.0
         for _ in range(10):
             drawn = _second_floor(rng, room, shot, world_from_board[:2, 3], sheet_m)
