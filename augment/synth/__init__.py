@@ -25,6 +25,7 @@ from .camera import Shot, place_board, random_handling, random_shot, random_size
 from .photo import degrade
 from .rooms import BASEBOARD_M, Clutter, Room, add_clutter, add_furniture, random_room
 from .scene import SEG_CEILING, SEG_FLOOR, SEG_WALL, build_scene
+from .truth import sun_exit
 
 FORMAT = "stager-synth-1"
 # Label image values (``Sample.labels``).
@@ -88,7 +89,7 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
                   board: Board | None = None, clutter: bool = True, photographic: bool = True,
                   board_hidden: float = 0.0, furnished: float = 0.0, baseboard_m=BASEBOARD_M,
                   trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True,
-                  pieces=(), low_sun: float = 0.0, two_floors: float = 0.0) -> Sample:
+                  pieces=(), low_sun: float = 0.0, two_floors: float = 0.0, outside: bool = True) -> Sample:
     """Render one synthetic room photo with its ground truth.
 
     Parameters
@@ -137,6 +138,11 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     two_floors : float
         Chance that part of the floor, past a straight or stepped threshold away from the
         board, is of a second material (0: never, and the random stream is the same).
+    outside : bool
+        Draw the building's outside, so that the walls and the ceiling keep the sun out
+        (:func:`augment.synth.scene._outside`). Without it the sun lights the whole room
+        but for the window frames' shadows: the photos some regression tests were found
+        on, drawn the same.
     """
     board = Board() if board is None else board
     rng = np.random.default_rng(seed)
@@ -166,13 +172,16 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         room = replace(room, clutter=room.clutter + (_board_cover(board, world_from_board, board_hidden),))
 
     built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px), baseboard_m,
-                        trim_like_floor, trim_dark, board_drawn, pieces, low_sun, two_floors)
+                        trim_like_floor, trim_dark, board_drawn, pieces, low_sun, two_floors, outside)
     width, height = size_px
     flags = pyrender.RenderFlags.SHADOWS_DIRECTIONAL | pyrender.RenderFlags.SHADOWS_SPOT
     # Small frames cannot show a 2048-texel shadow map's detail; it would cost half the time.
     shadow_px = 1024 if max(size_px) <= 800 else 2048
     color, depth_m = renderer.render(built.scene, width, height, flags=flags, shadow_map_px=shadow_px)
     labels = render_labels(renderer, built.scene, built.seg_node_map, depth_m)
+    for light in built.info["lights"]:
+        if light["kind"] == "sun" and outside:
+            light["floor_in_view"] = round(_sunlit_share(labels == FLOOR, depth_m, shot, room, light["direction"]), 4)
 
     if photographic:
         image, photo_params = degrade(rng, color)
@@ -188,6 +197,20 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     visible[inside] = np.abs(seen - corner_depth[inside]) < _VISIBLE_DEPTH_TOL_M
     truth = _truth(seed, room, shot, board, world_from_board, corners_px, visible, built.info, photo_params)
     return Sample(image, labels == FLOOR, labels, depth_m, truth)
+
+
+def _sunlit_share(floor, depth_m, shot, room: Room, direction) -> float:
+    """Share of the floor in view that the sun reaches through a window (from geometry:
+    the frames' and the clutter's shadows not counted), every 4th pixel."""
+    v, u = np.nonzero(floor[::4, ::4] & (depth_m[::4, ::4] > 0))
+    if len(v) == 0:
+        return 0.0
+    v, u = v * 4, u * 4
+    z = depth_m[v, u].astype(np.float64)
+    rays = np.linalg.solve(shot.K, np.stack([u, v, np.ones_like(u)]).astype(np.float64))
+    points = (rays * z).T @ shot.world_from_camera[:3, :3].T + shot.world_from_camera[:3, 3]
+    windows = [(o.segment_m(room.polygon_m), o.bottom_m, o.top_m) for o in room.openings if o.kind == "window"]
+    return float(np.mean(sun_exit(points, direction, room.polygon_m, room.height_m, windows) > 0))
 
 
 def render_labels(renderer: Renderer, scene, seg_node_map: dict, depth_m: np.ndarray) -> np.ndarray:

@@ -225,30 +225,39 @@ class Scene:
     info: dict
 
 
+def _wall_cells(ops, s_range, height):
+    """The cells (s0, s1, z0, z1) of a wall from ``s_range`` (meters along it) and floor to
+    ceiling, cut at the openings ``ops``, the openings themselves left out."""
+    s_breaks = sorted({*s_range, *[o.start_m for o in ops], *[o.end_m for o in ops]})
+    z_breaks = sorted({0.0, height, *[o.bottom_m for o in ops], *[o.top_m for o in ops]})
+    for s0, s1 in zip(s_breaks[:-1], s_breaks[1:]):
+        for z0, z1 in zip(z_breaks[:-1], z_breaks[1:]):
+            sm, zm = (s0 + s1) / 2, (z0 + z1) / 2
+            if not any(o.start_m < sm < o.end_m and o.bottom_m < zm < o.top_m for o in ops):
+                yield s0, s1, z0, z1
+
+
+def _wall_frame(poly, wall):
+    """A wall's start (3,), unit direction (3,), inward normal (3,) and length (m)."""
+    a, b = wall_ends(poly, wall)
+    length = float(np.linalg.norm(b - a))
+    return np.append(a, 0.0), np.append((b - a) / length, 0.0), np.append(inward_normal(poly, wall), 0.0), length
+
+
 def _walls(room: Room, batch: _Batch, tile_m: float):
     """Wall quads with the openings cut out, and each opening's reveal (its sides, head
     and sill through the wall's thickness)."""
     poly, height = room.polygon_m, room.height_m
     for wall in range(len(poly)):
-        a, b = wall_ends(poly, wall)
-        length = np.linalg.norm(b - a)
-        u = np.append((b - a) / length, 0.0)
-        n = np.append(inward_normal(poly, wall), 0.0)
-        a3 = np.append(a, 0.0)
+        a3, u, n, length = _wall_frame(poly, wall)
         ops = [o for o in room.openings if o.wall == wall]
-        s_breaks = sorted({0.0, length, *[o.start_m for o in ops], *[o.end_m for o in ops]})
-        z_breaks = sorted({0.0, height, *[o.bottom_m for o in ops], *[o.top_m for o in ops]})
 
         def point(s, z, depth=0.0):
             return a3 + u * s + np.array([0, 0, z]) - n * depth
 
-        for s0, s1 in zip(s_breaks[:-1], s_breaks[1:]):
-            for z0, z1 in zip(z_breaks[:-1], z_breaks[1:]):
-                sm, zm = (s0 + s1) / 2, (z0 + z1) / 2
-                if any(o.start_m < sm < o.end_m and o.bottom_m < zm < o.top_m for o in ops):
-                    continue
-                uv = np.array([[s0, z0], [s1, z0], [s1, z1], [s0, z1]]) / tile_m
-                batch.quad([point(s0, z0), point(s1, z0), point(s1, z1), point(s0, z1)], n, uv)
+        for s0, s1, z0, z1 in _wall_cells(ops, (0.0, length), height):
+            uv = np.array([[s0, z0], [s1, z0], [s1, z1], [s0, z1]]) / tile_m
+            batch.quad([point(s0, z0), point(s1, z0), point(s1, z1), point(s0, z1)], n, uv)
         t = WALL_THICKNESS_M
         for o in ops:
             s0, s1, z0, z1 = o.start_m, o.end_m, o.bottom_m, o.top_m
@@ -257,6 +266,24 @@ def _walls(room: Room, batch: _Batch, tile_m: float):
             batch.quad([point(s0, z1), point(s1, z1), point(s1, z1, t), point(s0, z1, t)], -np.array([0, 0, 1.0]))
             if z0 > 0:
                 batch.quad([point(s0, z0), point(s1, z0), point(s1, z0, t), point(s0, z0, t)], np.array([0, 0, 1.0]))
+
+
+def _outside(room: Room, batch: _Batch):
+    """The building's outside: the walls' outer faces (the windows cut out, the doors
+    closed) and a roof, facing out. pyrender's shadow maps are drawn with back faces
+    culled, double-sided or not, so the walls and the ceiling, which face into the room,
+    would cast no shadow: the sun would light the whole floor but for the window frames'
+    shadows. Drawn one-sided, these faces are never seen from inside."""
+    poly, height, t = room.polygon_m, room.height_m, WALL_THICKNESS_M
+    for wall in range(len(poly)):
+        a3, u, n, length = _wall_frame(poly, wall)
+        windows = [o for o in room.openings if o.wall == wall and o.kind == "window"]
+        for s0, s1, z0, z1 in _wall_cells(windows, (-t, length + t), height):
+            corners = [a3 + u * s + np.array([0, 0, z]) - n * t for s, z in ((s0, z0), (s1, z0), (s1, z1), (s0, z1))]
+            batch.quad(corners, -n)
+    lo, hi = poly.min(axis=0) - t, poly.max(axis=0) + t
+    batch.quad([[lo[0], lo[1], height], [hi[0], lo[1], height], [hi[0], hi[1], height], [lo[0], hi[1], height]],
+               [0, 0, 1.0])
 
 
 def _openings(rng, room: Room, frames: _Batch, doors: _Batch, baseboard_m):
@@ -457,7 +484,7 @@ def _low_sun(rng, room: Room, shot: Shot):
 def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                 world_from_board: np.ndarray, texture_px: int = 512, baseboard_m=BASEBOARD_M,
                 trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True,
-                pieces=(), low_sun: float = 0.0, two_floors: float = 0.0) -> Scene:
+                pieces=(), low_sun: float = 0.0, two_floors: float = 0.0, outside: bool = True) -> Scene:
     """Sample materials and lights and assemble the scene seen by ``shot`` (baseboards
     drawn ``baseboard_m`` (low, high) tall; the trim painted the floor's colour, 0.5-1.3
     of its brightness, with the chance ``trim_like_floor``, else a dark colour with the
@@ -467,7 +494,8 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     from ``rng``. With the chance ``low_sun`` a low, strong sun shines through a window
     onto the floor in view (:func:`_low_sun`); with the chance ``two_floors`` part of the
     floor is of a second material past a threshold (:func:`_second_floor`). Either at 0
-    draws nothing, so the random stream stays as it was."""
+    draws nothing, so the random stream stays as it was. ``outside`` draws the building's
+    outside (:func:`_outside`), which keeps the sun out but through the windows."""
     info: dict = {}
     sky = np.clip([0.92, 0.95, 1.0] + rng.normal(0, 0.03, 3), 0.8, 1.0)
     scene = GLScene(bg_color=np.append(sky, 1.0))
@@ -601,6 +629,12 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                         sharp=board.kind == "charuco")
     if board_drawn:
         add(paper.mesh(printed), SEG_FLOOR, pose=world_from_board)
+    if outside:  # after the other surfaces, which keep their names' order; draws nothing from rng
+        shell = _Batch()
+        _outside(room, shell)
+        one_sided = pyrender.MetallicRoughnessMaterial(baseColorFactor=(0.5, 0.5, 0.5, 1.0), metallicFactor=0.0,
+                                                       roughnessFactor=1.0, doubleSided=False)
+        add(shell.mesh(one_sided), SEG_WALL)
 
     # Lights. One exposure factor scales them all, like the camera's exposure would.
     exposure = float(np.exp(rng.normal(0.0, 0.25)))

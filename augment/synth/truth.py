@@ -74,3 +74,60 @@ def overlay(photo: np.ndarray, floor_mask: np.ndarray, corners_px: np.ndarray) -
     for x, y in np.asarray(corners_px):
         cv2.circle(out, (int(round(x * 16)), int(round(y * 16))), radius * 16, (230, 30, 30), -1, cv2.LINE_AA, 4)
     return out
+
+
+def sun_exit(points_m: np.ndarray, direction, polygon_m: np.ndarray, height_m: float, windows,
+             margin_m: float = 0.0) -> np.ndarray:
+    """Where the ray from each floor point toward the sun leaves the room.
+
+    Parameters
+    ----------
+    points_m : (k, 3) float
+        Points on the floor, world frame, meters.
+    direction : (3,) float
+        The way sunlight travels (pointing down).
+    polygon_m : (n, 2) float
+        The room's outline.
+    height_m : float
+        Its ceiling height.
+    windows : iterable of ((2, 2) float, float, float)
+        Each window's two floor-plan ends, bottom and top heights, meters.
+    margin_m : float
+        Points whose ray passes within this of a window's edge (or the ceiling) count as
+        neither.
+
+    Returns
+    -------
+    (k,) int
+        +1 through a window (in the sun, but for the frames' shadows), -1 through a wall or
+        the ceiling (in the shade), 0 within ``margin_m`` of an edge.
+    """
+    points_m = np.asarray(points_m, dtype=np.float64)
+    d = np.asarray(direction, dtype=np.float64)
+    back = -d / np.linalg.norm(d[:2])  # 1 m across the floor per unit
+    poly = np.asarray(polygon_m, dtype=np.float64)
+    exit_t = np.full(len(points_m), np.inf)
+    exit_xy = np.zeros((len(points_m), 2))
+    for a, b in zip(poly, np.roll(poly, -1, axis=0)):
+        e = b - a
+        den = back[0] * e[1] - back[1] * e[0]
+        if abs(den) < 1e-12:
+            continue
+        w = a - points_m[:, :2]
+        s = (w[:, 0] * e[1] - w[:, 1] * e[0]) / den
+        u = (w[:, 0] * back[1] - w[:, 1] * back[0]) / den
+        hit = (s > 1e-6) & (u >= 0) & (u <= 1) & (s < exit_t)
+        exit_t[hit] = s[hit]
+        exit_xy[hit] = points_m[hit, :2] + s[hit, None] * back[:2]
+    z = points_m[:, 2] + exit_t * back[2]
+    verdict = np.where(np.abs(z - height_m) < margin_m, 0, -1)
+    for ends, bottom, top in windows:
+        a, b = np.asarray(ends, dtype=np.float64)
+        length = float(np.linalg.norm(b - a))
+        u = (b - a) / length
+        along = (exit_xy - a) @ u
+        on = np.abs((exit_xy - a) @ np.array([-u[1], u[0]])) < 0.05
+        inside = on & (along > margin_m) & (along < length - margin_m) & (z > bottom + margin_m) & (z < top - margin_m)
+        near = on & (along > -margin_m) & (along < length + margin_m) & (z > bottom - margin_m) & (z < top + margin_m)
+        verdict = np.where(inside, 1, np.where(near, 0, verdict))
+    return verdict

@@ -225,9 +225,10 @@ def test_the_working_view_holds_every_row_the_profiles_read():
     assert not small_image[: int((rows + from_m * px_per_m).min()) - 3].any()  # the rest is not filled
 
 
-def _render_untrimmed(seed: int, index: int):
+def _render_untrimmed(seed: int, index: int, outside: bool = True):
     """A render of the synthetic photographer, its calibration from the board, and the
-    floor mask from the model and GrabCut before the trim."""
+    floor mask from the model and GrabCut before the trim (``outside=False``: the photo
+    as it was found, the sun through the walls)."""
     from augment.camera.calibrate import calibrate_photo, exif_intrinsics
     from augment.floor.model import DEFAULT_MODEL, FloorModel
     from augment.floor.segment import segment_floor
@@ -235,7 +236,7 @@ def _render_untrimmed(seed: int, index: int):
     from augment.synth import render_sample
 
     with Renderer() as renderer:
-        sample = render_sample([seed, index], renderer)
+        sample = render_sample([seed, index], renderer, outside=outside)
     w, h = sample.truth["size_px"]
     calibration = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
     return sample, calibration, segment_floor(sample.image, FloorModel(DEFAULT_MODEL), calibration,
@@ -317,16 +318,17 @@ def test_the_mask_edge_is_split_into_walls_at_corners_and_jumps():
 
 
 def test_a_board_on_one_wall_is_cut_when_the_other_walls_show_none(monkeypatch):
-    """Seed 916 render 78: the mask ends at the floor line along the left wall and at the
-    board's top along the right one. Over all walls the board model is unsure (mean
-    probability 0.43) and the heights the rules read spread across both walls, so the
-    photo as a whole shows no board; judged wall by wall, the right wall's board is cut.
+    """Seed 916 render 78 (as found: the sun through the walls). The mask ends at the
+    floor line along the left wall and at the board's top along the right one. Over all
+    walls the board model is unsure (mean probability 0.43) and the heights the rules
+    read spread across both walls, so the photo as a whole shows no board; judged wall
+    by wall, the right wall's board is cut.
     The polygon's area, 7 % over the true mask's untrimmed, comes within 2 % of it
     (0.7 % when written), and the cut follows the floor line: under 2 px of floor go
     with the board per column cut (1.3 px when written, along 447 columns)."""
     from augment.floor.polygon import floor_polygon
 
-    sample, calibration, mask = _render_untrimmed(916, 78)
+    sample, calibration, mask = _render_untrimmed(916, 78, outside=False)
     truth = sample.floor_mask
     true_m2 = floor_polygon(truth, calibration).area_m2
     assert floor_polygon(mask, calibration).area_m2 / true_m2 - 1 > 0.05
@@ -454,8 +456,9 @@ def test_no_doubt_where_the_board_model_sees_no_board(monkeypatch):
 
 
 def test_floor_below_a_boards_shadow_is_brought_back():
-    """A render of the synthetic photographer (seed 930, render 69): below the far wall's
-    board lies a band of its shadow, darker than the floor, and GrabCut stops below it,
+    """A render of the synthetic photographer (seed 930, render 69, as found: the sun
+    through the walls): below the far wall's board lies a band of its shadow, darker
+    than the floor, and GrabCut stops below it,
     short of the floor line; far away those rows are 6 % of the floor's area. No board is
     in the mask, so nothing is trimmed; the gap model moves the edge up to the floor
     line. The truth is the render's floor mask, its polygon through the same calibration."""
@@ -463,7 +466,7 @@ def test_floor_below_a_boards_shadow_is_brought_back():
     from augment.floor.polygon import floor_polygon
     from augment.floor.segment import segment_floor
 
-    sample, calibration, mask = _render_untrimmed(930, 69)
+    sample, calibration, mask = _render_untrimmed(930, 69, outside=False)
     truth = sample.floor_mask
     trimmed, height_m, _ = trim_skirting(sample.image, mask, calibration)
     assert height_m is None

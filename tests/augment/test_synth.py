@@ -17,7 +17,7 @@ from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, loo
                                   random_shot)
 from augment.synth.rooms import ROOM_SIDE_M, WALL_HEIGHT_M, random_polygon, random_room
 from augment.synth.scene import SEG_FLOOR, SEG_WALL, _Batch
-from augment.synth.truth import polygon_mask, project_floor_polygon
+from augment.synth.truth import polygon_mask, project_floor_polygon, sun_exit
 from layout.geometry import self_intersection
 
 SEEDS = range(6)
@@ -459,3 +459,37 @@ def test_low_sun_lands_on_the_floor_in_view(renderer):
             seen.append(cam[2] > 0 and 0 <= u < 320 and 0 <= v < 240 and inside)
         landed.append(any(seen))
     assert len(landed) >= 5 and np.mean(landed) >= 0.75, landed
+
+
+
+def test_sunlight_enters_only_through_the_windows(renderer):
+    """The floor is in the sun where a ray toward the sun leaves through a window, and in
+    the shade where it meets a wall or the ceiling: median light (linear) 1.6 times as
+    high at least (1.9-5.2 on these seeds). pyrender's shadow maps cull faces turned from
+    the sun: without the building's outside the walls let the sun through (0.9-1.3)."""
+    checked = 0
+    for seed in range(8):
+        sample = render_sample(seed, renderer, size_px=(320, 240), photographic=False, clutter=False, low_sun=1.0)
+        t = sample.truth
+        sun = [light for light in t["render"]["lights"] if light["kind"] == "sun"]
+        if not sun:
+            continue
+        floor = (sample.labels == FLOOR) & (sample.depth_m > 0)
+        points = _unproject(sample, floor)
+        windows = [(w["segment_m"], w["bottom_m"], w["top_m"]) for w in t["room"]["windows"]]
+        verdict = sun_exit(points, sun[0]["direction"], np.array(t["room"]["polygon_m"]), t["room"]["height_m"],
+                           windows, margin_m=0.1)
+        light = ((sample.image[floor].astype(np.float64) / 255.0) ** 2.2).mean(axis=1)
+        if (verdict == 1).sum() < 200 or (verdict == -1).sum() < 200:
+            continue
+        checked += 1
+        assert np.median(light[verdict == 1]) > 1.6 * np.median(light[verdict == -1]), seed
+        if checked == 1:  # without the outside the walls let the sun through
+            flood = render_sample(seed, renderer, size_px=(320, 240), photographic=False, clutter=False,
+                                  low_sun=1.0, outside=False)
+            assert np.array_equal(flood.labels, sample.labels)
+            lit = ((flood.image[floor].astype(np.float64) / 255.0) ** 2.2).mean(axis=1)
+            assert np.median(lit[verdict == 1]) < 1.4 * np.median(lit[verdict == -1]), seed
+        # The truth's share of the floor in view in the sun (every 4th pixel, no margin).
+        assert (verdict == 1).mean() - 0.02 <= sun[0]["floor_in_view"] <= (verdict >= 0).mean() + 0.02, seed
+    assert checked >= 3, checked
