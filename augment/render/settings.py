@@ -61,6 +61,9 @@ class StagedSettings:
     sun_elevation_deg: float = 35.0  # the sun's height when its patches give only its direction
     sun_key_range: tuple[float, float] = (0.3, 0.9)  # the sun's share of the light in the sun, at least and most
     sun_softness_rad: float = 0.01  # the sun's shadows: its disc, and a window's edge blur
+    # A window in view casts the patches when the line from it to them is this close to the
+    # sun's axis (cosine); then the light travels from it.
+    sun_window_alignment: float = 0.5
     light_cell_m: float = 0.04  # the floor's light map: cell size ...
     light_sigma_m: float = 0.3  # ... its blur (planks and tiles average out) ...
     light_gain_range: tuple[float, float] = (0.3, 2.5)  # ... and how far the light there may differ from the median

@@ -200,8 +200,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     settings : StagedSettings, optional
         Default ``RENDER.staged`` (:mod:`augment.render.settings`).
     floor_polygon : FloorPolygon or (n, 2) float, optional
-        The measured floor: its walls tell the sun's edges from the window's, and which
-        way the sunlight travels (:mod:`augment.render.sun`).
+        The measured floor: its walls tell the sun's edges from the window's
+        (:mod:`augment.render.sun`), and on which wall a window in view stands.
 
     Returns
     -------
@@ -268,16 +268,14 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     if patches is not None:
         axis = np.asarray(patches.axes_xy[0])
         center = np.asarray(patches.center_m)
-        back_plus = None if walls is None else first_hit_m(center, -axis, walls)
-        back_minus = None if walls is None else first_hit_m(center, axis, walls)
+        from_window = None if window_xy is None else center - window_xy
         if patches.downstream:  # the patches run into the wall they climb
             sign = float(patches.downstream)
-        elif back_plus is not None or back_minus is not None:  # a window lights the floor near it
-            sign = 1.0 if (back_plus or np.inf) <= (back_minus or np.inf) else -1.0
-        elif window_xy is not None:  # from the window in view to the patches
-            sign = 1.0 if axis @ (center - window_xy) >= 0 else -1.0
-        else:  # away from the camera, as the default light
-            sign = 1.0 if axis @ horiz >= 0 else -1.0
+        elif from_window is not None and abs(axis @ from_window) >= settings.sun_window_alignment * max(
+                float(np.linalg.norm(from_window)), 1e-9):  # the window in view casts them
+            sign = 1.0 if axis @ from_window >= 0 else -1.0
+        else:  # their window is out of view: on the camera's side of them
+            sign = 1.0 if axis @ (center - cam_xy) >= 0 else -1.0
         elev = math.radians(settings.sun_elevation_deg)
         direction = np.append(sign * axis * math.cos(elev), -math.sin(elev))
         key = float(np.clip(1.0 - 1.0 / patches.contrast, *settings.sun_key_range))

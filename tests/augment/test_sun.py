@@ -80,15 +80,12 @@ def test_no_sun_on_planks_or_a_plain_floor(rng, kind):
     assert find_sun(image, np.ones((H, W), bool), FLOOR_FROM_IMAGE, (0.0, 0.0), walls) is None
 
 
-def test_sun_direction_in_a_synthetic_room(renderer):
-    """The photographer's sun through a window (truth: its direction), read from the floor
-    of the photo; the room's walls from its true outline."""
-    from augment.synth import render_sample
-
-    sample = render_sample([9600, 0], renderer, size_px=(1280, 960), clutter=False)
+def _sun_error_deg(sample, settings=None):
+    """The key light estimated from a synthetic photo (the room's walls from its true
+    outline), and its angle on the floor to the photographer's sun, degrees."""
     truth = sample.truth
     sun = next(lt for lt in truth["render"]["lights"] if lt["kind"] == "sun")
-    cal = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(truth["K"][0][0], (1280, 960)))
+    cal = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(truth["K"][0][0], truth["size_px"]))
     world_from_board = np.asarray(truth["board"]["world_from_board"])
     # The calibration's floor frame is the board's, up to its half-turn symmetry.
     M = np.linalg.inv(world_from_board) @ np.linalg.inv(np.asarray(truth["camera_from_world"])) @ cal.camera_from_floor
@@ -97,18 +94,38 @@ def test_sun_direction_in_a_synthetic_room(renderer):
         [[math.cos(turn), -math.sin(turn), 0], [math.sin(turn), math.cos(turn), 0], [0, 0, 1]])
     room = np.asarray(truth["room"]["polygon_m"])
     outline = ((np.column_stack([room, np.zeros(len(room))]) - world_from_board[:3, 3]) @ world_from_floor)[:, :2]
-    lighting = estimate_lighting(sample.image, cal, sample.floor_mask, floor_polygon=outline)
+    lighting = estimate_lighting(sample.image, cal, sample.floor_mask, settings, floor_polygon=outline)
     true_xy = (world_from_floor.T @ np.asarray(sun["direction"]))[:2]
     got_xy = np.asarray(lighting.direction[:2])
-    angle = math.degrees(math.acos(np.clip(true_xy @ got_xy / np.linalg.norm(true_xy) / np.linalg.norm(got_xy), -1, 1)))
+    cos = true_xy @ got_xy / np.linalg.norm(true_xy) / np.linalg.norm(got_xy)
+    return lighting, math.degrees(math.acos(np.clip(cos, -1, 1)))
+
+
+def test_sun_direction_in_a_synthetic_room(renderer):
+    """The photographer's sun through a window out of view, read from its patch on the
+    floor of the photo: the light travels away from the camera's side."""
+    from augment.synth import render_sample
+
+    sample = render_sample([9600, 0], renderer, size_px=(1280, 960), clutter=False)
+    lighting, angle = _sun_error_deg(sample)
     assert lighting.source == "sun" and angle < 5.0
     windows_only = replace(RENDER.staged, sun_from_floor=False)
-    assert estimate_lighting(sample.image, cal, sample.floor_mask, windows_only, floor_polygon=outline).source != "sun"
+    assert _sun_error_deg(sample, windows_only)[0].source != "sun"
     # Without the sun the floor shows no patches and the light is the window's or the default.
     dim = render_sample([9600, 16], renderer, size_px=(1280, 960), clutter=False)
     assert not any(lt["kind"] == "sun" for lt in dim.truth["render"]["lights"])
     cal = calibrate_photo(dim.image, Board(), intrinsics=exif_intrinsics(dim.truth["K"][0][0], (1280, 960)))
     assert estimate_lighting(dim.image, cal, dim.floor_mask).source != "sun"
+
+
+def test_sun_through_the_window_in_view(renderer):
+    """A window in view whose line to the sun's patch on the floor runs along the sun's
+    edges casts it: the light travels from that window (here toward the camera)."""
+    from augment.synth import render_sample
+
+    sample = render_sample([9601, 28], renderer, size_px=(1600, 1200), clutter=False)
+    lighting, angle = _sun_error_deg(sample)
+    assert lighting.source == "sun" and angle < 5.0
 
 
 def _sun_over(lit_where, share=0.5):
