@@ -106,7 +106,8 @@ def job_work(job_dir, options: dict) -> tuple[dict, dict] | None:
         if options.get(role):
             inputs[role] = (names.get(role, default), (job / "input" / options[role]).read_bytes(), options[role])
     work = {"board": (*options["board"], options["square"], options["kind"]),
-            **{k: options.get(k) for k in ("room", "suggestions", "seed", "style", "clicks", "doors", "keep_board")}}
+            **{k: options.get(k) for k in ("room", "suggestions", "seed", "style", "clicks", "doors", "keep_board",
+                                           "height_m")}}
     return inputs, work
 
 
@@ -258,7 +259,8 @@ def job_state(job: Job) -> dict:
                          "clicks": len(job.options.get("clicks") or ()),
                          "doors": len(job.options.get("doors") or ()),
                          "keep_board": job.options["keep_board"], "style": job.options.get("style"),
-                         "suggestions": job.options["suggestions"], "seed": job.options["seed"]}}
+                         "suggestions": job.options["suggestions"], "seed": job.options["seed"],
+                         "height_m": job.options.get("height_m")}}
     try:
         progress = json.loads((job.folder / "progress.json").read_text())
     except (FileNotFoundError, json.JSONDecodeError):

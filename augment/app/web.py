@@ -13,7 +13,8 @@ described on the app's OpenAPI page (``/docs``):
                                     to render again, e.g. in another ``style``), an
                                     optional ``floor_mask`` file or
                                     ``clicks`` correcting the floor, ``doors`` to keep
-                                    clear) -> 202 ``{"id": ...}``
+                                    clear, ``height`` of the walls where the photo
+                                    does not show it) -> 202 ``{"id": ...}``
 ``GET /api/jobs/{id}``              ``status`` (queued, running, done, failed), per-stage
                                     progress, ``error`` (what went wrong, in words),
                                     ``files``, ``warnings``, ``doubt`` (where an
@@ -72,6 +73,7 @@ from ..floor.segment import MAX_CLICKS
 from ..render.styles import STYLES
 from ..room.doors import MAX_DOORS
 from .jobs import STAGES, Job, JobQueue, job_state
+from .values import HEIGHT_RANGE_M
 
 MAX_PIXELS = 50_000_000
 MAX_SUGGESTIONS = 12
@@ -367,9 +369,14 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                                                             "empty: each suggestion another")] = "",
                      keep_board: Annotated[bool, Form(description="leave the board in the staged photos (by "
                                                                   "default its sheet is filled with the floor "
-                                                                  "around it)")] = False):
+                                                                  "around it)")] = False,
+                     height: Annotated[float | None, Form(description="the wall height in meters, used when the "
+                                                                      "photo does not show it")] = None):
         """Start furnishing a photo; answers the job's id."""
         board_spec = _check_options(board, square, room, suggestions, seed)
+        if height is not None and not HEIGHT_RANGE_M[0] <= height <= HEIGHT_RANGE_M[1]:
+            raise UploadError(422, f"height {height:g}: the wall height in meters, {HEIGHT_RANGE_M[0]:g} to "
+                                   f"{HEIGHT_RANGE_M[1]:g}, e.g. 2.6; leave it empty to measure it from the photo")
         if style and style not in STYLES:
             raise UploadError(422, f"style {style[:40]!r}: choose one of {', '.join(STYLES)}")
         corrections = _check_clicks(clicks)
@@ -443,6 +450,7 @@ def create_app(jobs_dir=DEFAULT_JOBS_DIR, max_upload_mb: float = 25, workers: in
                    "room": None if layout_spec is not None or made is not None else room,
                    "suggestions": 1 if made is not None else int(suggestions),
                    "seed": int(seed), "keep_board": bool(keep_board), "style": style or None,
+                   "height_m": None if height is None else float(height),
                    "names": {"photo": _sent_name(photo.filename, "photo"),
                              **({"camera": _sent_name(camera.filename, "camera profile")} if profile else {}),
                              **({"spec": _sent_name(spec.filename, "spec file")} if layout_spec else {}),

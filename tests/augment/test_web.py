@@ -73,7 +73,7 @@ def test_job_runs_to_completion(finished):
     assert client.get(f"/api/jobs/{job_id}/files/report.json").json()["board"]["erased"] is True
     assert state["options"] == {"board": "7x5", "square": 45.0, "room": "living_room", "spec": False, "layout": False,
                                 "floor_mask": False, "clicks": 0, "doors": 0, "keep_board": False,
-                                "suggestions": 1, "seed": 0, "style": None}
+                                "suggestions": 1, "seed": 0, "style": None, "height_m": None}
     assert state["styles"] == ["scandinavian"]  # seed 0's
 
 
@@ -171,6 +171,7 @@ def test_bad_uploads(finished):
         (PHOTO.read_bytes(), {"room": "garage"}, 422, "choose one of"),
         (PHOTO.read_bytes(), {"suggestions": "50"}, 422, "from 1 to"),
         (PHOTO.read_bytes(), {"seed": "-5"}, 422, "seed -5: a whole number from 0"),
+        (PHOTO.read_bytes(), {"height": "12"}, 422, "height 12: the wall height in meters, 1.8 to 6"),
         (PHOTO.read_bytes(), {"doors": "[[980, 220]]"}, 422, "give a JSON list of at most 10 [x1, y1, x2, y2]"),
     ]
     for data, options, status, words in cases:
@@ -556,3 +557,16 @@ def test_keep_board(finished):
     state = _wait(client, response.json()["id"])
     assert state["status"] == "done" and state["options"]["keep_board"] is True, state
     assert client.get(f"/api/jobs/{state['id']}/files/report.json").json()["board"] == {"erased": False}
+
+
+def test_a_wall_height_given_is_used_where_the_photo_does_not_show_it(finished):
+    """room_4 shows no ceiling: the height given on the form stands in for the 2.5 m
+    fallback, and the job's options say so for the page to show again."""
+    client = finished[0]
+    response = client.post("/api/jobs", files={"photo": ("room_4.jpg", PHOTO.read_bytes(), "image/jpeg")},
+                           data={"suggestions": "1", "height": "2.7"})
+    assert response.status_code == 202, response.text
+    state = _wait(client, response.json()["id"])
+    assert state["status"] == "done" and state["options"]["height_m"] == 2.7, state
+    height = client.get(f"/api/jobs/{state['id']}/files/report.json").json()["height"]
+    assert height["height_m"] == 2.7 and height["given"] and height["fallback"], height
