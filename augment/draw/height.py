@@ -5,7 +5,9 @@
 * every measured candidate: vertical edges and wall--ceiling lines that stood on the floor,
   the ones the estimate was taken from thick (edges green, wall--ceiling lines cyan), the
   others thin and grey, each from its base (a dot, where it meets the floor) to its top
-  (a tick); the inliers labeled with their height;
+  (a tick); the inliers labeled with their height; when the height was not measured, the
+  edge whose top bounds it from below (``at_least_m``: a door's casing) thick in amber,
+  labeled "at least";
 * a caption box in a corner clear of the measured edges (top left when it can): the wall
   height and its confidence, or the fallback and why.
 
@@ -67,13 +69,17 @@ def height_overlay(image: np.ndarray, calibration: Calibration, result: HeightRe
     thick = max(2, round(side / settings.px_per_line_width))
     bases = _distorted(result.bases_px, calibration)
     tops = _distorted(result.tops_px, calibration)
-    order = np.argsort(result.inliers, kind="stable")          # inliers drawn last, on top
+    # The bound is the top of one whole edge: its height, copied, equals at_least_m exactly.
+    bound = np.zeros(len(bases), bool) if result.at_least_m is None else \
+        (result.kinds == "edge") & (result.heights_m == result.at_least_m)
+    shown = result.inliers | bound
+    order = np.argsort(shown, kind="stable")          # inliers and the bound drawn last, on top
     for i in order:
         if not (np.all(np.isfinite(bases[i])) and np.all(np.isfinite(tops[i]))):
             continue
-        inlier = bool(result.inliers[i])
-        color = ((settings.ceiling_rgb if result.kinds[i] == "ceiling" else settings.edge_rgb) if inlier
-                 else settings.other_rgb)
+        inlier = bool(shown[i])
+        color = (settings.bound_rgb if bound[i] else settings.ceiling_rgb if result.kinds[i] == "ceiling"
+                 else settings.edge_rgb if inlier else settings.other_rgb)
         b, t = tuple(np.round(bases[i]).astype(int)), tuple(np.round(tops[i]).astype(int))
         cv2.line(out, b, t, color, thick if inlier else max(1, thick // 2), cv2.LINE_AA)
         cv2.circle(out, b, thick * (2 if inlier else 1) + 1, color, -1, cv2.LINE_AA)
@@ -84,11 +90,12 @@ def height_overlay(image: np.ndarray, calibration: Calibration, result: HeightRe
     canvas = Image.fromarray(out)
     draw = ImageDraw.Draw(canvas, "RGBA")
     label_font = overlay_font(max(12, round(side / 55)))
-    for i in np.flatnonzero(result.inliers):
+    for i in np.flatnonzero(shown):
         if np.all(np.isfinite(tops[i])) and np.isfinite(result.heights_m[i]):
             x = min(max(tops[i][0] + thick * 5, 0), w - 1)
             y = min(max(tops[i][1] - label_font.size / 2, 0), h - 1)
-            draw.text((x, y), f"{result.heights_m[i]:.2f} m", font=label_font, fill=settings.text_rgb,
+            label = f"at least {result.heights_m[i]:.2f} m" if bound[i] else f"{result.heights_m[i]:.2f} m"
+            draw.text((x, y), label, font=label_font, fill=settings.text_rgb,
                       stroke_width=max(1, thick // 2), stroke_fill=(0, 0, 0))
     title = (f"wall height {result.height_m:.2f} m (fallback)" if result.fallback
              else f"wall height {result.height_m:.2f} m, confidence {result.confidence:.2f}")
@@ -97,7 +104,7 @@ def height_overlay(image: np.ndarray, calibration: Calibration, result: HeightRe
     pad = round(font.size * 0.5)
     box_w = pad * 2 + max(draw.textlength(s, font=font) for s in lines)
     box_h = pad * 2 + len(lines) * round(font.size * 1.25)
-    x0, y0 = _caption_corner(w, h, box_w, box_h, pad, np.vstack([bases[result.inliers], tops[result.inliers]]))
+    x0, y0 = _caption_corner(w, h, box_w, box_h, pad, np.vstack([bases[shown], tops[shown]]))
     draw.rectangle((x0, y0, x0 + box_w, y0 + box_h), fill=settings.caption_box_rgba)
     for k, text in enumerate(lines):
         fill = (settings.fallback_rgb if result.fallback else settings.text_rgb) if k == 0 else settings.text_rgb

@@ -62,6 +62,7 @@ class HeightOverlaySettings:
     edge_rgb: tuple[int, int, int] = (60, 220, 90)  # inlier vertical edges
     ceiling_rgb: tuple[int, int, int] = (40, 200, 255)  # inlier wall--ceiling lines (from their base to their top)
     other_rgb: tuple[int, int, int] = (170, 170, 170)  # measured but not used
+    bound_rgb: tuple[int, int, int] = (255, 190, 40)  # the edge whose top bounds the walls from below (a door's)
     fallback_rgb: tuple[int, int, int] = (255, 120, 60)  # caption accent when the fallback was used
     caption_box_rgba: tuple[int, int, int, int] = (0, 0, 0, 170)  # behind the caption: readable on any photo
     text_rgb: tuple[int, int, int] = (255, 255, 255)  # captions and labels

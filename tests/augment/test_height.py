@@ -2,6 +2,7 @@
 synthetic renders with exact ground truth."""
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,7 @@ from augment.camera.board import Board
 from augment.camera.calibrate import calibrate_file
 from augment.camera.settings import CAMERA
 from augment.draw.height import height_overlay
+from augment.draw.settings import DRAW
 from augment.render.gl import Renderer
 from augment.room import height as H
 from augment.room.settings import ROOM
@@ -237,6 +239,24 @@ def test_overlay_draws_on_a_copy(sample_calibration):
     out = height_overlay(photo, sample_calibration, result)
     np.testing.assert_array_equal(photo, before)
     assert out.shape == (h, w, 3) and out.dtype == np.uint8 and np.any(out != photo)
+
+
+def test_overlay_marks_the_edge_that_bounds_the_height_from_below(sample_calibration):
+    """Not measured, bounded by a door's casing 2.05 m tall: that edge is drawn thick in
+    amber and labeled "at least"; a shorter edge stays thin and grey. Without the bound
+    both are grey."""
+    w, h = sample_calibration.size_px
+    photo = np.full((h, w, 3), 90, np.uint8)
+    fallback = H.HeightResult(2.5, 0.0, True, "not measured", bases_px=np.array([[300.0, 700], [900, 700]]),
+                              tops_px=np.array([[300.0, 400], [900, 200]]), heights_m=np.array([1.2, 2.05]),
+                              feet_m=np.zeros((2, 2)), kinds=np.array(["edge", "edge"]), weights=np.zeros(2),
+                              inliers=np.zeros(2, bool), at_least_m=2.05)
+    settings = DRAW.height
+    out = height_overlay(photo, sample_calibration, fallback)
+    assert tuple(out[450, 900]) == settings.bound_rgb and tuple(out[550, 300]) == settings.other_rgb
+    assert (np.abs(out[450, 890:911].astype(int) - settings.bound_rgb).sum(axis=1) == 0).sum() >= 3  # thick
+    plain = height_overlay(photo, sample_calibration, dataclasses.replace(fallback, at_least_m=None))
+    assert tuple(plain[450, 900]) == settings.other_rgb
 
 
 # Synthetic renders: seeds [1002, i] at 640 x 480 with the phone held nearly level (pitch
