@@ -335,9 +335,12 @@ class LayoutBuilder:
                                     *self._stiff("symmetry", k0, schedule)))
 
     def balance(self, members=None, *, k0=None, schedule=None):
-        """Visual balance (Eq. 12): footprint-weighted center to the room centroid."""
+        """Visual balance (Eq. 12): footprint-weighted center to the room centroid; by
+        default of every item that blocks the floor, grouped ones too (a non-rigid group's
+        particle does not stand for where its members are; a rug lies where its host puts
+        it)."""
         if members is None:
-            members = [i for i, r in enumerate(self._p) if r["role"] == codes.ITEM and r["parent"] < 0]
+            members = [i for i, r in enumerate(self._p) if r["role"] == codes.ITEM and r["collides"]]
         members = [self._index("balance", m) for m in members]
         if members:
             self._c["balance"].append((members, polygon_centroid(self.polygon_m), *self._stiff("balance", k0, schedule)))

@@ -39,6 +39,9 @@ class Kind:
         False for floor coverings that other items may stand on.
     label : str
         Human-readable description.
+    bare_height_m : float
+        Its height without what stands on it (a TV stand without the TV), for a photo
+        that shows too little above the floor for the whole; 0 for none.
     """
 
     name: str
@@ -47,15 +50,16 @@ class Kind:
     against_wall: bool = False
     collides: bool = True
     label: str = ""
+    bare_height_m: float = 0.0
 
     @property
     def footprint_m2(self) -> float:
         return self.size_m[0] * self.size_m[1]
 
 
-def _k(name, size_m, access_m=(0.0, 0.0, 0.0, 0.0), against_wall=False, collides=True, label=""):
+def _k(name, size_m, access_m=(0.0, 0.0, 0.0, 0.0), against_wall=False, collides=True, label="", bare_m=0.0):
     return name, Kind(name, tuple(float(v) for v in size_m), tuple(float(v) for v in access_m),
-                      against_wall, collides, label or name.replace("_", " "))
+                      against_wall, collides, label or name.replace("_", " "), float(bare_m))
 
 
 #: Kind name -> :class:`Kind`. Access tuples are (back, left, front, right) in meters.
@@ -74,7 +78,7 @@ CATALOG = dict(
         _k("armchair", (0.85, 0.85, 0.9), (0, 0, 0.6, 0), label="armchair"),
         _k("coffee_table", (1.1, 0.6, 0.45), label="coffee table"),
         _k("side_table", (0.5, 0.5, 0.55), label="side table"),
-        _k("tv_stand", (1.6, 0.45, 0.55), (0, 0, 0.6, 0), True, label="TV on a low stand"),
+        _k("tv_stand", (1.6, 0.45, 1.25), (0, 0, 0.6, 0), True, label="TV on a low stand", bare_m=0.55),
         _k("bookcase", (0.8, 0.35, 1.9), (0, 0, 0.6, 0), True, label="bookcase"),
         _k("plant", (0.4, 0.4, 1.0), label="indoor plant in a pot"),
         _k("floor_lamp", (0.35, 0.35, 1.6), label="floor lamp"),
@@ -119,8 +123,14 @@ SEAT_KINDS = ("chair", "bench")
 
 # Comfortable viewing distance from a sofa to a TV (about 2.5 screen diagonals).
 TV_DISTANCE_M = 2.5
-# Gap between a sofa's front and the coffee table: room for legs and to pass.
-COFFEE_GAP_M = 0.6
+# Gap between a sofa's front and the coffee table: within reach, with room for legs.
+COFFEE_GAP_M = 0.45
+# Gap between the coffee table's end and an armchair's front: the group talks across it.
+ARMCHAIR_GAP_M = 0.4
+# How far a rug reaches under the sofa: its front legs stand on it.
+RUG_UNDER_SOFA_M = 0.2
+# Gap between a sofa's arm and the side table or lamp beside it.
+ARM_GAP_M = 0.05
 
 
 def kind_or_error(name, where):
@@ -204,8 +214,9 @@ def _same_body(a, b):
 def pairings(items):
     """Partners the rules link, as ``{item index: partner RuleItem}``.
 
-    Nightstands go to a bed (two per bed), office chairs to a desk (one per desk),
-    coffee tables to a sofa; a partner in the same group wins. Only items whose rules
+    Nightstands go to a bed (two per bed), office chairs to a desk (one per desk);
+    coffee tables, armchairs, side tables and floor lamps to a sofa (the conversation
+    group), else to an armchair; a partner in the same group wins. Only items whose rules
     are on get a partner. Used by :func:`apply_default_rules` and by the spec reader,
     which puts unrelated partners in a common group so they may stand in each other's
     clearance (a nightstand in the bed's side access, the chair in the desk's).
@@ -230,11 +241,28 @@ def pairings(items):
             if desk is not None:
                 desks_used.add(desk.index)
                 out[r.index] = desk
-        elif name == "coffee_table":
-            sofa = _first(items, ("sofa",), r.group) or _first(items, ("armchair",), r.group)
-            if sofa is not None:
-                out[r.index] = sofa
+        elif name in ("coffee_table", "side_table", "floor_lamp", "armchair"):
+            host = _first(items, ("sofa",), r.group) or (
+                _first(items, ("armchair",), r.group) if name != "armchair" else None)
+            if host is not None and host.index != r.index:
+                out[r.index] = host
     return out
+
+
+# The default rules that put an item at a spot in its partner's frame: it follows the partner.
+PLACED_AT_PARTNER = ("in_front_of", "beside_coffee_table", "beside_arm", "under", "beside_head", "at_desk")
+
+
+def _spot(builder, i, host, target_m, applied, name):
+    """``i`` at ``target_m`` in ``host``'s frame (x front, y left), turned like it."""
+    builder.heat([i], target_m, frame=host.index)
+    builder.parallel(i, host.index)
+    applied.append(Rule(name, i, host.index))
+
+
+def _coffee_ahead_m(seat: Kind, table: Kind) -> float:
+    """The coffee table's center ahead of its seat's center."""
+    return COFFEE_GAP_M + 0.5 * (seat.size_m[1] + table.size_m[1])
 
 
 def apply_default_rules(builder, items):
@@ -255,10 +283,15 @@ def apply_default_rules(builder, items):
     Notes
     -----
     * ``against_wall`` kinds: back to the nearest wall, facing the room.
-    * sofa: faces the first TV stand (and the TV faces it) at 2.5 m; armchair: faces
-      the TV from 1.5–3.2 m and stays within 1.6 m of the coffee table if any.
-    * coffee table: 0.6 m in front of its sofa (heat point in the sofa's frame),
-      parallel to it; a rug lies under the coffee table or at the foot of a bed.
+    * sofa: faces the first TV stand (and the TV faces it) at 2.5 m.
+    * coffee table: 0.45 m in front of its sofa (heat point in the sofa's frame),
+      parallel to it.
+    * armchair of a sofa with a coffee table: at an end of the coffee table, 0.4 m off
+      it, facing it (left, then right); otherwise it faces the TV from 1.5-3.2 m.
+    * side table, then floor lamp: beside the sofa's arms (left, then right), turned like
+      it; a third finds no arm and gets no rule.
+    * rug: under the sofa's front legs and the coffee table; without a sofa, under the
+      coffee table or half under the foot end of a bed.
     * nightstand: beside the head of its bed (left, then right), facing like the bed.
     * chair/bench in the same group as a table: faces it and keeps about half the
       table's depth plus 0.25 m from its center; together they center on the table.
@@ -273,8 +306,18 @@ def apply_default_rules(builder, items):
     tables = [r for r in items if r.kind.name in TABLE_KINDS]
     coffee = _first(items, ("coffee_table",))
     bed = _first(items, ("bed", "single_bed"))
+    sofa = _first(items, ("sofa",))
     side_seen = {}  # bed index -> nightstands placed so far
     seats_at = {}  # table index -> seats
+    # The sofa's arms, left then right: side tables first, then lamps.
+    arms = {}
+    for r in sorted((r for r in items if r.kind.name in ("side_table", "floor_lamp") and r.index in partner),
+                    key=lambda r: r.kind.name != "side_table"):
+        taken = arms.setdefault(partner[r.index].index, [])
+        if len(taken) < 2:
+            taken.append(r.index)
+    coffee_of = {p.index: r for r in items if r.kind.name == "coffee_table" and (p := partner.get(r.index))}
+    chairs_seen = {}  # sofa index -> armchairs placed so far
 
     for r in items:
         if not r.rules:
@@ -289,28 +332,41 @@ def apply_default_rules(builder, items):
             builder.face(i, tv.index, mutual=tv.rules)
             builder.distance(i, tv.index, TV_DISTANCE_M)
             applied.append(Rule("face_tv", i, tv.index))
+        elif (name == "armchair" and i in partner and partner[i].index in coffee_of
+              and not _same_body(r, partner[i]) and not _same_body(r, coffee_of[partner[i].index])):
+            s, table = partner[i], coffee_of[partner[i].index]
+            side = chairs_seen.get(s.index, 0)
+            chairs_seen[s.index] = side + 1
+            ahead = _coffee_ahead_m(s.kind, table.kind)
+            lateral = 0.5 * table.kind.size_m[0] + ARMCHAIR_GAP_M + 0.5 * k.size_m[1]
+            builder.heat([i], (ahead, lateral * (1.0 if side % 2 == 0 else -1.0)), frame=s.index)
+            builder.face(i, table.index)
+            applied.append(Rule("beside_coffee_table", i, table.index))
         elif name == "armchair" and tv is not None and not _same_body(r, tv):
             builder.face(i, tv.index)
             builder.distance(i, tv.index, 1.5, mode="min")
             builder.distance(i, tv.index, 3.2, mode="max")
             applied.append(Rule("face_tv", i, tv.index))
-            if coffee is not None and not _same_body(r, coffee):
-                builder.distance(i, coffee.index, 1.6, mode="max")
-                applied.append(Rule("near_coffee_table", i, coffee.index))
         elif name == "coffee_table" and i in partner and not _same_body(r, partner[i]):
+            _spot(builder, i, partner[i], (_coffee_ahead_m(partner[i].kind, k), 0.0), applied, "in_front_of")
+        elif name in ("side_table", "floor_lamp") and i in partner and i in arms.get(partner[i].index, ()):
             s = partner[i]
-            ahead = COFFEE_GAP_M + 0.5 * (s.kind.size_m[1] + k.size_m[1])
-            builder.heat([i], (ahead, 0.0), frame=s.index)
-            builder.parallel(i, s.index)
-            applied.append(Rule("in_front_of", i, s.index))
+            side = 1.0 if arms[s.index].index(i) == 0 else -1.0
+            back = -0.5 * (s.kind.size_m[1] - k.size_m[1]) + ARM_GAP_M
+            lateral = 0.5 * (s.kind.size_m[0] + k.size_m[0]) + ARM_GAP_M
+            if not _same_body(r, s):
+                _spot(builder, i, s, (back, side * lateral), applied, "beside_arm")
         elif name == "rug":
-            host = coffee if coffee is not None else bed
-            if host is not None and not _same_body(r, host):
-                # Under the coffee table; half under the foot end of a bed.
-                ahead = 0.0 if host is coffee else 0.5 * host.kind.size_m[1]
-                builder.heat([i], (ahead, 0.0), frame=host.index)
-                builder.parallel(i, host.index)
-                applied.append(Rule("under", i, host.index))
+            if sofa is not None and not _same_body(r, sofa):
+                # Its back edge under the sofa's front legs.
+                ahead = 0.5 * (sofa.kind.size_m[1] + k.size_m[1]) - RUG_UNDER_SOFA_M
+                _spot(builder, i, sofa, (ahead, 0.0), applied, "under")
+            else:
+                host = coffee if coffee is not None else bed
+                if host is not None and not _same_body(r, host):
+                    # Under the coffee table; half under the foot end of a bed.
+                    ahead = 0.0 if host is coffee else 0.5 * host.kind.size_m[1]
+                    _spot(builder, i, host, (ahead, 0.0), applied, "under")
         elif name == "nightstand" and i in partner and not _same_body(r, partner[i]):
             b = partner[i]
             side = side_seen.get(b.index, 0)

@@ -72,7 +72,7 @@ def _living_room(area):
     if area < 10:
         # A loveseat and a small TV bench fit where a full sofa set would not.
         items += [_item("sofa", "sofa", size=[1.5, 0.85, 0.85]),
-                  _item("tv_stand", "tv_stand", size=[1.2, 0.4, 0.55]),
+                  _item("tv_stand", "tv_stand", size=[1.2, 0.4, 1.05]),
                   _item("side_table", "side_table")]
     else:
         items += [_item("sofa", "sofa"), _item("tv_stand", "tv_stand"),

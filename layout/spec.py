@@ -92,7 +92,8 @@ Only the fields listed here are allowed: a misspelt field is an error, not ignor
                     start = [x, y] (in the origin's frame)
     heat            members*, target* = [x, y], frame (an id: target in its frame)
     symmetry        focal*, members*, angle_deg (axis from the focal's facing)
-    balance         members (default: every item)
+    balance         members (default: every item on the floor but rugs and
+                    those the default rules place at a partner)
     wall            item or items*, distance (of the center; default half the
                     depth), mode
     wall_orientation item or items*, angle_deg (0 = facing into the room)
@@ -671,8 +672,9 @@ def _check_names(r, groups, items, aliases):
 
 
 def _companion_groups(groups, items):
-    """Put a nightstand/office chair and its bed/desk in a shared group when neither has
-    one, so the chair may stand in the desk's clearance (see catalog.pairings)."""
+    """Put a nightstand/office chair and its bed/desk, or the pieces of a conversation
+    group and their sofa, in a shared group when neither has one, so the chair may stand
+    in the desk's clearance, the coffee table in the sofa's (see catalog.pairings)."""
     records = [RuleItem(n, it.kind, it.group, it.rules) for n, it in enumerate(items) if it.in_catalog]
     partner = catalog.pairings(records)
     taken = {g.id for g in groups} | {i.id for i in items}
@@ -681,7 +683,8 @@ def _companion_groups(groups, items):
     groups = list(groups)
     for n, p in partner.items():
         member, host = items[n], items[p.index]
-        if member.kind.name not in ("nightstand", "office_chair"):
+        if member.kind.name not in ("nightstand", "office_chair", "coffee_table", "armchair", "side_table",
+                                    "floor_lamp"):
             continue
         if member.group is not None or (host.group is not None and host.id not in new_group):
             continue
@@ -1143,11 +1146,14 @@ def build(spec: Spec, *, polygon_m=None):
     records = [RuleItem(index[i.id], i.kind, i.group, i.rules, i.group in rigid)
                for i in items if i.in_catalog]
     with r.context("default rules"):
-        catalog.apply_default_rules(b, records)
+        applied = catalog.apply_default_rules(b, records)
     sizes = {i.id: i.kind.size_m for i in items}
+    # Balance moves what stands on its own; what a rule places at its partner follows it.
+    followers = {a.index for a in applied if a.name in catalog.PLACED_AT_PARTNER}
+    balanced = [index[i.id] for i in items if i.kind.collides and index[i.id] not in followers]
     for c in constraints:
         with r.context(c.where):
-            _add_constraint(b, c, index, sizes, [index[i.id] for i in items])
+            _add_constraint(b, c, index, sizes, balanced)
     try:
         model = b.finalize()
     except LayoutError as e:
@@ -1155,7 +1161,7 @@ def build(spec: Spec, *, polygon_m=None):
     return model, spec.solver
 
 
-def _add_constraint(b, c, index, sizes, all_items):
+def _add_constraint(b, c, index, sizes, balanced):
     a = c.args
     kw = dict(k0=c.stiffness, schedule=c.schedule)
     t = c.type
@@ -1174,10 +1180,7 @@ def _add_constraint(b, c, index, sizes, all_items):
     elif t == "symmetry":
         b.symmetry(index[a["focal"]], [index[m] for m in a["members"]], angle_rad=a["angle"], **kw)
     elif t == "balance":
-        # Every item by default, grouped ones too: a non-rigid group's own particle
-        # does not stand for where its members are.
-        members = all_items if a["members"] is None else [index[m] for m in a["members"]]
-        b.balance(members, **kw)
+        b.balance(balanced if a["members"] is None else [index[m] for m in a["members"]], **kw)
     elif t == "wall":
         for i in a["items"]:
             b.wall_distance(index[i], a["distance"], mode=a["mode"], **kw)

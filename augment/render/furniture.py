@@ -890,10 +890,43 @@ def _side_table(shop, rng, W, D, H):
     return style
 
 
+# A TV stand's box holds the TV standing on it; below this height it is the stand alone.
+TV_MIN_BOX_M = 0.9
+TV_FEET_M = 0.05  # the gap the TV's feet leave between the stand and the panel
+
+
+def tv_on_stand_m(W, H) -> tuple[float, float, float]:
+    """``(stand height, panel width, panel height)`` of the TV on a stand whose box is
+    ``W`` wide and ``H`` tall (panel 0 when the box is too low for a TV): a 16:9 panel
+    four fifths of the stand's width, on a stand 0.35-0.6 m high."""
+    if H < TV_MIN_BOX_M:
+        return H, 0.0, 0.0
+    panel_w = min(0.82 * W, 1.65)
+    stand = float(np.clip(H - TV_FEET_M - (panel_w * 9 / 16 + 0.03), 0.35, 0.6))
+    panel_h = H - TV_FEET_M - stand
+    return stand, min(panel_w, (panel_h - 0.03) * 16 / 9), panel_h
+
+
+def _tv(shop, rng, y_back, z_base, feet_m, panel_w, panel_h):
+    """A flat TV, off, on a pedestal standing at ``z_base``, its panel ``feet_m`` higher:
+    a dark frame and a glossy screen facing the front."""
+    frame = _mat(rng, "black plastic", (26, 26, 28), 0.45, spread=0.01)
+    screen = _mat(rng, "screen", (6, 7, 9), 0.08, spread=0.0, surface="")
+    y0, y1 = y_back, y_back + 0.035
+    z = z_base + feet_m
+    shop.box((-0.12, y0 - 0.05, z_base), (0.12, y1 + 0.06, z_base + 0.01), frame, 0.004)
+    shop.box((-0.03, y0 + 0.005, z_base), (0.03, y1 - 0.01, z + 0.1), frame)
+    shop.box((-panel_w / 2, y0, z), (panel_w / 2, y1, z + panel_h), frame, 0.004)
+    shop.box((-panel_w / 2 + 0.01, y1 - 0.001, z + 0.02), (panel_w / 2 - 0.01, y1 + 0.002, z + panel_h - 0.01),
+             screen, shadow=False)
+
+
 def _tv_stand(shop, rng, W, D, H):
     style = _pick(rng, ("doors", "open", "soundbar"))
     body = _finish(rng)
     handle = _metal(rng, ("black steel", "brushed steel", "brass"))
+    box_h = H
+    H, panel_w, panel_h = tv_on_stand_m(W, box_h)
     top = H - (0.07 if style == "soundbar" else 0.0)
     base_h = 0.12 if rng.random() < 0.5 else 0.04
     _base(shop, rng, W, D - 0.02, base_h, _wood(rng) if base_h > 0.1 else body, "legs" if base_h > 0.1 else "plinth")
@@ -915,9 +948,11 @@ def _tv_stand(shop, rng, W, D, H):
         black = _mat(rng, "soundbar", (30, 30, 32), 0.6, spread=0.01)
         shop.box((-min(0.45, W * 0.3), -0.05, top), (min(0.45, W * 0.3), 0.04, top + 0.07), black, 0.02, 2)
         pot = _mat(rng, *_pick(rng, _styled("pots", POTS)))
-        shop.lathe(W / 2 - 0.14, 0.0,
+        shop.lathe(W / 2 - 0.14, 0.0 if not panel_w else D / 2 - 0.1,
                    [(0, top), (0.05, top), (0.06, top + 0.06), (0.055, top + 0.065), (0, top + 0.065)],
                    pot, 20, shadow=False)
+    if panel_w:
+        _tv(shop, rng, -D / 2 + 0.06, top, H - top + TV_FEET_M, panel_w, panel_h)
     return style
 
 

@@ -196,7 +196,7 @@ def _units(spec) -> list[list]:
     return units
 
 
-def fit_spec(spec, polygon_m, height_m: float, camera=None):
+def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None = None):
     """Fit a spec's furniture to a measured floor.
 
     The room becomes ``polygon_m`` and ``height_m`` (the spec's doors and windows, in
@@ -216,7 +216,10 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None):
         Wall height, meters.
     camera : layout.camera.Camera, optional
         The photo's camera: a unit that would be cut by the photo's edge or stand in its
-        foreground wherever it stood (:func:`layout.camera.in_view_share`) is dropped too.
+        foreground wherever it stood (:func:`layout.camera.in_view_share`) is dropped too,
+        or kept at its kind's ``bare_height_m`` (a TV stand without its TV) where that fits.
+    notes : list, optional
+        What was changed rather than dropped is appended to it.
 
     Returns
     -------
@@ -226,6 +229,7 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None):
         ``{"id", "kind", "reason"}`` per dropped item, in the order they were dropped.
     """
     fit = ROOM.fit
+    notes = [] if notes is None else notes
     poly = np.ascontiguousarray(polygon_m, dtype=np.float64)
     area = abs(polygon_area(poly))
     kinds = {i.id: i.kind.name for i in spec.items}
@@ -252,9 +256,18 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None):
             drop(unit, f"its footprint {w:.2f} x {d:.2f} m fits the {area:.1f} m\u00b2 floor at no angle")
         elif camera is not None:
             top = max(i.kind.size_m[2] + i.elevation_m for i in unit)
-            if in_view_share(camera, poly, (w, d, top)) == 0.0:
-                drop(unit, f"{top:.2f} m tall, it would be cut by the photo's edge or stand in its foreground "
-                           "wherever it stood (a photo taken from higher or farther back shows more)")
+            if in_view_share(camera, poly, (w, d, top)) > 0.0:
+                continue
+            why = (f"{top:.2f} m tall, it would be cut by the photo's edge or stand in its foreground wherever it "
+                   "stood (a photo taken from higher or farther back shows more)")
+            bare = unit[0].kind.bare_height_m if len(unit) == 1 and unit[0].elevation_m == 0.0 else 0.0
+            if 0.0 < bare < top and in_view_share(camera, poly, (w, d, bare)) > 0.0:
+                lowered = dataclasses.replace(unit[0], kind=dataclasses.replace(
+                    unit[0].kind, size_m=(*unit[0].kind.size_m[:2], bare)))
+                spec = dataclasses.replace(spec, items=tuple(lowered if i.id == lowered.id else i for i in spec.items))
+                notes.append(f"{lowered.id} stands without what it carries: {why}")
+            else:
+                drop(unit, why)
     stacked = _stacked_tops(spec.constraints)
     budget, used = fit.max_fill * area, 0.0
     for unit in _units(spec):
@@ -398,14 +411,39 @@ def _rule_faults(lay) -> int:
                + np.sum(np.abs(r["orientation"]) > np.radians(fit.rule_angle_deg)))
 
 
+def _astray(lay) -> set:
+    """The pieces a stager would not leave so: wall-bound ones more than
+    ``ROOM.fit.astray_m`` off every wall (a TV stand in the middle of the room), and both
+    of two that should face each other (a sofa and its TV) turned more than
+    ``ROOM.fit.astray_deg`` off; the less important of them is what goes."""
+    from layout import _codes as codes
+    from layout.solver import State, residuals
+
+    m = lay.model
+    r = residuals(m, State(lay.position_m, lay.yaw_rad))
+    off = set(m.wall_distance_item[np.abs(r["wall_distance"]) > ROOM.fit.astray_m])
+    turned = (np.abs(r["orientation"]) > np.radians(ROOM.fit.astray_deg)) & (m.orientation_mode == codes.FACE)
+    off.update(m.orientation_pairs[turned].ravel())
+    return {m.names[i] for i in off}
+
+
+def _armchairs_from_behind(lay, rep: dict) -> set:
+    """Armchairs whose backs face the lens (:func:`layout.camera.judge`): a stager takes
+    such a chair out of the shot rather than show its back."""
+    kinds = dict(zip(lay.model.names, lay.model.kinds))
+    return {n for n in rep.get("camera", {}).get("from_behind", ()) if kinds.get(n) == "armchair"}
+
+
 class _Pick:
     """The best try of one suggestion: clean first, then different from the earlier
     suggestions, then with the fewest faults (the camera's, :func:`_rule_faults`)."""
 
-    def __init__(self, earlier: list):
+    def __init__(self, earlier: list, anchor=frozenset()):
         self.earlier = earlier
+        self.anchor = anchor  # the ids of the most important unit: it stays, astray or not
         self.best = None
         self.cut = None  # the cut pieces of the unclean try that cut fewest
+        self.astray = None  # the pieces off their walls of the otherwise clean try with fewest
         self.pinned = 0  # clean tries that came back exactly as an earlier suggestion
 
     def offer(self, lay) -> bool:
@@ -414,6 +452,10 @@ class _Pick:
         if not _clean(rep):
             now = set(rep.get("camera", {}).get("cut", ()))
             self.cut = now if self.cut is None or len(now) < len(self.cut) else self.cut
+            return False
+        astray = (_astray(lay) | _armchairs_from_behind(lay, rep)) - self.anchor
+        if astray:
+            self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
             return False
         # A repeat is worth nothing to the user; a fault, a little less than a perfect one.
         nearest = min((apart_m(old, lay) for old in self.earlier), default=math.inf)
@@ -432,8 +474,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                       notes: list | None = None):
     """Solve ``suggestions`` layouts, suggestion K from seed ``seed + K - 1``.
 
-    A try that collides, leaves the floor, blocks a door, stands deep in a clearance or
-    is cut by the photo's edge is not clean; of the clean ones the first that is a
+    A try that collides, leaves the floor, blocks a door, stands deep in a clearance, is
+    cut by the photo's edge or leaves a wall-bound piece off its wall (:func:`_astray`)
+    is not clean; of the clean ones the first that is a
     different arrangement from the earlier suggestions (:func:`apart_m` at least
     ``ROOM.fit.min_difference_m``) and has no fault (the camera finds nothing hidden and
     no seating seen from behind, :func:`layout.camera.judge`; the rules hold,
@@ -445,7 +488,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     nothing gives anything else.
 
     When a suggestion has no clean layout, the least important unit with an item cut
-    by the photo's edge is dropped, else the least important unit (the spec's last),
+    by the photo's edge is dropped, else the one with a piece astray (the most
+    important unit, a sofa or a bed, is never astray), else the least important unit
+    (the spec's last),
     and all are solved again. Rather than drop the last unit for the camera's sake, all
     are laid out again without the camera, with a line in ``notes``."""
     from layout.solver import turned_state
@@ -457,9 +502,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     while True:
         model, solver = build(spec)
         solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts))
-        layouts, reports, failed, cut, said = [], [], None, None, []
+        layouts, reports, failed, cut, astray, said = [], [], None, None, None, []
         for k in range(suggestions):
-            pick = _Pick(layouts)
+            pick = _Pick(layouts, anchor=frozenset(i.id for i in _units(spec)[0]))
             for t in range(fit.seed_tries):
                 # Twice the very same arrangement: the photo pins it, other seeds will not help.
                 if pick.offer(solver.solve(model, seed=seed + k + t * suggestions)) or pick.pinned >= 2:
@@ -480,7 +525,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                         break
             progress.step()
             if pick.best is None:
-                failed, cut = k + 1, pick.cut
+                failed, cut, astray = k + 1, pick.cut, pick.astray
                 break
             # Its seed names the suggestion (it picks the designs and the default style, here
             # and when layout_K.json is rendered again), whichever try's start it came from.
@@ -501,9 +546,13 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
         units = _units(spec)
         kinds = {i.id: i.kind.name for i in spec.items}
         by_cut = [u for u in units if (cut or set()) & {i.id for i in u}]
+        by_astray = [u for u in units if (astray or set()) & {i.id for i in u}]
         if by_cut:
             reason = "the photo's edge or its foreground would cut it wherever it stood with the rest"
             gone_units = by_cut[-1:]
+        elif by_astray:
+            reason = "it found no place against a wall, or facing its partner, on the floor in view with the rest"
+            gone_units = by_astray[-1:]
         else:
             reason = (f"suggestion {failed} could not place everything without overlaps or leaving the "
                       f"{area_m2:.1f} m\u00b2 floor")
@@ -563,12 +612,14 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
     edges = open_edges(poly, floor)
     spec = _spec_for_floor(source, poly, height_m, warnings, edges)
     camera = layout_camera(calibration) if calibration is not None and ROOM.fit.for_camera else None
-    fitted, dropped = fit_spec(spec, poly, height_m, camera)
+    notes = []
+    fitted, dropped = fit_spec(spec, poly, height_m, camera, notes)
     if camera is not None and not fitted.items:
         # Better pieces cut by the photo's edge than no staged photo at all.
         fitted, dropped = fit_spec(spec, poly, height_m)
         camera = None
-        warnings.append(NO_ROOM_IN_VIEW)
+        notes = [NO_ROOM_IN_VIEW]
+    warnings += notes
     fitted = dataclasses.replace(fitted, camera=camera)
     if doors is not None and len(doors):
         fitted = dataclasses.replace(fitted, doors=doors_on_floor(doors, calibration, poly, edges))

@@ -55,6 +55,8 @@ class FitSettings:
     restarts: int = 4  # at most this many solver restarts per try: the tries and the drops do the rest
     rule_distance_m: float = 0.15  # a rule's distance or place off by more than this is a fault of a try
     rule_angle_deg: float = 15.0  # ... and a facing off by more than this
+    astray_m: float = 0.3  # a wall-bound piece (a TV, a wardrobe) farther off its wall than this: not clean
+    astray_deg: float = 30.0  # ... nor two pieces that should face each other turned farther off than this
     for_camera: bool = True  # lay out for the photo's camera (layout.camera); False: as a plan seen from above
     min_difference_m: float = 0.3  # a suggestion this close to an earlier one (diversity) is a twin
     fit_cell_m: float = 0.02  # raster cell of the "does this footprint fit the floor" test

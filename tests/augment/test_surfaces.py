@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from augment.render import surfaces
-from augment.render.furniture import BUILDERS, Material, Part, PlacedItem, _rounded_box_mesh, build_furniture
+from augment.render.furniture import (BUILDERS, Material, Part, PlacedItem, _rounded_box_mesh, build_furniture,
+                                      tv_on_stand_m)
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.staged import render_staged
@@ -185,8 +186,33 @@ def test_open_compartments_hold_things_and_gaps_between_fronts_are_dark():
         if furniture.style != "open":
             continue
         y = np.linspace(-W / 2, W / 2, 300)
-        names = _first_hits(furniture.parts, np.column_stack([np.ones_like(y), y, np.full_like(y, H / 2)]), front)
+        stand_h = tv_on_stand_m(W, H)[0]
+        names = _first_hits(furniture.parts, np.column_stack([np.ones_like(y), y, np.full_like(y, stand_h / 2)]),
+                            front)
         assert (names == "book").mean() > 0.12, names  # the compartment is a third of the width
         break
     else:
         pytest.fail("no open TV stand in 20 seeds")
+
+
+def test_a_tv_stand_carries_a_tv_when_its_box_is_tall_enough():
+    """The catalog's TV stand (1.6 x 0.45 x 1.25 m) is a 0.43 m stand with a 16:9 panel
+    1.31 m wide (0.82 of the stand) standing on it: rays from the front meet the screen
+    over the panel's middle and the stand's carcass below it, and a ray above the panel
+    meets nothing. A box lower than 0.9 m (a spec's bench) holds the stand alone."""
+    front = np.array([-1.0, 0.0, 0.0])
+    W, D, H = CATALOG["tv_stand"].size_m
+    stand, panel_w, panel_h = tv_on_stand_m(W, H)
+    assert panel_w == pytest.approx(0.82 * W) and stand == pytest.approx(H - 0.05 - (panel_w * 9 / 16 + 0.03))
+    for seed in range(6):
+        furniture = build_furniture("tv_stand", style_seed=seed)
+        z_mid = stand + 0.05 + panel_h / 2
+        y = np.linspace(-0.4 * panel_w, 0.4 * panel_w, 50)
+        names = _first_hits(furniture.parts, np.column_stack([np.ones_like(y), y, np.full_like(y, z_mid)]), front)
+        assert (names == "screen").all(), (seed, furniture.style, set(names))
+        below = _first_hits(furniture.parts, np.array([[1.0, 0.0, 0.5 * stand]]), front)
+        assert below[0] not in ("", "screen"), furniture.style
+        beside = _first_hits(furniture.parts, np.array([[1.0, 0.48 * W, z_mid]]), front)
+        assert beside[0] == "", furniture.style  # past the panel's side: the wall behind
+    low = build_furniture("tv_stand", (1.2, 0.4, 0.55), style_seed=0)
+    assert not any(p.material.name == "screen" for p in low.parts)

@@ -496,17 +496,29 @@ def test_rules_bedroom():
 
 
 def test_rules_living_room_and_rules_off_partner():
-    b, items = _builder_with("sofa", "tv_stand", "coffee_table", "armchair", "rug")
-    sofa, tv, table, chair, rug = items
+    b, items = _builder_with("sofa", "tv_stand", "coffee_table", "armchair", "rug", "armchair", "floor_lamp",
+                             "side_table")
+    sofa, tv, table, chair, rug, chair2, lamp, side = items
     items[1] = tv._replace(rules=False)  # the TV still serves as the sofa's partner
     applied = {(r.name, r.index, r.partner) for r in apply_default_rules(b, items)}
     assert ("face_tv", sofa.index, tv.index) in applied
-    assert ("face_tv", chair.index, tv.index) in applied
+    assert ("beside_coffee_table", chair.index, table.index) in applied
     assert ("in_front_of", table.index, sofa.index) in applied
-    assert ("under", rug.index, table.index) in applied
+    assert ("under", rug.index, sofa.index) in applied
+    assert ("beside_arm", side.index, sofa.index) in applied
     assert not any(r[0] == "against_wall" and r[1] == tv.index for r in applied)
     model = b.finalize()
-    np.testing.assert_allclose(model.heat_target_m[0], [catalog.COFFEE_GAP_M + 0.5 * (0.95 + 0.6), 0.0])
+    # By hand, in the sofa's frame (x front, y left): sofa 2.1 x 0.95, coffee table 1.1 x 0.6,
+    # armchair 0.85 deep, rug 1.4 deep, side table 0.5, lamp 0.35.
+    ahead = 0.45 + (0.95 + 0.6) / 2
+    np.testing.assert_allclose(model.heat_target_m, [
+        [ahead, 0.0],  # the coffee table, 45 cm off the sofa's front
+        [ahead, 0.55 + 0.4 + 0.425],  # an armchair 40 cm off the table's left end ...
+        [(0.95 + 1.4) / 2 - 0.2, 0.0],  # the rug 20 cm under the sofa's front
+        [ahead, -(0.55 + 0.4 + 0.425)],  # ... the other off its right end
+        [-(0.95 - 0.35) / 2 + 0.05, -((2.1 + 0.35) / 2 + 0.05)],  # the lamp at the right arm,
+        [-(0.95 - 0.5) / 2 + 0.05, (2.1 + 0.5) / 2 + 0.05],  # as the side table has the left
+    ])
     assert catalog.TV_DISTANCE_M in model.distance_rest_m
 
 
