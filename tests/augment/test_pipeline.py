@@ -170,6 +170,12 @@ def test_report_is_complete(roomy):
     look = report["camera_look"]
     assert max(look["noise_rgb"]) < 1.0 and 0.5 < look["blur_px"] < 2.5 and look["edges"] >= 12
     assert report["furniture"]["source"] == "preset living_room" and report["furniture"]["items"]
+    # The frame is too low for the TV on its stand (kept bare), and the floor in view has no
+    # wall facing the sofa for the stand: it is left out, and that alone is said of it.
+    assert [d["id"] for d in report["furniture"]["dropped"]] == ["tv_stand"]
+    assert [w for w in report["warnings"] if "tv_stand" in w] == [
+        "left out 1 item(s) that do not fit the measured floor: tv_stand: it found no place against a wall, "
+        "or facing its partner, on the floor in view with the rest"]
     assert [s["k"] for s in report["suggestions"]] == [1, 2, 3]
     for s in report["suggestions"]:
         assert {"energy", "overlaps", "outside_m2", "traversable"} <= set(s)
