@@ -25,10 +25,17 @@ def _item(id_, kind, count=1, **fields):
     return d
 
 
-def _table_set(group, table_kind, seat_kind, n_seats, *, table_size=None, gap_m=0.02):
-    """A rigid table-and-seats group: seats spread along the table's long sides
-    (and its ends for more than four), each facing the table ``gap_m`` from its edge
-    (rigid members do not collide with each other, so they must not overlap).
+# Dining chairs pulled in: their seats this far under the table's edge (clear of a
+# trestle's foot), and kept this far from the table's ends (clear of its legs).
+TUCK_M = 0.08
+END_CLEAR_M = 0.1
+
+
+def _table_set(group, table_kind, seat_kind, n_seats, *, table_size=None, gap_m=0.02, end_m=0.0):
+    """A rigid table-and-seats group: seats spread along the table's long sides, ``end_m``
+    clear of its ends (and at its ends for more than four), each facing the table
+    ``gap_m`` from its edge (negative: pulled in under it; rigid members do not collide
+    with each other).
 
     Returns the group table and its item tables.
     """
@@ -47,9 +54,10 @@ def _table_set(group, table_kind, seat_kind, n_seats, *, table_size=None, gap_m=
         ends = 2 if n_seats > 4 else 0
         per_side = (n_seats - ends) // 2
         # Table frame: x along its depth (front), y along its width (long side).
+        span = tw - 2 * end_m
         for side in (1.0, -1.0):
             for k in range(per_side):
-                y = (k + 0.5) * tw / per_side - 0.5 * tw
+                y = (k + 0.5) * span / per_side - 0.5 * span
                 x = side * (0.5 * td + 0.5 * sd + gap_m)
                 offsets.append([round(x, 4), round(y, 4)])
                 yaws.append(180.0 if side > 0 else 0.0)
@@ -113,12 +121,13 @@ def _bedroom(area):
 
 
 def _dining_room(area):
+    pulled_in = {"gap_m": -TUCK_M, "end_m": END_CLEAR_M}
     if area < 9:
-        group, items = _table_set("dining", "round_table", "chair", 4)
+        group, items = _table_set("dining", "round_table", "chair", 4, **pulled_in)
     elif area < 18:
-        group, items = _table_set("dining", "dining_table", "chair", 6)
+        group, items = _table_set("dining", "dining_table", "chair", 6, **pulled_in)
     else:
-        group, items = _table_set("dining", "dining_table", "chair", 8, table_size=[2.0, 0.95, 0.75])
+        group, items = _table_set("dining", "dining_table", "chair", 8, table_size=[2.0, 0.95, 0.75], **pulled_in)
     if area >= 11:
         items.append(_item("sideboard", "dresser"))
     if area >= 16:

@@ -59,6 +59,10 @@ def evaluate(layout) -> dict:
     ids = [m.names[i] for i in items]
     collides = m.particle_collides[items]
     pairs, area = metrics.box_overlaps(corners, z, collides, min_area_m2=MIN_OVERLAP_M2)
+    # Members of one rigid group stand where their offsets put them (a chair pulled in
+    # under its table): their boxes may meet.
+    apart = m.particle_body[items[pairs[:, 0]]] != m.particle_body[items[pairs[:, 1]]]
+    pairs, area = pairs[apart], area[apart]
     polygon = m.floor_polygon_m
     outside = metrics.area_outside(polygon, corners)
     doors = layout.corners_m(m.door_particles) if len(m.door_particles) else np.zeros((0, 4, 2))
