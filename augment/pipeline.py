@@ -87,7 +87,8 @@ from .render.erase import erase_board, layer_over_photo
 from .render.furniture import load_assets
 from .render.gltf import scene_glb
 from .render.styles import STYLES
-from .room.fit import dropped_summary, furniture_for_floor, furniture_source, solve_suggestions
+from .room.fit import (broken_rules, dropped_summary, furniture_for_floor, furniture_source, rule_count,
+                       solve_suggestions)
 from .room.openings import find_doors
 from .room.height import measure_height
 
@@ -399,7 +400,8 @@ def report_dict(result: FurnishResult) -> dict:
     ``source`` and ``rms_px`` first), the floor (area, polygon, edge kinds, caveat), the
     wall height (with confidence, and ``used_m``), the furniture (source, items laid
     out, items dropped and why), per suggestion its energy, overlaps, area off the floor,
-    walkability and how deep the worst item stands in another's clearance, seconds per
+    walkability, how deep the worst item stands in another's clearance and the rules it
+    breaks (:func:`augment.room.fit.broken_rules`), seconds per
     stage, the photo's noise and sharpness given to the furniture (``camera_look``), the
     light it was rendered in (``light``) and
     the library versions."""
@@ -415,6 +417,7 @@ def report_dict(result: FurnishResult) -> dict:
             "traversable": rep["traversable"], "unreachable": rep["unreachable"],
             "clearance_intrusion_m": rep["clearances"]["deepest_m"],
             **({"camera": rep["camera"]} if "camera" in rep else {}),
+            "rules": {"judged": rule_count(lay), "broken": broken_rules(lay)},
             "furniture": [lay.model.names[i] for i in lay.items],
             "files": {"staged": f"staged_{k}.jpg", "layout": f"layout_{k}.json", "plan": f"plan_{k}.png",
                       "scene": f"scene_{k}.glb", **({"layer": f"staged_{k}_layer.png"} if result.layers else {})}})

@@ -396,19 +396,44 @@ def apart_m(a, b) -> float:
     return math.inf if ka != kb else diversity([a, b])
 
 
-def _rule_faults(lay) -> int:
-    """How many rules a clean layout still breaks by more than a glance shows: a
-    wall-bound item off its wall,
-    a facing off by more than ``ROOM.fit.rule_angle_deg``, a distance or a place ("in
-    front of", "beside") off by more than ``ROOM.fit.rule_distance_m``."""
+def broken_rules(lay) -> list[dict]:
+    """The rules a layout breaks by more than a glance shows: a wall-bound item off its
+    wall, a facing off by more than ``ROOM.fit.rule_angle_deg``, a distance or a place
+    ("in front of", "beside") off by more than ``ROOM.fit.rule_distance_m``.
+
+    Returns
+    -------
+    list of dict
+        ``{"rule": "wall" | "facing" | "distance" | "place", "items": [ids], "off": value}``
+        with ``off`` in meters, or degrees for a facing; in the model's constraint order.
+    """
     from layout.solver import State, residuals
 
-    fit = ROOM.fit
-    r = residuals(lay.model, State(lay.position_m, lay.yaw_rad))
-    return int(np.sum(np.abs(r["wall_distance"]) > fit.rule_distance_m)
-               + np.sum(np.abs(r["distance"]) > fit.rule_distance_m)
-               + np.sum(np.sqrt(2.0 * np.abs(r["heat"])) > fit.rule_distance_m)
-               + np.sum(np.abs(r["orientation"]) > np.radians(fit.rule_angle_deg)))
+    fit, m = ROOM.fit, lay.model
+    r = residuals(m, State(lay.position_m, lay.yaw_rad))
+    names = m.names
+    out = []
+    for c in np.flatnonzero(np.abs(r["wall_distance"]) > fit.rule_distance_m):
+        out.append({"rule": "wall", "items": [names[m.wall_distance_item[c]]], "off": float(r["wall_distance"][c])})
+    for c in np.flatnonzero(np.abs(r["distance"]) > fit.rule_distance_m):
+        out.append({"rule": "distance", "items": [names[i] for i in m.distance_pairs[c]],
+                    "off": float(r["distance"][c])})
+    # The centre-of-mass kinds give half the squared distance, m².
+    place_m = np.sqrt(2.0 * np.abs(r["heat"]))
+    for c in np.flatnonzero(place_m > fit.rule_distance_m):
+        members = [names[i] for i in m.heat_members[m.heat_start[c]:m.heat_start[c + 1]]]
+        frame = [names[m.heat_frame[c]]] if m.heat_frame[c] >= 0 else []
+        out.append({"rule": "place", "items": members + frame, "off": float(place_m[c])})
+    for c in np.flatnonzero(np.abs(r["orientation"]) > np.radians(fit.rule_angle_deg)):
+        out.append({"rule": "facing", "items": [names[i] for i in m.orientation_pairs[c]],
+                    "off": float(np.degrees(r["orientation"][c]))})
+    return out
+
+
+def rule_count(lay) -> int:
+    """How many rules :func:`broken_rules` judges in a layout."""
+    counts = lay.model.counts()
+    return sum(counts[k] for k in ("wall_distance", "distance", "heat", "orientation"))
 
 
 def _astray(lay) -> set:
@@ -436,7 +461,7 @@ def _armchairs_from_behind(lay, rep: dict) -> set:
 
 class _Pick:
     """The best try of one suggestion: clean first, then different from the earlier
-    suggestions, then with the fewest faults (the camera's, :func:`_rule_faults`)."""
+    suggestions, then with the fewest faults (the camera's, :func:`broken_rules`)."""
 
     def __init__(self, earlier: list, anchor=frozenset()):
         self.earlier = earlier
@@ -459,7 +484,7 @@ class _Pick:
             return False
         # A repeat is worth nothing to the user; a fault, a little less than a perfect one.
         nearest = min((apart_m(old, lay) for old in self.earlier), default=math.inf)
-        key = (nearest < ROOM.fit.min_difference_m, camera_faults(rep.get("camera", {})) + _rule_faults(lay))
+        key = (nearest < ROOM.fit.min_difference_m, camera_faults(rep.get("camera", {})) + len(broken_rules(lay)))
         self.pinned += nearest < PINNED_M
         if self.best is None or key < self.best[0]:
             self.best = (key, lay, rep)
@@ -480,7 +505,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     different arrangement from the earlier suggestions (:func:`apart_m` at least
     ``ROOM.fit.min_difference_m``) and has no fault (the camera finds nothing hidden and
     no seating seen from behind, :func:`layout.camera.judge`; the rules hold,
-    :func:`_rule_faults`) is kept, else a different one with the fewest faults. Tries go
+    :func:`broken_rules`) is kept, else a different one with the fewest faults. Tries go
     on from seed ``seed + K - 1 + N``, then ``+ 2N`` (``ROOM.fit.seed_tries`` in all). When all of
     them repeat an earlier suggestion, the first suggestion turned and mirrored
     (:data:`TURNS`) is tried as a start, then the furniture without one of its less

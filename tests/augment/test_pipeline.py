@@ -179,6 +179,7 @@ def test_report_is_complete(roomy):
     assert [s["k"] for s in report["suggestions"]] == [1, 2, 3]
     for s in report["suggestions"]:
         assert {"energy", "overlaps", "outside_m2", "traversable"} <= set(s)
+        assert s["rules"]["judged"] >= 1 and len(s["rules"]["broken"]) <= s["rules"]["judged"]
         assert 0.0 <= s["clearance_intrusion_m"] <= ACCESS_CLEAR_M  # restarted until clear
     for stage in ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene",
                   "overlays", "total"):
@@ -924,6 +925,46 @@ def test_a_tv_off_its_wall_or_not_facing_the_sofa_is_left_out(tmp_path, monkeypa
     assert [i.id for i in fitted.items] == ["sofa"] and layouts[0].model.names.count("tv") == 0
     assert dropped == [{"id": "tv", "kind": "tv_stand", "reason": "it found no place against a wall, or facing "
                         "its partner, on the floor in view with the rest"}]
+
+
+def test_the_rules_a_layout_breaks_are_named_with_how_far_off(tmp_path):
+    """A sofa and a TV placed by hand in a 6 x 4 m room (the catalog rules: the TV's back
+    on its wall, sofa and TV facing each other 2.5 m apart): face to face 2.0 m apart,
+    the distance is 0.5 m short; turned 90 degrees, the sofa's facing is 90 degrees off
+    too; the TV 1 m off its wall, its wall rule is 1 m off."""
+    import dataclasses
+
+    from layout import Solver
+    from layout.spec import build
+
+    spec = load_spec(write_spec(tmp_path, """
+        [room]
+        polygon = [[0, 0], [6, 0], [6, 4], [0, 4]]
+        height = 2.6
+        [[items]]
+        id = "sofa"
+        kind = "sofa"
+        [[items]]
+        id = "tv"
+        kind = "tv_stand"
+        """))
+    model, _ = build(spec)
+    lay = Solver().solve(model, seed=0)
+    sofa, tv = (model.names.index(n) for n in ("sofa", "tv"))
+    depth = spec.items[1].kind.size_m[1]
+
+    def broken(sofa_yaw_deg, tv_off_m):
+        pos, yaw = lay.position_m.copy(), lay.yaw_rad.copy()
+        pos[sofa, :2], yaw[sofa] = (3.0, depth / 2 + tv_off_m + 2.0), math.radians(sofa_yaw_deg)
+        pos[tv, :2], yaw[tv] = (3.0, depth / 2 + tv_off_m), math.radians(90.0)
+        return {(b["rule"], tuple(b["items"])): b["off"]
+                for b in fit.broken_rules(dataclasses.replace(lay, position_m=pos, yaw_rad=yaw))}
+
+    assert fit.rule_count(lay) == 3  # the TV's wall, the facing (both ways, one rule), the distance
+    assert broken(-90.0, 0.0) == {("distance", ("sofa", "tv")): pytest.approx(-0.5)}
+    turned = broken(0.0, 0.0)
+    assert abs(turned[("facing", ("sofa", "tv"))]) == pytest.approx(90.0, abs=0.5)
+    assert broken(-90.0, 1.0)[("wall", ("tv",))] == pytest.approx(1.0)
 
 
 def test_furniture_keeps_to_the_users_floor_mask(tmp_path, capsys):
