@@ -881,89 +881,72 @@ def test_a_repeated_suggestion_is_solved_again_from_another_seed(monkeypatch):
     assert build(alone)[0].n == first.model.n
 
 
+class _SofaAndTV:
+    """A sofa and a TV with the catalog's rules in a 6 x 4 m room (the TV's back on its
+    wall; sofa and TV face to face 2.5 m apart), solved once, then placed by hand."""
+
+    def __init__(self, folder: Path):
+        from layout import Solver
+        from layout.spec import build
+
+        self.spec = load_spec(write_spec(folder, """
+            [room]
+            polygon = [[0, 0], [6, 0], [6, 4], [0, 4]]
+            height = 2.6
+            [[items]]
+            id = "sofa"
+            kind = "sofa"
+            [[items]]
+            id = "tv"
+            kind = "tv_stand"
+            """))
+        model, _ = build(self.spec)
+        self.layout = Solver().solve(model, seed=0)
+        self.depth_m = self.spec.items[1].kind.size_m[1]
+        self._index = [model.names.index(n) for n in ("sofa", "tv")]
+
+    def placed(self, sofa_yaw_deg: float, sofa_y_m: float, tv_off_wall_m: float):
+        """Both on x = 3: the TV facing +y with its back ``tv_off_wall_m`` off the wall y = 0."""
+        import dataclasses
+
+        pos, yaw = self.layout.position_m.copy(), self.layout.yaw_rad.copy()
+        for i, (y, a) in zip(self._index, ((sofa_y_m, sofa_yaw_deg), (self.depth_m / 2 + tv_off_wall_m, 90.0))):
+            pos[i, :2], yaw[i] = (3.0, y), math.radians(a)
+        return dataclasses.replace(self.layout, position_m=pos, yaw_rad=yaw)
+
+
 def test_a_tv_off_its_wall_or_not_facing_the_sofa_is_left_out(tmp_path, monkeypatch):
-    """Placed by hand in a 6 x 4 m room: the TV's back 1 m off the wall (residual 1 m >
-    0.3 m) is astray, and so are both of a sofa and TV turned 90 degrees from each other
-    (> 30 degrees); against the wall and face to face, nothing is. When every try leaves
-    them astray, the suggestions are made without the TV, and the reason says so."""
-    import dataclasses
-
-    from layout import Solver
-    from layout.spec import build
-
-    spec = load_spec(write_spec(tmp_path, """
-        [room]
-        polygon = [[0, 0], [6, 0], [6, 4], [0, 4]]
-        height = 2.6
-        [[items]]
-        id = "sofa"
-        kind = "sofa"
-        [[items]]
-        id = "tv"
-        kind = "tv_stand"
-        """))
-    model, _ = build(spec)
-    lay = Solver().solve(model, seed=0)
-    sofa, tv = (model.names.index(n) for n in ("sofa", "tv"))
-
-    def placed(sofa_xy_yaw, tv_xy_yaw):
-        pos, yaw = lay.position_m.copy(), lay.yaw_rad.copy()
-        for i, (x, y, a) in ((sofa, sofa_xy_yaw), (tv, tv_xy_yaw)):
-            pos[i, :2], yaw[i] = (x, y), math.radians(a)
-        return dataclasses.replace(lay, position_m=pos, yaw_rad=yaw)
-
-    depth = spec.items[1].kind.size_m[1]
-    # Sofa in the middle facing -y, the TV's back on the wall y = 0, facing +y: 2 m apart.
-    assert fit._astray(placed((3.0, 2.5, -90.0), (3.0, depth / 2, 90.0))) == set()
-    assert fit._astray(placed((3.0, 2.5, -90.0), (3.0, depth / 2 + 1.0, 90.0))) == {"tv"}
-    assert fit._astray(placed((3.0, 2.5, 0.0), (3.0, depth / 2, 90.0))) == {"sofa", "tv"}
+    """Placed by hand: the TV's back 1 m off the wall (residual 1 m > 0.3 m) is astray,
+    and so are both of a sofa and TV turned 90 degrees from each other (> 30 degrees);
+    against the wall and face to face, nothing is. When every try leaves them astray,
+    the suggestions are made without the TV, and the reason says so."""
+    room = _SofaAndTV(tmp_path)
+    assert fit._astray(room.placed(-90.0, 2.5, 0.0)) == set()
+    assert fit._astray(room.placed(-90.0, 2.5, 1.0)) == {"tv"}
+    assert fit._astray(room.placed(0.0, 2.5, 0.0)) == {"sofa", "tv"}
 
     # Both astray in every try: the TV goes, the sofa (the spec's first, its anchor) stays.
     monkeypatch.setattr(fit, "_astray", lambda lay: {"sofa", "tv"} & set(lay.model.names))
     dropped = []
-    fitted, layouts, _ = fit.solve_suggestions(spec, 1, 0, 24.0, dropped, pipeline._Progress(False, 1))
+    fitted, layouts, _ = fit.solve_suggestions(room.spec, 1, 0, 24.0, dropped, pipeline._Progress(False, 1))
     assert [i.id for i in fitted.items] == ["sofa"] and layouts[0].model.names.count("tv") == 0
     assert dropped == [{"id": "tv", "kind": "tv_stand", "reason": "it found no place against a wall, or facing "
                         "its partner, on the floor in view with the rest"}]
 
 
 def test_the_rules_a_layout_breaks_are_named_with_how_far_off(tmp_path):
-    """A sofa and a TV placed by hand in a 6 x 4 m room (the catalog rules: the TV's back
-    on its wall, sofa and TV facing each other 2.5 m apart): face to face 2.0 m apart,
-    the distance is 0.5 m short; turned 90 degrees, the sofa's facing is 90 degrees off
-    too; the TV 1 m off its wall, its wall rule is 1 m off."""
-    import dataclasses
-
-    from layout import Solver
-    from layout.spec import build
-
-    spec = load_spec(write_spec(tmp_path, """
-        [room]
-        polygon = [[0, 0], [6, 0], [6, 4], [0, 4]]
-        height = 2.6
-        [[items]]
-        id = "sofa"
-        kind = "sofa"
-        [[items]]
-        id = "tv"
-        kind = "tv_stand"
-        """))
-    model, _ = build(spec)
-    lay = Solver().solve(model, seed=0)
-    sofa, tv = (model.names.index(n) for n in ("sofa", "tv"))
-    depth = spec.items[1].kind.size_m[1]
+    """Face to face 2.0 m apart, the sofa-TV distance is 0.5 m short; turned 90 degrees,
+    the sofa's facing is 90 degrees off too; the TV 1 m off its wall, its wall rule is
+    1 m off."""
+    room = _SofaAndTV(tmp_path)
 
     def broken(sofa_yaw_deg, tv_off_m):
-        pos, yaw = lay.position_m.copy(), lay.yaw_rad.copy()
-        pos[sofa, :2], yaw[sofa] = (3.0, depth / 2 + tv_off_m + 2.0), math.radians(sofa_yaw_deg)
-        pos[tv, :2], yaw[tv] = (3.0, depth / 2 + tv_off_m), math.radians(90.0)
-        return {(b["rule"], tuple(b["items"])): b["off"]
-                for b in fit.broken_rules(dataclasses.replace(lay, position_m=pos, yaw_rad=yaw))}
+        lay = room.placed(sofa_yaw_deg, room.depth_m / 2 + tv_off_m + 2.0, tv_off_m)
+        return {(b["rule"], tuple(b["items"])): b["off"] for b in fit.broken_rules(lay)}
 
-    assert fit.rule_count(lay) == 3  # the TV's wall, the facing (both ways, one rule), the distance
+    assert fit.rule_count(room.layout) == 3  # the TV's wall, the facing (both ways, one rule), the distance
     assert broken(-90.0, 0.0) == {("distance", ("sofa", "tv")): pytest.approx(-0.5)}
-    turned = broken(0.0, 0.0)
-    assert abs(turned[("facing", ("sofa", "tv"))]) == pytest.approx(90.0, abs=0.5)
+    assert abs(broken(0.0, 0.0)[("facing", ("sofa", "tv"))]) == pytest.approx(90.0, abs=0.5)
     assert broken(-90.0, 1.0)[("wall", ("tv",))] == pytest.approx(1.0)
 
 
