@@ -613,9 +613,6 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 fitted, layouts, reports = solve_suggestions(fitted, suggestions, seed, m.floor.area_m2, dropped,
                                                              bar, warnings)
         if dropped:
-            # A piece kept bare for the frame and then left out after all is said once, as left out.
-            gone = tuple(f"{d['id']} stands without" for d in dropped)
-            warnings[:] = [w for w in warnings if not w.startswith(gone)]
             warnings.append(f"left out {len(dropped)} item(s) that do not fit the measured floor: "
                             + dropped_summary(dropped))
         # A plan's title names no folder (the web app's files are its own).

@@ -334,13 +334,14 @@ class LayoutBuilder:
         self._c["symmetry"].append((members, self._index("symmetry focal", focal), angle,
                                     *self._stiff("symmetry", k0, schedule)))
 
-    def balance(self, members=None, *, k0=None, schedule=None):
+    def balance(self, members=None, *, exclude=(), k0=None, schedule=None):
         """Visual balance (Eq. 12): footprint-weighted center to the room centroid; by
         default of every item that blocks the floor, grouped ones too (a non-rigid group's
         particle does not stand for where its members are; a rug lies where its host puts
-        it)."""
+        it), but those in ``exclude``."""
         if members is None:
-            members = [i for i, r in enumerate(self._p) if r["role"] == codes.ITEM and r["collides"]]
+            members = [i for i, r in enumerate(self._p)
+                       if r["role"] == codes.ITEM and r["collides"] and i not in exclude]
         members = [self._index("balance", m) for m in members]
         if members:
             self._c["balance"].append((members, polygon_centroid(self.polygon_m), *self._stiff("balance", k0, schedule)))

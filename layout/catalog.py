@@ -260,6 +260,14 @@ def _spot(builder, i, host, target_m, applied, name):
     applied.append(Rule(name, i, host.index))
 
 
+def _next_side(placed: dict, host: int) -> float:
+    """+1 (left) for the first piece placed beside ``host``, -1 (right) for the second, and
+    so on; ``placed`` counts them."""
+    k = placed.get(host, 0)
+    placed[host] = k + 1
+    return 1.0 if k % 2 == 0 else -1.0
+
+
 def _coffee_ahead_m(seat: Kind, table: Kind) -> float:
     """The coffee table's center ahead of its seat's center."""
     return COFFEE_GAP_M + 0.5 * (seat.size_m[1] + table.size_m[1])
@@ -307,7 +315,7 @@ def apply_default_rules(builder, items):
     coffee = _first(items, ("coffee_table",))
     bed = _first(items, ("bed", "single_bed"))
     sofa = _first(items, ("sofa",))
-    side_seen = {}  # bed index -> nightstands placed so far
+    beside = {}  # host index -> pieces placed beside it so far (nightstands, armchairs)
     seats_at = {}  # table index -> seats
     # The sofa's arms, left then right: side tables first, then lamps.
     arms = {}
@@ -317,7 +325,6 @@ def apply_default_rules(builder, items):
         if len(taken) < 2:
             taken.append(r.index)
     coffee_of = {p.index: r for r in items if r.kind.name == "coffee_table" and (p := partner.get(r.index))}
-    chairs_seen = {}  # sofa index -> armchairs placed so far
 
     for r in items:
         if not r.rules:
@@ -335,11 +342,9 @@ def apply_default_rules(builder, items):
         elif (name == "armchair" and i in partner and partner[i].index in coffee_of
               and not _same_body(r, partner[i]) and not _same_body(r, coffee_of[partner[i].index])):
             s, table = partner[i], coffee_of[partner[i].index]
-            side = chairs_seen.get(s.index, 0)
-            chairs_seen[s.index] = side + 1
             ahead = _coffee_ahead_m(s.kind, table.kind)
             lateral = 0.5 * table.kind.size_m[0] + ARMCHAIR_GAP_M + 0.5 * k.size_m[1]
-            builder.heat([i], (ahead, lateral * (1.0 if side % 2 == 0 else -1.0)), frame=s.index)
+            builder.heat([i], (ahead, lateral * _next_side(beside, s.index)), frame=s.index)
             builder.face(i, table.index)
             applied.append(Rule("beside_coffee_table", i, table.index))
         elif name == "armchair" and tv is not None and not _same_body(r, tv):
@@ -369,12 +374,10 @@ def apply_default_rules(builder, items):
                     _spot(builder, i, host, (ahead, 0.0), applied, "under")
         elif name == "nightstand" and i in partner and not _same_body(r, partner[i]):
             b = partner[i]
-            side = side_seen.get(b.index, 0)
-            side_seen[b.index] = side + 1
             bw, bd = b.kind.size_m[:2]
             nw, nd = k.size_m[:2]
             # Left of the head first, then right (bed frame: x front, y left).
-            lateral = (0.5 * (bw + nw) + 0.02) * (1.0 if side % 2 == 0 else -1.0)
+            lateral = (0.5 * (bw + nw) + 0.02) * _next_side(beside, b.index)
             back = -0.5 * (bd - nd)
             builder.heat([i], (back, lateral), frame=b.index)
             # Facing like the bed, written as an angle off the direction to the bed's

@@ -683,9 +683,6 @@ def _companion_groups(groups, items):
     groups = list(groups)
     for n, p in partner.items():
         member, host = items[n], items[p.index]
-        if member.kind.name not in ("nightstand", "office_chair", "coffee_table", "armchair", "side_table",
-                                    "floor_lamp"):
-            continue
         if member.group is not None or (host.group is not None and host.id not in new_group):
             continue
         gid = new_group.get(host.id)
@@ -1150,10 +1147,9 @@ def build(spec: Spec, *, polygon_m=None):
     sizes = {i.id: i.kind.size_m for i in items}
     # Balance moves what stands on its own; what a rule places at its partner follows it.
     followers = {a.index for a in applied if a.name in catalog.PLACED_AT_PARTNER}
-    balanced = [index[i.id] for i in items if i.kind.collides and index[i.id] not in followers]
     for c in constraints:
         with r.context(c.where):
-            _add_constraint(b, c, index, sizes, balanced)
+            _add_constraint(b, c, index, sizes, followers)
     try:
         model = b.finalize()
     except LayoutError as e:
@@ -1161,7 +1157,7 @@ def build(spec: Spec, *, polygon_m=None):
     return model, spec.solver
 
 
-def _add_constraint(b, c, index, sizes, balanced):
+def _add_constraint(b, c, index, sizes, followers):
     a = c.args
     kw = dict(k0=c.stiffness, schedule=c.schedule)
     t = c.type
@@ -1180,7 +1176,10 @@ def _add_constraint(b, c, index, sizes, balanced):
     elif t == "symmetry":
         b.symmetry(index[a["focal"]], [index[m] for m in a["members"]], angle_rad=a["angle"], **kw)
     elif t == "balance":
-        b.balance(balanced if a["members"] is None else [index[m] for m in a["members"]], **kw)
+        if a["members"] is None:
+            b.balance(exclude=followers, **kw)
+        else:
+            b.balance([index[m] for m in a["members"]], **kw)
     elif t == "wall":
         for i in a["items"]:
             b.wall_distance(index[i], a["distance"], mode=a["mode"], **kw)

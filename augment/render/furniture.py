@@ -925,8 +925,7 @@ def _tv_stand(shop, rng, W, D, H):
     style = _pick(rng, ("doors", "open", "soundbar"))
     body = _finish(rng)
     handle = _metal(rng, ("black steel", "brushed steel", "brass"))
-    box_h = H
-    H, panel_w, panel_h = tv_on_stand_m(W, box_h)
+    H, panel_w, panel_h = tv_on_stand_m(W, H)
     top = H - (0.07 if style == "soundbar" else 0.0)
     base_h = 0.12 if rng.random() < 0.5 else 0.04
     _base(shop, rng, W, D - 0.02, base_h, _wood(rng) if base_h > 0.1 else body, "legs" if base_h > 0.1 else "plinth")

@@ -196,6 +196,11 @@ def _units(spec) -> list[list]:
     return units
 
 
+# What follows an item's id in the note that it is kept bare (fit_spec), retracted when
+# the item is left out after all (solve_suggestions).
+BARE_NOTE = " stands without what it carries: "
+
+
 def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None = None):
     """Fit a spec's furniture to a measured floor.
 
@@ -265,7 +270,7 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None =
                 lowered = dataclasses.replace(unit[0], kind=dataclasses.replace(
                     unit[0].kind, size_m=(*unit[0].kind.size_m[:2], bare)))
                 spec = dataclasses.replace(spec, items=tuple(lowered if i.id == lowered.id else i for i in spec.items))
-                notes.append(f"{lowered.id} stands without what it carries: {why}")
+                notes.append(f"{lowered.id}{BARE_NOTE}{why}")
             else:
                 drop(unit, why)
     stacked = _stacked_tops(spec.constraints)
@@ -396,7 +401,13 @@ def apart_m(a, b) -> float:
     return math.inf if ka != kb else diversity([a, b])
 
 
-def broken_rules(lay) -> list[dict]:
+def _residuals(lay) -> dict:
+    from layout.solver import State, residuals
+
+    return residuals(lay.model, State(lay.position_m, lay.yaw_rad))
+
+
+def broken_rules(lay, r: dict | None = None) -> list[dict]:
     """The rules a layout breaks by more than a glance shows: a wall-bound item off its
     wall, a facing off by more than ``ROOM.fit.rule_angle_deg``, a distance or a place
     ("in front of", "beside") off by more than ``ROOM.fit.rule_distance_m``.
@@ -406,11 +417,10 @@ def broken_rules(lay) -> list[dict]:
     list of dict
         ``{"rule": "wall" | "facing" | "distance" | "place", "items": [ids], "off": value}``
         with ``off`` in meters, or degrees for a facing; in the model's constraint order.
+        ``r``: the layout's residuals when already computed.
     """
-    from layout.solver import State, residuals
-
     fit, m = ROOM.fit, lay.model
-    r = residuals(m, State(lay.position_m, lay.yaw_rad))
+    r = _residuals(lay) if r is None else r
     names = m.names
     out = []
     for c in np.flatnonzero(np.abs(r["wall_distance"]) > fit.rule_distance_m):
@@ -436,16 +446,16 @@ def rule_count(lay) -> int:
     return sum(counts[k] for k in ("wall_distance", "distance", "heat", "orientation"))
 
 
-def _astray(lay) -> set:
+def _astray(lay, r: dict | None = None) -> set:
     """The pieces a stager would not leave so: wall-bound ones more than
     ``ROOM.fit.astray_m`` off every wall (a TV stand in the middle of the room), and both
     of two that should face each other (a sofa and its TV) turned more than
-    ``ROOM.fit.astray_deg`` off; the less important of them is what goes."""
+    ``ROOM.fit.astray_deg`` off; the less important of them is what goes. ``r``: the
+    layout's residuals when already computed."""
     from layout import _codes as codes
-    from layout.solver import State, residuals
 
     m = lay.model
-    r = residuals(m, State(lay.position_m, lay.yaw_rad))
+    r = _residuals(lay) if r is None else r
     off = set(m.wall_distance_item[np.abs(r["wall_distance"]) > ROOM.fit.astray_m])
     turned = (np.abs(r["orientation"]) > np.radians(ROOM.fit.astray_deg)) & (m.orientation_mode == codes.FACE)
     off.update(m.orientation_pairs[turned].ravel())
@@ -478,13 +488,14 @@ class _Pick:
             now = set(rep.get("camera", {}).get("cut", ()))
             self.cut = now if self.cut is None or len(now) < len(self.cut) else self.cut
             return False
-        astray = (_astray(lay) | _armchairs_from_behind(lay, rep)) - self.anchor
+        r = _residuals(lay)
+        astray = (_astray(lay, r) | _armchairs_from_behind(lay, rep)) - self.anchor
         if astray:
             self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
             return False
         # A repeat is worth nothing to the user; a fault, a little less than a perfect one.
         nearest = min((apart_m(old, lay) for old in self.earlier), default=math.inf)
-        key = (nearest < ROOM.fit.min_difference_m, camera_faults(rep.get("camera", {})) + len(broken_rules(lay)))
+        key = (nearest < ROOM.fit.min_difference_m, camera_faults(rep.get("camera", {})) + len(broken_rules(lay, r)))
         self.pinned += nearest < PINNED_M
         if self.best is None or key < self.best[0]:
             self.best = (key, lay, rep)
@@ -593,6 +604,8 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             raise too_small(area_m2, dropped)
         spec, gone = _drop(spec, [i.id for u in gone_units for i in u])
         dropped.extend({"id": i, "kind": kinds[i], "reason": reason} for i in sorted(gone))
+        # A piece kept bare for the frame and left out after all is said once, as left out.
+        notes[:] = [n for n in notes if not n.startswith(tuple(i + BARE_NOTE for i in gone))]
         progress.grow(suggestions)
 
 

@@ -854,7 +854,7 @@ def test_a_repeated_suggestion_is_solved_again_from_another_seed(monkeypatch):
     real = Solver.solve
     spec = load_spec(Path(__file__).resolve().parents[2] / "samples" / "living_room.toml")
     # Which seeds give a clean try is not the point here: every try counts as in place.
-    monkeypatch.setattr(fit, "_astray", lambda lay: set())
+    monkeypatch.setattr(fit, "_astray", lambda lay, r=None: set())
 
     def run(spec, twin_seeds):
         # A twin seed gives seed 0's layout, from any start.
@@ -926,7 +926,7 @@ def test_a_tv_off_its_wall_or_not_facing_the_sofa_is_left_out(tmp_path, monkeypa
     assert fit._astray(room.placed(0.0, 2.5, 0.0)) == {"sofa", "tv"}
 
     # Both astray in every try: the TV goes, the sofa (the spec's first, its anchor) stays.
-    monkeypatch.setattr(fit, "_astray", lambda lay: {"sofa", "tv"} & set(lay.model.names))
+    monkeypatch.setattr(fit, "_astray", lambda lay, r=None: {"sofa", "tv"} & set(lay.model.names))
     dropped = []
     fitted, layouts, _ = fit.solve_suggestions(room.spec, 1, 0, 24.0, dropped, pipeline._Progress(False, 1))
     assert [i.id for i in fitted.items] == ["sofa"] and layouts[0].model.names.count("tv") == 0
