@@ -612,6 +612,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             with clock("layout"):
                 fitted, layouts, reports = solve_suggestions(fitted, suggestions, seed, m.floor.area_m2, dropped,
                                                              bar, warnings)
+                # Rendered as layout_K.json holds them, so `--layout` renders the very same photo.
+                layouts = [lay.as_written() for lay in layouts]
         if dropped:
             warnings.append(f"left out {len(dropped)} item(s) that do not fit the measured floor: "
                             + dropped_summary(dropped))

@@ -9,7 +9,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -105,6 +105,16 @@ class Layout:
         size = self.model.particle_size_m[idx]
         return box_corners(self.position_m[idx, :2], self.yaw_rad[idx], size[:, 0], size[:, 1])
 
+    def as_written(self) -> Layout:
+        """This layout with the items' positions and yaws as :meth:`to_dict` writes them
+        (:data:`WRITTEN_DECIMALS`): what is rendered from it, a layout file read back
+        renders to the very same pixels (a micrometre can flip a rounding in a render)."""
+        pos, yaw = self.position_m.copy(), self.yaw_rad.copy()
+        for i in self.items:
+            pos[i] = [_written(v) for v in pos[i]]
+            yaw[i] = _written(yaw[i])
+        return replace(self, position_m=pos, yaw_rad=yaw)
+
     def to_dict(self) -> dict:
         """JSON-ready description: room, doors, windows and items (meters, radians)."""
         m = self.model
@@ -120,8 +130,8 @@ class Layout:
                 {
                     "id": m.names[i],
                     "kind": m.kinds[i],
-                    "position_m": [round(float(v), 6) for v in self.position_m[i]],
-                    "yaw_rad": round(float(self.yaw_rad[i]), 6),
+                    "position_m": [_written(v) for v in self.position_m[i]],
+                    "yaw_rad": _written(self.yaw_rad[i]),
                     "size_m": [float(v) for v in m.particle_size_m[i]],
                     "group": m.names[m.particle_parent[i]] if m.particle_parent[i] >= 0 else None,
                 }
@@ -131,6 +141,15 @@ class Layout:
             "seed": self.seed,
             "iterations": self.iterations,
         }
+
+
+# Decimals of the meters and radians in a layout file: micrometres, microradians.
+WRITTEN_DECIMALS = 6
+
+
+def _written(v) -> float:
+    # Python's round is correctly rounded, so rounding what it gave changes nothing.
+    return round(float(v), WRITTEN_DECIMALS)
 
 
 def _inside(polygon_m, points_m):

@@ -638,6 +638,12 @@ def test_a_solved_layout_reads_back_as_it_stands(tmp_path):
     assert [again.model.names[i] for i in again.items] == [solved.model.names[i] for i in solved.items]
     np.testing.assert_allclose(again.position_m[again.items], solved.position_m[solved.items], atol=2e-6)
     np.testing.assert_allclose(again.yaw_rad[again.items], solved.yaw_rad[solved.items], atol=2e-6)
+    # What the pipeline renders (as_written) is what the file holds, to the last bit or two.
+    written = solved.as_written()
+    assert written.to_dict() == solved.to_dict() and np.array_equal(written.as_written().position_m, written.position_m)
+    assert 0 < np.abs(written.position_m - solved.position_m).max() <= 5e-7
+    np.testing.assert_allclose(again.position_m[again.items], written.position_m[written.items], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(again.yaw_rad[again.items], written.yaw_rad[written.items], rtol=0, atol=1e-15)
     top = [solved.model.names.index(f"book_{s}_6") for s in "ab"]  # six 3 cm books: 15 cm up
     np.testing.assert_allclose(again.position_m[top, 2], [0.165, 0.165], atol=1e-9)
     np.testing.assert_allclose(again.model.floor_polygon_m, solved.model.floor_polygon_m)
