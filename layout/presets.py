@@ -76,6 +76,9 @@ def _table_set(group, table_kind, seat_kind, n_seats, *, table_size=None, gap_m=
 
 
 def _living_room(area):
+    # The conversation group first (what is dropped first goes last): seating, the TV it
+    # faces and the coffee table, then the rug, side table and lamp at the sofa that make
+    # even a small visible floor read as a furnished room, then what lines the walls.
     items, groups = [], []
     if area < 10:
         # A loveseat and a small TV bench fit where a full sofa set would not.
@@ -85,15 +88,13 @@ def _living_room(area):
     else:
         items += [_item("sofa", "sofa"), _item("tv_stand", "tv_stand"),
                   _item("coffee_table", "coffee_table")]
+        if area >= 14:
+            items.append(_item("armchair", "armchair", count=1 if area < 20 else 2))
+        items += [_item("rug", "rug"), _item("side_table", "side_table", count=1 if area < 20 else 2)]
     if area >= 12:
-        items.append(_item("plant", "plant", count=1 if area < 20 else 2))
-    if area >= 14:
-        items += [_item("armchair", "armchair", count=1 if area < 20 else 2),
-                  _item("floor_lamp", "floor_lamp"), _item("rug", "rug")]
+        items += [_item("floor_lamp", "floor_lamp"), _item("plant", "plant", count=1 if area < 20 else 2)]
     if area >= 16:
         items.append(_item("bookcase", "bookcase", count=1 if area < 30 else 2))
-    if area >= 20:
-        items.append(_item("side_table", "side_table"))
     if area >= 30:
         items.append(_item("dresser", "dresser"))
     # In rooms this size the sofa goes against a wall, which keeps the middle free.
@@ -137,14 +138,25 @@ def _dining_room(area):
     return [group], items, [{"type": "balance"}]
 
 
+# A home office's one desk stands this far (its center) from the wall it faces, the chair
+# between them: whoever sits there looks into the room, and the photo shows the chair's front.
+DESK_INTO_ROOM_M = 1.45
+
+
 def _office(area):
     desks = max(1, min(8, int(area // 6)))
-    items = [_item("desk", "desk", count=desks), _item("office_chair", "office_chair", count=desks),
-             _item("plant", "plant")]
+    constraints = []
+    desk = _item("desk", "desk", count=desks)
+    if desks == 1:
+        # Not the catalog's back-to-the-wall: its front (the chair's side) to the wall.
+        desk["rules"] = False
+        constraints += [{"type": "wall", "item": "desk", "distance": DESK_INTO_ROOM_M},
+                        {"type": "wall_orientation", "item": "desk", "angle_deg": 180.0}]
+    items = [desk, _item("office_chair", "office_chair", count=desks), _item("plant", "plant")]
     items.append(_item("bookcase", "bookcase", count=1 if area < 10 else 2 if area < 30 else 3))
     if area >= 20:
         items.append(_item("coat_rack", "coat_rack"))
-    return [], items, []
+    return [], items, constraints
 
 
 def _game_room(area):
@@ -193,10 +205,10 @@ PRESETS = {
 }
 
 DESCRIPTIONS = {
-    "living_room": "sofa, TV, coffee table; armchairs, bookcases, plants, lamp, rug with space",
+    "living_room": "sofa, TV, coffee table, rug, side table; lamp, plants, armchairs, bookcases with space",
     "bedroom": "single bed + nightstand (< 13 m²) or double bed + 2 nightstands; wardrobe, dresser",
     "dining_room": "table with 4/6/8 chairs by area, sideboard, plants",
-    "office": "one desk and office chair per 6 m², bookcases, plant, coat rack",
+    "office": "one desk and office chair per 6 m² (one alone faces into the room), bookcases, plant, coat rack",
     "game_room": "game table with chairs, arcade cabinets; a pool table from 28 m²",
     "outdoor_yard": "bistro set or picnic tables with benches, grill, trash can, parasol, loungers",
 }

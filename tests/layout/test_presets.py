@@ -82,6 +82,39 @@ def test_bedroom_tiers():
     assert {"armchair", "rug", "plant", "dresser"} <= set(kinds(18))
 
 
+def test_living_room_tiers():
+    """The conversation group first (what fit_spec and the pipeline drop last), then the rug
+    and side table that make even a small floor a furnished corner, then the rest."""
+    def ids(area):
+        return [t["id"] for t in presets.preset_items("living_room", area)["items"]]
+
+    assert ids(9) == ["sofa", "tv_stand", "side_table"]
+    assert ids(11) == ["sofa", "tv_stand", "coffee_table", "rug", "side_table"]
+    assert ids(13) == ids(11) + ["floor_lamp", "plant"]
+    assert ids(15) == ["sofa", "tv_stand", "coffee_table", "armchair", "rug", "side_table", "floor_lamp", "plant"]
+    assert ids(17) == ids(15) + ["bookcase"]
+
+
+def test_a_lone_office_desk_faces_into_the_room(tmp_path):
+    """A home office's one desk stands DESK_INTO_ROOM_M off a wall facing it, the chair between
+    them facing the desk (whoever sits looks into the room); several desks line the walls."""
+    model, solver = spec.build(rect_room(tmp_path, "office", 3.2, 3.0, door_x=2.6))
+    lay = solver.solve(model, seed=0)
+    desk, chair = model.names.index("desk"), model.names.index("office_chair")
+    (x, y), yaw = lay.position_m[desk, :2], lay.yaw_rad[desk]
+    walls = {"y=0": (y, -np.pi / 2), "x=3.2": (3.2 - x, 0.0), "y=3": (3.0 - y, np.pi / 2), "x=0": (x, np.pi)}
+    wall, (gap, toward) = min(walls.items(), key=lambda w: w[1][0])
+    assert gap == pytest.approx(presets.DESK_INTO_ROOM_M, abs=0.05), wall
+    assert abs(np.angle(np.exp(1j * (yaw - toward)))) < np.radians(5), wall  # its front to that wall
+    # The chair between desk and wall, facing the desk.
+    front = np.array([np.cos(yaw), np.sin(yaw)])
+    ahead = (lay.position_m[chair, :2] - lay.position_m[desk, :2]) @ front
+    assert 0.5 * CATALOG["desk"].size_m[1] < ahead < gap
+    assert abs(np.angle(np.exp(1j * (lay.yaw_rad[chair] - yaw - np.pi)))) < np.radians(10)
+    shared = presets.preset_items("office", 13)
+    assert all(t.get("rules", True) for t in shared["items"]) and not shared["constraints"]
+
+
 def test_dining_chairs_follow_the_area():
     def chairs(area):
         return sum(t["kind"] == "chair" for t in expanded(presets.preset_items("dining_room", area)))
