@@ -462,6 +462,38 @@ def _astray(lay, r: dict | None = None) -> set:
     return {m.names[i] for i in off}
 
 
+def _off_their_spots(lay, r: dict | None = None) -> set:
+    """Pieces placed at a partner (a side table at the sofa's arm, a rug under it) that
+    stand more than ``ROOM.fit.astray_spot_m`` off their spot or turn more than
+    ``astray_spot_deg`` from their partner: a side table in front of the sofa rather
+    than at its arm. A stager takes such a piece out of that shot."""
+    from layout import _codes as codes
+
+    fit, m = ROOM.fit, lay.model
+    r = _residuals(lay) if r is None else r
+    off = set()
+    for c in np.flatnonzero((np.sqrt(2.0 * np.abs(r["heat"])) > fit.astray_spot_m) & (m.heat_frame >= 0)):
+        off.update(m.heat_members[m.heat_start[c]:m.heat_start[c + 1]])
+    askew = (np.abs(r["orientation"]) > np.radians(fit.astray_spot_deg)) & (m.orientation_mode == codes.PARALLEL)
+    off.update(m.orientation_pairs[askew, 0])
+    return {m.names[i] for i in off}
+
+
+def _taken_out(lay, spec, ids: set):
+    """``lay`` with the items ``ids`` (and what stands on them) taken out, the rest where
+    it stood: a layout of ``spec`` without them."""
+    from layout.solver import Layout, State, energy_terms
+    from layout.spec import build
+
+    gone = set(ids) | ({i.id for i in spec.items} - set(lay.model.names))  # a try of a subset
+    smaller, _ = _drop(spec, sorted(gone))
+    model, _ = build(smaller)
+    at = [lay.model.names.index(n) for n in model.names]
+    pos, yaw = lay.position_m[at].copy(), lay.yaw_rad[at].copy()
+    return Layout.from_state(model, pos, yaw, energy_terms(model, State(pos, yaw)), lay.trace, lay.iterations,
+                             lay.best_iteration, lay.seed, lay.time_s, runs=lay.runs)
+
+
 def _armchairs_from_behind(lay, rep: dict) -> set:
     """Armchairs whose backs face the lens (:func:`layout.camera.judge`): a stager takes
     such a chair out of the shot rather than show its back."""
@@ -470,11 +502,13 @@ def _armchairs_from_behind(lay, rep: dict) -> set:
 
 
 class _Pick:
-    """The best try of one suggestion: clean first, then different from the earlier
-    suggestions, then with the fewest faults (the camera's, :func:`broken_rules`)."""
+    """The best try of one suggestion: clean first, then no seating seen from behind, then
+    different from the earlier suggestions, then with the fewest faults (the camera's,
+    :func:`broken_rules`, a piece taken out for standing off its spot)."""
 
-    def __init__(self, earlier: list, anchor=frozenset()):
+    def __init__(self, earlier: list, spec, anchor=frozenset()):
         self.earlier = earlier
+        self.spec = spec
         self.anchor = anchor  # the ids of the most important unit: it stays, astray or not
         self.best = None
         self.cut = None  # the cut pieces of the unclean try that cut fewest
@@ -493,17 +527,31 @@ class _Pick:
         if astray:
             self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
             return False
-        # A repeat is worth nothing to the user; a fault, a little less than a perfect one.
+        taken = _off_their_spots(lay, r) - self.anchor
+        if taken:
+            # Taking a piece out moves nothing else: the try stays clean.
+            lay = _taken_out(lay, self.spec, taken)
+            rep, r = layout_report.evaluate(lay), _residuals(lay)
+        # Seating shown from behind is worse than a repeat (a sofa's back is no picture to
+        # show a client); a repeat is worth nothing to the user; a fault, a little less than
+        # a perfect one.
         nearest = min((apart_m(old, lay) for old in self.earlier), default=math.inf)
-        key = (nearest < ROOM.fit.min_difference_m, camera_faults(rep.get("camera", {})) + len(broken_rules(lay, r)))
+        key = (bool(rep.get("camera", {}).get("from_behind")), nearest < ROOM.fit.min_difference_m,
+               camera_faults(rep.get("camera", {})) + len(broken_rules(lay, r)) + len(taken))
         self.pinned += nearest < PINNED_M
         if self.best is None or key < self.best[0]:
-            self.best = (key, lay, rep)
-        return key == (False, 0)
+            self.best = (key, lay, rep, sorted(taken))
+        return key == (False, False, 0)
 
     @property
     def twin(self) -> bool:
-        return self.best is not None and self.best[0][0]
+        return self.best is not None and self.best[0][1]
+
+    @property
+    def lacking(self) -> bool:
+        """The best so far repeats an earlier suggestion or shows seating from behind:
+        other starts are worth trying (other subsets only for a repeat)."""
+        return self.best is not None and (self.best[0][0] or self.best[0][1])
 
 
 def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress,
@@ -540,24 +588,25 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
         solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts))
         layouts, reports, failed, cut, astray, said = [], [], None, None, None, []
         for k in range(suggestions):
-            pick = _Pick(layouts, anchor=frozenset(i.id for i in _units(spec)[0]))
+            pick = _Pick(layouts, spec, anchor=frozenset(i.id for i in _units(spec)[0]))
             for t in range(fit.seed_tries):
                 # Twice the very same arrangement: the photo pins it, other seeds will not help.
                 if pick.offer(solver.solve(model, seed=seed + k + t * suggestions)) or pick.pinned >= 2:
                     break
             pick.pinned = 0
-            for angle, mirror in TURNS if pick.twin else ():
+            # Turned starts from the first suggestion, when it holds all the furniture.
+            for angle, mirror in TURNS if pick.lacking and layouts and layouts[0].model.n == model.n else ():
                 if pick.offer(solver.solve(model, seed=seed + k, state=turned_state(layouts[0], angle, mirror))) \
-                        or not pick.twin or pick.pinned >= 2:
+                        or not pick.lacking or pick.pinned >= 2:
                     break
             if pick.twin:
                 for unit in _units(spec)[:0:-1]:
                     smaller, _ = _drop(spec, [i.id for i in unit])
                     sub_model, _ = build(smaller)
                     for t in range(fit.seed_tries):
-                        if pick.offer(solver.solve(sub_model, seed=seed + k + t * suggestions)) or not pick.twin:
+                        if pick.offer(solver.solve(sub_model, seed=seed + k + t * suggestions)) or not pick.lacking:
                             break
-                    if not pick.twin:
+                    if not pick.lacking:
                         break
             progress.step()
             if pick.best is None:
@@ -567,13 +616,15 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             # and when layout_K.json is rendered again), whichever try's start it came from.
             layouts.append(dataclasses.replace(pick.best[1], seed=seed + k))
             reports.append(pick.best[2])
-            kinds = sorted(pick.best[1].model.kinds[i] for i in pick.best[1].items)
-            full = sorted(i.kind.name for i in spec.items)
+            taken = pick.best[3]
+            if taken:
+                said.append(f"suggestion {k + 1} leaves out {', '.join(taken)}: in view, it found no place at "
+                            "the piece it goes with")
+            left = sorted(set(i.id for i in _drop(spec, taken)[0].items) - set(pick.best[1].model.names))
             if pick.twin:
                 said.append(f"suggestion {k + 1} repeats an earlier one: the floor in view leaves no other "
                             "arrangement of this furniture")
-            elif kinds != full:
-                left = sorted(set(i.id for i in spec.items) - set(pick.best[1].model.names))
+            elif left:
                 said.append(f"suggestion {k + 1} leaves out {', '.join(left)} to differ from the others: the floor "
                             "in view leaves room for one arrangement of all of it")
         if failed is None:

@@ -933,6 +933,79 @@ def test_a_tv_off_its_wall_or_not_facing_the_sofa_is_left_out(tmp_path, monkeypa
                         "its partner, on the floor in view with the rest"}]
 
 
+def test_a_side_table_off_its_spot_at_the_sofa_is_taken_out(tmp_path, monkeypatch):
+    """A side table placed at the sofa's arm: where the solver put it, and 0.4 m off its
+    spot, it stays; 0.8 m ahead of it (before the sofa, > ``astray_spot_m``) or turned
+    60 degrees from the sofa (> ``astray_spot_deg``) it is a piece a stager takes out of
+    that shot."""
+    import dataclasses
+
+    from layout import Solver
+    from layout.spec import build
+
+    spec = load_spec(write_spec(tmp_path, """
+        [room]
+        polygon = [[0, 0], [6, 0], [6, 4], [0, 4]]
+        height = 2.6
+        [[items]]
+        id = "sofa"
+        kind = "sofa"
+        [[items]]
+        id = "side_table"
+        kind = "side_table"
+        """))
+    model, _ = build(spec)
+    solved = Solver().solve(model, seed=0)
+    sofa, table = model.names.index("sofa"), model.names.index("side_table")
+    front = np.array([math.cos(solved.yaw_rad[sofa]), math.sin(solved.yaw_rad[sofa])])
+
+    def moved(ahead_m=0.0, turn_deg=0.0):
+        pos, yaw = solved.position_m.copy(), solved.yaw_rad.copy()
+        pos[table, :2] += ahead_m * front
+        yaw[table] += math.radians(turn_deg)
+        return dataclasses.replace(solved, position_m=pos, yaw_rad=yaw)
+
+    assert fit._off_their_spots(solved) == set() and fit.broken_rules(solved) == []
+    assert fit._off_their_spots(moved(0.4)) == set()
+    assert fit._off_their_spots(moved(0.8)) == {"side_table"}
+    assert fit._off_their_spots(moved(turn_deg=60.0)) == {"side_table"}
+
+    # Off its spot in every try: that suggestion is shown without it, the sofa where it stood;
+    # the table stays in the furniture (another suggestion may find its spot).
+    monkeypatch.setattr(fit, "_off_their_spots", lambda lay, r=None: {"side_table"} & set(lay.model.names))
+    notes = []
+    fitted, layouts, _ = fit.solve_suggestions(spec, 1, 0, 24.0, [], pipeline._Progress(False, 1), notes)
+    assert [i.id for i in fitted.items] == ["sofa", "side_table"]
+    assert [layouts[0].model.names[i] for i in layouts[0].items] == ["sofa"]
+    out = fit._taken_out(solved, spec, {"side_table"})
+    assert [out.model.names[i] for i in out.items] == ["sofa"]
+    np.testing.assert_array_equal(out.position_m[out.items], solved.position_m[[sofa]])
+    assert notes == ["suggestion 1 leaves out side_table: in view, it found no place at the piece it goes with"]
+
+
+def test_seating_seen_from_behind_loses_even_to_a_repeat(tmp_path, monkeypatch):
+    """Of two clean tries, one another arrangement with the sofa's back to the lens and
+    one repeating the earlier suggestion, the repeat is kept (and is a twin)."""
+    from layout import report as layout_report
+
+    room = _SofaAndTV(tmp_path)
+    earlier, other = room.placed(-90.0, 2.5, 0.0), room.placed(-90.0, 3.2, 0.0)
+    real = layout_report.evaluate
+
+    def judged(lay):
+        rep = real(lay)
+        rep["camera"] = {"cut": [], "hidden": [], "from_behind": ["sofa"] if lay is other else []}
+        return rep
+
+    monkeypatch.setattr(layout_report, "evaluate", judged)
+    assert fit.apart_m(earlier, other) >= ROOM.fit.min_difference_m
+    pick = fit._Pick([earlier], room.spec)
+    pick.offer(other)
+    assert pick.best[1] is other and pick.lacking and not pick.twin
+    pick.offer(earlier)
+    assert pick.best[1] is earlier and pick.twin
+
+
 def test_the_rules_a_layout_breaks_are_named_with_how_far_off(tmp_path):
     """Face to face 2.0 m apart, the sofa-TV distance is 0.5 m short; turned 90 degrees,
     the sofa's facing is 90 degrees off too; the TV 1 m off its wall, its wall rule is
