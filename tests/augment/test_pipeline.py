@@ -992,8 +992,8 @@ def test_seating_seen_from_behind_loses_even_to_a_repeat(tmp_path, monkeypatch):
     earlier, other = room.placed(-90.0, 2.5, 0.0), room.placed(-90.0, 3.2, 0.0)
     real = layout_report.evaluate
 
-    def judged(lay):
-        rep = real(lay)
+    def judged(lay, walkable=True):
+        rep = real(lay, walkable)
         rep["camera"] = {"cut": [], "hidden": [], "from_behind": ["sofa"] if lay is other else []}
         return rep
 
@@ -1030,7 +1030,7 @@ def test_furniture_keeps_to_the_users_floor_mask(tmp_path, capsys):
     mask = tmp_path / "my_floor.png"
     cv2.imwrite(str(mask), allowed.astype(np.uint8) * 255)
     before = _digest(mask)
-    result = furnish(ROOMY, Board(), room="bedroom", suggestions=1, floor_mask=mask)
+    result = furnish(ROOMY, Board(), room="living_room", suggestions=1, floor_mask=mask)
     assert _digest(mask) == before
     assert result.segmentation.method == "user mask" and np.array_equal(result.segmentation.mask, allowed)
     assert result.report["floor"]["method"] == "user mask"
