@@ -26,12 +26,15 @@ MIN_OUTSIDE_M2 = 1e-4
 MIN_INTRUSION_M = 0.01
 
 
-def evaluate(layout) -> dict:
+def evaluate(layout, walkable: bool = True) -> dict:
     """Exact quality measures of a layout.
 
     Parameters
     ----------
     layout : Layout
+    walkable : bool
+        Also judge walkability (``traversable`` … ``blocked_doors``), a rasterization
+        and the costliest measure: a caller weighing many tries leaves it to the one kept.
 
     Returns
     -------
@@ -66,7 +69,7 @@ def evaluate(layout) -> dict:
     polygon = m.floor_polygon_m
     outside = metrics.area_outside(polygon, corners)
     doors = layout.corners_m(m.door_particles) if len(m.door_particles) else np.zeros((0, 4, 2))
-    trav = walkability(layout)
+    trav = walkability(layout) if walkable else None
     intruding, depth = clearance_intrusions(m, layout)
     clearance = metrics.door_clearance(doors, corners, collides) if len(doors) else np.zeros(0)
     blockers = [
@@ -85,10 +88,12 @@ def evaluate(layout) -> dict:
         },
         "outside_m2": float(outside[outside > MIN_OUTSIDE_M2].sum()),
         "outside_items": [ids[k] for k in np.flatnonzero(outside > MIN_OUTSIDE_M2)],
-        "traversable": bool(trav.ok),
-        "components": int(trav.n_components),
-        "unreachable": [[ids[i], SIDE_NAMES[k]] for i, k in trav.unreachable],
-        "blocked_doors": [int(d) + 1 for d in trav.blocked_doors],
+        **({} if trav is None else {
+            "traversable": bool(trav.ok),
+            "components": int(trav.n_components),
+            "unreachable": [[ids[i], SIDE_NAMES[k]] for i, k in trav.unreachable],
+            "blocked_doors": [int(d) + 1 for d in trav.blocked_doors],
+        }),
         "door_clearance_m2": [float(a) for a in clearance],
         "door_blockers": blockers,
         "clearances": {

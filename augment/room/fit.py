@@ -517,7 +517,7 @@ class _Pick:
 
     def offer(self, lay) -> bool:
         """Consider a try; True once it is all one could want."""
-        rep = layout_report.evaluate(lay)
+        rep = layout_report.evaluate(lay, walkable=False)  # judged in full for the one kept
         if not _clean(rep):
             now = set(rep.get("camera", {}).get("cut", ()))
             self.cut = now if self.cut is None or len(now) < len(self.cut) else self.cut
@@ -531,7 +531,7 @@ class _Pick:
         if taken:
             # Taking a piece out moves nothing else: the try stays clean.
             lay = _taken_out(lay, self.spec, taken)
-            rep, r = layout_report.evaluate(lay), _residuals(lay)
+            rep, r = layout_report.evaluate(lay, walkable=False), _residuals(lay)
         # Seating shown from behind is worse than a repeat (a sofa's back is no picture to
         # show a client); a repeat is worth nothing to the user; a fault, a little less than
         # a perfect one.
@@ -540,7 +540,7 @@ class _Pick:
                camera_faults(rep.get("camera", {})) + len(broken_rules(lay, r)) + len(taken))
         self.pinned += nearest < PINNED_M
         if self.best is None or key < self.best[0]:
-            self.best = (key, lay, rep, sorted(taken))
+            self.best = (key, lay, sorted(taken))
         return key == (False, False, 0)
 
     @property
@@ -615,8 +615,8 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             # Its seed names the suggestion (it picks the designs and the default style, here
             # and when layout_K.json is rendered again), whichever try's start it came from.
             layouts.append(dataclasses.replace(pick.best[1], seed=seed + k))
-            reports.append(pick.best[2])
-            taken = pick.best[3]
+            reports.append(layout_report.evaluate(pick.best[1]))
+            taken = pick.best[2]
             if taken:
                 said.append(f"suggestion {k + 1} leaves out {', '.join(taken)}: in view, it found no place at "
                             "the piece it goes with")

@@ -42,6 +42,9 @@ def test_overlaps_and_outside_are_exact():
     # c pokes 0.25 m out of the 4 m wall: 0.25 m² outside.
     assert r["outside_m2"] == pytest.approx(0.25) and r["outside_items"] == ["c"]
     json.dumps(r)  # JSON-ready
+    # Without walkability (tries weighed by the pipeline): the rest, the very same.
+    walk = ("traversable", "components", "unreachable", "blocked_doors")
+    assert report.evaluate(lay, walkable=False) == {k: v for k, v in r.items() if k not in walk}
 
 
 def test_stacked_items_do_not_overlap():
