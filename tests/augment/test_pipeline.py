@@ -880,6 +880,21 @@ def test_a_repeated_suggestion_is_solved_again_from_another_seed(monkeypatch):
     assert build(alone)[0].n == first.model.n
 
 
+def _sofa_and(folder: Path, id_: str, kind: str):
+    """The spec of a 6 x 4 m room with a sofa and one more item, the catalog's rules on."""
+    return load_spec(write_spec(folder, f"""
+        [room]
+        polygon = [[0, 0], [6, 0], [6, 4], [0, 4]]
+        height = 2.6
+        [[items]]
+        id = "sofa"
+        kind = "sofa"
+        [[items]]
+        id = "{id_}"
+        kind = "{kind}"
+        """))
+
+
 class _SofaAndTV:
     """A sofa and a TV with the catalog's rules in a 6 x 4 m room (the TV's back on its
     wall; sofa and TV face to face 2.5 m apart), solved once, then placed by hand."""
@@ -888,17 +903,7 @@ class _SofaAndTV:
         from layout import Solver
         from layout.spec import build
 
-        self.spec = load_spec(write_spec(folder, """
-            [room]
-            polygon = [[0, 0], [6, 0], [6, 4], [0, 4]]
-            height = 2.6
-            [[items]]
-            id = "sofa"
-            kind = "sofa"
-            [[items]]
-            id = "tv"
-            kind = "tv_stand"
-            """))
+        self.spec = _sofa_and(folder, "tv", "tv_stand")
         model, _ = build(self.spec)
         self.layout = Solver().solve(model, seed=0)
         self.depth_m = self.spec.items[1].kind.size_m[1]
@@ -943,17 +948,7 @@ def test_a_side_table_off_its_spot_at_the_sofa_is_taken_out(tmp_path, monkeypatc
     from layout import Solver
     from layout.spec import build
 
-    spec = load_spec(write_spec(tmp_path, """
-        [room]
-        polygon = [[0, 0], [6, 0], [6, 4], [0, 4]]
-        height = 2.6
-        [[items]]
-        id = "sofa"
-        kind = "sofa"
-        [[items]]
-        id = "side_table"
-        kind = "side_table"
-        """))
+    spec = _sofa_and(tmp_path, "side_table", "side_table")
     model, _ = build(spec)
     solved = Solver().solve(model, seed=0)
     sofa, table = model.names.index("sofa"), model.names.index("side_table")
