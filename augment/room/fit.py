@@ -501,15 +501,25 @@ def _armchairs_from_behind(lay, rep: dict) -> set:
     return {n for n in rep.get("camera", {}).get("from_behind", ()) if kinds.get(n) == "armchair"}
 
 
+# Why a piece is left out of one suggestion (:class:`_Pick`).
+OFF_SPOT = "in view, it found no place at the piece it goes with"
+UNSEEN = "it would stand hidden behind the others"
+
+
 class _Pick:
     """The best try of one suggestion: clean first, then no seating seen from behind, then
     different from the earlier suggestions, then with the fewest faults (the camera's,
-    :func:`broken_rules`, a piece taken out for standing off its spot)."""
+    :func:`broken_rules`, a piece taken out). A piece off its spot (:func:`_off_their_spots`)
+    or hardly seen behind others (under ``ROOM.fit.unseen_share`` of its box) is taken
+    out of the try, as a stager takes it out of the shot."""
 
     def __init__(self, earlier: list, spec, anchor=frozenset()):
         self.earlier = earlier
         self.spec = spec
         self.anchor = anchor  # the ids of the most important unit: it stays, astray or not
+        groups = {g.id: g for g in spec.groups}
+        # A member of a rigid set (a table's chairs) goes only with its set.
+        self.in_sets = {i.id for i in spec.items if _rigid_root(i, groups) is not None}
         self.best = None
         self.cut = None  # the cut pieces of the unclean try that cut fewest
         self.astray = None  # the pieces off their walls of the otherwise clean try with fewest
@@ -527,7 +537,12 @@ class _Pick:
         if astray:
             self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
             return False
-        taken = _off_their_spots(lay, r) - self.anchor
+        seen = rep.get("camera", {}).get("visible", {})
+        # A piece others are placed at (a desk, its chair at it) stays: they would stand at nothing.
+        m = lay.model
+        hosts = {m.names[f] for f in m.heat_frame if f >= 0}
+        unseen = {i for i, share in seen.items() if share < ROOM.fit.unseen_share} - self.anchor - self.in_sets - hosts
+        taken = {i: OFF_SPOT for i in _off_their_spots(lay, r) - self.anchor} | {i: UNSEEN for i in unseen}
         if taken:
             # Taking a piece out moves nothing else: the try stays clean.
             lay = _taken_out(lay, self.spec, taken)
@@ -540,7 +555,7 @@ class _Pick:
                camera_faults(rep.get("camera", {})) + len(broken_rules(lay, r)) + len(taken))
         self.pinned += nearest < PINNED_M
         if self.best is None or key < self.best[0]:
-            self.best = (key, lay, sorted(taken))
+            self.best = (key, lay, taken)
         return key == (False, False, 0)
 
     @property
@@ -617,9 +632,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             layouts.append(dataclasses.replace(pick.best[1], seed=seed + k))
             reports.append(layout_report.evaluate(pick.best[1]))
             taken = pick.best[2]
-            if taken:
-                said.append(f"suggestion {k + 1} leaves out {', '.join(taken)}: in view, it found no place at "
-                            "the piece it goes with")
+            for why in (OFF_SPOT, UNSEEN):
+                if ids := sorted(i for i, w in taken.items() if w == why):
+                    said.append(f"suggestion {k + 1} leaves out {', '.join(ids)}: {why}")
             left = sorted(set(i.id for i in _drop(spec, taken)[0].items) - set(pick.best[1].model.names))
             if pick.twin:
                 said.append(f"suggestion {k + 1} repeats an earlier one: the floor in view leaves no other "

@@ -1001,6 +1001,38 @@ def test_seating_seen_from_behind_loses_even_to_a_repeat(tmp_path, monkeypatch):
     assert pick.best[1] is earlier and pick.twin
 
 
+def test_a_piece_hardly_seen_is_taken_out_of_the_shot(tmp_path, monkeypatch):
+    """Judged 10 % visible (under ``unseen_share``), the TV leaves that try, the sofa where it
+    stood; at 50 % (hidden, a fault, but in the picture) it stays; the sofa (the anchor, or
+    the host of a side table) stays whatever it shows."""
+    from layout import report as layout_report
+
+    from layout import Solver
+    from layout.spec import build
+
+    room = _SofaAndTV(tmp_path)
+    lay = room.placed(-90.0, 2.5, 0.0)
+    real = layout_report.evaluate
+
+    def offered(spec, lay, shares, anchor=frozenset({"sofa"})):
+        monkeypatch.setattr(layout_report, "evaluate", lambda lay, walkable=True: {
+            **real(lay, walkable), "camera": {"cut": [], "hidden": [], "from_behind": [],
+                                              "visible": {n: v for n, v in shares.items() if n in lay.model.names}}})
+        pick = fit._Pick([], spec, anchor=anchor)
+        pick.offer(lay)
+        return pick.best
+
+    _, kept, taken = offered(room.spec, lay, {"sofa": 1.0, "tv": 0.1})
+    assert taken == {"tv": fit.UNSEEN} and "tv" not in kept.model.names
+    np.testing.assert_array_equal(kept.position_m[kept.items], lay.position_m[[lay.model.names.index("sofa")]])
+    assert offered(room.spec, lay, {"sofa": 1.0, "tv": 0.5})[2] == {}
+    assert offered(room.spec, lay, {"sofa": 0.1, "tv": 1.0})[2] == {}
+    # A piece another is placed at (the sofa, its side table at its arm) stays, anchor or not.
+    spec = _sofa_and(tmp_path, "side_table", "side_table")
+    solved = Solver().solve(build(spec)[0], seed=0)
+    assert offered(spec, solved, {"sofa": 0.1, "side_table": 1.0}, anchor=frozenset())[2] == {}
+
+
 def test_the_rules_a_layout_breaks_are_named_with_how_far_off(tmp_path):
     """Face to face 2.0 m apart, the sofa-TV distance is 0.5 m short; turned 90 degrees,
     the sofa's facing is 90 degrees off too; the TV 1 m off its wall, its wall rule is
