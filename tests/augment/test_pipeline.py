@@ -1057,7 +1057,7 @@ def test_furniture_keeps_to_the_users_floor_mask(tmp_path, capsys):
     mask = tmp_path / "my_floor.png"
     cv2.imwrite(str(mask), allowed.astype(np.uint8) * 255)
     before = _digest(mask)
-    result = furnish(ROOMY, Board(), room="living_room", suggestions=1, floor_mask=mask)
+    result = furnish(ROOMY, Board(), room="office", suggestions=1, floor_mask=mask)
     assert _digest(mask) == before
     assert result.segmentation.method == "user mask" and np.array_equal(result.segmentation.mask, allowed)
     assert result.report["floor"]["method"] == "user mask"
