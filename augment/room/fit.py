@@ -575,11 +575,13 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
 
     A try that collides, leaves the floor, blocks a door, stands deep in a clearance, is
     cut by the photo's edge or leaves a wall-bound piece off its wall (:func:`_astray`)
-    is not clean; of the clean ones the first that is a
-    different arrangement from the earlier suggestions (:func:`apart_m` at least
-    ``ROOM.fit.min_difference_m``) and has no fault (the camera finds nothing hidden and
-    no seating seen from behind, :func:`layout.camera.judge`; the rules hold,
-    :func:`broken_rules`) is kept, else a different one with the fewest faults. Tries go
+    is not clean. From a clean try a piece off its spot at its partner or hardly seen
+    behind the others is taken out (:class:`_Pick`, with a line in ``notes``); of the
+    clean ones the first that shows no seating from behind, is a different arrangement
+    from the earlier suggestions (:func:`apart_m` at least ``ROOM.fit.min_difference_m``)
+    and has no fault (the camera finds nothing hidden, :func:`layout.camera.judge`; the
+    rules hold, :func:`broken_rules`; nothing taken out) is kept, else the best in that
+    order. Tries go
     on from seed ``seed + K - 1 + N``, then ``+ 2N`` (``ROOM.fit.seed_tries`` in all). When all of
     them repeat an earlier suggestion, the first suggestion turned and mirrored
     (:data:`TURNS`) is tried as a start, then the furniture without one of its less
