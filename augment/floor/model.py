@@ -215,7 +215,7 @@ class FloorModel:
     def _probability(self, image: np.ndarray, in_shape: tuple[int, int], size_px: tuple[int, int]) -> np.ndarray:
         s = self.spec
         in_rows, in_cols = in_shape
-        x = cv2.resize(image, (in_cols, in_rows), interpolation=cv2.INTER_AREA)
+        x = shrink_area(image, (in_cols, in_rows))
         if s.channel_order == "BGR":
             x = x[..., ::-1]
         if self.input_dtype != np.uint8:
@@ -245,11 +245,34 @@ class FloorModel:
 
 
 def shrink_to(image: np.ndarray, long_px: int) -> np.ndarray:
-    scale = working_scale(image.shape[:2], long_px)
-    if scale == 1.0:
+    """``image`` shrunk by the least whole factor that brings its long side to ``long_px``
+    or less (a whole factor is OpenCV's fast path); as it is when it is that small."""
+    rows, cols = image.shape[:2]
+    k = math.ceil(max(rows, cols) / long_px)
+    if k <= 1:
         return image
-    size = (round(image.shape[1] * scale), round(image.shape[0] * scale))
-    return cv2.resize(image, size, interpolation=cv2.INTER_AREA)
+    return shrink_area(image, (round(cols / k), round(rows / k)))
+
+
+def shrink_area(image: np.ndarray, size_px: tuple[int, int], least: int = 4) -> np.ndarray:
+    """``cv2.resize(image, size_px, interpolation=cv2.INTER_AREA)`` for a smaller ``size_px =
+    (width, height)``, through :func:`shrink_whole` first."""
+    image = shrink_whole(image, size_px, least)
+    if image.shape[1::-1] == tuple(size_px):
+        return image
+    return cv2.resize(image, tuple(size_px), interpolation=cv2.INTER_AREA)
+
+
+def shrink_whole(image: np.ndarray, size_px: tuple[int, int], least: int = 4) -> np.ndarray:
+    """``image`` shrunk by a whole factor that divides both its sides, so that the way on to
+    ``size_px = (width, height)`` still averages ``least`` x ``least`` pixels or more: OpenCV
+    averages whole blocks some 20 times faster than fractional ones (12 MP photos), and
+    with 4 the two steps come within a few levels of one."""
+    rows, cols = image.shape[:2]
+    k = int(min(cols / size_px[0], rows / size_px[1]) / least)
+    while k >= 2 and (cols % k or rows % k):
+        k -= 1
+    return image if k < 2 else cv2.resize(image, (cols // k, rows // k), interpolation=cv2.INTER_AREA)
 
 
 def check_image(image: np.ndarray) -> np.ndarray:

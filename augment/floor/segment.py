@@ -23,7 +23,7 @@ from layout.fileio import path_problem
 
 from ..errors import SegmentationError
 from ..photo.io import decode_grey, decode_problem, header, pixels_problem, read_user_file
-from .model import FloorModel, check_image, shrink_to, working_scale
+from .model import FloorModel, check_image, shrink_area, shrink_to, working_scale
 from .settings import FLOOR
 from .skirting import board_clicks, trim_skirting
 from .upright import Upright
@@ -494,7 +494,7 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
     scale = working_scale((rows, cols), FLOOR.segment.grabcut_long_px)
     size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
     work = shrink_to(image, FLOOR.model.preshrink_long_px)
-    small = _hide_board(cv2.resize(work, size_small, interpolation=cv2.INTER_AREA), calibration, scale)
+    small = _hide_board(shrink_area(work, size_small), calibration, scale)
     probability = model.floor_probability(work, size_small) if method == "onnx" else None
 
     def found(wand):
@@ -541,8 +541,8 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
     disputed = (None, None, None)
     if probability is not None and calibration is not None and mask.any():
         # A board the user clicked was cut where the model calls it floor: settled too.
-        settled = clicked_near | (cv2.resize(board_cut.astype(np.uint8), size_small,
-                                             interpolation=cv2.INTER_AREA) > 0)
+        settled = clicked_near | (shrink_area(board_cut.view(np.uint8), size_small) > 0 if board_cut.any()
+                                  else False)
         disputed = disputed_floor(mask, probability, calibration, settled=settled)
     return _Found(mask, probability, name, skirting_m, *disputed, board_doubt, bool(mask_small.any()))
 
@@ -551,7 +551,8 @@ def _full_size(mask_small: np.ndarray, size_px: tuple[int, int]) -> np.ndarray:
     """The working size's mask at ``size_px = (width, height)``. Linear interpolation of the
     0/1 mask, cut at one half: edges come out straight rather than staircased at the
     working pixel size."""
-    return cv2.resize(mask_small.astype(np.float32), size_px, interpolation=cv2.INTER_LINEAR) > 0.5
+    return cv2.resize(np.asarray(mask_small, bool).view(np.uint8) * np.uint8(255), size_px,
+                      interpolation=cv2.INTER_LINEAR) > 127
 
 
 def _refined(small, scale, probability, calibration, method, refine, clicks):
@@ -694,7 +695,7 @@ def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration,
         ``disputed_m2`` over the mask's floor area (m^2, same limit).
     """
     r, c = probability.shape
-    small = cv2.resize(np.asarray(mask, np.float32), (c, r), interpolation=cv2.INTER_AREA) > 0.5
+    small = shrink_area(np.asarray(mask, bool).view(np.uint8), (c, r)) > 0  # a mean of 0/1 rounded: over one half
     footprint = _believed_footprint_m2((r, c), calibration.scaled(c / mask.shape[1]))
     region = small != (probability > 0.5)
     if settled is not None:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 class ModelSettings:
     """The floor model (:mod:`augment.floor.model`)."""
 
-    preshrink_long_px: int = 2048  # larger photos are shrunk to this once: shrinking 12 MP costs more than the model
+    preshrink_long_px: int = 2048  # larger photos are shrunk to this once, by a whole factor (12 MP: 2016 px)
 
 
 @dataclass

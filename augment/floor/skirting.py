@@ -68,7 +68,7 @@ import cv2
 import numpy as np
 from scipy.ndimage import median_filter
 
-from .model import MODELS_DIR
+from .model import MODELS_DIR, shrink_area
 from .settings import FLOOR
 
 BOARD_MODEL = MODELS_DIR / "skirting_board.onnx"
@@ -447,7 +447,7 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
     bottom = min(size[1], int(np.ceil((rows + max(sk.search_m, sk.profile_to_m) * px_per_m).max())) + 12)
     band = image[int(top / scale):min(rows_px, int(np.ceil(bottom / scale)) + 1)]
     small_image = np.zeros((size[1], size[0], 3), np.uint8)
-    small_image[top:bottom] = cv2.resize(band, (size[0], bottom - top), interpolation=cv2.INTER_AREA)
+    small_image[top:bottom] = shrink_area(band, (size[0], bottom - top), least=2)  # blurred next
     small_image = cv2.GaussianBlur(small_image, (3, 3), 0)
     return scale, small_image, small_mask, small_cal, cols, rows, px_per_m
 

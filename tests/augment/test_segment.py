@@ -19,7 +19,7 @@ from augment.draw.floor import floor_overlay
 from augment.draw.settings import DRAW
 from augment.errors import SegmentationError
 from augment.floor import segment
-from augment.floor.model import DEFAULT_MODEL, FloorModel, ModelSpec
+from augment.floor.model import DEFAULT_MODEL, FloorModel, ModelSpec, shrink_area, shrink_to
 from augment.floor.polygon import _bridge, floor_area_m2, floor_polygon
 from augment.floor.segment import below_horizon, disputed_floor, floor_parts, segment_floor
 from augment.floor.settings import FLOOR
@@ -1032,3 +1032,25 @@ def test_a_second_floor_past_a_threshold_is_floor(model, index):
     assert sample.truth["render"]["second_floor"]["area_m2"] > 10
     cal = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (640, 480)))
     assert iou(segment_floor(sample.image, model, cal).mask, sample.floor_mask) > 0.98
+
+
+def test_shrinking_by_whole_blocks_first_keeps_the_area_average():
+    """Large photos are shrunk by a whole factor first (OpenCV's fast path): exactly by
+    two for the model's working copy, and within a few levels of a one-step area filter
+    on the way to a much smaller size."""
+    blocks = np.array([[10, 20, 30], [40, 50, 60]], np.uint8)
+    image = np.kron(blocks, np.ones((3, 3), np.uint8)).repeat(2, axis=0).repeat(2, axis=1)  # (12, 18)
+    image[0, 0], image[1, 1] = 8, 12  # the first 6 x 6 block still averages 10
+    np.testing.assert_array_equal(shrink_area(image, (3, 2)), blocks)
+    photo = np.zeros((3024, 4032, 3), np.uint8)
+    photo[1::2, 1::2] = 200  # a pattern only a whole 2 x 2 average turns into one flat grey
+    assert np.all(shrink_to(photo, 2048) == 50) and shrink_to(photo, 2048).shape == (1512, 2016, 3)
+    assert shrink_to(photo[:960, :1280], 2048).shape == (960, 1280, 3)
+    # A photo's detail at a few output pixels: piecewise linear over 32 px.
+    rng = np.random.default_rng(0)
+    photo = cv2.resize(rng.integers(0, 256, (94, 126, 3), dtype=np.uint8), (4032, 3024), interpolation=cv2.INTER_LINEAR)
+    for size in ((400, 300), (448, 320), (1280, 960)):
+        ours = shrink_area(photo, size).astype(int)
+        theirs = cv2.resize(photo, size, interpolation=cv2.INTER_AREA).astype(int)
+        assert ours.shape == theirs.shape and np.abs(ours - theirs).max() <= 2
+        assert np.abs(ours - theirs).mean() < 0.3
