@@ -89,7 +89,8 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
                   board: Board | None = None, clutter: bool = True, photographic: bool = True,
                   board_hidden: float = 0.0, furnished: float = 0.0, baseboard_m=BASEBOARD_M,
                   trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True,
-                  pieces=(), low_sun: float = 0.0, two_floors: float = 0.0, outside: bool = True) -> Sample:
+                  pieces=(), low_sun: float = 0.0, two_floors: float = 0.0, outside: bool = True,
+                  shadowed_fill: bool = False) -> Sample:
     """Render one synthetic room photo with its ground truth.
 
     Parameters
@@ -143,6 +144,10 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         (:func:`augment.synth.scene._outside`). Without it the sun lights the whole room
         but for the window frames' shadows: the photos some regression tests were found
         on, drawn the same.
+    shadowed_fill : bool
+        The fill light from the ceiling's middle casts shadows (a wide spot, the same
+        light below the horizontal) instead of lighting through the furniture: the
+        realism benchmark's truth. Off by default: the training renders stay as they were.
     """
     board = Board() if board is None else board
     rng = np.random.default_rng(seed)
@@ -172,7 +177,8 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         room = replace(room, clutter=room.clutter + (_board_cover(board, world_from_board, board_hidden),))
 
     built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px), baseboard_m,
-                        trim_like_floor, trim_dark, board_drawn, pieces, low_sun, two_floors, outside)
+                        trim_like_floor, trim_dark, board_drawn, pieces, low_sun, two_floors, outside,
+                        shadowed_fill)
     width, height = size_px
     flags = pyrender.RenderFlags.SHADOWS_DIRECTIONAL | pyrender.RenderFlags.SHADOWS_SPOT
     # Small frames cannot show a 2048-texel shadow map's detail; it would cost half the time.

@@ -484,7 +484,8 @@ def _low_sun(rng, room: Room, shot: Shot):
 def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                 world_from_board: np.ndarray, texture_px: int = 512, baseboard_m=BASEBOARD_M,
                 trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True,
-                pieces=(), low_sun: float = 0.0, two_floors: float = 0.0, outside: bool = True) -> Scene:
+                pieces=(), low_sun: float = 0.0, two_floors: float = 0.0, outside: bool = True,
+                shadowed_fill: bool = False) -> Scene:
     """Sample materials and lights and assemble the scene seen by ``shot`` (baseboards
     drawn ``baseboard_m`` (low, high) tall; the trim painted the floor's colour, 0.5-1.3
     of its brightness, with the chance ``trim_like_floor``, else a dark colour with the
@@ -495,7 +496,9 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     onto the floor in view (:func:`_low_sun`); with the chance ``two_floors`` part of the
     floor is of a second material past a threshold (:func:`_second_floor`). Either at 0
     draws nothing, so the random stream stays as it was. ``outside`` draws the building's
-    outside (:func:`_outside`), which keeps the sun out but through the windows."""
+    outside (:func:`_outside`), which keeps the sun out but through the windows.
+    ``shadowed_fill`` makes the fill light from the ceiling's middle a wide spot that casts
+    shadows (the same light below the horizontal), as any real lamp does."""
     info: dict = {}
     sky = np.clip([0.92, 0.95, 1.0] + rng.normal(0, 0.03, 3), 0.8, 1.0)
     scene = GLScene(bg_color=np.append(sky, 1.0))
@@ -672,10 +675,13 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                        "intensity": intensity})
     if fixtures.positions:
         add(fixtures.mesh(_material(rng, np.ones(3), emissive=warm * 0.9, closed=True)), SEG_OTHER)
-    # Light bouncing off walls and floor: an unshadowed fill from the ceiling plus ambient.
+    # Light bouncing off walls and floor: a fill from the ceiling (unshadowed unless asked) plus ambient.
     center = (lo + hi) / 2
     fill = float(rng.uniform(1.5, 5.0)) * exposure
-    scene.add(pyrender.PointLight(color=(warm + daylight) / 2, intensity=fill),
+    fill_light = (pyrender.SpotLight(color=(warm + daylight) / 2, intensity=fill, innerConeAngle=1.3,
+                                     outerConeAngle=1.35) if shadowed_fill else
+                  pyrender.PointLight(color=(warm + daylight) / 2, intensity=fill))
+    scene.add(fill_light,
               pose=_light_pose([0, 0, -1.0], [center[0], center[1], room.height_m - 0.3]), name="light2-fill")
     ambient = float(rng.uniform(0.12, 0.35)) * exposure
     scene.ambient_light = ambient * (warm + daylight) / 2

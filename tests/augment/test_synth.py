@@ -10,6 +10,7 @@ import pytest
 from skimage.measure import points_in_poly
 
 from augment.camera.board import Board
+from augment.render.furniture import PlacedItem, furniture_for, world_from_item
 from augment.render.gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from augment.synth import CEILING, FLOOR, render_labels, render_sample, write_sample
 from augment.synth.__main__ import main as synth_main
@@ -493,3 +494,24 @@ def test_sunlight_enters_only_through_the_windows(renderer):
         # The truth's share of the floor in view in the sun (every 4th pixel, no margin).
         assert (verdict == 1).mean() - 0.02 <= sun[0]["floor_in_view"] <= (verdict >= 0).mean() + 0.02, seed
     assert checked >= 3, checked
+
+
+def test_a_shadowed_fill_lights_the_same_and_casts_shadows(renderer):
+    """The realism benchmark's truth: with ``shadowed_fill`` the ceiling's fill light is a
+    wide spot. The empty room looks the same (the same light below the horizontal); a
+    cabinet standing on the board's spot darkens the floor more than with the fill
+    shining through it."""
+    seed, size = [9700, 5], (640, 480)
+    plain = render_sample(seed, renderer, size, clutter=False, photographic=False)
+    spot = render_sample(seed, renderer, size, clutter=False, photographic=False, shadowed_fill=True)
+    floor = plain.labels == FLOOR
+    assert np.abs(plain.image.astype(int) - spot.image.astype(int))[floor].mean() < 1.0
+    world_from_board = np.asarray(plain.truth["board"]["world_from_board"])
+    item = PlacedItem("dresser", (0.0, 0.0, 0.4), 0.0, (0.8, 0.45, 0.8), "cabinet")
+    pieces = [(furniture_for(item, 0), world_from_board @ world_from_item(item))]
+    lit = [render_sample(seed, renderer, size, clutter=False, photographic=False, board_drawn=False, pieces=pieces,
+                         shadowed_fill=shadowed) for shadowed in (False, True)]
+    seen = (lit[0].labels == FLOOR) & (lit[1].labels == FLOOR)
+    grey = [cv2.cvtColor(s.image, cv2.COLOR_RGB2GRAY).astype(float)[seen] for s in lit]
+    assert grey[1].sum() < grey[0].sum()
+    assert (grey[1] < grey[0] - 8).sum() > 400  # a shadow behind it (776 pixels), not a shade
