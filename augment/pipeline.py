@@ -632,7 +632,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 base = m.image if erased is None else erased.image
                 # Both from the photo as taken: the board's white squares give the light, its edges the sharpness.
                 lighting = render.estimate_lighting(m.image, m.calibration, m.segmentation.mask,
-                                                    floor_polygon=m.floor)
+                                                    floor_polygon=m.floor, ceiling_m=room_height)
                 camera_look = render.estimate_look(m.image, m.calibration)
                 staged, staged_layers = [], []
                 for lay, style_name in zip(layouts, styles):

@@ -1,7 +1,10 @@
 """Staged photos against the truth: the synthetic photographer furnishes the room itself.
 
-Run by hand: ``python benchmarks/realism.py [--count 40] [--seed 9700] [--old d0f695e]``
-(about half an hour). Writes ``results/realism.{json,md}`` and ``results/realism_worst.png``.
+Run by hand: ``python benchmarks/realism.py [--count 40] [--seed 9700] [--old d0f695e]
+[--shadowed-fill]`` (about half an hour). Writes ``results/realism.{json,md}`` and
+``results/realism_worst.png`` (``realism_shadowed_fill.*`` with ``--shadowed-fill``: the
+photographer's fill light from the ceiling casts shadows, in the empty photo and in the
+truth alike, as a real lamp there would; without it, it lights through the furniture).
 
 Each case (seed ``[--seed, i]``, sizes from 1280x960 to 4032x3024, the living room, bedroom,
 dining room and office presets in turn) is an empty synthetic room with the board on the
@@ -165,6 +168,7 @@ def main(argv=None) -> int:
     parser.add_argument("--count", type=int, default=40)
     parser.add_argument("--seed", type=int, default=9700)
     parser.add_argument("--old", default="d0f695e", help="git revision of the renderer to compare with")
+    parser.add_argument("--shadowed-fill", action="store_true", help="the truth's fill light casts shadows")
     parser.add_argument("--old-driver", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.old_driver:
@@ -194,7 +198,7 @@ def main(argv=None) -> int:
             seed = [args.seed, i]
             row = {"case": i, "size": f"{size[0]}x{size[1]}", "room": room}
             t = time.perf_counter()
-            empty = render_sample(seed, renderer, size, clutter=False)
+            empty = render_sample(seed, renderer, size, clutter=False, shadowed_fill=args.shadowed_fill)
             truth = empty.truth
             photo = work / f"case_{i:02d}.jpg"
             write_phone_jpeg(photo, empty.image, truth["K"][0][0], truth["photo"]["jpeg_quality"])
@@ -211,12 +215,14 @@ def main(argv=None) -> int:
             world_from_floor = floor_in_world(truth, result.calibration.camera_from_floor)
             pieces = [(furniture_for(it, lay_seed, style=style), world_from_floor @ world_from_item(it))
                       for it in items]
-            truth_f = render_sample(seed, renderer, size, clutter=False, board_drawn=False, pieces=pieces)
+            truth_f = render_sample(seed, renderer, size, clutter=False, board_drawn=False, pieces=pieces,
+                                    shadowed_fill=args.shadowed_fill)
             t_truth = time.perf_counter() - t
 
             cal, mask = result.calibration, result.segmentation.mask
             base = result.erased.image
-            lighting = estimate_lighting(result.image, cal, mask, floor_polygon=result.floor)
+            lighting = estimate_lighting(result.image, cal, mask, floor_polygon=result.floor,
+                                        ceiling_m=result.room_height_m)
             t = time.perf_counter()
             new = render_staged(base, cal, lay, renderer, floor_mask=mask, floor_polygon=result.floor,
                                 lighting=lighting, look=estimate_look(result.image, cal), seed=lay_seed, style=style)
@@ -228,11 +234,12 @@ def main(argv=None) -> int:
             floor_f = truth_f.labels == FLOOR
             sun_share = next((lt["floor_in_view"] for lt in truth["render"]["lights"] if lt["kind"] == "sun"), 0.0)
             row.update(items=len(items), style=style, sun=sun is not None, sun_in_view=sun_share,
-                       light_source=lighting.source, truth_s=t_truth)
+                       light_source=lighting.source, lamps=len(lighting.lamps), truth_s=t_truth)
             row["new"] = scores(truth_f, empty, new.image, base, new.alpha, sheet, floor_f, sun, est)
             # The same renderer with the key light from windows only (no sun read off the floor).
             windows_only = replace(RENDER.staged, sun_from_floor=False)
-            lit_w = estimate_lighting(result.image, cal, mask, windows_only, floor_polygon=result.floor)
+            lit_w = estimate_lighting(result.image, cal, mask, windows_only, floor_polygon=result.floor,
+                                    ceiling_m=result.room_height_m)
             plain = render_staged(base, cal, lay, renderer, floor_mask=mask, floor_polygon=result.floor,
                                   lighting=lit_w, look=estimate_look(result.image, cal), seed=lay_seed, style=style,
                                   settings=windows_only)
@@ -283,11 +290,14 @@ def main(argv=None) -> int:
         summary[which]["light_error_deg_sun_in_view_median"] = med
         summary[which]["light_error_deg_sun_in_view_cases"] = n
     passed = {k: (summary["new"][k] <= v if op == "<=" else summary["new"][k] >= v) for k, (op, v) in TARGETS.items()}
-    data = {"machine": machine(count=args.count, seed=args.seed, old=args.old), "targets": TARGETS,
+    name = "realism_shadowed_fill" if args.shadowed_fill else "realism"
+    flag = " --shadowed-fill" if args.shadowed_fill else ""
+    data = {"machine": machine(count=args.count, seed=args.seed, old=args.old, shadowed_fill=args.shadowed_fill),
+            "targets": TARGETS,
             "summary": summary, "passed": passed, "cases": rows}
     refused = [r for r in rows if "refused" in r]
     md = ["# Realism: staged photos against the synthetic photographer's truth", "",
-          f"`python benchmarks/realism.py --count {args.count} --seed {args.seed} --old {args.old}` "
+          f"`python benchmarks/realism.py --count {args.count} --seed {args.seed} --old {args.old}{flag}` "
           f"({data['machine']['date']}, {data['machine']['cpu_count']} cores). {len(rows) - len(refused)} of "
           f"{len(rows)} cases staged; {len(refused)} refused by the pipeline.", "",
           "| measure | target | new | new, no sun from the floor | old renderer | cases |", "|---|---|---|---|---|---|"]
@@ -308,24 +318,30 @@ def main(argv=None) -> int:
             continue
         n, w, o = r["new"], r["no_sun"], r.get("old", {})
         sun = format(r["sun_in_view"], ".0%") if r["sun"] else ""
+        lamps = r.get("lamps", 0)
+        source = r["light_source"] + (f" + {lamps} lamp{'s' if lamps > 1 else ''}" if lamps else "")
         md.append(f"| {r['case']} | {r['size']} | {r['room']} | {r['style']} | {sun} | "
-                  f"{r['light_source']} | {n['delta_e']:.1f} / {w['delta_e']:.1f} / {o.get('delta_e', math.nan):.1f} | "
+                  f"{source} | {n['delta_e']:.1f} / {w['delta_e']:.1f} / {o.get('delta_e', math.nan):.1f} | "
                   f"{n['shadow_iou']:.2f} / {w['shadow_iou']:.2f} / {o.get('shadow_iou', math.nan):.2f} | "
                   f"{n['light_error_deg']:.0f} / {w['light_error_deg']:.0f} / "
                   f"{o.get('light_error_deg', math.nan):.0f} |")
-    md += ["", "`realism_worst.png`: the six cases with the largest ΔE, each truth | new | old renderer.", "",
-           "Caveats: the truth's ambient and fill light are unshadowed (pyrender has no ambient occlusion), so its "
-           "floor darkens only under the sun and the ceiling spots; the renderer's occlusion under furniture, which "
-           "real rooms show, counts against it in shadow IoU. The old renderer reads its light off the board-erased "
-           "photo, as the pipeline then did."]
-    write("realism", data, md)
+    fill = ("its fill light from the ceiling's middle casts shadows (`--shadowed-fill`), its ambient light does "
+            "not" if args.shadowed_fill else "its ambient light and its fill light from the ceiling's middle (whose "
+            "pool on the floor the renderer takes for a lamp's) light through the furniture")
+    md += ["", f"`{name}_worst.png`: the six cases with the largest ΔE, each truth | new | old renderer.", "",
+           "Lamps: ceiling lamps the renderer found from their pools of light on the floor. Caveats: pyrender has "
+           f"no ambient occlusion or bounced light, and in the truth {fill}; so its floor darkens only under the "
+           "sun and the shadowed lights, and the renderer's occlusion under furniture, which real rooms show, "
+           "counts against it in shadow IoU. The old renderer reads its light off the board-erased photo, as the "
+           "pipeline then did."]
+    write(name, data, md)
     worst = sorted((p for p in pictures if not math.isnan(p[0])), key=lambda p: -p[0])[:6]
     if worst:
         width = max(sum(c.shape[1] for c in p[2]) for p in worst)
         strips = [np.pad(np.hstack(p[2]), ((0, 6), (0, width - sum(c.shape[1] for c in p[2])), (0, 0)),
                          constant_values=255) for p in worst]
         ok, png = cv2.imencode(".png", cv2.cvtColor(np.vstack(strips), cv2.COLOR_RGB2BGR))
-        write_atomic(RESULTS / "realism_worst.png", png.tobytes())
+        write_atomic(RESULTS / f"{name}_worst.png", png.tobytes())
     shutil.rmtree(work, ignore_errors=True)
     print("\n".join(md[:10]))
     return 0

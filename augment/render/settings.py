@@ -108,6 +108,31 @@ class SunSettings:
 
 
 @dataclass
+class LampSettings:
+    """Ceiling lamps from their pools of light on the floor (:mod:`augment.render.lamps`)."""
+
+    ceiling_m: float = 2.5  # the room's height when the caller does not know it
+    below_ceiling_m: float = 0.08  # a lamp hangs this far below the ceiling
+    reach_m: float = 7.0  # the floor read, around the camera's foot
+    cell_m: float = 0.1  # the fit's cell (the light is read at half of it, then averaged)
+    smooth_m: float = 0.1  # the light is smoothed this much first: planks and grain fade, a pool stays
+    board_margin_m: float = 0.1  # the board's sheet, grown by this, is left out
+    min_cells: int = 40  # fewer cells of floor in view than this: no lamp is looked for
+    min_extent_m: float = 1.0  # ... nor when the floor in view spans less than this
+    width_shares: tuple = (0.45, 0.6, 0.8, 1.0)  # pool widths tried, of the lamp's height (1: a bare bulb)
+    beyond_view_m: float = 0.8  # a pool's centre may lie this far past the floor in view
+    max_lamps: int = 2
+    search_cells: int = 600  # the search for a pool's centre reads about this many cells
+    min_explained: float = 0.3  # a pool explains this share of the light the plane leaves, at least ...
+    min_core_cells: int = 20  # ... its core (light over half its peak) shows on this many cells ...
+    max_misfit: float = 0.15  # ... where the light departs from it by this share of its peak at most (rms)
+    min_peak: float = 0.25  # ... and is this much brighter than the floor at large, right under it
+    max_peak: float = 3.0  # brighter is a sun patch or a reflection, not a lamp's pool
+    shade_radius_m: float = 0.1  # a lamp's shade: its shadows' penumbra
+    shadow_top_share: float = 0.75  # shadows are cast from at most this share of a lamp's height up
+
+
+@dataclass
 class LookSettings:
     """The photo's noise and sharpness given to the furniture (:mod:`augment.render.look`)."""
 
@@ -142,6 +167,7 @@ class RenderSettings:
     erase: EraseSettings = field(default_factory=EraseSettings)
     look: LookSettings = field(default_factory=LookSettings)
     sun: SunSettings = field(default_factory=SunSettings)
+    lamps: LampSettings = field(default_factory=LampSettings)
     gltf: GltfSettings = field(default_factory=GltfSettings)
 
 

@@ -49,6 +49,7 @@ from layout.fileio import write_atomic
 from ..photo.io import JPEG_QUALITY, encode_image
 from .furniture import furniture_for, part_texture, placed_items, world_from_item
 from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
+from .lamps import find_lamps
 from .look import PhotoLook, apply_look, estimate_look
 from .settings import RENDER, StagedSettings
 from .sun import find_sun, first_hit_m, linear_luminance, wall_angles_rad
@@ -87,6 +88,9 @@ class Lighting:
         Then the key light reaches only what stands in its beam (where the light through
         a point lands on sunlit floor), and ``key_fraction`` is its share of the light in
         the sun.
+    lamps : tuple of Lamp
+        Ceiling lamps whose pools of light the floor shows (:mod:`augment.render.lamps`):
+        light besides the rest, from above, with shadows of their own.
     """
 
     irradiance_rgb: tuple
@@ -96,11 +100,13 @@ class Lighting:
     floor_rgb: tuple
     source: str
     sun: object = field(default=None, compare=False, repr=False)
+    lamps: tuple = ()
 
     def to_json(self) -> dict:
         return {"source": self.source, "direction": [round(float(v), 4) for v in self.direction],
                 "key_fraction": round(float(self.key_fraction), 3), "softness_rad": round(float(self.softness_rad), 3),
-                "irradiance_rgb": [round(float(v), 4) for v in self.irradiance_rgb]}
+                "irradiance_rgb": [round(float(v), 4) for v in self.irradiance_rgb],
+                "lamps": [lamp.to_json() for lamp in self.lamps]}
 
 
 def _to_linear(rgb_uint8) -> np.ndarray:
@@ -185,7 +191,8 @@ def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon):
 
 
 def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | None = None,
-                      settings: StagedSettings | None = None, floor_polygon=None) -> Lighting:
+                      settings: StagedSettings | None = None, floor_polygon=None,
+                      ceiling_m: float | None = None) -> Lighting:
     """Estimate exposure, colour and the key light's direction from a calibrated photo.
 
     Parameters
@@ -202,6 +209,9 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     floor_polygon : FloorPolygon or (n, 2) float, optional
         The measured floor: its walls tell the sun's edges from the window's
         (:mod:`augment.render.sun`), and on which wall a window in view stands.
+    ceiling_m : float, optional
+        The room's height, where ceiling lamps hang (default ``RENDER.lamps.ceiling_m``);
+        lamps are looked for with a floor mask only.
 
     Returns
     -------
@@ -291,8 +301,15 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         elev = math.radians(65.0)
         direction = np.append(horiz * math.cos(elev), -math.sin(elev))
         key, soft, source = 0.3, 0.3, "default"
+    sun = patches if source == "sun" else None
+    lamps = ()
+    if floor_mask is not None:
+        lamps = find_lamps(image, np.asarray(floor_mask, dtype=bool), calibration,
+                           RENDER.lamps.ceiling_m if ceiling_m is None else float(ceiling_m),
+                           float(floor_rgb @ [0.2126, 0.7152, 0.0722]),
+                           None if sun is None else (lambda xy: sun.sunlit(xy) > 0.25))
     return Lighting(tuple(float(v) for v in irradiance), tuple(float(v) for v in direction), key, soft,
-                    tuple(float(v) for v in floor_rgb), source, patches if source == "sun" else None)
+                    tuple(float(v) for v in floor_rgb), source, sun, lamps)
 
 
 # --------------------------------------------------------------------------------------
@@ -374,10 +391,15 @@ class _LightMap:
 
     def at(self, xy) -> np.ndarray:
         """Gain (n,) at floor points (n, 2+), bilinear; the edge's value beyond it."""
-        px = self.grid.to_px(xy) - 0.5
-        return cv2.remap(self.gain, px[:, 0].astype(np.float32).reshape(-1, 1),
-                         px[:, 1].astype(np.float32).reshape(-1, 1), cv2.INTER_LINEAR,
-                         borderMode=cv2.BORDER_REPLICATE).ravel()
+        px = (self.grid.to_px(xy) - 0.5).astype(np.float32)
+        n = len(px)
+        # cv2.remap takes maps of under 32767 a side: the points in rows of 1024.
+        rows = -(-n // 1024)
+        maps = np.zeros((rows * 1024, 2), np.float32)
+        maps[:n] = px
+        maps = maps.reshape(rows, 1024, 2)
+        return cv2.remap(self.gain, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_REPLICATE).ravel()[:n]
 
 
 def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, hi_m,
@@ -398,19 +420,22 @@ def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, 
     ok[ok] = floor_mask[ij[ok, 1], ij[ok, 0]]
     if ok.sum() < 50:
         return None
+    reference = max(float(np.asarray(lighting.floor_rgb) @ [0.2126, 0.7152, 0.0722]), 1e-6)
     lum = np.zeros(len(xy), np.float32)
     lum[ok] = linear_luminance(image[ij[ok, 1], ij[ok, 0]])
     if lighting.sun is not None:  # the light in the shade: the sun's beam is traced apart
         lum /= 1.0 + (_sun_contrast(lighting) - 1.0) * (lighting.sun.sunlit(xy) > 0.5)
+    if lighting.lamps:  # and the lamps' light: they light the furniture themselves
+        lum[ok] = np.maximum(lum[ok] - reference * sum(lamp.on_floor(xy[ok]) for lamp in lighting.lamps), 0.0)
     weight = ok.astype(np.float32).reshape(shape)
     sigma = settings.light_sigma_m / cell
     num = cv2.GaussianBlur(lum.reshape(shape), (0, 0), sigma)
     den = cv2.GaussianBlur(weight, (0, 0), sigma)
-    # Far from any floor in view, the light of the floor at large (the median).
-    reference = max(float(np.asarray(lighting.floor_rgb) @ [0.2126, 0.7152, 0.0722]), 1e-6)
     trust = np.clip(den / 0.2, 0.0, 1.0)
     local = np.where(den > 1e-3, num / np.maximum(den, 1e-3), reference)
-    gain = trust * local / reference + (1.0 - trust)
+    # Far from any floor in view, the light of the floor at large (the median), less the lamps'.
+    far = float(np.median(lum[ok])) / reference if lighting.lamps else 1.0
+    gain = trust * local / reference + (1.0 - trust) * far
     return _LightMap(grid, np.clip(gain, *settings.light_gain_range).astype(np.float32))
 
 
@@ -429,10 +454,12 @@ def _in_beam(points_m, lighting: Lighting) -> np.ndarray:
 
 
 def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings: StagedSettings,
-                      light_map: _LightMap | None = None):
+                      light_map: _LightMap | None = None, renderer: Renderer | None = None):
     """The furniture as pyrender meshes in the floor frame, lit: (all light, key light
     alone), one primitive per texture (all untextured parts share one). ``light_map``
-    scales each vertex's light by the floor's light below it."""
+    scales each vertex's light by the floor's light below it; with ``renderer``, what
+    stands between a lamp and a vertex keeps the lamp's light from it."""
+    lamp_views = [_lamp_view(renderer, placed, lamp) for lamp in lighting.lamps] if renderer is not None else []
     groups: dict = {}
     for item, furniture in placed:
         T = world_from_item(item)
@@ -470,6 +497,10 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
             fill, key = fill * gain * c, key * gain * c * _in_beam(v, lighting)[:, None]
         else:
             fill, key = fill * gain, key * gain
+        if lighting.lamps:
+            lit = sum(lamp.on(v, n) * (1.0 if not lamp_views else lamp_views[k].visible(v, n))
+                      for k, lamp in enumerate(lighting.lamps)) * ao
+            fill = fill + lit[:, None] * np.asarray(lighting.irradiance_rgb) * albedo * (1.0 - 0.96 * metal)[:, None]
         positions, normals = v.astype(np.float32), n.astype(np.float32)
         indices = np.concatenate(fs).astype(np.uint32)
         uv = np.concatenate([m[3] for m in members]).astype(np.float32) if tex_key else None
@@ -481,6 +512,63 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
                 positions=positions, normals=normals, texcoord_0=uv, color_0=_encode(colors), indices=indices,
                 material=material, mode=pyrender.GLTF.TRIANGLES)]))
     return fills, keys
+
+
+@dataclass(frozen=True)
+class _LampView:
+    """A camera at a lamp looking straight down, and the furniture's depth map from it:
+    which vertices the lamp sees."""
+
+    camera_from_floor: np.ndarray
+    K: np.ndarray
+    depth_m: np.ndarray
+    texel_per_m: float  # a texel's size at a depth of one meter
+
+    def visible(self, points, normals) -> np.ndarray:
+        """(n,) share of the lamp that reaches vertices (n, 3) with unit normals (n, 3):
+        tested a texel and a half off their surface, with a bias for surfaces aslant to it."""
+        R, t = self.camera_from_floor[:3, :3], self.camera_from_floor[:3, 3]
+        depth = np.maximum(points @ R[2] + t[2], 1e-3)
+        texel = depth * self.texel_per_m
+        to_lamp = -(points @ R.T + t) @ R  # toward the camera's centre, floor frame
+        to_lamp /= np.maximum(np.linalg.norm(to_lamp, axis=1, keepdims=True), 1e-9)
+        ndl = np.clip((normals * to_lamp).sum(axis=1), 0.05, 1.0)
+        slope = np.minimum(np.sqrt(1.0 - ndl ** 2) / ndl, 4.0)
+        pushed = points + normals * (1.5 * texel)[:, None]
+        return _key_visibility(np.ascontiguousarray(pushed), 0.003 + texel * (1.0 + 1.5 * slope), R, t, self.K,
+                               self.depth_m, 1.5)
+
+
+def _lamp_view(renderer, placed, lamp, size_px=1024) -> _LampView:
+    """The furniture's depth seen from ``lamp``, as wide as it needs (75 degrees off
+    straight down at most: beyond, the lamp's light is slight and counted as seen)."""
+    vs, fs, count = [], [], 0
+    for item, furniture in placed:
+        T = world_from_item(item)
+        for part in furniture.parts:
+            vs.append(part.vertices @ T[:3, :3].T + T[:3, 3])
+            fs.append(part.faces + count)
+            count += len(part.vertices)
+    v = np.concatenate(vs)
+    position = np.asarray(lamp.position_m, dtype=np.float64)
+    R = np.array([[1.0, 0, 0], [0, -1.0, 0], [0, 0, -1.0]])  # looking straight down
+    pose = np.eye(4)
+    pose[:3, :3], pose[:3, 3] = R, -R @ position
+    cam = v @ R.T + pose[:3, 3]
+    ahead = cam[:, 2] > 0.05
+    reach = float(np.max(np.abs(cam[ahead, :2]) / cam[ahead, 2:3])) if ahead.any() else 1.0
+    reach = min(max(reach, 0.1), math.tan(math.radians(75.0)))
+    f = 0.5 * size_px / reach
+    c = 0.5 * size_px - 0.5
+    K = np.array([[f, 0, c], [0, f, c], [0, 0, 1.0]])
+    camera = pyrender.IntrinsicsCamera(fx=f, fy=f, cx=c + 0.5, cy=c + 0.5, znear=0.02,
+                                       zfar=float(position[2]) + 1.0)
+    mesh = pyrender.Mesh([pyrender.Primitive(positions=v.astype(np.float32),
+                                             indices=np.concatenate(fs).astype(np.uint32),
+                                             mode=pyrender.GLTF.TRIANGLES)])
+    scene = _flat_scene([mesh], camera, gl_from_cv_pose(np.linalg.inv(pose)))
+    depth = renderer.render(scene, size_px, size_px, flags=pyrender.RenderFlags.DEPTH_ONLY)
+    return _LampView(pose, K, np.ascontiguousarray(depth, dtype=np.float32), 2.0 * reach / size_px)
 
 
 def _flat_scene(meshes, camera, camera_pose_gl):
@@ -683,18 +771,46 @@ class _Footprints:
         tris = [c.triangles.reshape(-1, 3) for c in casters if c.triangles is not None]
         self.triangles = np.concatenate(tris) if tris else np.zeros((0, 3))
 
-    def fill(self, raster, grid, direction=None):
-        """Fill the casters' shadows along ``direction`` (their footprints when None)."""
+    def fill(self, raster, grid, direction=None, source=None):
+        """Fill the casters' shadows along ``direction``, or from a point ``source`` (3,)
+        above them; their footprints when neither."""
         for pts, convex in ((self.points, True), (self.triangles, False)):
             if not len(pts):
                 continue
-            xy = pts[:, :2] if direction is None else pts[:, :2] - (pts[:, 2:3] / direction[2]) * direction[:2]
+            if source is not None:
+                xy = _from_source(pts, source)
+            else:
+                xy = pts[:, :2] if direction is None else pts[:, :2] - (pts[:, 2:3] / direction[2]) * direction[:2]
             fixed = np.rint((grid.to_px(xy) - 0.5) * (1 << _SUB)).astype(np.int32)
             if convex:
                 for part in np.split(fixed, self.ends[:-1]):
                     cv2.fillConvexPoly(raster, cv2.convexHull(part), 1, lineType=cv2.LINE_8, shift=_SUB)
             else:
                 cv2.fillPoly(raster, list(fixed.reshape(-1, 3, 2)), 1, lineType=cv2.LINE_8, shift=_SUB)
+
+
+def _from_source(points, source):
+    """Where the light from ``source`` (3,) past points (n, 3) meets the floor, (n, 2).
+    Points high up near the source are taken lower: their shadows would run far, faint."""
+    s = np.asarray(source, dtype=np.float64)
+    z = np.minimum(points[:, 2:3], RENDER.lamps.shadow_top_share * s[2])
+    return s[:2] + (points[:, :2] - s[:2]) * (s[2] / (s[2] - z))
+
+
+def _lamp_shadow(footprints, grid, lamp, settings: StagedSettings):
+    """A lamp's shadow on the floor raster (rows, cols) float32 in [0, 1]: hard shadows
+    from points spread over the lamp's shade, averaged."""
+    shade = np.zeros(grid.shape, np.float32)
+    layer = np.zeros(grid.shape, np.uint8)
+    radius, n = RENDER.lamps.shade_radius_m, settings.shadow_samples
+    golden = math.pi * (3 - math.sqrt(5))
+    for k in range(n):
+        r = radius * math.sqrt((k + 0.5) / n)
+        layer[:] = 0
+        footprints.fill(layer, grid, source=np.asarray(lamp.position_m) + [r * math.cos(k * golden),
+                                                                          r * math.sin(k * golden), 0.0])
+        shade += layer
+    return _blur(shade / n, max(0.5, 0.5 * radius / math.sqrt(n) / grid.cell_m))
 
 
 def _blur(image, sigma_px):
@@ -723,7 +839,7 @@ def _shadow_directions(direction, softness_rad, n):
     return out
 
 
-def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings):
+def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings, light_map: _LightMap | None = None):
     """What the floor's brightness is multiplied by, in the photo's gamma: (irradiance with
     the furniture / without) ** (1 / 2.2), as a (rows, cols) float32 raster over the floor
     rectangle ``extent_m`` ((xmin, ymin), (xmax, ymax)); and its grid.
@@ -733,7 +849,8 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings)
     blurs each part's footprint by the height of its underside (a plate at height z hides
     a cosine-weighted share of sky that falls off over about z) and, less, by its height
     (the sides of things hide the sky near their base); what stands on the floor darkens
-    a thin line around its foot (contact)."""
+    a thin line around its foot (contact). Ceiling lamps light the floor besides (their
+    share where ``light_map`` says how much the rest gives) and cast shadows of their own."""
     lo, hi = np.asarray(extent_m[0], dtype=np.float64), np.asarray(extent_m[1], dtype=np.float64)
     size = hi - lo
     cell = max(settings.floor_cell_min_m, float(size.max()) / settings.floor_cell_max_px)
@@ -783,6 +900,16 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings)
     if lighting.sun is not None:  # only the floor in the sun loses the sun
         f_key = (f_key * lighting.sun.sunlit(grid.centers_m())).reshape(shape).astype(np.float32)
     ratio = 1.0 - f_key * shadow - (1.0 - f_key) * settings.ao_strength * ao
+    if lighting.lamps:
+        xy = grid.centers_m()
+        rest = np.ones(len(xy)) if light_map is None else light_map.at(xy)
+        if lighting.sun is not None:  # the light map is the shade's
+            rest = rest * (1.0 + (_sun_contrast(lighting) - 1.0) * lighting.sun.sunlit(xy))
+        lamps = [lamp.on_floor(xy) for lamp in lighting.lamps]
+        total = rest + sum(lamps)
+        ratio = ratio * (rest / total).reshape(shape)
+        for lamp, light in zip(lighting.lamps, lamps):
+            ratio += (light / total).reshape(shape) * (1.0 - _lamp_shadow(footprints, grid, lamp, settings))
     # Contact: right beside a leg or a base standing on the floor, the floor sees little of
     # any light; a dark line a centimetre or two wide, at the full raster's resolution.
     feet = [c.points[c.points[:, 2] < c.z_bottom + settings.contact_band_m] for c in casters
@@ -985,7 +1112,7 @@ def _check_image(image) -> np.ndarray:
 def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
     """Floor-frame points whose projection bounds what the furniture and its shadows can
     touch: each box's corners grown by 0.35 m (contact darkening), and the shadows of its
-    upper corners along the key light's extreme directions."""
+    upper corners along the key light's extreme directions and from the lamps."""
     out = []
     dirs = [v for v in _shadow_directions(lighting.direction, lighting.softness_rad, 8) if v[2] < -0.05]
     for item, _ in placed:
@@ -999,6 +1126,8 @@ def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
         top = world[1::2]
         for v in dirs:
             out.append(top - np.outer(top[:, 2] / v[2], v))
+        for lamp in lighting.lamps:
+            out.append(np.column_stack([_from_source(top, lamp.position_m), np.zeros(len(top))]))
     return np.concatenate(out)
 
 
@@ -1164,7 +1293,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                               for it, _ in placed])
     light_map = floor_light_map(image, floor_mask, K, dist, pose, lighting, corners.min(axis=0) - 0.5,
                                 corners.max(axis=0) + 0.5, settings)
-    fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy, settings, light_map)
+    fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy, settings, light_map, renderer)
     camera, camera_gl = pyrender_camera(Kr), gl_from_cv_pose(np.linalg.inv(pose))
     flags = pyrender.RenderFlags.RGBA | pyrender.RenderFlags.FLAT
     full, depth = renderer.render(_flat_scene(fulls, camera, camera_gl), rw, rh, flags=flags)
@@ -1250,7 +1379,8 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     casters = _casters(placed, settings)
     on_floor = reach[reach[:, 2] < 1e-6, :2]
     pts = np.concatenate([on_floor] + [c.points[:, :2] for c in casters])
-    gain_floor, grid = _floor_gain(casters, lighting, (pts.min(axis=0) - 0.3, pts.max(axis=0) + 0.3), settings)
+    gain_floor, grid = _floor_gain(casters, lighting, (pts.min(axis=0) - 0.3, pts.max(axis=0) + 0.3), settings,
+                                   light_map)
     shift = np.array([[1.0, 0, -box[0]], [0, 1, -box[1]], [0, 0, 1]])
     H_box = shift @ K @ np.column_stack([R[:, 0], R[:, 1], tvec]) @ grid.floor_from_raster()
     gain = cv2.warpPerspective(gain_floor, H_box, (bw, bh), flags=cv2.INTER_LINEAR,

@@ -1,0 +1,127 @@
+"""Ceiling lamps from their pools of light on the floor: their light on surfaces, pools
+painted on a sample photo's floor, and the shadows they cast."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from augment.render.furniture import PlacedItem, furniture_for
+from augment.render.gl import Renderer
+from augment.render.lamps import Lamp, find_lamps
+from augment.render.settings import RENDER
+from augment.render.staged import GAMMA, Lighting, _Caster, _floor_gain, _FloorGrid, _lamp_view, _LightMap
+
+from tests.augment.test_render import _truth_calibration
+
+CEILING_M = 2.5
+HEIGHT_M = CEILING_M - RENDER.lamps.below_ceiling_m
+
+
+def test_a_lamps_light_on_the_floor_and_on_the_furniture():
+    lamp = Lamp((0.5, -0.2, 2.4), 1.5, 0.8)
+    up = np.array([[0.0, 0, 1]])
+    assert lamp.on_floor([[0.5, -0.2]])[0] == pytest.approx(0.8)
+    # On the floor, the same light either way; 1.2 m off, (1 + 1.44 / 2.25) ** -1.5 of the peak.
+    floor = np.array([[0.5 + 1.2, -0.2, 0.0]])
+    assert lamp.on(floor, up)[0] == pytest.approx(lamp.on_floor(floor)[0])
+    assert lamp.on_floor(floor)[0] == pytest.approx(0.8 * (1 + 1.44 / 2.25) ** -1.5)
+    # A face turned to the lamp at the same point: its cosine is 1.2 / d, the floor's 2.4 / d.
+    facing = np.array([[-1.0, 0, 0]])
+    assert lamp.on(floor, facing)[0] == pytest.approx(0.5 * lamp.on_floor(floor)[0])
+    assert lamp.on(floor, -facing)[0] == 0.0  # turned away
+    assert lamp.on(np.array([[0.5, -0.2, 2.45]]), -up)[0] == 0.0  # above the lamp: none
+    # A table top 0.75 m up right under it: the inverse square of the nearer lamp.
+    top = np.array([[0.5, -0.2, 0.75]])
+    assert lamp.on(top, up)[0] == pytest.approx(0.8 * (2.4 / 1.65) ** 2)
+
+
+def _painted_floor(calibration, mask, light, rng):
+    """room_1 (half size) with its floor painted grey under ``light(xy)`` (linear, (n,) or
+    (n, 3)), with a plank-like texture of +-8 %."""
+    h, w = mask.shape
+    rows, cols = np.nonzero(mask)
+    xy = calibration.floor_from_pixels(np.column_stack([cols, rows]).astype(np.float64))
+    planks = 1.0 + 0.08 * np.sin(xy[:, 0] * 2 * np.pi / 0.19) * np.sign(np.sin(xy[:, 1] * 2 * np.pi / 1.3))
+    lit = np.asarray(light(xy)).reshape(len(xy), -1)
+    linear = np.clip(0.18 * lit * (planks * rng.uniform(0.97, 1.03, len(xy)))[:, None], 0, 1)
+    image = np.full((h, w, 3), 200, np.uint8)
+    image[rows, cols] = np.round(255 * linear ** (1 / GAMMA)).astype(np.uint8)
+    return image, xy
+
+
+def test_a_pool_painted_on_the_floor_is_found_where_it_is(rng):
+    image, mask, calibration = _truth_calibration("room_1", 0.5)
+    rows, cols = np.nonzero(mask)
+    seen = calibration.floor_from_pixels(np.column_stack([cols, rows]).astype(np.float64))
+    centre = np.median(seen, axis=0)
+    width = 0.6 * HEIGHT_M
+
+    def light(xy):  # a window's gradient and a spot's pool, 1.5 times the floor's light under it
+        return 1.0 + 0.15 * (xy[:, 0] - centre[0]) + 1.5 * (1 + ((xy - centre) ** 2).sum(1) / width ** 2) ** -1.5
+
+    painted, _ = _painted_floor(calibration, mask, light, rng)
+    before = painted.copy()
+    lamps = find_lamps(painted, mask, calibration, CEILING_M, 0.18)
+    np.testing.assert_array_equal(painted, before)
+    assert len(lamps) == 1
+    lamp = lamps[0]
+    assert np.hypot(*(np.asarray(lamp.position_m[:2]) - centre)) < 0.1
+    assert lamp.position_m[2] == pytest.approx(HEIGHT_M)
+    assert lamp.width_m == pytest.approx(width)
+    assert lamp.peak == pytest.approx(1.5, rel=0.15)
+
+
+@pytest.mark.parametrize("slope", [0.0, 0.3])
+def test_no_lamp_on_an_even_floor_or_a_windows_gradient(rng, slope):
+    image, mask, calibration = _truth_calibration("room_1", 0.5)
+    painted, _ = _painted_floor(calibration, mask, lambda xy: 1.0 + slope * xy[:, 0], rng)
+    assert find_lamps(painted, mask, calibration, CEILING_M, 0.18) == ()
+
+
+def test_a_lamp_casts_its_shadow_away_from_it():
+    """A box 0.4 m tall between x = 0.85 and 1.15 m, a lamp 2.4 m above the origin: its
+    top edge's shadow reaches 1.15 x 2.4 / 2.0 = 1.38 m. Without ambient occlusion or a
+    key light, the floor there keeps only the rest of the light: 1 / (1 + the lamp's)."""
+    x, y = np.meshgrid([0.85, 1.15], [-0.15, 0.15])
+    box = np.column_stack([np.repeat(np.column_stack([x.ravel(), y.ravel()]), 2, axis=0), np.tile([0.0, 0.4], 4)])
+    lamp = Lamp((0.0, 0.0, 2.4), 1.5, 1.0)
+    light = Lighting((0.8, 0.8, 0.8), (0.0, 0.0, -1.0), 0.0, 0.05, (0.4, 0.4, 0.4), "test", lamps=(lamp,))
+    plain = replace(RENDER.staged, ao_strength=0.0, contact_strength=0.0)
+    gain, grid = _floor_gain([_Caster(box, None, 0.0, 0.4)], light, ((-0.5, -0.5), (2.0, 0.5)), plain)
+
+    def at(px, py):
+        col, row = np.floor(grid.to_px([px, py])).astype(int)
+        return float(gain[row, col])
+
+    behind = 1.0 / (1.0 + lamp.on_floor([[1.25, 0.0]])[0])
+    assert at(1.25, 0.0) == pytest.approx(behind ** (1 / GAMMA), abs=0.02)
+    assert at(0.6, 0.0) == pytest.approx(1.0, abs=1e-3)  # between the lamp and the box
+    assert at(1.6, 0.0) == pytest.approx(1.0, abs=1e-3)  # past the shadow's end
+    assert at(1.25, 0.4) == pytest.approx(1.0, abs=1e-3)  # beside it
+
+
+def test_the_floors_light_map_reads_any_number_of_points():
+    """The lamps' shares read the light map at every cell of a fine floor raster: far more
+    points than one OpenCV map may hold (32767); a ramp reads back exactly."""
+    grid = _FloorGrid(np.array([0.0, 0.0]), 0.04, (50, 100))
+    cols = np.arange(100, dtype=np.float32)
+    light = _LightMap(grid, np.tile(1.0 + 0.01 * cols, (50, 1)).astype(np.float32))
+    xy = np.column_stack([np.linspace(0.5, 3.5, 70001), np.full(70001, 1.0)])
+    expected = 1.0 + 0.01 * (xy[:, 0] / 0.04 - 0.5)
+    np.testing.assert_allclose(light.at(xy), expected, atol=1e-4)
+
+
+def test_what_stands_under_a_table_top_gets_none_of_the_lamps_light():
+    """A lamp 2.4 m above a table 0.75 m high: the top's upper face sees it, a point under
+    the top (on a leg's height, facing up) does not, nor does the floor there; a point
+    beside the table does."""
+    item = PlacedItem("dining_table", (0.0, 0.0, 0.375), 0.0, (1.6, 0.9, 0.75), "table")
+    placed = [(item, furniture_for(item, 0))]
+    lamp = Lamp((0.3, 0.2, 2.4), 1.5, 1.0)
+    with Renderer() as renderer:
+        view = _lamp_view(renderer, placed, lamp)
+    points = np.array([[0.0, 0.0, 0.752], [0.1, 0.0, 0.35], [0.1, 0.0, 0.0], [1.5, 0.0, 0.0]])
+    up = np.tile([0.0, 0.0, 1.0], (4, 1))
+    np.testing.assert_allclose(view.visible(points, up), [1.0, 0.0, 0.0, 1.0])
