@@ -498,8 +498,10 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
         else:
             fill, key = fill * gain, key * gain
         if lighting.lamps:
-            lit = sum(lamp.on(v, n) * (1.0 if not lamp_views else lamp_views[k].visible(v, n))
-                      for k, lamp in enumerate(lighting.lamps)) * ao
+            # Floor-level pieces (rugs) take the floor's shadows instead.
+            raised = v[:, 2] >= settings.floor_level_m
+            lit = sum(lamp.on(v, n) * np.where(raised, lamp_views[k].visible(v, n), 1.0) if lamp_views
+                      else lamp.on(v, n) for k, lamp in enumerate(lighting.lamps)) * ao
             fill = fill + lit[:, None] * np.asarray(lighting.irradiance_rgb) * albedo * (1.0 - 0.96 * metal)[:, None]
         positions, normals = v.astype(np.float32), n.astype(np.float32)
         indices = np.concatenate(fs).astype(np.uint32)
@@ -1332,6 +1334,8 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         visibility = np.ones(lit.shape, np.float32)
         visibility[ly, lx] = _key_visibility(points, bias, view.camera_from_floor[:3, :3],
                                              view.camera_from_floor[:3, 3], view.K, view.depth_m, radius_px)
+        with np.errstate(invalid="ignore"):  # floor-level pieces (rugs) take the floor's shadows instead
+            visibility[world_image[..., 2] < settings.floor_level_m] = 1.0
         if step > 1:
             visibility = cv2.resize(visibility, (rw, rh), interpolation=cv2.INTER_LINEAR)
         visibility = cv2.blur(visibility, (3, 3))
