@@ -73,8 +73,8 @@ def find_lamps(image: np.ndarray, floor_mask: np.ndarray, calibration, ceiling_m
     ----------
     image : (h, w, 3) uint8
         The photo, RGB. Not modified.
-    floor_mask : (h, w) bool
-        Visible floor.
+    floor_mask : (rows, cols) bool
+        Visible floor (scaled to the photo when of another size).
     calibration : Calibration
         Of this photo: the floor's pixels seen from above.
     ceiling_m : float
@@ -154,7 +154,9 @@ def _floor_light(image, floor_mask, calibration, reference, left_out, settings: 
     ahead = points @ R[2] + t[2] > 0.1
     px = np.full((len(points), 2), -1.0)
     px[ahead] = calibration.pixels_from_floor(points[ahead])
-    h, w = floor_mask.shape
+    h, w = image.shape[:2]
+    if floor_mask.shape != (h, w):
+        floor_mask = cv2.resize(floor_mask.astype(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST) > 0
     ij = np.round(px).astype(np.int64)
     ok = ahead & (ij[:, 0] >= 0) & (ij[:, 0] < w) & (ij[:, 1] >= 0) & (ij[:, 1] < h)
     ok[ok] = floor_mask[ij[ok, 1], ij[ok, 0]]

@@ -10,18 +10,21 @@ warping the render), only over the part of the frame it and its shadows can reac
 antialiased by the renderer's 4x multisampling and by supersampling where the pixel
 budget allows. The light is estimated from the photo (:func:`estimate_lighting`):
 exposure and colour from the white squares of the board, paper of known whiteness lying
-on the floor; a key light from the brightest window, or from overhead behind the camera
-when there is none. It is computed per vertex (key light with a highlight, sky, room,
-floor bounce, ambient, baked occlusion near the floor) and drawn with pyrender's flat
-shader, which llvmpipe runs several times faster than its physically based one; the key
-light's shadows on the furniture come per pixel from a depth map seen from the light.
+on the floor; a key light from the sun's patches on the floor or the brightest window, or
+from overhead behind the camera when there is none; ceiling lamps from their pools of
+light on the floor (:mod:`augment.render.lamps`). It is computed per vertex (key light
+with a highlight, lamps, sky, room, floor bounce, ambient, baked occlusion near the
+floor) and drawn with pyrender's flat shader, which llvmpipe runs several times faster
+than its physically based one; the key light's shadows on the furniture come per pixel
+from a depth map seen from the light (the lamps' per vertex, from one seen from each).
 
 Shadows on the real floor are differential: the floor's irradiance is computed with and
 without the furniture in a top-down raster of the floor (the key light's cast shadow,
 averaged over directions across the light's extent so it is soft and hardens toward
-contact; ambient occlusion from what stands over and beside each floor point), and the
-photo is multiplied by their ratio (in the photo's gamma, the 2.2 power the renderer
-also uses). Floor-level items (rugs) take the same shadows.
+contact; each lamp's, cast away from it; ambient occlusion from what stands over and
+beside each floor point), and the photo is multiplied by their ratio (in the photo's
+gamma, the 2.2 power the renderer also uses). Floor-level items (rugs) take the same
+shadows, and only those.
 
 Occlusion. The photo hides furniture where its walls or objects stand in front of it. With
 a floor mask, a pixel that shows something other than floor shows a vertical thing
@@ -193,7 +196,7 @@ def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon):
 def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | None = None,
                       settings: StagedSettings | None = None, floor_polygon=None,
                       ceiling_m: float | None = None) -> Lighting:
-    """Estimate exposure, colour and the key light's direction from a calibrated photo.
+    """Estimate exposure, colour, the key light's direction and the ceiling lamps from a calibrated photo.
 
     Parameters
     ----------
