@@ -42,8 +42,8 @@ class Lamp:
 
     def on_floor(self, xy) -> np.ndarray:
         """Its light (n,) on floor points (n, 2+), over the floor at large's."""
-        d2 = ((np.asarray(xy, dtype=np.float64)[..., :2] - np.asarray(self.position_m[:2])) ** 2).sum(axis=-1)
-        return self.peak * (1.0 + d2 / self.width_m ** 2) ** -1.5
+        return self.peak * _pool(np.asarray(xy, dtype=np.float64)[..., :2], np.asarray(self.position_m[:2]),
+                                 self.width_m)
 
     def on(self, points_m, normals) -> np.ndarray:
         """Its light (n,) on surfaces at points (n, 3) facing unit normals (n, 3), over
@@ -102,11 +102,11 @@ def find_lamps(image: np.ndarray, floor_mask: np.ndarray, calibration, ceiling_m
     columns, found = [base], []
     # The search reads a subset of the cells when the floor in view is large.
     every = max(1, len(xy) // settings.search_cells)
+    candidates = _candidates(xy, settings.cell_m * 2, settings)
     for _ in range(settings.max_lamps):
         basis, _ = np.linalg.qr(np.column_stack(columns))
         rest = light - basis @ (basis.T @ light)
-        best = _best_pool(xy[::every], rest[::every], basis[::every], widths,
-                          _candidates(xy, settings.cell_m * 2, settings), settings)
+        best = _best_pool(xy[::every], rest[::every], basis[::every], widths, candidates, settings)
         if best is None:
             break
         # Refined on a finer grid around the coarse best, with every cell.
@@ -188,7 +188,8 @@ def _floor_light(image, floor_mask, calibration, reference, left_out, settings: 
 
 
 def _pool(xy, centre, width):
-    return (1.0 + ((xy - centre) ** 2).sum(axis=1) / width ** 2) ** -1.5
+    """The pool's shape at floor points (..., 2): 1 at ``centre``."""
+    return (1.0 + ((xy - centre) ** 2).sum(axis=-1) / width ** 2) ** -1.5
 
 
 def _candidates(xy, step, settings: LampSettings):

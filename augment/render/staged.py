@@ -808,12 +808,11 @@ def _lamp_shadow(footprints, grid, lamp, settings: StagedSettings):
     shade = np.zeros(grid.shape, np.float32)
     layer = np.zeros(grid.shape, np.uint8)
     radius, n = RENDER.lamps.shade_radius_m, settings.shadow_samples
-    golden = math.pi * (3 - math.sqrt(5))
-    for k in range(n):
-        r = radius * math.sqrt((k + 0.5) / n)
+    for share, angle in _spiral(n):
+        r = radius * share
         layer[:] = 0
-        footprints.fill(layer, grid, source=np.asarray(lamp.position_m) + [r * math.cos(k * golden),
-                                                                          r * math.sin(k * golden), 0.0])
+        footprints.fill(layer, grid, source=np.asarray(lamp.position_m) + [r * math.cos(angle),
+                                                                          r * math.sin(angle), 0.0])
         shade += layer
     return _blur(shade / n, max(0.5, 0.5 * radius / math.sqrt(n) / grid.cell_m))
 
@@ -828,6 +827,13 @@ def _blur(image, sigma_px):
     return cv2.resize(cv2.GaussianBlur(small, (0, 0), 2.5), (w, h), interpolation=cv2.INTER_LINEAR)
 
 
+def _spiral(n):
+    """``n`` points spread evenly over the unit disk (a golden-angle spiral), as
+    (distance from the centre, angle) pairs."""
+    golden = math.pi * (3 - math.sqrt(5))
+    return [(math.sqrt((k + 0.5) / n), k * golden) for k in range(n)]
+
+
 def _shadow_directions(direction, softness_rad, n):
     """``n`` directions spread evenly over a disk of angular radius ``softness_rad`` about ``direction``."""
     d = np.asarray(direction, dtype=np.float64)
@@ -835,11 +841,9 @@ def _shadow_directions(direction, softness_rad, n):
     a = np.cross(d, [0, 0, 1.0]) if abs(d[2]) < 0.99 else np.array([1.0, 0, 0])
     a /= np.linalg.norm(a)
     b = np.cross(d, a)
-    golden = math.pi * (3 - math.sqrt(5))
     out = []
-    for k in range(n):
-        r = softness_rad * math.sqrt((k + 0.5) / n)
-        v = d + math.tan(r) * (math.cos(k * golden) * a + math.sin(k * golden) * b)
+    for share, angle in _spiral(n):
+        v = d + math.tan(softness_rad * share) * (math.cos(angle) * a + math.sin(angle) * b)
         out.append(v / np.linalg.norm(v))
     return out
 
