@@ -377,6 +377,16 @@ def _vertex_light(v, n, albedo, roughness, metal, emissive, ao, lighting: Lighti
     return fill * ao[:, None] + emissive * float(E.max()), key * ao[:, None]
 
 
+def _roll_off(linear, knee):
+    """(n,) factors that bring light (n, 3) above ``knee`` smoothly toward 1 by its
+    brightest channel, hue kept: a white top under a lamp keeps its shading instead of
+    clipping flat, as a camera's shoulder keeps it."""
+    peak = np.max(linear, axis=1)
+    over = np.maximum(peak - knee, 0.0)
+    soft = knee + (1.0 - knee) * -np.expm1(-over / (1.0 - knee))
+    return np.where(peak > knee, soft / np.maximum(peak, 1e-9), 1.0)
+
+
 def _encode(linear):
     """Vertex colours (n, 4) float32: linear light in the photo's gamma, alpha 1. Above 1
     is kept: a surface texture (at most 1) multiplies it before the shader clamps."""
@@ -506,6 +516,8 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
             lit = sum(lamp.on(v, n) * np.where(raised, lamp_views[k].visible(v, n), 1.0) if lamp_views
                       else lamp.on(v, n) for k, lamp in enumerate(lighting.lamps)) * ao
             fill = fill + lit[:, None] * np.asarray(lighting.irradiance_rgb) * albedo * (1.0 - 0.96 * metal)[:, None]
+        roll = _roll_off(fill + key, settings.highlight_knee)[:, None]
+        fill, key = fill * roll, key * roll
         positions, normals = v.astype(np.float32), n.astype(np.float32)
         indices = np.concatenate(fs).astype(np.uint32)
         uv = np.concatenate([m[3] for m in members]).astype(np.float32) if tex_key else None

@@ -18,7 +18,8 @@ from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furnitur
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
-from augment.render.staged import Lighting, _Caster, _floor_gain, estimate_lighting, render_staged, write_jpeg
+from augment.render.staged import (Lighting, _Caster, _floor_gain, _roll_off, estimate_lighting, render_staged,
+                                   write_jpeg)
 from layout.catalog import CATALOG
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -457,3 +458,34 @@ def test_a_style_keeps_every_piece_in_its_palette():
     assert len(set(seen.values())) == len(STYLES)
     with pytest.raises(ValueError, match="choose one of scandinavian"):
         build_furniture("sofa", style="baroque")
+
+
+def test_light_past_the_knee_rolls_off_toward_white_keeping_its_hue():
+    light = np.array([[0.5, 0.4, 0.3], [1.0, 0.5, 0.25], [1.6, 0.8, 0.4], [2.4, 1.2, 0.6]])
+    out = light * _roll_off(light, 0.8)[:, None]
+    np.testing.assert_allclose(out[0], light[0])  # below the knee: as it was
+    assert out[1, 0] == pytest.approx(0.8 + 0.2 * (1.0 - np.exp(-1.0)))  # 0.2 past it: 1 - 1/e of the rest
+    np.testing.assert_allclose(out[1:, 1] / out[1:, 0], 0.5)
+    np.testing.assert_allclose(out[1:, 2] / out[1:, 0], 0.25)
+    assert np.all(np.diff(out[:, 0]) > 0) and out[-1, 0] < 1.0
+
+
+def test_an_overexposed_table_keeps_its_shading_and_hue(renderer):
+    """A dark wooden side table in light 20 times too bright for it: without a shoulder
+    every pixel would clip to flat white; with it, none clips, top and sides still
+    differ, and the wood stays redder than it is blue."""
+    image, mask, calibration = _truth_calibration("room_2", 0.5)
+    xy = calibration.floor_from_pixels(np.argwhere(mask)[:, ::-1].astype(np.float64))
+    x, y = np.median(xy[xy[:, 0] > 0.8], axis=0)
+    item = [PlacedItem("side_table", (x, y, 0.275), 0.0, (0.45, 0.45, 0.55), "t")]
+    levels = {}
+    for gain in (1.0, 20.0):
+        light = Lighting(tuple(gain * np.asarray(LIGHT.irradiance_rgb)), *list(vars(LIGHT).values())[1:6])
+        done = render_staged(image, calibration, item, renderer, floor_mask=mask, lighting=light, look=CLEAN,
+                             self_shadows=False)
+        levels[gain] = done.image[done.alpha > 0.99].astype(float)
+    bright = levels[20.0]
+    assert len(bright) > 2000 and bright.max() < 255
+    assert np.percentile(bright[:, 0], 90) - np.percentile(bright[:, 0], 10) > 10
+    assert np.median(bright[:, 0]) > np.median(levels[1.0][:, 0]) + 80
+    assert np.median(bright[:, 0] - bright[:, 2]) > 40
