@@ -10,6 +10,7 @@ import json
 import math
 import numbers
 from dataclasses import dataclass, replace
+from functools import lru_cache
 from pathlib import Path
 
 import cv2
@@ -242,6 +243,19 @@ class FloorModel:
             out /= out.sum(axis=0, keepdims=True)
         p = out[list(s.floor_class)].sum(axis=0).astype(np.float32)
         return cv2.resize(p, size_px, interpolation=cv2.INTER_LINEAR)
+
+
+@lru_cache(maxsize=4)
+def shipped_session(path: str):
+    """An onnxruntime session of one of the small models that ship in ``models/``, kept."""
+    import onnxruntime as ort
+
+    if not Path(path).is_file():
+        raise FileNotFoundError(f"the model {path} is missing: it ships with Stager, "
+                                f"restore it with `git checkout models/{Path(path).name}`")
+    options = ort.SessionOptions()
+    options.log_severity_level = 3
+    return ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
 
 
 def shrink_to(image: np.ndarray, long_px: int) -> np.ndarray:

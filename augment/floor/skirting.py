@@ -61,14 +61,13 @@ The thresholds and sizes are :data:`augment.floor.settings.FLOOR`'s ``skirting``
 """
 from __future__ import annotations
 
-from functools import cache, lru_cache
-from pathlib import Path
+from functools import cache
 
 import cv2
 import numpy as np
 from scipy.ndimage import median_filter
 
-from .model import MODELS_DIR, shrink_area
+from .model import MODELS_DIR, shipped_session, shrink_area
 from .settings import FLOOR
 
 BOARD_MODEL = MODELS_DIR / "skirting_board.onnx"
@@ -287,24 +286,12 @@ def board_profiles(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
     return profile.astype(np.float32), scalars.astype(np.float32), inside[:, -1]
 
 
-@lru_cache(maxsize=2)
-def _skirting_session(path: str):
-    import onnxruntime as ort
-
-    if not Path(path).is_file():
-        raise FileNotFoundError(f"the skirting model {path} is missing: it ships with Stager, "
-                                f"restore it with `git checkout models/{Path(path).name}`")
-    options = ort.SessionOptions()
-    options.log_severity_level = 3
-    return ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
-
-
 def board_probability(profile: np.ndarray, scalars: np.ndarray) -> np.ndarray:
     """Per column, the board model's probability that the mask's edge is a board's top
     edge (the floor line lies below it), from :func:`board_profiles`. (k,) float."""
     if len(profile) == 0:
         return np.zeros(0)
-    session = _skirting_session(str(BOARD_MODEL))
+    session = shipped_session(str(BOARD_MODEL))
     logits = session.run(None, {"profile": profile, "scalars": scalars})[0].reshape(-1)
     return 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
 
@@ -314,7 +301,7 @@ def floor_line_gap(profile: np.ndarray, scalars: np.ndarray) -> tuple[np.ndarray
     edge, and how far above (m, 0 or more), from :func:`board_profiles`. Two (k,) float."""
     if len(profile) == 0:
         return np.zeros(0), np.zeros(0)
-    out = _skirting_session(str(GAP_MODEL)).run(None, {"profile": profile, "scalars": scalars})[0].astype(np.float64)
+    out = shipped_session(str(GAP_MODEL)).run(None, {"profile": profile, "scalars": scalars})[0].astype(np.float64)
     return 1.0 / (1.0 + np.exp(-out[:, 0])), np.maximum(0.0, -out[:, 1] / 100.0)
 
 
@@ -324,7 +311,7 @@ def board_depth_m(profile: np.ndarray, scalars: np.ndarray) -> np.ndarray:
     the edge if the column shows a board. (k,) float."""
     if len(profile) == 0:
         return np.zeros(0)
-    out = _skirting_session(str(DEPTH_MODEL)).run(None, {"profile": profile, "scalars": scalars})[0]
+    out = shipped_session(str(DEPTH_MODEL)).run(None, {"profile": profile, "scalars": scalars})[0]
     return np.clip(out.reshape(-1).astype(np.float64) / 100.0, 0.0, FLOOR.skirting.max_height_m)
 
 

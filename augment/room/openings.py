@@ -2,14 +2,21 @@
 
 Every wall of the measured floor is a vertical plane through its foot line, so the
 calibration maps the wall to the photo: :func:`find_doors` samples each wall in view as
-a front-on strip (2 cm a sample, from the floor to 2.2 m), takes the wall's own colour
-(the median where a wall is usually bare, 0.9-1.7 m up), and looks for a door leaf: a run
-of columns, as wide as a door, whose colour differs from the wall's from the floor up as
-far as the photo shows (at least 1 m of it), where a window (a sill above the floor) or a
-radiator (below 0.7 m) differs only in part of the height. The feet of the run's two
-sides are the door, as a user would mark it (:func:`augment.room.doors.doors_on_floor`).
+a front-on strip (2 cm a sample) and takes the wall's own colour (its median 0.15-0.7 m
+up, below the windows' sills). Two readers find doors on it, and both are kept where
+they do not overlap:
 
-A door painted the wall's colour shows no such run and is missed; ``--door`` marks it.
+- the door model (``models/door_columns.onnx``, trained by ``models/train_doors.py`` on
+  the synthetic photographer's rooms) gives each column a probability from its colours
+  up to 2.4 m and its neighbours' within 1.2 m either side (a casing's two sides, a
+  door's head); a run of likely columns as wide as a door is one;
+- the rules: a run of columns, as wide as a door, whose colour differs from the wall's
+  from the floor up as far as the photo shows, with a hard edge at a side, where a
+  window (a sill above the floor) or a radiator (below 0.7 m) differs only in part of
+  the height; or two vertical lines that far apart rising from the floor (a casing).
+
+The feet of a run's two sides are the door, as a user would mark it
+(:func:`augment.room.doors.doors_on_floor`). ``--door`` marks one that is missed.
 """
 from __future__ import annotations
 
@@ -18,7 +25,10 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ..floor.model import MODELS_DIR, shipped_session
 from .settings import ROOM
+
+DOOR_MODEL = MODELS_DIR / "door_columns.onnx"
 
 
 @dataclass(frozen=True)
@@ -32,7 +42,9 @@ class FoundDoor:
     segment_m : (2, 2) float64
         The same on the floor, meters.
     score : float
-        Share of its columns that differ from the wall all the way up (0-1).
+        How sure (0-1): the door model's mean probability over its columns, or for the
+        rules the share of its columns that differ from the wall all the way up (0.5 for
+        a casing's two lines).
     """
 
     feet_px: np.ndarray
@@ -56,6 +68,40 @@ def _wall_strip(lab: np.ndarray, calibration, a: np.ndarray, b: np.ndarray, step
               & (px[..., 1] >= 0) & (px[..., 1] <= h - 1))
     strip = cv2.remap(lab, px[..., 0], px[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     return strip, inside, s
+
+
+def _lab(image: np.ndarray) -> np.ndarray:
+    """CIELAB of an RGB uint8 image, float32: L 0-100, a and b about 0."""
+    lab = cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2LAB).astype(np.float32)
+    lab[..., 0] *= 100.0 / 255.0
+    lab[..., 1:] -= 128.0
+    return lab
+
+
+def column_features(lab: np.ndarray, calibration, a: np.ndarray, b: np.ndarray, settings=None):
+    """What the door model reads of the wall standing on a -> b: per column of its
+    front-on strip (``settings.step_m`` apart), the strip's samples every two steps from
+    the floor to ``settings.model_top_m`` as their colour less the wall's own, their
+    lightness, the step in lightness across the column (a casing's edge) and whether they
+    are in view. Returns ((channels, columns) float32, (columns,) positions along the
+    wall, m), or None for a wall too little in view to tell its colour."""
+    settings = settings or ROOM.doors
+    step = settings.step_m
+    strip, inside, s = _wall_strip(lab, calibration, a, b, step, settings.model_top_m)
+    z = (np.arange(strip.shape[0]) + 0.5) * step
+    bare = inside & (z[:, None] >= settings.wall_from_m) & (z[:, None] <= settings.wall_to_m)
+    if bare.sum() < 20:
+        return None
+    wall = np.median(strip[bare], axis=0)
+    light = strip[..., 0]
+    across = np.zeros_like(light)
+    across[:, 1:-1] = np.abs(light[:, 2:] - light[:, :-2]) / 2.0
+    seen = inside.astype(np.float32)
+    planes = [(strip[..., c] - wall[c]) / 20.0 * seen for c in range(3)]
+    planes += [(light - 50.0) / 50.0 * seen, across / 5.0 * seen, seen]
+    rows = strip.shape[0] // 2 * 2
+    stack = np.stack([p[:rows].reshape(rows // 2, 2, -1).mean(axis=1) for p in planes])
+    return stack.reshape(-1, stack.shape[-1]).astype(np.float32), s
 
 
 def _walls(poly: np.ndarray, edge_kind, settings) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -119,6 +165,29 @@ def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
+def door_probability(features: np.ndarray) -> np.ndarray:
+    """Per column of a wall, the door model's probability that a door stands there, from
+    :func:`column_features`. (columns,) float."""
+    # Both ends padded with columns of nothing in view, as in training.
+    margin = ROOM.doors.model_margin
+    padded = np.pad(features, ((0, 0), (margin, margin)))[None]
+    logits = shipped_session(str(DOOR_MODEL)).run(None, {"features": padded})[0].reshape(-1)[margin:-margin]
+    return 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
+
+
+def _model_spans(lab, calibration, a, b, settings) -> list:
+    """(start, end, score) column spans of the door model's doors on the wall a -> b."""
+    got = column_features(lab, calibration, a, b, settings)
+    if got is None:
+        return []
+    p = door_probability(got[0])
+    door = p >= settings.model_threshold
+    door = cv2.morphologyEx(door.astype(np.uint8)[None], cv2.MORPH_CLOSE, np.ones((1, 5), np.uint8))[0] > 0
+    lo_w, hi_w = settings.width_m
+    return [(i0, i1, float(p[i0:i1].mean())) for i0, i1 in _runs(door)
+            if lo_w <= (i1 - i0) * settings.step_m <= hi_w]
+
+
 def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
     """The doors standing on the walls of ``floor`` in ``image``.
 
@@ -136,9 +205,7 @@ def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
         Left to right along each wall, walls in the polygon's order.
     """
     settings = ROOM.doors
-    lab = cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2LAB).astype(np.float32)
-    lab[..., 0] *= 100.0 / 255.0
-    lab[..., 1:] -= 128.0
+    lab = _lab(image)
     step = settings.step_m
     poly = np.asarray(floor.polygon_m, dtype=np.float64)
     lo_w, hi_w = settings.width_m
@@ -174,6 +241,7 @@ def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
         for i, j in ((i, j) for i in lines for j in lines if lo_w <= (j - i) * step <= hi_w):
             if not any(i0 - 3 <= i and j <= i1 + 3 for i0, i1, _ in spans):
                 spans.append((i, j + 1, 0.5))
+        spans += _model_spans(lab, calibration, a, b, settings)
         spans = _without_overlaps(spans)
         u = (b - a) / np.linalg.norm(b - a)
         for i0, i1, score in spans:

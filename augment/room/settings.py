@@ -91,6 +91,9 @@ class DoorSettings:
     line_margin: int = 4  # ... and stands this many samples off the wall's ends (its corners)
     wall_turn_deg: float = 20.0  # the outline's edges form one wall while they turn less than this,
     jog_m: float = 0.3  # ... or by any angle over an edge shorter than this (round a threshold)
+    model_threshold: float = 0.5  # a column is a door's where the model's probability is this or more
+    model_margin: int = 64  # columns of nothing in view padded at a wall's ends, as in training
+    model_top_m: float = 2.4  # the door model reads the wall up to here (a door's head and the wall above)
 
 
 @dataclass

@@ -1159,3 +1159,66 @@ def test_no_auto_doors_keeps_only_the_users(tmp_path, capsys):
     assert code == 0, err
     report = json.loads((out / "report.json").read_text())
     assert report["furniture"]["doors"] == []
+
+
+@pytest.mark.parametrize("seed", [[9900, 0], [9900, 22]])
+def test_a_door_the_rules_miss_is_found_by_the_door_model(tmp_path, seed):
+    """Rooms of the synthetic photographer whose door, in view, the colour rules alone
+    miss: the door model finds it, its centre within 15 cm of the true door's (the
+    truth mapped into the calibration's floor frame), and nothing else."""
+    from PIL import Image
+
+    from augment.render.gl import Renderer
+    from augment.room.openings import find_doors
+    from augment.synth import render_sample
+
+    with Renderer() as renderer:
+        sample = render_sample(seed, renderer, (1280, 960), clutter=False)
+    path = tmp_path / "room.jpg"
+    exif = Image.Exif()  # the 35 mm equivalent focal length, as a phone writes it
+    exif.get_ifd(0x8769)[0xA405] = round(sample.truth["K"][0][0] * math.hypot(36, 24) / math.hypot(1280, 960))
+    Image.fromarray(sample.image).save(path, quality=92, exif=exif)
+    m = pipeline.measure(path, Board())
+    # The board's frame in the world, up to the checkerboard's half-turn symmetry.
+    world_from_board = np.asarray(sample.truth["board"]["world_from_board"])
+    M = np.linalg.inv(world_from_board) @ np.linalg.inv(sample.truth["camera_from_world"]) \
+        @ m.calibration.camera_from_floor
+    turn = round(math.atan2(M[1, 0], M[0, 0]) / (math.pi / 2)) * (math.pi / 2)
+    c, s = round(math.cos(turn)), round(math.sin(turn))
+    floor_from_world = np.linalg.inv(world_from_board @ np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0],
+                                                                  [0, 0, 0, 1.0]]))
+    w, h = m.calibration.size_px
+    true = []
+    for door in sample.truth["room"]["doors"]:
+        feet = (np.column_stack([door["segment_m"], np.zeros(2), np.ones(2)]) @ floor_from_world.T)[:, :2]
+        px = m.calibration.pixels_from_floor(feet)
+        if ((px >= 0) & (px < [w, h])).all():
+            true.append(feet.mean(axis=0))
+    (door,) = true
+    (found,) = find_doors(m.image, m.calibration, m.floor)
+    assert np.linalg.norm(found.segment_m.mean(axis=0) - door) < 0.15
+
+
+def test_a_door_on_a_wall_drawn_in_steps_keeps_the_width_of_its_step():
+    """A 1 m door whose middle lies on a 0.8 m edge of an outline that steps 3 cm either
+    side of it: the door is kept, 0.8 m wide, where before the layout refused it as
+    wider than its wall; a door on a step narrower than a door keeps its own width."""
+    cal = calibrate_file(CRAMPED, Board())
+    w, h = cal.size_px
+    mid = cal.floor_from_pixels(np.array([[w / 2, 0.8 * h]]))[0]
+    u, n = np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    feet_px = cal.pixels_from_floor(np.stack([mid - 0.5 * u, mid + 0.5 * u]))
+
+    def outline(step_m):
+        st = [(-2, 0.03), (-step_m / 2, 0.03), (-step_m / 2, 0), (step_m / 2, 0), (step_m / 2, 0.03), (2, 0.03),
+              (2, 3), (-2, 3)]
+        return np.array([mid + s * u + t * n for s, t in st])
+
+    (door,) = room_doors.doors_on_floor([feet_px.ravel()], cal, outline(0.8))
+    assert door.width_m == pytest.approx(0.8, abs=1e-4) and door.width_m <= 0.8
+    np.testing.assert_allclose(door.at_m, mid, atol=1e-6)
+    from layout.builder import LayoutBuilder
+
+    LayoutBuilder(outline(0.8), 2.5).add_door(door.at_m, door.width_m)  # no longer refused
+    (door,) = room_doors.doors_on_floor([feet_px.ravel()], cal, outline(0.3))
+    assert door.width_m == pytest.approx(1.0, abs=1e-3)
