@@ -185,7 +185,13 @@ def test_a_run_interrupted_is_resumed_where_it_stopped(cluster, photos, tmp_path
     out = tmp_path / "out"
     command = [sys.executable, "-m", "augment.app.cli", "batch", str(photos), "--out", str(out), "-n", "1",
                "--address", cluster.address, "--workers", "1"]
-    run = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    # Ctrl-C as a terminal sends it, even where this suite runs in a shell's background,
+    # which starts it with SIGINT ignored: a child inherits an ignored signal, but not a handler.
+    inherited = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        run = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    finally:
+        signal.signal(signal.SIGINT, inherited)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and not ((out / RESULTS).is_file() and (out / RESULTS).read_text()):
         time.sleep(0.1)
