@@ -3,6 +3,7 @@ shadows, occlusion, the furniture's sizes, and the renderer's hygiene."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -480,7 +481,7 @@ def test_an_overexposed_table_keeps_its_shading_and_hue(renderer):
     item = [PlacedItem("side_table", (x, y, 0.275), 0.0, (0.45, 0.45, 0.55), "t")]
     levels = {}
     for gain in (1.0, 20.0):
-        light = Lighting(tuple(gain * np.asarray(LIGHT.irradiance_rgb)), *list(vars(LIGHT).values())[1:6])
+        light = replace(LIGHT, irradiance_rgb=tuple(gain * np.asarray(LIGHT.irradiance_rgb)))
         done = render_staged(image, calibration, item, renderer, floor_mask=mask, lighting=light, look=CLEAN,
                              self_shadows=False)
         levels[gain] = done.image[done.alpha > 0.99].astype(float)
