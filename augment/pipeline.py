@@ -87,8 +87,8 @@ from .render.erase import erase_board, layer_over_photo
 from .render.furniture import load_assets
 from .render.gltf import scene_glb
 from .render.styles import STYLES
-from .room.fit import (broken_rules, dropped_summary, furniture_for_floor, furniture_source, rule_count,
-                       solve_suggestions)
+from .room.fit import (broken_rules, corner_specs, dropped_summary, furniture_for_floor, furniture_source,
+                       rule_count, solve_suggestions)
 from .room.openings import find_doors
 from .room.height import measure_height
 
@@ -610,8 +610,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                                                       warnings=warnings)
             bar.step()
             with clock("layout"):
+                corners = corner_specs(source, fitted, m.calibration)
                 fitted, layouts, reports = solve_suggestions(fitted, suggestions, seed, m.floor.area_m2, dropped,
-                                                             bar, warnings)
+                                                             bar, warnings, corners)
                 # Rendered as layout_K.json holds them, so `--layout` renders the very same photo.
                 layouts = [lay.as_written() for lay in layouts]
         if dropped:

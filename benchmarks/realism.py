@@ -62,7 +62,6 @@ TARGETS = {"delta_e_median": ("<=", 6.0), "shadow_iou_median": (">=", 0.7), "lig
 # A render shows its sun when this share of the floor in view is sunlit (the truth's
 # ``floor_in_view``); on the others no photo tells where the sun is.
 SUN_IN_VIEW = 0.02
-FILM_DIAGONAL_MM = 43.27
 
 
 def old_driver(folder: Path) -> int:
@@ -82,26 +81,6 @@ def old_driver(folder: Path) -> int:
                             direction=np.asarray(lighting.direction), seconds=time.perf_counter() - t)
     renderer.close()
     return 0
-
-
-def write_phone_jpeg(path: Path, image: np.ndarray, focal_px: float, quality: int):
-    """JPEG with the 35 mm equivalent focal length in EXIF, as a phone writes it."""
-    from PIL import Image
-
-    exif = Image.Exif()
-    exif.get_ifd(0x8769)[0xA405] = int(round(focal_px * FILM_DIAGONAL_MM / math.hypot(*image.shape[1::-1])))
-    Image.fromarray(image).save(path, quality=quality, exif=exif)
-
-
-def floor_in_world(truth: dict, camera_from_floor: np.ndarray) -> np.ndarray:
-    """(4, 4) world_from_floor: the calibration's floor frame is the board's, up to the
-    board's symmetry (a checkerboard reads the same turned a half), which the estimated
-    pose tells; its small errors are the calibration's and stay in the comparison."""
-    world_from_board = np.asarray(truth["board"]["world_from_board"])
-    M = np.linalg.inv(world_from_board) @ np.linalg.inv(np.asarray(truth["camera_from_world"])) @ camera_from_floor
-    turn = round(math.atan2(M[1, 0], M[0, 0]) / (math.pi / 2)) * (math.pi / 2)
-    c, s = round(math.cos(turn)), round(math.sin(turn))
-    return world_from_board @ np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
 
 
 def linear_luminance(rgb: np.ndarray) -> np.ndarray:
@@ -185,6 +164,8 @@ def main(argv=None) -> int:
     from augment.render.settings import RENDER
     from augment.render.staged import estimate_lighting, render_staged
     from augment.synth import FLOOR, render_sample
+    from augment.synth.photo import save_as_phone
+    from augment.synth.truth import floor_in_world
     from layout.fileio import write_atomic
 
     work = Path(tempfile.mkdtemp(prefix="realism-"))
@@ -201,7 +182,7 @@ def main(argv=None) -> int:
             empty = render_sample(seed, renderer, size, clutter=False, shadowed_fill=args.shadowed_fill)
             truth = empty.truth
             photo = work / f"case_{i:02d}.jpg"
-            write_phone_jpeg(photo, empty.image, truth["K"][0][0], truth["photo"]["jpeg_quality"])
+            save_as_phone(photo, empty.image, truth["K"][0][0], truth["photo"]["jpeg_quality"])
             try:
                 result = furnish(photo, Board(), room=room, suggestions=1, seed=i, renderer=renderer)
             except StagerError as error:

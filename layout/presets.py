@@ -75,15 +75,18 @@ def _table_set(group, table_kind, seat_kind, n_seats, *, table_size=None, gap_m=
     return {"id": group, "rigid": True}, [table, seats]
 
 
+# A loveseat and a small TV bench (with its TV) fit where a full sofa set would not.
+LOVESEAT = (1.5, 0.85, 0.85)
+TV_BENCH = (1.2, 0.4, 1.05)
+
+
 def _living_room(area):
     # The conversation group first (what is dropped first goes last): seating, the TV it
     # faces and the coffee table, then the rug, side table and lamp at the sofa that make
     # even a small visible floor read as a furnished room, then what lines the walls.
     items, groups = [], []
     if area < 10:
-        # A loveseat and a small TV bench fit where a full sofa set would not.
-        items += [_item("sofa", "sofa", size=[1.5, 0.85, 0.85]),
-                  _item("tv_stand", "tv_stand", size=[1.2, 0.4, 1.05]),
+        items += [_item("sofa", "sofa", size=list(LOVESEAT)), _item("tv_stand", "tv_stand", size=list(TV_BENCH)),
                   _item("side_table", "side_table")]
     else:
         items += [_item("sofa", "sofa"), _item("tv_stand", "tv_stand"),
@@ -249,6 +252,73 @@ def preset_items(name, floor_area_m2):
         raise LayoutError(f"preset {name!r}: floor area {floor_area_m2!r} must be a positive number of m²")
     groups, items, constraints = PRESETS[name](area)
     return {"groups": groups, "items": items, "constraints": constraints}
+
+
+# Corner sets for a floor that shows too little for a preset's whole furniture: when every
+# arrangement of what fits repeats the first suggestion, the next suggestions stage one of
+# these instead (the first piece of each is its point: a set that cannot keep it is not
+# offered). A stager shows a small corner as one small group, not as the same piece again.
+def _set(items, groups=(), constraints=()):
+    return {"groups": list(groups), "items": list(items), "constraints": list(constraints)}
+
+
+def _living_corners():
+    return [
+        _set([_item("armchair", "armchair"), _item("side_table", "side_table"), _item("floor_lamp", "floor_lamp")]),
+        _set([_item("tv_stand", "tv_stand", size=list(TV_BENCH)), _item("plant", "plant")]),
+        _set([_item("sofa", "sofa", size=list(LOVESEAT)), _item("side_table", "side_table")]),
+        _set([_item("bookcase", "bookcase"), _item("plant", "plant")]),
+        _set([_item("armchair", "armchair"), _item("plant", "plant")]),
+    ]
+
+
+def _bedroom_corners():
+    return [
+        _set([_item("bed", "single_bed"), _item("nightstand", "nightstand")]),
+        _set([_item("dresser", "dresser"), _item("plant", "plant")]),
+        _set([_item("armchair", "armchair"), _item("floor_lamp", "floor_lamp")]),
+        _set([_item("wardrobe", "wardrobe"), _item("plant", "plant")]),
+    ]
+
+
+def _dining_corners():
+    four, four_items = _table_set("dining", "round_table", "chair", 4, gap_m=-TUCK_M, end_m=END_CLEAR_M)
+    two, two_items = _table_set("bistro", "round_table", "chair", 2, table_size=[0.7, 0.7, 0.75], gap_m=-TUCK_M)
+    return [
+        _set(four_items, [four]),
+        _set(two_items + [_item("plant", "plant")], [two]),
+        _set([_item("sideboard", "dresser"), _item("plant", "plant")]),
+    ]
+
+
+def _office_corners():
+    facing_in = [{"type": "wall", "item": "desk", "distance": DESK_INTO_ROOM_M},
+                 {"type": "wall_orientation", "item": "desk", "angle_deg": 180.0}]
+    return [
+        _set([_item("desk", "desk", rules=False), _item("office_chair", "office_chair")], constraints=facing_in),
+        _set([_item("desk", "desk"), _item("office_chair", "office_chair"), _item("plant", "plant")]),
+        _set([_item("bookcase", "bookcase"), _item("armchair", "armchair"), _item("floor_lamp", "floor_lamp")]),
+        _set([_item("bookcase", "bookcase"), _item("plant", "plant")]),
+    ]
+
+
+CORNERS = {"living_room": _living_corners, "bedroom": _bedroom_corners, "dining_room": _dining_corners,
+           "office": _office_corners}
+
+
+def corner_sets(name) -> list[dict]:
+    """Small furniture sets for a corner of a room of type ``name``, in order of preference
+    (none for a preset without them).
+
+    Returns
+    -------
+    list of dict
+        ``{"groups", "items", "constraints"}`` each, shaped as :func:`preset_items`' result
+        (fresh objects).
+    """
+    if name not in PRESETS:
+        raise LayoutError(f"preset {name!r} does not exist; choose one of {', '.join(PRESETS)}")
+    return CORNERS[name]() if name in CORNERS else []
 
 
 def footprint_m2(items):

@@ -35,7 +35,6 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "benchmarks"))
 
 # Columns this close to a door's side are neither door nor wall (the casing, blur).
 UNSURE_M = 0.04
@@ -60,7 +59,8 @@ def render_walls(seed: int, count: int) -> dict:
     from augment.room.openings import _lab, _walls, column_features
     from augment.room.settings import ROOM
     from augment.synth import render_sample
-    from realism import floor_in_world, write_phone_jpeg
+    from augment.synth.photo import save_as_phone
+    from augment.synth.truth import floor_in_world
 
     walls, labels, render = [], [], []
     work = Path(tempfile.mkdtemp())
@@ -68,7 +68,7 @@ def render_walls(seed: int, count: int) -> dict:
         for i in range(count):
             sample = render_sample([seed, i], renderer, clutter=False)
             path = work / f"{i}.jpg"
-            write_phone_jpeg(path, sample.image, sample.truth["K"][0][0], sample.truth["photo"]["jpeg_quality"])
+            save_as_phone(path, sample.image, sample.truth["K"][0][0], sample.truth["photo"]["jpeg_quality"])
             try:
                 m = measure(path, Board())
             except StagerError:

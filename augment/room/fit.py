@@ -23,7 +23,7 @@ from layout.camera import Camera, in_view_share
 from layout.camera import faults as camera_faults
 from layout.errors import LayoutError
 from layout.geometry import polygon_area
-from layout.presets import DEFAULT_ROOM, PRESETS
+from layout.presets import DEFAULT_ROOM, PRESETS, corner_sets
 
 from ..errors import FurnishError
 from .doors import doors_on_floor, open_edges
@@ -333,6 +333,31 @@ def _spec_for_floor(source, polygon_m: np.ndarray, height_m: float, warnings: li
         groups=tuple(dataclasses.replace(g, at_m=None, fixed=False) for g in sp.groups), open_edges=tuple(open_edges))
 
 
+def corner_specs(source, fitted, calibration=None) -> list:
+    """The preset's corner sets (:func:`layout.presets.corner_sets`) fitted to the floor of
+    ``fitted`` (its polygon, height, open edges and doors) and the photo's camera (that of
+    ``calibration``, also where ``fitted`` is laid out without it), for suggestions that
+    would otherwise repeat the first: those that keep their first piece whole in view and
+    stand as the preset made them (none kept bare of what it carries), in order. None for
+    a spec file's furniture: that is what the user chose."""
+    from layout.spec import spec_from_dict
+
+    if not isinstance(source, str):
+        return []
+    camera = layout_camera(calibration) if calibration is not None and ROOM.fit.for_camera else fitted.camera
+    room = {"height": fitted.height_m, "polygon": np.asarray(fitted.polygon_m).round(6).tolist(),
+            "open_edges": list(fitted.open_edges)}
+    out = []
+    for k, parts in enumerate(corner_sets(source)):
+        spec = spec_from_dict({"room": room, **parts}, where=f"preset {source}, corner set {k + 1}")
+        notes = []
+        spec, dropped = fit_spec(spec, fitted.polygon_m, fitted.height_m, camera, notes)
+        if notes or not spec.items or parts["items"][0]["id"] in {d["id"] for d in dropped}:
+            continue
+        out.append(dataclasses.replace(spec, camera=camera, doors=fitted.doors))
+    return out
+
+
 def dropped_summary(dropped: list) -> str:
     """``"a, b: why; c: why"``: the dropped items grouped by reason, in order."""
     by_reason = {}
@@ -379,6 +404,7 @@ def layout_camera(calibration) -> Camera:
     return Camera(calibration.intrinsics.K, calibration.camera_from_floor, tuple(calibration.size_px))
 
 
+IN_NO_VIEW = "it would be cut by the photo's edge or stand in its foreground wherever it stood"
 NO_ROOM_IN_VIEW = ("the photo shows too little above the floor for any piece to stand whole in it; laid out "
                    "without the camera, so pieces may be cut by the photo's edge (step back, or hold the camera "
                    "higher and level)")
@@ -569,8 +595,16 @@ class _Pick:
         return self.best is not None and (self.best[0][0] or self.best[0][1])
 
 
+def _corner_instead(spec, corner, dropped: list, reason: str) -> tuple:
+    """``corner`` (a corner set, :func:`corner_specs`) to lay out in place of all of ``spec``'s
+    furniture, which no suggestion can show whole in the photo, and the note that says so."""
+    dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason} for i in spec.items)
+    return corner, (f"staged as a corner ({', '.join(i.id for i in corner.items)}): the floor in view shows too "
+                    "little for the room's furniture to stand whole in the photo")
+
+
 def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress,
-                      notes: list | None = None):
+                      notes: list | None = None, corners=()):
     """Solve ``suggestions`` layouts, suggestion K from seed ``seed + K - 1``.
 
     A try that collides, leaves the floor, blocks a door, stands deep in a clearance, is
@@ -585,8 +619,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     on from seed ``seed + K - 1 + N``, then ``+ 2N`` (``ROOM.fit.seed_tries`` in all). When all of
     them repeat an earlier suggestion, the first suggestion turned and mirrored
     (:data:`TURNS`) is tried as a start, then the furniture without one of its less
-    important units (another subset); a twin is kept, with a line in ``notes``, when
-    nothing gives anything else.
+    important units (another subset), then other furniture: ``corners``, specs on the
+    same floor (:func:`corner_specs`), each tried once per photo; a twin is kept, with a
+    line in ``notes``, when nothing gives anything else.
 
     When a suggestion has no clean layout, the least important unit with an item cut
     by the photo's edge is dropped, else the one with a piece astray (the most
@@ -600,10 +635,16 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     fit = ROOM.fit
     notes = [] if notes is None else notes
     original, dropped_before = spec, len(dropped)
+    corners, cornered = list(corners), None
+    if spec.camera is None and corners and corners[0].camera is not None and NO_ROOM_IN_VIEW in notes:
+        # Nothing of the furniture stands whole in view (furniture_for_floor laid it out without the
+        # camera): a corner set does.
+        notes.remove(NO_ROOM_IN_VIEW)
+        spec, cornered = _corner_instead(spec, corners.pop(0), dropped, IN_NO_VIEW)
     while True:
         model, solver = build(spec)
         solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts))
-        layouts, reports, failed, cut, astray, said = [], [], None, None, None, []
+        layouts, reports, failed, cut, astray, said, tried = [], [], None, None, None, [], set()
         for k in range(suggestions):
             pick = _Pick(layouts, spec, anchor=frozenset(i.id for i in _units(spec)[0]))
             for t in range(fit.seed_tries):
@@ -625,6 +666,19 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                             break
                     if not pick.lacking:
                         break
+            for c, corner in enumerate(corners if pick.twin else ()):
+                if c in tried:
+                    continue
+                tried.add(c)
+                other = _Pick(layouts, corner, anchor=frozenset(i.id for i in _units(corner)[0]))
+                corner_model, _ = build(corner)
+                for t in range(fit.seed_tries):
+                    if other.offer(solver.solve(corner_model, seed=seed + k + t * suggestions)) or not other.lacking:
+                        break
+                if other.best is not None and other.best[0] < pick.best[0]:
+                    pick = other
+                if not pick.twin:
+                    break
             progress.step()
             if pick.best is None:
                 failed, cut, astray = k + 1, pick.cut, pick.astray
@@ -637,15 +691,19 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             for why in (OFF_SPOT, UNSEEN):
                 if ids := sorted(i for i, w in taken.items() if w == why):
                     said.append(f"suggestion {k + 1} leaves out {', '.join(ids)}: {why}")
-            left = sorted(set(i.id for i in _drop(spec, taken)[0].items) - set(pick.best[1].model.names))
-            if pick.twin:
+            left = sorted(set(i.id for i in _drop(pick.spec, taken)[0].items) - set(pick.best[1].model.names))
+            if pick.spec is not spec:
+                shown = ", ".join(i.id for i in pick.spec.items if i.id in pick.best[1].model.names)
+                said.append(f"suggestion {k + 1} stages another corner set ({shown}): the floor in view leaves "
+                            "room for one arrangement of the room's furniture")
+            elif pick.twin:
                 said.append(f"suggestion {k + 1} repeats an earlier one: the floor in view leaves no other "
                             "arrangement of this furniture")
             elif left:
                 said.append(f"suggestion {k + 1} leaves out {', '.join(left)} to differ from the others: the floor "
                             "in view leaves room for one arrangement of all of it")
         if failed is None:
-            notes.extend(said)
+            notes.extend(([cornered] if cornered else []) + said)
             return spec, layouts, reports
         units = _units(spec)
         kinds = {i.id: i.kind.name for i in spec.items}
@@ -662,10 +720,14 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                       f"{area_m2:.1f} m\u00b2 floor")
             gone_units = units[-1:]
         if len(gone_units) == len(units):
+            if spec.camera is not None and corners:
+                spec, cornered = _corner_instead(spec, corners.pop(0), dropped, reason)
+                progress.grow(suggestions)
+                continue
             if spec.camera is not None:
                 # Better pieces cut by the photo's edge than no staged photo: all again, as a plan.
                 notes.append(NO_ROOM_IN_VIEW)
-                spec = dataclasses.replace(original, camera=None)
+                spec, cornered = dataclasses.replace(original, camera=None), None
                 del dropped[dropped_before:]
                 continue
             dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason} for u in units for i in u)

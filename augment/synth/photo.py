@@ -60,3 +60,21 @@ def degrade(rng: np.random.Generator, image: np.ndarray) -> tuple[np.ndarray, di
         "jpeg_quality": int(rng.integers(70, 96)),
     }
     return photo, params
+
+
+def save_as_phone(path, image: np.ndarray, focal_px: float, quality: int) -> None:
+    """Save a sample's photo as a phone would: JPEG at ``quality`` with the 35 mm
+    equivalent focal length in EXIF (what ``stage`` reads the focal length from).
+
+    Parameters
+    ----------
+    image : (h, w, 3) uint8
+        RGB. Not modified.
+    focal_px : float
+        The render's focal length, pixels.
+    """
+    from PIL import Image
+
+    exif = Image.Exif()
+    exif.get_ifd(0x8769)[0xA405] = int(round(focal_px * np.hypot(36.0, 24.0) / np.hypot(*image.shape[1::-1])))
+    Image.fromarray(image).save(path, quality=int(quality), exif=exif)

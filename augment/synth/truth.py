@@ -131,3 +131,15 @@ def sun_exit(points_m: np.ndarray, direction, polygon_m: np.ndarray, height_m: f
         near = on & (along > -margin_m) & (along < length + margin_m) & (z > bottom - margin_m) & (z < top + margin_m)
         verdict = np.where(inside, 1, np.where(near, 0, verdict))
     return verdict
+
+
+def floor_in_world(truth: dict, camera_from_floor: np.ndarray) -> np.ndarray:
+    """(4, 4) ``world_from_floor``: the floor frame of a calibration of the sample's photo in
+    the sample's world. That frame is the board's, up to the checkerboard's half-turn
+    symmetry, which the estimated pose ``camera_from_floor`` tells; its small errors are the
+    calibration's and stay in any comparison."""
+    world_from_board = np.asarray(truth["board"]["world_from_board"])
+    M = np.linalg.inv(world_from_board) @ np.linalg.inv(np.asarray(truth["camera_from_world"])) @ camera_from_floor
+    turn = round(np.arctan2(M[1, 0], M[0, 0]) / (np.pi / 2)) * (np.pi / 2)
+    c, s = round(np.cos(turn)), round(np.sin(turn))
+    return world_from_board @ np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])

@@ -1161,35 +1161,33 @@ def test_no_auto_doors_keeps_only_the_users(tmp_path, capsys):
     assert report["furniture"]["doors"] == []
 
 
+def _measured_render(seed, folder):
+    """A render of the synthetic photographer (an empty room, 1280x960) saved as a phone
+    would, measured by the pipeline; and its truth."""
+    from augment.render.gl import Renderer
+    from augment.synth import render_sample
+    from augment.synth.photo import save_as_phone
+
+    with Renderer() as renderer:
+        sample = render_sample(seed, renderer, (1280, 960), clutter=False)
+    path = folder / "room.jpg"
+    save_as_phone(path, sample.image, sample.truth["K"][0][0], 92)
+    return pipeline.measure(path, Board()), sample.truth
+
+
 @pytest.mark.parametrize("seed", [[9900, 0], [9900, 22]])
 def test_a_door_the_rules_miss_is_found_by_the_door_model(tmp_path, seed):
     """Rooms of the synthetic photographer whose door, in view, the colour rules alone
     miss: the door model finds it, its centre within 15 cm of the true door's (the
     truth mapped into the calibration's floor frame), and nothing else."""
-    from PIL import Image
-
-    from augment.render.gl import Renderer
     from augment.room.openings import find_doors
-    from augment.synth import render_sample
+    from augment.synth.truth import floor_in_world
 
-    with Renderer() as renderer:
-        sample = render_sample(seed, renderer, (1280, 960), clutter=False)
-    path = tmp_path / "room.jpg"
-    exif = Image.Exif()  # the 35 mm equivalent focal length, as a phone writes it
-    exif.get_ifd(0x8769)[0xA405] = round(sample.truth["K"][0][0] * math.hypot(36, 24) / math.hypot(1280, 960))
-    Image.fromarray(sample.image).save(path, quality=92, exif=exif)
-    m = pipeline.measure(path, Board())
-    # The board's frame in the world, up to the checkerboard's half-turn symmetry.
-    world_from_board = np.asarray(sample.truth["board"]["world_from_board"])
-    M = np.linalg.inv(world_from_board) @ np.linalg.inv(sample.truth["camera_from_world"]) \
-        @ m.calibration.camera_from_floor
-    turn = round(math.atan2(M[1, 0], M[0, 0]) / (math.pi / 2)) * (math.pi / 2)
-    c, s = round(math.cos(turn)), round(math.sin(turn))
-    floor_from_world = np.linalg.inv(world_from_board @ np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0],
-                                                                  [0, 0, 0, 1.0]]))
+    m, truth = _measured_render(seed, tmp_path)
+    floor_from_world = np.linalg.inv(floor_in_world(truth, m.calibration.camera_from_floor))
     w, h = m.calibration.size_px
     true = []
-    for door in sample.truth["room"]["doors"]:
+    for door in truth["room"]["doors"]:
         feet = (np.column_stack([door["segment_m"], np.zeros(2), np.ones(2)]) @ floor_from_world.T)[:, :2]
         px = m.calibration.pixels_from_floor(feet)
         if ((px >= 0) & (px < [w, h])).all():
@@ -1197,6 +1195,57 @@ def test_a_door_the_rules_miss_is_found_by_the_door_model(tmp_path, seed):
     (door,) = true
     (found,) = find_doors(m.image, m.calibration, m.floor)
     assert np.linalg.norm(found.segment_m.mean(axis=0) - door) < 0.15
+
+
+def _suggestions(m, room, corners: bool):
+    """Four suggestions of the preset ``room`` on a measured photo (its doors found, as
+    ``stage furnish`` does), with or without its corner sets; their notes and dropped items."""
+    from augment.room.openings import find_doors
+
+    warnings = []
+    doors = [d.feet_px.ravel() for d in find_doors(m.image, m.calibration, m.floor)]
+    spec, dropped = fit.furniture_for_floor(room, m.floor, m.height.height_m, Path("room.jpg"), found_doors=doors,
+                                            calibration=m.calibration, warnings=warnings)
+    others = fit.corner_specs(room, spec, m.calibration) if corners else ()
+    _, layouts, _ = fit.solve_suggestions(spec, 4, 0, m.floor.area_m2, dropped, pipeline._Progress(False, 4),
+                                          warnings, others)
+    return layouts, warnings, dropped
+
+
+def test_a_small_floor_gets_four_different_corners_not_four_twins(tmp_path):
+    """Render [9900, 16], a living room whose floor in view holds the loveseat alone: all
+    four suggestions were that loveseat in one place. With the corner sets the four are
+    other furniture (each pair apart, :func:`fit.apart_m`), all whole in the frame, and
+    the notes say which suggestion stages which corner."""
+    from layout.camera import judge
+
+    m, _ = _measured_render([9900, 16], tmp_path)
+    plain, notes, _ = _suggestions(m, "living_room", corners=False)
+    assert max(fit.apart_m(a, b) for a in plain for b in plain if a is not b) < ROOM.fit.min_difference_m
+    layouts, notes, _ = _suggestions(m, "living_room", corners=True)
+    assert all(fit.apart_m(a, b) >= ROOM.fit.min_difference_m for a in layouts for b in layouts if a is not b)
+    assert all(judge(lay)["cut"] == [] for lay in layouts)
+    cornered = [n for n in notes if "stages another corner set" in n]
+    assert len(cornered) >= 2 and not any("repeats an earlier one" in n for n in notes), notes
+
+
+def test_furniture_cut_wherever_it_stood_gives_way_to_a_corner_in_view(tmp_path):
+    """Render [9900, 7], a dining room whose table set is cut by the photo's edge
+    wherever it stands: it was laid out without the camera, cut in all four photos. Now a
+    corner set stands whole in the frame in every suggestion, the table set is reported as
+    left out and no note says the camera was given up."""
+    from layout.camera import judge
+
+    m, _ = _measured_render([9900, 7], tmp_path)
+    plain, notes, _ = _suggestions(m, "dining_room", corners=False)
+    assert fit.NO_ROOM_IN_VIEW in notes and all(judge(lay, camera=fit.layout_camera(m.calibration))["cut"]
+                                                 for lay in plain)
+    layouts, notes, dropped = _suggestions(m, "dining_room", corners=True)
+    assert fit.NO_ROOM_IN_VIEW not in notes
+    assert any(n.startswith("staged as a corner (") for n in notes), notes
+    assert all(lay.model.camera is not None and judge(lay)["cut"] == [] for lay in layouts)
+    assert "dining_table" in {d["id"] for d in dropped}
+    assert not {"dining_table", "round_table"} & {k for lay in layouts for k in lay.model.kinds}
 
 
 def test_a_door_on_a_wall_drawn_in_steps_keeps_the_width_of_its_step():

@@ -196,3 +196,29 @@ def test_bedroom_suggestions_leave_the_nightstands_reachable(tmp_path):
     model, solver = spec.build(rect_room(tmp_path, "bedroom", 4.5, 4.0, door_x=1.0))
     reports = [evaluate(lay) for lay in solver.suggest(model, 5)]
     assert all(r["traversable"] for r in reports), [r["unreachable"] for r in reports]
+
+
+@pytest.mark.parametrize("name", list(presets.PRESETS))
+def test_corner_sets_are_other_small_groups_that_solve_clean(name):
+    """Each corner set is another furniture (no two of a preset hold the same kinds), a
+    small group (at most three pieces beside a table set, under half of a 2.5 x 2.5 m
+    corner), built from catalog kinds, and solves clean in that corner."""
+    sets = presets.corner_sets(name)
+    assert (len(sets) >= 3) == (name in ("living_room", "bedroom", "dining_room", "office"))
+    kinds = [sorted(t["kind"] for t in expanded(s)) for s in sets]
+    assert len({tuple(k) for k in kinds}) == len(kinds), kinds
+    for s in sets:
+        assert len([t for t in s["items"] if "group" not in t]) <= 3, s
+        assert presets.footprint_m2(s["items"]) <= 0.5 * 2.5 ** 2, s
+        doc = {"room": {"polygon": [[0, 0], [2.5, 0], [2.5, 2.5], [0, 2.5]], "height": 2.6}, **s}
+        model, _ = spec.build(spec.spec_from_dict(doc))
+        assert set(model.kinds) - {"group"} <= set(CATALOG)
+        reports = [evaluate(lay) for lay in Solver(max_iterations=400).suggest(model, 3)]
+        assert any(r["overlaps"]["count"] == 0 and r["outside_m2"] == 0.0 for r in reports), s
+
+
+def test_corner_sets_are_fresh_and_checked():
+    presets.corner_sets("living_room")[0]["items"].clear()
+    assert presets.corner_sets("living_room")[0]["items"]
+    with pytest.raises(LayoutError, match="preset 'kitchen' does not exist"):
+        presets.corner_sets("kitchen")
