@@ -86,13 +86,29 @@ def column_features(lab: np.ndarray, calibration, a: np.ndarray, b: np.ndarray, 
     are in view. Returns ((channels, columns) float32, (columns,) positions along the
     wall, m), or None for a wall too little in view to tell its colour."""
     settings = settings or ROOM.doors
-    step = settings.step_m
-    strip, inside, s = _wall_strip(lab, calibration, a, b, step, settings.model_top_m)
-    z = (np.arange(strip.shape[0]) + 0.5) * step
+    strip, inside, s = _wall_strip(lab, calibration, a, b, settings.step_m, settings.model_top_m)
+    features = _strip_features(strip, inside, settings)
+    return None if features is None else (features, s)
+
+
+def _rows(step_m: float, top_m: float) -> int:
+    """How many rows :func:`_wall_strip` samples up to ``top_m``."""
+    return len(np.arange(0.5 * step_m, top_m, step_m))
+
+
+def _wall_colour(strip: np.ndarray, inside: np.ndarray, settings) -> np.ndarray | None:
+    """The wall's own Lab colour: the median of the strip between ``wall_from_m`` and
+    ``wall_to_m`` (None when too little of that shows)."""
+    z = (np.arange(strip.shape[0]) + 0.5) * settings.step_m
     bare = inside & (z[:, None] >= settings.wall_from_m) & (z[:, None] <= settings.wall_to_m)
-    if bare.sum() < 20:
+    return np.median(strip[bare], axis=0) if bare.sum() >= 20 else None
+
+
+def _strip_features(strip: np.ndarray, inside: np.ndarray, settings) -> np.ndarray | None:
+    """:func:`column_features` of a strip sampled to ``settings.model_top_m``."""
+    wall = _wall_colour(strip, inside, settings)
+    if wall is None:
         return None
-    wall = np.median(strip[bare], axis=0)
     light = strip[..., 0]
     across = np.zeros_like(light)
     across[:, 1:-1] = np.abs(light[:, 2:] - light[:, :-2]) / 2.0
@@ -101,7 +117,7 @@ def column_features(lab: np.ndarray, calibration, a: np.ndarray, b: np.ndarray, 
     planes += [(light - 50.0) / 50.0 * seen, across / 5.0 * seen, seen]
     rows = strip.shape[0] // 2 * 2
     stack = np.stack([p[:rows].reshape(rows // 2, 2, -1).mean(axis=1) for p in planes])
-    return stack.reshape(-1, stack.shape[-1]).astype(np.float32), s
+    return stack.reshape(-1, stack.shape[-1]).astype(np.float32)
 
 
 def _walls(poly: np.ndarray, edge_kind, settings) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -175,12 +191,10 @@ def door_probability(features: np.ndarray) -> np.ndarray:
     return 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
 
 
-def _model_spans(lab, calibration, a, b, settings) -> list:
-    """(start, end, score) column spans of the door model's doors on the wall a -> b."""
-    got = column_features(lab, calibration, a, b, settings)
-    if got is None:
-        return []
-    p = door_probability(got[0])
+def _model_spans(features: np.ndarray, settings) -> list:
+    """(start, end, score) column spans of the door model's doors on a wall, from its
+    :func:`column_features`."""
+    p = door_probability(features)
     door = p >= settings.model_threshold
     door = cv2.morphologyEx(door.astype(np.uint8)[None], cv2.MORPH_CLOSE, np.ones((1, 5), np.uint8))[0] > 0
     lo_w, hi_w = settings.width_m
@@ -213,12 +227,15 @@ def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
     for a, b in _walls(poly, floor.edge_kind, settings):
         if np.linalg.norm(b - a) < lo_w:
             continue
-        strip, inside, s = _wall_strip(lab, calibration, a, b, step, settings.top_m)
-        z = (np.arange(strip.shape[0]) + 0.5) * step
-        bare = inside & (z[:, None] >= settings.wall_from_m) & (z[:, None] <= settings.wall_to_m)
-        if bare.sum() < 20:
+        # One strip for both readers: the rules read it to top_m, the model to model_top_m.
+        tall_strip, tall_inside, s = _wall_strip(lab, calibration, a, b, step, max(settings.top_m,
+                                                                                   settings.model_top_m))
+        rows = _rows(step, settings.top_m)
+        strip, inside = tall_strip[:rows], tall_inside[:rows]
+        wall = _wall_colour(strip, inside, settings)
+        if wall is None:
             continue
-        wall = np.median(strip[bare], axis=0)
+        z = (np.arange(strip.shape[0]) + 0.5) * step
         differs = np.linalg.norm(strip - wall, axis=-1) > settings.min_difference
         low = inside & (z[:, None] >= settings.leaf_from_m)
         seen = low.sum(axis=0)
@@ -241,7 +258,8 @@ def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
         for i, j in ((i, j) for i in lines for j in lines if lo_w <= (j - i) * step <= hi_w):
             if not any(i0 - 3 <= i and j <= i1 + 3 for i0, i1, _ in spans):
                 spans.append((i, j + 1, 0.5))
-        spans += _model_spans(lab, calibration, a, b, settings)
+        rows = _rows(step, settings.model_top_m)
+        spans += _model_spans(_strip_features(tall_strip[:rows], tall_inside[:rows], settings), settings)
         spans = _without_overlaps(spans)
         u = (b - a) / np.linalg.norm(b - a)
         for i0, i1, score in spans:
