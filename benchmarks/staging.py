@@ -14,7 +14,11 @@ Per suggestion, judged through the photo's calibrated camera (what the staged ph
 shows; :func:`layout.camera.judge`):
 * ``foreground_clear``: no footprint reaches into the lowest 15 % of the frame;
 * ``whole``: every item's box projects inside the image;
-* ``visible``: every judged item shows on at least 70 % of its box's pixels;
+* ``visible``: every judged item shows on at least 70 % of its box's pixels, with
+  other items' boxes in front (what the layout's own test sees, boxes as occluders);
+* ``visible_in_photo``: the same for the furniture's meshes as rendered (each judged
+  item's silhouette, drawn alone, against the drawing of all; :func:`_rendered_visible`):
+  what the staged photo shows, where a chair in front hides less than its box;
 * ``good_side``: no sofa or armchair nearer than the floor's middle seen from behind;
 * ``doors_clear``: no furniture in the swing zone (as deep as the door is wide) of the
   photographer's true doors with both feet in view (renders only); before, no door was
@@ -43,11 +47,11 @@ ROOT = HERE.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(HERE))
 
-from realism import floor_in_world, write_phone_jpeg  # noqa: E402  (the photos and the board pose as realism.py)
 
 ROOMS = ("living_room", "bedroom", "office", "dining_room")
 SUGGESTIONS = 4
-CHECKS = ("foreground_clear", "whole", "visible", "good_side", "doors_clear", "rules_met", "different")
+CHECKS = ("foreground_clear", "whole", "visible", "visible_in_photo", "good_side", "doors_clear", "rules_met",
+          "different")
 TARGET = 0.95
 DOOR_MATCH_M = 0.3  # a found door this close to a true one is that door (its error is reported)
 
@@ -64,19 +68,22 @@ def _photos(count: int, seed: int, work: Path):
     """(name, path, preset, truth or None) of the sample photos and the renders."""
     from augment.render.gl import Renderer
     from augment.synth import render_sample
+    from augment.synth.photo import save_as_phone
 
     out = [(f"sample {k}", ROOT / "samples" / "photos" / f"room_{k}.jpg", "living_room", None) for k in range(1, 5)]
     with Renderer() as renderer:
         for i in range(count):
             sample = render_sample([seed, i], renderer, (1280, 960), clutter=False)
             path = work / f"render_{i:02d}.jpg"
-            write_phone_jpeg(path, sample.image, sample.truth["K"][0][0], sample.truth["photo"]["jpeg_quality"])
+            save_as_phone(path, sample.image, sample.truth["K"][0][0], sample.truth["photo"]["jpeg_quality"])
             out.append((f"render {seed}/{i}", path, ROOMS[i % len(ROOMS)], sample.truth))
     return out
 
 
 def _doors_in_layout_frame(truth, calibration) -> list:
-    """The true doors' segments in the calibration's floor frame (:func:`realism.floor_in_world`)."""
+    """The true doors' segments in the calibration's floor frame (:func:`augment.synth.truth.floor_in_world`)."""
+    from augment.synth.truth import floor_in_world
+
     floor_from_world = np.linalg.inv(floor_in_world(truth, calibration.camera_from_floor))
     return [(np.column_stack([d["segment_m"], np.zeros(2), np.ones(2)]) @ floor_from_world.T)[:, :2]
             for d in truth["room"]["doors"]]
@@ -121,10 +128,13 @@ def _rules_met(lay) -> bool:
                 and np.all(np.sqrt(2.0 * np.abs(r["heat"])) <= 0.15))
 
 
-def _checks(layouts, camera, calibration, doors) -> list[dict]:
+def _checks(layouts, camera, calibration, doors, renderer) -> list[dict]:
     from augment.room.fit import apart_m
+    from augment.pipeline import suggestion_styles
     from layout.camera import CAMERA, box_corners_3d, judge
     from layout.metrics import convex_intersection_area
+
+    styles = suggestion_styles(None, 0, len(layouts))  # as stage furnish --seed 0 renders them
 
     w, h = camera.size_px
     rows = []
@@ -143,6 +153,8 @@ def _checks(layouts, camera, calibration, doors) -> list[dict]:
             "whole": bool(np.all(z > 0) and np.all((uv[..., 0] >= -1) & (uv[..., 0] <= w + 1) & (uv[..., 1] >= -1)
                                                    & (uv[..., 1] <= h + 1))),
             "visible": not j["hidden"],
+            "visible_in_photo": all(v >= CAMERA.min_visible for v in _rendered_visible(
+                lay, calibration, renderer, styles[k]).values()),
             "good_side": not j["from_behind"],
             "doors_clear": None if not zones else all(
                 convex_intersection_area(zn, f) <= 0.01 for zn in zones for f in footprints),
@@ -151,6 +163,52 @@ def _checks(layouts, camera, calibration, doors) -> list[dict]:
             "hidden": j["hidden"], "from_behind": j["from_behind"], "cut": j["cut"],
         })
     return rows
+
+
+def _rendered_visible(lay, calibration, renderer, style: str) -> dict:
+    """Each judged item's share of its rendered silhouette that the staged photo shows (the
+    furniture's meshes, as the pipeline builds them, at a quarter of the photo's size),
+    for the items :func:`layout.camera.judge` judges; the box test's check, from meshes."""
+    import pyrender
+
+    from augment.render.furniture import furniture_for, placed_items, world_from_item
+    from augment.render.gl import gl_from_cv_pose, pyrender_camera
+    from layout.camera import judge
+
+    from augment.room.fit import layout_camera
+
+    judged = set(judge(lay, camera=layout_camera(calibration)).get("visible", {}))
+    w, h = (int(round(v / 4)) for v in calibration.size_px)
+    K = calibration.intrinsics.K.copy()
+    K[:2] *= 0.25
+    K[:2, 2] = (calibration.intrinsics.K[:2, 2] + 0.5) * 0.25 - 0.5
+    pose = gl_from_cv_pose(np.linalg.inv(calibration.camera_from_floor))
+    meshes = {}
+    for it in placed_items(lay):
+        f = furniture_for(it, 0 if lay.seed is None else int(lay.seed), style=style)
+        world = world_from_item(it)
+        v = np.concatenate([p.vertices for p in f.parts]) @ world[:3, :3].T + world[:3, 3]
+        starts = np.cumsum([0] + [len(p.vertices) for p in f.parts[:-1]])
+        faces = np.concatenate([p.faces + s0 for p, s0 in zip(f.parts, starts)])
+        meshes[it.id] = pyrender.Mesh([pyrender.Primitive(positions=v.astype(np.float32), indices=faces,
+                                                          material=pyrender.MetallicRoughnessMaterial(
+                                                              doubleSided=True))])
+
+    def depth(ids):
+        scene = pyrender.Scene()
+        scene.add(pyrender_camera(K), pose=pose)
+        for i in ids:
+            scene.add(meshes[i])
+        return renderer.render(scene, w, h, flags=pyrender.RenderFlags.DEPTH_ONLY)
+
+    everything = depth(list(meshes))
+    out = {}
+    for i in sorted(judged & set(meshes)):
+        alone = depth([i])
+        silhouette = alone > 0
+        shown = silhouette & (np.abs(everything - alone) <= 1e-3 * np.maximum(alone, 1.0))
+        out[i] = float(shown.sum() / max(silhouette.sum(), 1))
+    return out
 
 
 def _share(rows, key):
@@ -170,6 +228,7 @@ def main(argv=None) -> int:
     from augment.draw.sheet import contact_sheet
     from augment.errors import StagerError
     from augment.pipeline import furnish, measure
+    from augment.render.gl import Renderer
     from augment.room import fit
     from augment.room.openings import find_doors
     from augment.room.settings import ROOM
@@ -177,6 +236,7 @@ def main(argv=None) -> int:
 
     work = Path(tempfile.mkdtemp(prefix="staging-"))
     photos = _photos(args.count, args.seed, work)
+    renderer = Renderer()
     results = {"plan": [], "camera": []}
     door_rows, false_doors = [], 0
     times = {"plan": [], "camera": []}
@@ -206,15 +266,18 @@ def main(argv=None) -> int:
                 spec, dropped = fit.furniture_for_floor(
                     room, m.floor, m.height.height_m, path, calibration=m.calibration, warnings=warnings,
                     found_doors=[f.feet_px.ravel() for f in found_doors] if mode == "camera" else ())
-                fit.solve_suggestions(spec, SUGGESTIONS, 0, m.floor.area_m2, list(dropped), _Quiet(), [])  # warm
+                # Before the camera, no corner sets either.
+                corners = fit.corner_specs(room, spec, m.calibration) if mode == "camera" else ()
+                fit.solve_suggestions(spec, SUGGESTIONS, 0, m.floor.area_m2, list(dropped), _Quiet(), [],
+                                      corners)  # warm
                 t = time.perf_counter()
                 spec, layouts, _ = fit.solve_suggestions(spec, SUGGESTIONS, 0, m.floor.area_m2, dropped, _Quiet(),
-                                                         warnings)
+                                                         warnings, corners)
                 times[mode].append(time.perf_counter() - t)
             except (StagerError, LayoutError) as error:
                 entry[mode] = {"refused": str(error)[:200]}
                 continue
-            rows = _checks(layouts, cam, m.calibration, doors)
+            rows = _checks(layouts, cam, m.calibration, doors, renderer)
             for r in rows:
                 r["photo"] = name
             results[mode].extend(rows)
@@ -236,7 +299,7 @@ def main(argv=None) -> int:
     for e in worst:
         path = next(p for n, p, _, _ in photos if n == e["photo"])
         try:
-            res = furnish(path, Board(), room=e["room"], suggestions=SUGGESTIONS, seed=0)
+            res = furnish(path, Board(), room=e["room"], suggestions=SUGGESTIONS, seed=0, renderer=renderer)
         except StagerError:
             continue
         rows = [r for r in results["camera"] if r["photo"] == e["photo"]]
@@ -276,8 +339,12 @@ def main(argv=None) -> int:
            f"{layout_s['camera']:.2f} s (camera); slowest {layout_max['plan']:.2f} s / {layout_max['camera']:.2f} s "
            "(target under 0.5 s).", "",
            "Refused photos: " + (", ".join(f"{e['photo']} ({e['refused'][:80]})" for e in per_photo
-                                          if "refused" in e) or "none") + ".", "",
+                                          if "refused" in e) or "none") + ".",
+           "Refused furniture, for the camera: " + (", ".join(
+               f"{e['photo']} ({e['camera']['refused'][:80]})" for e in per_photo
+               if "refused" in e.get("camera", {})) or "none") + ".", "",
            "Worst cases (camera): `staging_worst.png`."]
+    renderer.close()
     write("staging", data, md)
     print("\n".join(md))
     return 0

@@ -595,6 +595,10 @@ class _Pick:
         return self.best is not None and (self.best[0][0] or self.best[0][1])
 
 
+def _kinds(spec) -> list:
+    return sorted(i.kind.name for i in spec.items)
+
+
 def _corner_instead(spec, corner, dropped: list, reason: str) -> tuple:
     """``corner`` (a corner set, :func:`corner_specs`) to lay out in place of all of ``spec``'s
     furniture, which no suggestion can show whole in the photo, and the note that says so."""
@@ -635,7 +639,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     fit = ROOM.fit
     notes = [] if notes is None else notes
     original, dropped_before = spec, len(dropped)
-    corners, cornered = list(corners), None
+    corners, cornered = [c for c in corners if _kinds(c) != _kinds(spec)], None
     if spec.camera is None and corners and corners[0].camera is not None and NO_ROOM_IN_VIEW in notes:
         # Nothing of the furniture stands whole in view (furniture_for_floor laid it out without the
         # camera): a corner set does.
@@ -774,7 +778,8 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
     Raises
     ------
     FurnishError
-        The floor is no usable room, or too small for any of the furniture.
+        The floor is no usable room, or too small for any of the furniture (a preset: for
+        any of its corner sets too).
     """
     poly = _layout_floor(floor, height_m, where)
     edges = open_edges(poly, floor)
@@ -802,7 +807,15 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
         found += door
     fitted = dataclasses.replace(fitted, doors=fitted.doors + tuple(found))
     if not fitted.items:
-        raise too_small(floor.area_m2, dropped)
+        # A preset's corner set where none of its furniture fits (a dining set on 3 m²): whole
+        # in the frame, else cut by it rather than no staged photo.
+        corners = corner_specs(source, fitted, calibration) or corner_specs(source, fitted)
+        if not corners:
+            raise too_small(floor.area_m2, dropped)
+        fitted, note = _corner_instead(fitted, corners[0], dropped, "")
+        if fitted.camera is not None and NO_ROOM_IN_VIEW in warnings:
+            warnings.remove(NO_ROOM_IN_VIEW)
+        warnings.append(note)
     kinds = {i.kind.name for i in fitted.items}
     unused = sorted(set(asset_kinds) - kinds)
     if unused:

@@ -1248,6 +1248,23 @@ def test_furniture_cut_wherever_it_stood_gives_way_to_a_corner_in_view(tmp_path)
     assert not {"dining_table", "round_table"} & {k for lay in layouts for k in lay.model.kinds}
 
 
+def test_a_floor_too_small_for_the_dining_set_is_staged_with_a_corner_set(tmp_path):
+    """Render [9900, 11] shows 7 m² of a dining room, too little for its table set at any
+    angle (the preset's round table for four, 1.84 m across with its chairs): the photo was
+    refused. Now the bistro set is staged, whole in the frame in all four suggestions."""
+    from layout.camera import judge
+
+    m, _ = _measured_render([9900, 11], tmp_path)
+    layouts, notes, dropped = _suggestions(m, "dining_room", corners=True)
+    assert ("dining_table", "round_table") in {(d["id"], d["kind"]) for d in dropped}
+    assert any(n.startswith("staged as a corner (bistro_table") for n in notes), notes
+    assert fit.NO_ROOM_IN_VIEW not in notes
+    for lay in layouts:
+        assert "round_table" in lay.model.kinds and lay.model.particle_size_m[lay.model.names.index(
+            "bistro_table")][0] == pytest.approx(0.7)
+        assert lay.model.camera is not None and judge(lay)["cut"] == []
+
+
 def test_a_door_on_a_wall_drawn_in_steps_keeps_the_width_of_its_step():
     """A 1 m door whose middle lies on a 0.8 m edge of an outline that steps 3 cm either
     side of it: the door is kept, 0.8 m wide, where before the layout refused it as
