@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _codes as codes
+from ._kernels import ray_box_entry
 from .errors import LayoutError
 
 # Seating that is looked at and so has a good side; chairs at a table are seen from
@@ -177,25 +178,6 @@ def in_view_share(camera: Camera, polygon_m, size_m, rules: CameraRules | None =
     return ok / (n * yaws)
 
 
-def _ray_box_hits(origin, dirs, pos, yaw, size):
-    """Entry distance of each ray into each box ((r, n), inf where it misses): the slab
-    test in the box's own frame."""
-    c, s = np.cos(yaw), np.sin(yaw)
-    rel = origin[None, :] - pos  # (n, 3)
-    # Box frame: x along the facing (depth), y across (width), z up.
-    o = np.stack([c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1], rel[:, 2]], axis=1)
-    d = np.stack([dirs[:, None, 0] * c + dirs[:, None, 1] * s, -dirs[:, None, 0] * s + dirs[:, None, 1] * c,
-                  np.broadcast_to(dirs[:, None, 2], (len(dirs), len(pos)))], axis=2)
-    half = 0.5 * size[:, [1, 0, 2]]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / np.where(np.abs(d) < 1e-12, 1e-12, d)
-        t1 = (-half[None] - o[None]) * inv
-        t2 = (half[None] - o[None]) * inv
-    near = np.minimum(t1, t2).max(axis=2)
-    far = np.maximum(t1, t2).min(axis=2)
-    return np.where((far >= near) & (far > 0.0), np.maximum(near, 0.0), np.inf)
-
-
 def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None) -> dict:
     """How a layout looks through its model's camera (or ``camera``: e.g. a layout
     made without one, judged as the photo shows it).
@@ -245,7 +227,9 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
     R = cam.camera_from_floor[:3, :3]
     dirs = (np.linalg.solve(cam.K, pix.T).T) @ R  # camera rays into the floor frame
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-    hits = _ray_box_hits(cam.center_m, dirs, pos, yaw, size) if len(items) else np.zeros((len(dirs), 0))
+    hits = np.empty((len(dirs), len(items)))
+    ray_box_entry(np.asarray(cam.center_m, dtype=np.float64), np.ascontiguousarray(dirs), np.ascontiguousarray(pos),
+                  np.ascontiguousarray(yaw, dtype=np.float64), np.ascontiguousarray(size), hits)
     seen = np.isfinite(hits)
     nearest = np.where(seen.any(axis=1), hits.argmin(axis=1), -1)
     exempt = _not_judged_for_hiding(model, items)

@@ -140,3 +140,24 @@ def test_a_spec_names_its_camera():
         spec_from_dict(below, where="my.toml")
     with pytest.raises(LayoutError, match=r"my.toml: camera: size_px = \[640\] must be \[width, height\]"):
         spec_from_dict({**doc, "camera": {**doc["camera"], "size_px": [640]}}, where="my.toml")
+
+
+def test_rays_enter_turned_boxes_where_hand_computed():
+    """The visibility rays' slab test (layout._kernels.ray_box_entry): a 1 m cube 2 m ahead
+    is entered at 1.5 m; behind the ray it is missed; from inside, at 0. A box turned to
+    face +y (2 m wide across it, 0.5 m deep along it) centred 3 m along y spans y 2.75 to
+    3.25 and x -1 to 1: entered at 2.75 m, missed from 2.2 m to the side."""
+    from layout._kernels import ray_box_entry
+
+    pos = np.array([[2.0, 0.0, 0.5], [0.0, 3.0, 0.5]])
+    yaw = np.array([0.0, math.pi / 2])
+    size = np.array([[1.0, 1.0, 1.0], [2.0, 0.5, 1.0]])
+    dirs = np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    out = np.empty((3, 2))
+    ray_box_entry(np.array([0.0, 0.0, 0.5]), dirs, pos, yaw, size, out)
+    np.testing.assert_allclose(out[0, 0], 1.5)
+    assert out[1, 0] == np.inf and out[0, 1] == np.inf and out[1, 1] == np.inf
+    np.testing.assert_allclose(out[2, 1], 2.75)
+    assert out[2, 0] == np.inf
+    ray_box_entry(np.array([2.2, 0.0, 0.5]), dirs, pos, yaw, size, out)
+    assert out[2, 1] == np.inf and out[0, 0] == 0.0 and out[1, 0] == 0.0
