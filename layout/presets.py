@@ -269,6 +269,7 @@ def _living_corners():
         _set([_item("sofa", "sofa", size=list(LOVESEAT)), _item("side_table", "side_table")]),
         _set([_item("bookcase", "bookcase"), _item("plant", "plant")]),
         _set([_item("armchair", "armchair"), _item("plant", "plant")]),
+        _set([_item("plant", "plant"), _item("side_table", "side_table")]),
     ]
 
 
