@@ -696,10 +696,12 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 if ids := sorted(i for i, w in taken.items() if w == why):
                     said.append(f"suggestion {k + 1} leaves out {', '.join(ids)}: {why}")
             left = sorted(set(i.id for i in _drop(pick.spec, taken)[0].items) - set(pick.best[1].model.names))
+            kept = [i for i in pick.spec.items if i.id in pick.best[1].model.names]
             if pick.spec is not spec:
-                shown = ", ".join(i.id for i in pick.spec.items if i.id in pick.best[1].model.names)
-                said.append(f"suggestion {k + 1} stages another corner set ({shown}): the floor in view leaves "
-                            "room for one arrangement of the room's furniture")
+                # A corner set left with the room's own furniture shows it elsewhere: nothing to say.
+                if sorted(i.kind.name for i in kept) != _kinds(spec):
+                    said.append(f"suggestion {k + 1} stages another corner set ({', '.join(i.id for i in kept)}): "
+                                "the floor in view leaves room for one arrangement of the room's furniture")
             elif pick.twin:
                 said.append(f"suggestion {k + 1} repeats an earlier one: the floor in view leaves no other "
                             "arrangement of this furniture")

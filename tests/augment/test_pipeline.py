@@ -1227,6 +1227,11 @@ def test_a_small_floor_gets_four_different_corners_not_four_twins(tmp_path):
     assert all(judge(lay)["cut"] == [] for lay in layouts)
     cornered = [n for n in notes if "stages another corner set" in n]
     assert len(cornered) >= 2 and not any("repeats an earlier one" in n for n in notes), notes
+    # A suggestion said to stage another set shows other furniture than the first.
+    for n in cornered:
+        k = int(n.split()[1])
+        assert sorted(layouts[k - 1].model.kinds[i] for i in layouts[k - 1].items) != \
+            sorted(layouts[0].model.kinds[i] for i in layouts[0].items), n
 
 
 def test_furniture_cut_wherever_it_stood_gives_way_to_a_corner_in_view(tmp_path):
