@@ -80,15 +80,6 @@ def _photos(count: int, seed: int, work: Path):
     return out
 
 
-def _doors_in_layout_frame(truth, calibration) -> list:
-    """The true doors' segments in the calibration's floor frame (:func:`augment.synth.truth.floor_in_world`)."""
-    from augment.synth.truth import floor_in_world
-
-    floor_from_world = np.linalg.inv(floor_in_world(truth, calibration.camera_from_floor))
-    return [(np.column_stack([d["segment_m"], np.zeros(2), np.ones(2)]) @ floor_from_world.T)[:, :2]
-            for d in truth["room"]["doors"]]
-
-
 def _doors_in_view(doors, calibration, floor) -> list:
     """The true doors whose feet both show in the photo, on a wall of the floor found."""
     from layout.geometry import edge_distances
@@ -154,7 +145,7 @@ def _checks(layouts, camera, calibration, doors, renderer) -> list[dict]:
                                                    & (uv[..., 1] <= h + 1))),
             "visible": not j["hidden"],
             "visible_in_photo": all(v >= CAMERA.min_visible for v in _rendered_visible(
-                lay, calibration, renderer, styles[k]).values()),
+                lay, calibration, renderer, styles[k], j["visible"]).values()),
             "good_side": not j["from_behind"],
             "doors_clear": None if not zones else all(
                 convex_intersection_area(zn, f) <= 0.01 for zn in zones for f in footprints),
@@ -165,19 +156,16 @@ def _checks(layouts, camera, calibration, doors, renderer) -> list[dict]:
     return rows
 
 
-def _rendered_visible(lay, calibration, renderer, style: str) -> dict:
+def _rendered_visible(lay, calibration, renderer, style: str, judged) -> dict:
     """Each judged item's share of its rendered silhouette that the staged photo shows (the
     furniture's meshes, as the pipeline builds them, at a quarter of the photo's size),
-    for the items :func:`layout.camera.judge` judges; the box test's check, from meshes."""
+    for the items ``judged`` (names :func:`layout.camera.judge` judges); the box test's
+    check, from meshes."""
     import pyrender
 
     from augment.render.furniture import furniture_for, placed_items, world_from_item
     from augment.render.gl import gl_from_cv_pose, pyrender_camera
-    from layout.camera import judge
 
-    from augment.room.fit import layout_camera
-
-    judged = set(judge(lay, camera=layout_camera(calibration)).get("visible", {}))
     w, h = (int(round(v / 4)) for v in calibration.size_px)
     K = calibration.intrinsics.K.copy()
     K[:2] *= 0.25
@@ -203,7 +191,7 @@ def _rendered_visible(lay, calibration, renderer, style: str) -> dict:
 
     everything = depth(list(meshes))
     out = {}
-    for i in sorted(judged & set(meshes)):
+    for i in sorted(set(judged) & set(meshes)):
         alone = depth([i])
         silhouette = alone > 0
         shown = silhouette & (np.abs(everything - alone) <= 1e-3 * np.maximum(alone, 1.0))
@@ -232,6 +220,7 @@ def main(argv=None) -> int:
     from augment.room import fit
     from augment.room.openings import find_doors
     from augment.room.settings import ROOM
+    from augment.synth.truth import true_doors_on_floor
     from layout.errors import LayoutError
 
     work = Path(tempfile.mkdtemp(prefix="staging-"))
@@ -248,7 +237,7 @@ def main(argv=None) -> int:
             per_photo.append({"photo": name, "refused": str(error)[:200]})
             continue
         cam = fit.layout_camera(m.calibration)
-        doors = _doors_in_view(_doors_in_layout_frame(truth, m.calibration), m.calibration, m.floor) \
+        doors = _doors_in_view(true_doors_on_floor(truth, m.calibration.camera_from_floor), m.calibration, m.floor) \
             if truth is not None else []
         entry = {"photo": name, "room": room}
         found_doors = find_doors(m.image, m.calibration, m.floor)

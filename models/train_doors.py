@@ -60,7 +60,7 @@ def render_walls(seed: int, count: int) -> dict:
     from augment.room.settings import ROOM
     from augment.synth import render_sample
     from augment.synth.photo import save_as_phone
-    from augment.synth.truth import floor_in_world
+    from augment.synth.truth import true_doors_on_floor
 
     walls, labels, render = [], [], []
     work = Path(tempfile.mkdtemp())
@@ -73,9 +73,7 @@ def render_walls(seed: int, count: int) -> dict:
                 m = measure(path, Board())
             except StagerError:
                 continue
-            floor_from_world = np.linalg.inv(floor_in_world(sample.truth, m.calibration.camera_from_floor))
-            doors = [(np.column_stack([d["segment_m"], np.zeros(2), np.ones(2)]) @ floor_from_world.T)[:, :2]
-                     for d in sample.truth["room"]["doors"]]
+            doors = true_doors_on_floor(sample.truth, m.calibration.camera_from_floor)
             lab = _lab(m.image)
             poly = np.asarray(m.floor.polygon_m, dtype=np.float64)
             for a, b in _walls(poly, m.floor.edge_kind, ROOM.doors):

@@ -29,6 +29,12 @@ def exif_focal_px(path, size_px: tuple[int, int]) -> float | None:
     return float(f35) / _FILM_DIAGONAL_MM * float(np.hypot(*size_px))
 
 
+def focal_35mm(focal_px: float, size_px: tuple[int, int]) -> int:
+    """The EXIF 35 mm equivalent focal length (whole mm) of a focal length in pixels: the
+    inverse of :func:`exif_focal_px`."""
+    return int(round(focal_px * _FILM_DIAGONAL_MM / float(np.hypot(*size_px))))
+
+
 def exif_orientation(path) -> int | None:
     """The EXIF orientation tag of an image file (1-8), or None."""
     value = _exif(path)[0].get(0x0112)

@@ -263,8 +263,7 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None =
             top = max(i.kind.size_m[2] + i.elevation_m for i in unit)
             if in_view_share(camera, poly, (w, d, top)) > 0.0:
                 continue
-            why = (f"{top:.2f} m tall, it would be cut by the photo's edge or stand in its foreground wherever it "
-                   "stood (a photo taken from higher or farther back shows more)")
+            why = f"{top:.2f} m tall, {IN_NO_VIEW} (a photo taken from higher or farther back shows more)"
             bare = unit[0].kind.bare_height_m if len(unit) == 1 and unit[0].elevation_m == 0.0 else 0.0
             if 0.0 < bare < top and in_view_share(camera, poly, (w, d, bare)) > 0.0:
                 lowered = dataclasses.replace(unit[0], kind=dataclasses.replace(

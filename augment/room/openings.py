@@ -87,8 +87,8 @@ def column_features(lab: np.ndarray, calibration, a: np.ndarray, b: np.ndarray, 
     wall, m), or None for a wall too little in view to tell its colour."""
     settings = settings or ROOM.doors
     strip, inside, s = _wall_strip(lab, calibration, a, b, settings.step_m, settings.model_top_m)
-    features = _strip_features(strip, inside, settings)
-    return None if features is None else (features, s)
+    wall = _wall_colour(strip, inside, settings)
+    return None if wall is None else (_strip_features(strip, inside, wall), s)
 
 
 def _rows(step_m: float, top_m: float) -> int:
@@ -104,11 +104,9 @@ def _wall_colour(strip: np.ndarray, inside: np.ndarray, settings) -> np.ndarray 
     return np.median(strip[bare], axis=0) if bare.sum() >= 20 else None
 
 
-def _strip_features(strip: np.ndarray, inside: np.ndarray, settings) -> np.ndarray | None:
-    """:func:`column_features` of a strip sampled to ``settings.model_top_m``."""
-    wall = _wall_colour(strip, inside, settings)
-    if wall is None:
-        return None
+def _strip_features(strip: np.ndarray, inside: np.ndarray, wall: np.ndarray) -> np.ndarray:
+    """:func:`column_features` of a strip sampled to ``settings.model_top_m``, the wall's
+    own colour ``wall`` (:func:`_wall_colour`)."""
     light = strip[..., 0]
     across = np.zeros_like(light)
     across[:, 1:-1] = np.abs(light[:, 2:] - light[:, :-2]) / 2.0
@@ -259,7 +257,7 @@ def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
             if not any(i0 - 3 <= i and j <= i1 + 3 for i0, i1, _ in spans):
                 spans.append((i, j + 1, 0.5))
         rows = _rows(step, settings.model_top_m)
-        spans += _model_spans(_strip_features(tall_strip[:rows], tall_inside[:rows], settings), settings)
+        spans += _model_spans(_strip_features(tall_strip[:rows], tall_inside[:rows], wall), settings)
         spans = _without_overlaps(spans)
         u = (b - a) / np.linalg.norm(b - a)
         for i0, i1, score in spans:

@@ -75,6 +75,8 @@ def save_as_phone(path, image: np.ndarray, focal_px: float, quality: int) -> Non
     """
     from PIL import Image
 
+    from ..photo.exif import focal_35mm
+
     exif = Image.Exif()
-    exif.get_ifd(0x8769)[0xA405] = int(round(focal_px * np.hypot(36.0, 24.0) / np.hypot(*image.shape[1::-1])))
+    exif.get_ifd(0x8769)[0xA405] = focal_35mm(focal_px, image.shape[1::-1])
     Image.fromarray(image).save(path, quality=int(quality), exif=exif)

@@ -1181,14 +1181,12 @@ def test_a_door_the_rules_miss_is_found_by_the_door_model(tmp_path, seed):
     miss: the door model finds it, its centre within 15 cm of the true door's (the
     truth mapped into the calibration's floor frame), and nothing else."""
     from augment.room.openings import find_doors
-    from augment.synth.truth import floor_in_world
+    from augment.synth.truth import true_doors_on_floor
 
     m, truth = _measured_render(seed, tmp_path)
-    floor_from_world = np.linalg.inv(floor_in_world(truth, m.calibration.camera_from_floor))
     w, h = m.calibration.size_px
     true = []
-    for door in truth["room"]["doors"]:
-        feet = (np.column_stack([door["segment_m"], np.zeros(2), np.ones(2)]) @ floor_from_world.T)[:, :2]
+    for feet in true_doors_on_floor(truth, m.calibration.camera_from_floor):
         px = m.calibration.pixels_from_floor(feet)
         if ((px >= 0) & (px < [w, h])).all():
             true.append(feet.mean(axis=0))
