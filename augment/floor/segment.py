@@ -572,7 +572,7 @@ def _refined(small, scale, probability, calibration, method, refine, clicks):
         _seed_geometry(trimap, shape_small, scale, calibration)
         _apply_clicks(trimap, clicked_floor, clicked_other, clicked_near)
         small_mask = _grabcut(small, trimap, FLOOR.segment.grabcut_iterations)
-        small_mask = _restore_dropped(small_mask, probability, calibration, scale, clicked_other)
+        small_mask = _restore_dropped(small_mask, probability, calibration, scale, clicked_other | clicked_near)
         name = "onnx+grabcut"
     elif method == "onnx":
         small_mask = probability > 0.5
@@ -592,19 +592,22 @@ def _refined(small, scale, probability, calibration, method, refine, clicks):
 
 
 def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, scale: float,
-                     clicked_other: np.ndarray) -> np.ndarray:
+                     clicked: np.ndarray) -> np.ndarray:
     """Give back the regions the model calls floor that GrabCut dropped whole.
 
     GrabCut's colour model of the floor is learnt from the floor it is sure of, around
     the board: a second floor material past a threshold (tiles beyond carpet, planks in
     an alcove) fits it badly and is dropped, though the model calls it floor. GrabCut is
     for the model's soft edges, a few working pixels; a region of
-    ``FLOOR.segment.restore_min_m2`` or more on the floor, thicker than an edge
+    ``FLOOR.segment.restore_min_m2`` or more on the floor and not a far speck in the photo
+    (``FLOOR.segment.min_part_share`` of the mask's pixels: a carton's top far off spans
+    that much floor in a few hundred pixels), thicker than an edge
     (``FLOOR.segment.restore_edge_px``), below the horizon and touching the floor kept,
-    is the model's call to make. A region the user clicked as not floor stays out."""
+    is the model's call to make. Where the user clicked (``clicked``: a "not floor" region
+    and every click's reach) GrabCut, told by the click, has the last word."""
     if calibration is None:
         return mask
-    dropped = (probability > 0.5) & ~mask & ~clicked_other
+    dropped = (probability > 0.5) & ~mask & ~clicked
     dropped &= below_horizon(mask.shape, calibration.scaled(scale).horizon, 1.0)
     edge = FLOOR.segment.restore_edge_px
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * edge + 1, 2 * edge + 1))
@@ -612,17 +615,21 @@ def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, sca
     if not core.any():
         return mask
     n, labels = cv2.connectedComponents(core, connectivity=8)
+    # Each core grown back to its region: the area is the dropped region's, not the
+    # thinner core's (a far strip of tiles loses a third of itself to the erosion).
+    region = np.where(dropped, cv2.dilate(labels.astype(np.float32), kernel).astype(np.int32), 0)
     footprint = _believed_footprint_m2(mask.shape, calibration.scaled(scale))
-    area = np.bincount(labels.ravel(), footprint.ravel(), minlength=n)
+    area = np.bincount(region.ravel(), footprint.ravel(), minlength=n)
     near = cv2.dilate(mask.astype(np.uint8), kernel, iterations=2) > 0
     touching = np.zeros(n, bool)
     touching[np.unique(labels[near & (labels > 0)])] = True
+    pixels = np.bincount(region.ravel(), minlength=n)
     keep = touching & (area >= FLOOR.segment.restore_min_m2)
+    keep &= pixels >= FLOOR.segment.min_part_share * np.count_nonzero(mask)
     keep[0] = False
     if not keep.any():
         return mask
-    grown = cv2.dilate(np.isin(labels, np.flatnonzero(keep)).astype(np.uint8), kernel) > 0
-    return mask | (grown & dropped)
+    return mask | np.isin(region, np.flatnonzero(keep))
 
 
 def _cut_clicked(cut: np.ndarray, marks: np.ndarray) -> np.ndarray:
@@ -808,8 +815,29 @@ def _geometry_trimap(shape_small, scale, calibration) -> np.ndarray:
     return trimap
 
 
+def _bridged(mask: np.ndarray, calibration) -> np.ndarray:
+    """``mask`` (rows, cols) uint8 with the substantial floor regions either side of a line
+    thinner than ``FLOOR.segment.bridge_px`` joined, the line with them: two floors meeting
+    at a threshold bar that GrabCut left out are one floor. Slivers (a line along a
+    skirting board's top) are not joined: the clean-up judges them on their own."""
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    if n <= 2:
+        return mask
+    area = np.bincount(labels.ravel(), _believed_footprint_m2(mask.shape, calibration).ravel(), minlength=n)
+    pixels = stats[:, cv2.CC_STAT_AREA]
+    big = (area >= FLOOR.segment.min_part_m2) & (pixels >= FLOOR.segment.min_part_share * pixels[1:].max())
+    big[0] = False
+    if big.sum() < 2:
+        return mask
+    width = FLOOR.segment.bridge_px
+    regions = np.isin(labels, np.flatnonzero(big)).astype(np.uint8)
+    return mask | cv2.morphologyEx(regions, cv2.MORPH_CLOSE,
+                                   cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (width, width)))
+
+
 def _clean(mask: np.ndarray, calibration, scale, probability=None, clicked=None) -> np.ndarray:
-    """Keep the floor's region under the board (else the largest), the parts cut off
+    """Keep the floor's region under the board (else the largest) with the floors it meets
+    across a thin line (:func:`_bridged`), the parts cut off
     from it at the photo's edge (:func:`floor_parts`) and the parts the user clicked as
     floor (``clicked``), close pinholes, drop specks and thin spurs far from the model's
     floor (``FLOOR.segment.spur_width_px``, ``FLOOR.segment.spur_reach_px``; floor the user
@@ -826,6 +854,8 @@ def _clean(mask: np.ndarray, calibration, scale, probability=None, clicked=None)
         width = FLOOR.segment.spur_width_px
         disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (width, width))
         mask[far & (cv2.morphologyEx(mask, cv2.MORPH_OPEN, disc) == 0)] = 0
+    if calibration is not None:
+        mask = _bridged(mask, calibration.scaled(scale))
     labels, main, parts = floor_parts(mask, None if calibration is None else calibration.scaled(scale),
                                       probability)
     if probability is None:

@@ -32,6 +32,7 @@ class SegmentSettings:
     restore_edge_px: int = 2  # ... when thicker than this either side: GrabCut's edge corrections are thinner
     spur_width_px: int = 5  # mask lines thinner than this and farther than spur_reach_px from the model's floor go
     spur_reach_px: int = 25  # GrabCut's spurs up walls reach farther; a sliver of floor behind a far carton, less
+    bridge_px: int = 5  # floor either side of a not-floor line thinner than this (a threshold bar) is one region
     board_margin: float = 1.3  # the board grown this much about its center is floor for sure: it lies on open floor
     click_tolerance: int = 12  # a click's region holds the pixels within this Lab distance of the clicked colour
     click_region_reach_m: float = 0.5  # below the horizon, within this of the clicked floor point, on the floor
