@@ -904,10 +904,16 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
     raster = np.zeros(coarse.shape, np.uint8)
     bottoms = np.array([c.z_bottom for c in casters])
     heights = np.array([c.z_top - c.z_bottom for c in casters])
-    for key, sigma_of, weight in ((bottoms, lambda z: max(0.015, 0.45 * z), 0.8),
-                                  (heights, lambda z: float(np.clip(0.12 * z, 0.015, 0.1)), settings.side_ao_weight)):
+    # A part raised higher than it is tall (a tabletop, a seat) hides the sky from the floor
+    # beside it no more than its underside does: its sides count only when it stands low.
+    standing = bottoms < heights
+    for key, sigma_of, weight, which in ((bottoms, lambda z: max(0.015, 0.45 * z), 0.8, None),
+                                         (heights, lambda z: float(np.clip(0.12 * z, 0.015, 0.1)),
+                                          settings.side_ao_weight, standing)):
         bins = np.clip(np.searchsorted(bins_m, key, side="right") - 1, 0, nb - 1)
-        for b in np.unique(bins):
+        if which is not None:
+            bins = np.where(which, bins, -1)
+        for b in np.unique(bins[bins >= 0]):
             raster[:] = 0
             # Footprints only: every part as its convex hull seen from above.
             _Footprints([_Caster(casters[i].points if casters[i].triangles is None

@@ -241,6 +241,28 @@ def test_the_floor_darkens_in_a_thin_line_where_a_leg_stands_on_it():
     assert abs(standing[1] - lifted[1]) < 0.01
 
 
+def test_a_raised_tabletop_hides_the_sky_below_it_by_its_underside_alone():
+    """The sides of a part hide the sky from the floor near their base: a cabinet's do, a
+    tabletop's 3 cm edge 42 cm up does not. Under and beside a 1.2 x 0.6 m top the floor's
+    gain is the same with the side term as without it; beside a box of that footprint
+    standing on the floor the side term darkens the floor (the room_4 coffee table's
+    shadow was a near-black slab)."""
+    light = Lighting((0.8, 0.8, 0.8), (0.0, 0.0, -1.0), 0.3, 0.3, (0.4, 0.4, 0.4), "test")
+    no_sides = replace(RENDER.staged, side_ao_weight=0.0)
+
+    def gains(z0, z1, settings):
+        box = np.array([[x, y, z] for x in (-0.6, 0.6) for y in (-0.3, 0.3) for z in (z0, z1)])
+        gain, grid = _floor_gain([_Caster(box, None, z0, z1)], light, ((-1.2, -1.2), (1.2, 1.2)), settings)
+        cells = np.floor(grid.to_px(np.array([[0.0, 0.0], [0.0, 0.33], [0.0, 0.4]]))).astype(int)
+        return gain[cells[:, 1], cells[:, 0]]
+
+    top, top_no_sides = gains(0.42, 0.45, RENDER.staged), gains(0.42, 0.45, no_sides)
+    assert np.allclose(top, top_no_sides, atol=1e-3)
+    assert top[0] < top[2] < 1.0  # darkest under its middle
+    box, box_no_sides = gains(0.0, 0.45, RENDER.staged), gains(0.0, 0.45, no_sides)
+    assert box[1] < box_no_sides[1] - 0.02
+
+
 def test_walls_in_the_mask_and_the_polygon_hide_what_stands_behind_them(renderer, room_small):
     """A floor mask cut off 3.2 m from the camera (a wall there): a box beyond it is
     hidden, a box before it shows. The same wall as a floor-polygon edge does the same."""
