@@ -987,6 +987,17 @@ def test_the_middle_of_a_patch_by_hand():
     assert segment.patch_middle(image) == (14, 10)
 
 
+def _working_floor(held_out):
+    """The first held-out render's true floor at GrabCut's working size (400 px wide):
+    its calibration, the scale, the mask and the rows that hold floor."""
+    sample, cal = held_out[0]
+    rows, cols = sample.floor_mask.shape
+    scale = 400 / cols
+    small = cv2.resize(sample.floor_mask.astype(np.uint8), (400, round(rows * scale)),
+                       interpolation=cv2.INTER_NEAREST) > 0
+    return cal, scale, small, np.flatnonzero(small.any(axis=1))
+
+
 def test_floor_the_model_calls_floor_and_grabcut_dropped_whole_is_given_back(held_out):
     """A second floor material past a threshold fits GrabCut's colour model badly and is
     dropped whole, though the model calls it floor: a far band of the true floor, taken
@@ -995,12 +1006,7 @@ def test_floor_the_model_calls_floor_and_grabcut_dropped_whole_is_given_back(hel
     the horizon and a region clicked as not floor stay out."""
     from augment.floor.segment import _restore_dropped
 
-    sample, cal = held_out[0]
-    rows, cols = sample.floor_mask.shape
-    scale = 400 / cols
-    small = cv2.resize(sample.floor_mask.astype(np.uint8), (400, round(rows * scale)),
-                       interpolation=cv2.INTER_NEAREST) > 0
-    floor_rows = np.flatnonzero(small.any(axis=1))
+    cal, scale, small, floor_rows = _working_floor(held_out)
     band = np.zeros_like(small)
     band[floor_rows[0]:floor_rows[0] + (floor_rows[-1] - floor_rows[0]) // 3] = True
     band &= small
@@ -1025,16 +1031,11 @@ def test_floor_the_model_calls_floor_and_grabcut_dropped_whole_is_given_back(hel
 def test_a_dropped_floor_is_judged_by_its_whole_area_not_its_core(held_out, monkeypatch):
     """The size rule weighs the dropped region, not the core left after peeling its
     edge: a far strip of tiles lost a third of its area to that peel (render 981/20 of
-    the threshold stress set: 0.28 of 0.37 m\u00b2, under the 0.3 m\u00b2 rule). With the
+    the threshold stress set: 0.28 of 0.37 m², under the 0.3 m² rule). With the
     rule set between the band's core and its whole area, the band comes back."""
     from augment.floor.segment import _restore_dropped
 
-    sample, cal = held_out[0]
-    rows, cols = sample.floor_mask.shape
-    scale = 400 / cols
-    small = cv2.resize(sample.floor_mask.astype(np.uint8), (400, round(rows * scale)),
-                       interpolation=cv2.INTER_NEAREST) > 0
-    floor_rows = np.flatnonzero(small.any(axis=1))
+    cal, scale, small, floor_rows = _working_floor(held_out)
     band = np.zeros_like(small)
     band[floor_rows[0]:floor_rows[0] + 12] = True
     band &= small
