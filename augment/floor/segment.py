@@ -136,9 +136,7 @@ def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | No
         main = int(labels[y, x])
     if n == 2:
         return labels, main, []
-    footprint = _believed_footprint_m2(labels.shape, calibration, distance_m).ravel()
-    keep = np.bincount(labels.ravel(), footprint, minlength=n) >= FLOOR.segment.min_part_m2
-    keep &= stats[:, cv2.CC_STAT_AREA] >= FLOOR.segment.min_part_share * stats[main, cv2.CC_STAT_AREA]
+    keep = _substantial(labels, stats[:, cv2.CC_STAT_AREA], stats[main, cv2.CC_STAT_AREA], calibration, distance_m)
     if reach_edge:
         edge = np.zeros(n, bool)
         edge[border_pixels(labels)] = True
@@ -149,6 +147,16 @@ def floor_parts(mask: np.ndarray, calibration=None, probability: np.ndarray | No
     keep[[0, main]] = False
     parts = np.flatnonzero(keep)
     return labels, main, [int(k) for k in parts[np.argsort(-stats[parts, cv2.CC_STAT_AREA])]]
+
+
+def _substantial(labels: np.ndarray, pixels: np.ndarray, reference_px: int, calibration,
+                 distance_m: np.ndarray | None = None) -> np.ndarray:
+    """(n,) bool: which of the regions ``labels`` numbers (``pixels`` (n,) each) are
+    substantial, on the floor (``FLOOR.segment.min_part_m2``) and in the photo
+    (``FLOOR.segment.min_part_share`` of ``reference_px``); ``calibration`` at the labels' size."""
+    footprint = _believed_footprint_m2(labels.shape, calibration, distance_m).ravel()
+    area = np.bincount(labels.ravel(), footprint, minlength=len(pixels))
+    return (area >= FLOOR.segment.min_part_m2) & (pixels >= FLOOR.segment.min_part_share * reference_px)
 
 
 # ----------------------------------------------------------------------------- segmentation
@@ -823,9 +831,8 @@ def _bridged(mask: np.ndarray, calibration) -> np.ndarray:
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     if n <= 2:
         return mask
-    area = np.bincount(labels.ravel(), _believed_footprint_m2(mask.shape, calibration).ravel(), minlength=n)
     pixels = stats[:, cv2.CC_STAT_AREA]
-    big = (area >= FLOOR.segment.min_part_m2) & (pixels >= FLOOR.segment.min_part_share * pixels[1:].max())
+    big = _substantial(labels, pixels, pixels[1:].max(), calibration)
     big[0] = False
     if big.sum() < 2:
         return mask

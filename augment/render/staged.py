@@ -906,14 +906,12 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
     heights = np.array([c.z_top - c.z_bottom for c in casters])
     # A part raised higher than it is tall (a tabletop, a seat) hides the sky from the floor
     # beside it no more than its underside does: its sides count only when it stands low.
-    standing = bottoms < heights
-    for key, sigma_of, weight, which in ((bottoms, lambda z: max(0.015, 0.45 * z), 0.8, None),
-                                         (heights, lambda z: float(np.clip(0.12 * z, 0.015, 0.1)),
-                                          settings.side_ao_weight, standing)):
-        bins = np.clip(np.searchsorted(bins_m, key, side="right") - 1, 0, nb - 1)
-        if which is not None:
-            bins = np.where(which, bins, -1)
-        for b in np.unique(bins[bins >= 0]):
+    every = np.ones(len(casters), bool)
+    for key, sigma_of, weight, counted in ((bottoms, lambda z: max(0.015, 0.45 * z), 0.8, every),
+                                           (heights, lambda z: float(np.clip(0.12 * z, 0.015, 0.1)),
+                                            settings.side_ao_weight, bottoms < heights)):
+        bins = np.where(counted, np.clip(np.searchsorted(bins_m, key, side="right") - 1, 0, nb - 1), -1)
+        for b in np.unique(bins[counted]):
             raster[:] = 0
             # Footprints only: every part as its convex hull seen from above.
             _Footprints([_Caster(casters[i].points if casters[i].triangles is None
