@@ -15,7 +15,8 @@ shows; :func:`layout.camera.judge`):
 * ``foreground_clear``: no footprint reaches into the lowest 15 % of the frame;
 * ``whole``: every item's box projects inside the image;
 * ``visible``: every judged item shows on at least 70 % of its box's pixels, with
-  other items' boxes in front (what the layout's own test sees, boxes as occluders);
+  other items' boxes in front (what the layout's own test sees, boxes as occluders; a
+  table or desk is seen through its own chairs, :func:`layout.camera.seats_at`);
 * ``visible_in_photo``: the same for the furniture's meshes as rendered (each judged
   item's silhouette, drawn alone, against the drawing of all; :func:`_rendered_visible`):
   what the staged photo shows, where a chair in front hides less than its box;
@@ -165,6 +166,7 @@ def _rendered_visible(lay, calibration, renderer, style: str, judged) -> dict:
 
     from augment.render.furniture import furniture_for, placed_items, world_from_item
     from augment.render.gl import gl_from_cv_pose, pyrender_camera
+    from layout.camera import seats_at
 
     w, h = (int(round(v / 4)) for v in calibration.size_px)
     K = calibration.intrinsics.K.copy()
@@ -189,12 +191,15 @@ def _rendered_visible(lay, calibration, renderer, style: str, judged) -> dict:
             scene.add(meshes[i])
         return renderer.render(scene, w, h, flags=pyrender.RenderFlags.DEPTH_ONLY)
 
+    seats = seats_at(lay.model)
     everything = depth(list(meshes))
     out = {}
     for i in sorted(set(judged) & set(meshes)):
         alone = depth([i])
         silhouette = alone > 0
-        shown = silhouette & (np.abs(everything - alone) <= 1e-3 * np.maximum(alone, 1.0))
+        # A table is seen through its own chairs, as the box test judges it.
+        front = depth([j for j in meshes if j not in seats.get(i, ())]) if i in seats else everything
+        shown = silhouette & (np.abs(front - alone) <= 1e-3 * np.maximum(alone, 1.0))
         out[i] = float(shown.sum() / max(silhouette.sum(), 1))
     return out
 

@@ -188,15 +188,17 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
       (the lowest ``rules.foreground`` of the frame, with a pixel's tolerance);
     - ``hidden``: under ``rules.min_visible`` of its box's pixels show it rather than
       another item's box in front (rays cast on a ``rules.grid_px`` grid); chairs at a
-      table, pulled in under it, and items standing on others are not judged;
+      table, pulled in under it, and items standing on others are not judged, and a table
+      or desk is not hidden by its own chairs (:func:`seats_at`: a set is seen as one);
     - ``from_behind``: seating in :data:`FRONT_KINDS`, not at a table, nearer than the
       floor's middle, with the camera within ``rules.back_view_deg`` of its back.
 
     Returns
     -------
     dict
-        ``visible`` (item name -> share shown, for the items judged), and the names
-        ``cut``, ``hidden``, ``from_behind``; empty without a camera.
+        ``visible`` (item name -> share shown, for the items judged), the names ``cut``,
+        ``hidden``, ``from_behind``, and ``hidden_by`` (hidden item -> the item in front of
+        most of what is hidden); empty without a camera.
     """
     model = layout.model
     cam = model.camera if camera is None else camera
@@ -231,18 +233,25 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
     ray_box_entry(np.asarray(cam.center_m, dtype=np.float64), np.ascontiguousarray(dirs), np.ascontiguousarray(pos),
                   np.ascontiguousarray(yaw, dtype=np.float64), np.ascontiguousarray(size), hits)
     seen = np.isfinite(hits)
-    nearest = np.where(seen.any(axis=1), hits.argmin(axis=1), -1)
     exempt = _not_judged_for_hiding(model, items)
+    seats = seats_at(model)
     visible = {}
     hidden = []
+    hidden_by = {}
     for k, name in enumerate(names):
-        total = int(seen[:, k].sum())
-        share = float((nearest == k).sum() / total) if total else 0.0
         if exempt[k]:
             continue
+        total = int(seen[:, k].sum())
+        cols = [c for c in range(len(names)) if c != k and names[c] not in seats.get(name, ())]
+        others = hits[:, cols]
+        in_front = others.min(axis=1, initial=np.inf) < hits[:, k]
+        share = float((seen[:, k] & ~in_front).sum() / total) if total else 0.0
         visible[name] = round(share, 4)
         if share < rules.min_visible:
             hidden.append(name)
+            if (seen[:, k] & in_front).any():
+                blocker = np.bincount(others[seen[:, k] & in_front].argmin(axis=1), minlength=len(cols))
+                hidden_by[name] = names[cols[int(blocker.argmax())]]
 
     # Seen from behind.
     at_table = _at_table(model, items)
@@ -261,7 +270,7 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
         back = -np.array([np.cos(yaw[k]), np.sin(yaw[k])])
         if to_eye @ back / dist >= cos_back:
             behind.append(names[k])
-    return {"visible": visible, "cut": cut, "hidden": hidden, "from_behind": behind}
+    return {"visible": visible, "cut": cut, "hidden": hidden, "hidden_by": hidden_by, "from_behind": behind}
 
 
 def faults(judged: dict) -> int:
@@ -278,6 +287,23 @@ def _group_kinds(model, i) -> set:
 
 def _at_table(model, items) -> list[bool]:
     return [model.kinds[i] not in TABLE_KINDS and bool(_group_kinds(model, i) & set(TABLE_KINDS)) for i in items]
+
+
+def seats_at(model) -> dict:
+    """Table or desk name -> the names of the seats pulled in at it (its rigid set's
+    chairs, a chair placed at a desk): a photo shows a table through its chairs as one
+    piece, so they do not hide it."""
+    out = {}
+    for i in range(model.n):
+        if model.kinds[i] not in TABLE_KINDS:
+            continue
+        g = model.particle_parent[i]
+        mates = {j for j in np.flatnonzero(model.particle_parent == g) if j != i} if g >= 0 else set()
+        for c in np.flatnonzero(model.heat_frame == i):
+            mates.update(int(j) for j in model.heat_members[model.heat_start[c]:model.heat_start[c + 1]])
+        if mates:
+            out[model.names[i]] = sorted(model.names[j] for j in mates)
+    return out
 
 
 def _not_judged_for_hiding(model, items) -> list[bool]:

@@ -19,7 +19,7 @@ import numpy as np
 
 from layout import report as layout_report
 from layout.builder import LayoutBuilder
-from layout.camera import Camera, in_view_share
+from layout.camera import Camera, in_view_share, seats_at
 from layout.camera import faults as camera_faults
 from layout.errors import LayoutError
 from layout.geometry import polygon_area
@@ -529,14 +529,18 @@ def _armchairs_from_behind(lay, rep: dict) -> set:
 # Why a piece is left out of one suggestion (:class:`_Pick`).
 OFF_SPOT = "in view, it found no place at the piece it goes with"
 UNSEEN = "it would stand hidden behind the others"
+IN_FRONT = "it would hide a piece that stays behind it"
+HIDING_ROUNDS = 3  # taking a piece out can show or hide others: judge again this often at most
 
 
 class _Pick:
     """The best try of one suggestion: clean first, then no seating seen from behind, then
     different from the earlier suggestions, then with the fewest faults (the camera's,
     :func:`broken_rules`, a piece taken out). A piece off its spot (:func:`_off_their_spots`)
-    or hardly seen behind others (under ``ROOM.fit.unseen_share`` of its box) is taken
-    out of the try, as a stager takes it out of the shot."""
+    or hidden behind others (:func:`layout.camera.judge`) is taken out of the try, as a
+    stager takes it out of the shot, with the pieces placed at it (a desk's chair); where
+    the hidden piece stays (the most important unit, a member of a rigid set), the piece
+    in front of it goes instead."""
 
     def __init__(self, earlier: list, spec, anchor=frozenset()):
         self.earlier = earlier
@@ -562,16 +566,34 @@ class _Pick:
         if astray:
             self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
             return False
-        seen = rep.get("camera", {}).get("visible", {})
-        # A piece others are placed at (a desk, its chair at it) stays: they would stand at nothing.
+        # A piece goes with those placed at it (a side table at an armchair), a desk with its
+        # chair and the chair with its desk; a chair at a desk that stays, stays.
         m = lay.model
-        hosts = {m.names[f] for f in m.heat_frame if f >= 0}
-        unseen = {i for i, share in seen.items() if share < ROOM.fit.unseen_share} - self.anchor - self.in_sets - hosts
-        taken = {i: OFF_SPOT for i in _off_their_spots(lay, r) - self.anchor} | {i: UNSEEN for i in unseen}
-        if taken:
-            # Taking a piece out moves nothing else: the try stays clean.
-            lay = _taken_out(lay, self.spec, taken)
-            rep, r = layout_report.evaluate(lay, walkable=False), _residuals(lay)
+        with_it = {}
+        for c in np.flatnonzero(m.heat_frame >= 0):
+            with_it.setdefault(m.names[m.heat_frame[c]], set()).update(
+                m.names[i] for i in m.heat_members[m.heat_start[c]:m.heat_start[c + 1]])
+        stays = set(self.anchor | self.in_sets)
+        for table, seats in seats_at(m).items():
+            for seat in seats:
+                with_it.setdefault(seat, set()).update({table} | with_it.get(table, set()))
+            stays.update(seats if table in stays else ())
+        taken = {i: OFF_SPOT for i in _off_their_spots(lay, r) - self.anchor}
+        for _ in range(HIDING_ROUNDS + 1):
+            if taken:
+                # Taking a piece out moves nothing else: the try stays clean.
+                lay = _taken_out(lay, self.spec, taken)
+                rep, r = layout_report.evaluate(lay, walkable=False), _residuals(lay)
+            camera = rep.get("camera", {})
+            hiding = {}
+            for h in camera.get("hidden", ()):
+                front = camera["hidden_by"].get(h, h)
+                goes, why = (h, UNSEEN) if h not in stays else (front, IN_FRONT) if front not in stays else (None, None)
+                if goes is not None:
+                    hiding.update(dict.fromkeys({goes} | with_it.get(goes, set()), why))
+            if not hiding or _ == HIDING_ROUNDS or {lay.model.names[i] for i in lay.items} <= set(hiding):
+                break
+            taken |= hiding
         # Seating shown from behind is worse than a repeat (a sofa's back is no picture to
         # show a client); a repeat is worth nothing to the user; a fault, a little less than
         # a perfect one.
@@ -691,7 +713,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             layouts.append(dataclasses.replace(pick.best[1], seed=seed + k))
             reports.append(layout_report.evaluate(pick.best[1]))
             taken = pick.best[2]
-            for why in (OFF_SPOT, UNSEEN):
+            for why in (OFF_SPOT, UNSEEN, IN_FRONT):
                 if ids := sorted(i for i, w in taken.items() if w == why):
                     said.append(f"suggestion {k + 1} leaves out {', '.join(ids)}: {why}")
             left = sorted(set(i.id for i in _drop(pick.spec, taken)[0].items) - set(pick.best[1].model.names))

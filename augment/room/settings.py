@@ -59,7 +59,6 @@ class FitSettings:
     astray_deg: float = 30.0  # ... nor two pieces that should face each other turned farther off than this
     astray_spot_m: float = 0.6  # a piece placed at a partner (a side table at the sofa's arm) this far off its spot
     astray_spot_deg: float = 45.0  # ... or turned this far from its partner: not clean
-    unseen_share: float = 0.3  # a piece showing less of its box than this (hidden behind others) leaves the shot
     for_camera: bool = True  # lay out for the photo's camera (layout.camera); False: as a plan seen from above
     min_difference_m: float = 0.3  # a suggestion this close to an earlier one (diversity) is a twin
     fit_cell_m: float = 0.02  # raster cell of the "does this footprint fit the floor" test

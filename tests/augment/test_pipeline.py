@@ -1001,10 +1001,11 @@ def test_seating_seen_from_behind_loses_even_to_a_repeat(tmp_path, monkeypatch):
     assert pick.best[1] is earlier and pick.twin
 
 
-def test_a_piece_hardly_seen_is_taken_out_of_the_shot(tmp_path, monkeypatch):
-    """Judged 10 % visible (under ``unseen_share``), the TV leaves that try, the sofa where it
-    stood; at 50 % (hidden, a fault, but in the picture) it stays; the sofa (the anchor, or
-    the host of a side table) stays whatever it shows."""
+def test_a_hidden_piece_or_the_piece_in_front_of_it_is_taken_out_of_the_shot(tmp_path, monkeypatch):
+    """Judged hidden, the TV leaves that try, the sofa where it stood; seen, it stays. The
+    sofa (the anchor) hidden behind the TV stays and the TV goes; hidden behind nothing
+    that may go, nothing goes. A piece others are placed at goes with them (a sofa not
+    the anchor, its side table at its arm), and a chair at a desk with its desk."""
     from layout import report as layout_report
 
     from layout import Solver
@@ -1014,23 +1015,37 @@ def test_a_piece_hardly_seen_is_taken_out_of_the_shot(tmp_path, monkeypatch):
     lay = room.placed(-90.0, 2.5, 0.0)
     real = layout_report.evaluate
 
-    def offered(spec, lay, shares, anchor=frozenset({"sofa"})):
+    def offered(spec, lay, hidden_by, anchor=frozenset({"sofa"})):
         monkeypatch.setattr(layout_report, "evaluate", lambda lay, walkable=True: {
-            **real(lay, walkable), "camera": {"cut": [], "hidden": [], "from_behind": [],
-                                              "visible": {n: v for n, v in shares.items() if n in lay.model.names}}})
+            **real(lay, walkable), "camera": {
+                "cut": [], "from_behind": [], "hidden": [h for h in hidden_by if h in lay.model.names],
+                "hidden_by": {h: f for h, f in hidden_by.items() if h in lay.model.names}}})
         pick = fit._Pick([], spec, anchor=anchor)
         pick.offer(lay)
         return pick.best
 
-    _, kept, taken = offered(room.spec, lay, {"sofa": 1.0, "tv": 0.1})
+    _, kept, taken = offered(room.spec, lay, {"tv": "sofa"})
     assert taken == {"tv": fit.UNSEEN} and "tv" not in kept.model.names
     np.testing.assert_array_equal(kept.position_m[kept.items], lay.position_m[[lay.model.names.index("sofa")]])
-    assert offered(room.spec, lay, {"sofa": 1.0, "tv": 0.5})[2] == {}
-    assert offered(room.spec, lay, {"sofa": 0.1, "tv": 1.0})[2] == {}
-    # A piece another is placed at (the sofa, its side table at its arm) stays, anchor or not.
-    spec = _sofa_and(tmp_path, "side_table", "side_table")
-    solved = Solver().solve(build(spec)[0], seed=0)
-    assert offered(spec, solved, {"sofa": 0.1, "side_table": 1.0}, anchor=frozenset())[2] == {}
+    assert offered(room.spec, lay, {})[2] == {}
+    assert offered(room.spec, lay, {"sofa": "tv"})[2] == {"tv": fit.IN_FRONT}
+    assert offered(room.spec, lay, {"sofa": "tv"}, anchor=frozenset({"sofa", "tv"}))[2] == {}
+
+    def three(*kinds):
+        items = "".join(f'\n[[items]]\nid = "{k}"\nkind = "{k}"' for k in kinds)
+        spec = load_spec(write_spec(tmp_path, "[room]\npolygon = [[0, 0], [6, 0], [6, 4], [0, 4]]\nheight = 2.6"
+                                    + items))
+        return spec, Solver().solve(build(spec)[0], seed=0)
+
+    spec, solved = three("bookcase", "sofa", "side_table")
+    assert offered(spec, solved, {"sofa": "bookcase"}, anchor=frozenset({"bookcase"}))[2] == {
+        "sofa": fit.UNSEEN, "side_table": fit.UNSEEN}
+    spec, solved = three("bookcase", "desk", "office_chair")
+    assert offered(spec, solved, {"bookcase": "office_chair"}, anchor=frozenset({"bookcase"}))[2] == {
+        "office_chair": fit.IN_FRONT, "desk": fit.IN_FRONT}
+    # The desk the anchor: its chair stays with it.
+    assert offered(spec, solved, {"bookcase": "office_chair"}, anchor=frozenset({"desk"}))[2] == {
+        "bookcase": fit.UNSEEN}
 
 
 def test_the_rules_a_layout_breaks_are_named_with_how_far_off(tmp_path):

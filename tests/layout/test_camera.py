@@ -125,6 +125,35 @@ def test_judge_finds_hidden_and_from_behind():
     assert judge(Layout.from_state(model, pos, yaw, {}, np.zeros(0), 0, 0, None, 0.0))["from_behind"] == []
 
 
+def test_a_desk_is_seen_through_its_chair_but_not_through_a_bookcase():
+    """Level camera 1.2 m up looking along +x. A desk 0.75 m high at x = 8 with its chair
+    (placed at it by a heat rule) at x = 7 in front: the chair's 1 m box covers the desk's
+    whole outline (from 1.2 m up, its top edge hides the floor out to 40 m), yet the desk
+    is not hidden (seats_at); a 2 m bookcase at x = 6 hides both, and hidden_by names it."""
+    from layout.camera import seats_at
+    from layout.solver import Layout
+
+    cam = Camera(K, looking_along_x(1.2, 10.0), (640, 480))
+    b = LayoutBuilder([[0, -3], [12, -3], [12, 3], [0, 3]], 3.0)
+    desk = b.add_item("desk", (1.2, 0.6, 0.75), kind="desk")
+    chair = b.add_item("chair", (1.4, 0.6, 1.0), kind="office_chair")
+    shelf = b.add_item("shelf", (1.6, 0.4, 2.0), kind="bookcase")
+    b.heat([chair], (0.65, 0.0), frame=desk)
+    b.set_camera(cam)
+    model = b.finalize()
+    assert seats_at(model) == {"desk": ["chair"]}
+    pos = model.particle_init_position_m.copy()
+    yaw = np.zeros(model.n)
+    pos[desk], pos[chair], pos[shelf] = [8.0, 0.0, 0.375], [7.0, 0.0, 0.5], [6.0, 4.0, 1.0]
+    lay = Layout.from_state(model, pos, yaw, {}, np.zeros(0), 0, 0, None, 0.0)
+    j = judge(lay)
+    assert j["visible"]["desk"] == 1.0 and j["hidden"] == []
+    pos[shelf] = [6.0, 0.0, 1.0]
+    j = judge(Layout.from_state(model, pos, yaw, {}, np.zeros(0), 0, 0, None, 0.0))
+    assert j["hidden"] == ["desk", "chair"] and j["visible"]["desk"] < 0.1
+    assert j["hidden_by"] == {"desk": "shelf", "chair": "shelf"}
+
+
 def test_a_spec_names_its_camera():
     T = looking_along_x(1.5).tolist()
     doc = {"room": {"polygon": [[0, -3], [9, -3], [9, 3], [0, 3]], "height": 3.0},
