@@ -489,17 +489,18 @@ def _astray(lay, r: dict | None = None) -> set:
 
 def _off_their_spots(lay, r: dict | None = None) -> set:
     """Pieces placed at a partner (a side table at the sofa's arm, a rug under it) that
-    stand more than ``ROOM.fit.astray_spot_m`` off their spot or turn more than
-    ``astray_spot_deg`` from their partner: a side table in front of the sofa rather
-    than at its arm. A stager takes such a piece out of that shot."""
+    break their place by more than a glance shows (:func:`broken_rules`'
+    ``ROOM.fit.rule_distance_m`` off their spot, or ``rule_angle_deg`` turned from their
+    partner): a coffee table off the sofa's middle, a rug askew. A stager puts such a
+    piece right or takes it out of that shot."""
     from layout import _codes as codes
 
     fit, m = ROOM.fit, lay.model
     r = _residuals(lay) if r is None else r
     off = set()
-    for c in np.flatnonzero((np.sqrt(2.0 * np.abs(r["heat"])) > fit.astray_spot_m) & (m.heat_frame >= 0)):
+    for c in np.flatnonzero((np.sqrt(2.0 * np.abs(r["heat"])) > fit.rule_distance_m) & (m.heat_frame >= 0)):
         off.update(m.heat_members[m.heat_start[c]:m.heat_start[c + 1]])
-    askew = (np.abs(r["orientation"]) > np.radians(fit.astray_spot_deg)) & (m.orientation_mode == codes.PARALLEL)
+    askew = (np.abs(r["orientation"]) > np.radians(fit.rule_angle_deg)) & (m.orientation_mode == codes.PARALLEL)
     off.update(m.orientation_pairs[askew, 0])
     return {m.names[i] for i in off}
 

@@ -57,8 +57,6 @@ class FitSettings:
     rule_angle_deg: float = 15.0  # ... and a facing off by more than this
     astray_m: float = 0.3  # a wall-bound piece (a TV, a wardrobe) farther off its wall than this: not clean
     astray_deg: float = 30.0  # ... nor two pieces that should face each other turned farther off than this
-    astray_spot_m: float = 0.6  # a piece placed at a partner (a side table at the sofa's arm) this far off its spot
-    astray_spot_deg: float = 45.0  # ... or turned this far from its partner: not clean
     for_camera: bool = True  # lay out for the photo's camera (layout.camera); False: as a plan seen from above
     min_difference_m: float = 0.3  # a suggestion this close to an earlier one (diversity) is a twin
     fit_cell_m: float = 0.02  # raster cell of the "does this footprint fit the floor" test

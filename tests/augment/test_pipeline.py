@@ -939,10 +939,10 @@ def test_a_tv_off_its_wall_or_not_facing_the_sofa_is_left_out(tmp_path, monkeypa
 
 
 def test_a_side_table_off_its_spot_at_the_sofa_is_taken_out(tmp_path, monkeypatch):
-    """A side table placed at the sofa's arm: where the solver put it, and 0.4 m off its
-    spot, it stays; 0.8 m ahead of it (before the sofa, > ``astray_spot_m``) or turned
-    60 degrees from the sofa (> ``astray_spot_deg``) it is a piece a stager takes out of
-    that shot."""
+    """A side table placed at the sofa's arm: where the solver put it, 0.1 m off its spot
+    or turned 10 degrees, it stays; 0.3 m ahead of it (> ``rule_distance_m``, 0.15) or
+    turned 20 degrees from the sofa (> ``rule_angle_deg``, 15) it is a piece a stager
+    takes out of that shot."""
     import dataclasses
 
     from layout import Solver
@@ -961,9 +961,9 @@ def test_a_side_table_off_its_spot_at_the_sofa_is_taken_out(tmp_path, monkeypatc
         return dataclasses.replace(solved, position_m=pos, yaw_rad=yaw)
 
     assert fit._off_their_spots(solved) == set() and fit.broken_rules(solved) == []
-    assert fit._off_their_spots(moved(0.4)) == set()
-    assert fit._off_their_spots(moved(0.8)) == {"side_table"}
-    assert fit._off_their_spots(moved(turn_deg=60.0)) == {"side_table"}
+    assert fit._off_their_spots(moved(0.1)) == set() and fit._off_their_spots(moved(turn_deg=10.0)) == set()
+    assert fit._off_their_spots(moved(0.3)) == {"side_table"}
+    assert fit._off_their_spots(moved(turn_deg=20.0)) == {"side_table"}
 
     # Off its spot in every try: that suggestion is shown without it, the sofa where it stood;
     # the table stays in the furniture (another suggestion may find its spot).
