@@ -89,7 +89,7 @@ from .render.gltf import scene_glb
 from .render.styles import STYLES
 from .room.fit import (broken_rules, corner_specs, dropped_summary, furniture_for_floor, furniture_source,
                        rule_count, solve_suggestions)
-from .room.openings import find_doors
+from .room.openings import find_openings
 from .room.height import measure_height
 
 DEFAULT_SUGGESTIONS = 4
@@ -330,13 +330,14 @@ def measure(photo, board, *, camera=None, model=None, floor_mask=None, clicks=No
     return Measurement(photo, image, calibration, seg, floor, height, dict(clock.timings), warnings)
 
 
-def overlays(m: Measurement, doors=None) -> dict:
+def overlays(m: Measurement, doors=None, windows_px=()) -> dict:
     """The three overlays of a measurement, ``{file name: (h, w, 3) uint8}``; ``doors``
-    are the ones the user marked or, without, those found in the photo."""
+    are the ones the user marked or, without, those found in the photo; ``windows_px``
+    the corners of the windows found (:class:`augment.room.openings.FoundWindow`)."""
     seg = m.segmentation
     return {"overlay_calibration.png": calibration_overlay(m.image, m.calibration),
             "overlay_floor.png": floor_overlay(m.image, seg.mask, m.floor, m.calibration, seg.doubted, seg.clicks,
-                                               seg.doubt_px, doors),
+                                               seg.doubt_px, doors, windows_px),
             "overlay_height.png": height_overlay(m.image, m.calibration, m.height)}
 
 
@@ -440,6 +441,8 @@ def report_dict(result: FurnishResult) -> dict:
                       "kinds": [i.kind.name for i in result.spec.items], "dropped": result.dropped,
                       "doors": [{"at_m": list(o.at_m), "width_m": o.width_m, "marked": o.where}
                                 for o in result.spec.doors],
+                      "windows": [{"at_m": list(o.at_m), "width_m": o.width_m, "sill_m": o.sill_m,
+                                   "height_m": o.height_m} for o in result.spec.windows],
                       "assets": dict(result.assets)},
         "suggestions": suggestions,
         "files": {"contact_sheet": "staged_all.jpg", "report": "report.json",
@@ -521,8 +524,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         two sides (:func:`doors_on_floor`). Each swing zone, as deep as the door is
         wide, stays free of furniture.
     auto_doors : bool
-        Without ``doors``, find the doors in the photo (:func:`augment.room.openings.find_doors`)
-        and keep them clear the same way.
+        Find the windows in the photo, and without ``doors`` the doors
+        (:func:`augment.room.openings.find_openings`): doors are kept clear the same way,
+        windows free of tall furniture.
     assets : dict, optional
         Kind -> the user's model of that kind, rendered and put in the scenes instead of
         Stager's own, stretched onto each item's box: a GLB, glTF or OBJ path (y up,
@@ -592,7 +596,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         room_height = float(m.height.height_m)
         # The doors kept clear: the user's, else those found in the photo (drawn on the overlay too).
         marked = doors is not None and len(doors) > 0
-        found_px = []
+        found_px, found_windows = [], []
         if layout is not None:
             fitted, layouts, dropped = fixed_spec, [fixed_layout], []
             reports = [layout_report.evaluate(fixed_layout)]
@@ -602,10 +606,12 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             bar.step(1 + suggestions)
         else:
             with clock("furniture"):
-                if auto_doors and not marked:
-                    found_px = [f.feet_px.ravel() for f in find_doors(m.image, m.calibration, m.floor)]
+                found = find_openings(m.image, m.calibration, m.floor) if auto_doors else None
+                if found is not None and not marked:
+                    found_px = [f.feet_px.ravel() for f in found.doors]
+                found_windows = [] if found is None else found.windows
                 fitted, dropped = furniture_for_floor(source, m.floor, room_height, photo, doors=doors,
-                                                      found_doors=found_px,
+                                                      found_doors=found_px, found_windows=found_windows,
                                                       calibration=m.calibration, asset_kinds=user_models,
                                                       warnings=warnings)
             bar.step()
@@ -657,7 +663,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                                         assets=user_models, style=style_name))
                 bar.step()
         with clock("overlays"):
-            pictures = overlays(m, doors if marked else found_px)
+            pictures = overlays(m, doors if marked else found_px, [w.corners_px for w in found_windows])
             sheet = contact_sheet(staged)
         bar.step()
         with clock("plans"):  # only what the plans take beyond the stages above

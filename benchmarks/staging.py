@@ -24,7 +24,10 @@ shows; :func:`layout.camera.judge`):
 * ``doors_clear``: no furniture in the swing zone (as deep as the door is wide) of the
   photographer's true doors with both feet in view (renders only); before, no door was
   known to the solver, now those found in the photo are
-  (:func:`augment.room.openings.find_doors`, also scored: recall and centre error);
+  (:func:`augment.room.openings.find_openings`, also scored: recall and centre error);
+* ``windows_clear``: no furniture taller than a true window's sill within
+  ``ROOM.fit.window_clearance_m`` of it (windows with 80 % of their sill in view);
+  windows found in the photo are kept clear so (also scored);
 * ``rules_met``: every group rule holds: faces within 15 degrees, distances within 10 cm,
   "in front of"/"beside" targets within 15 cm;
 * ``different``: another arrangement than each other suggestion of the photo (other
@@ -51,8 +54,8 @@ sys.path.insert(0, str(HERE))
 
 ROOMS = ("living_room", "bedroom", "office", "dining_room")
 SUGGESTIONS = 4
-CHECKS = ("foreground_clear", "whole", "visible", "visible_in_photo", "good_side", "doors_clear", "rules_met",
-          "different")
+CHECKS = ("foreground_clear", "whole", "visible", "visible_in_photo", "good_side", "doors_clear", "windows_clear",
+          "rules_met", "different")
 TARGET = 0.95
 DOOR_MATCH_M = 0.3  # a found door this close to a true one is that door (its error is reported)
 
@@ -98,14 +101,44 @@ def _doors_in_view(doors, calibration, floor) -> list:
     return out
 
 
-def _swing_zone(segment, polygon) -> np.ndarray:
-    """The door's swing zone (as deep as it is wide), on the room's side of the wall."""
+def _windows_in_view(truth, calibration, floor) -> list:
+    """The true windows (segment (2, 2) m, sill m, top m) with at least 80 % of their sill
+    in the photo, on a wall of the floor found."""
+    from augment.synth.truth import true_doors_on_floor
+    from layout.geometry import edge_distances
+
+    w, h = calibration.size_px
+    out = []
+    for seg, t in zip(true_doors_on_floor(truth, calibration.camera_from_floor, "windows"), truth["room"]["windows"]):
+        sill = np.column_stack([seg[0] + np.linspace(0.0, 1.0, 11)[:, None] * (seg[1] - seg[0]),
+                                np.full(11, t["bottom_m"])])
+        cam = sill @ calibration.camera_from_floor[:3, :3].T + calibration.camera_from_floor[:3, 3]
+        px = calibration.pixels_from_floor(sill)
+        shown = ((cam[:, 2] > 0) & (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)).mean()
+        if shown >= 0.8 and edge_distances(seg.mean(axis=0)[None], floor.polygon_m)[0].min() < 0.3:
+            out.append((seg, t["bottom_m"], t["top_m"]))
+    return out
+
+
+def _on_window(found_m, true_m) -> bool:
+    """A found window stands on a true one (any part in view): within 0.3 m of its wall
+    line and sharing more than 0.1 m of its width."""
+    a, b = true_m
+    u = (b - a) / np.linalg.norm(b - a)
+    off = abs(float(np.cross(u, found_m.mean(axis=0) - a)))
+    t = sorted(((found_m - a) @ u).tolist())
+    return off < DOOR_MATCH_M and min(t[1], float(np.linalg.norm(b - a))) - max(t[0], 0.0) > 0.1
+
+
+def _swing_zone(segment, polygon, depth_m=None) -> np.ndarray:
+    """The door's swing zone (as deep as it is wide, or ``depth_m``), on the room's side
+    of the wall."""
     from layout.solver import _inside
 
     a, b = segment
     u = (b - a) / np.linalg.norm(b - a)
     n = np.array([-u[1], u[0]])
-    width = np.linalg.norm(b - a)
+    width = np.linalg.norm(b - a) if depth_m is None else depth_m
     mid = (a + b) / 2
     if not _inside(polygon, [mid + 0.2 * n])[0]:
         n = -n
@@ -120,9 +153,10 @@ def _rules_met(lay) -> bool:
                 and np.all(np.sqrt(2.0 * np.abs(r["heat"])) <= 0.15))
 
 
-def _checks(layouts, camera, calibration, doors, renderer) -> list[dict]:
+def _checks(layouts, camera, calibration, doors, windows, renderer) -> list[dict]:
     from augment.room.fit import apart_m
     from augment.pipeline import suggestion_styles
+    from augment.room.settings import ROOM
     from layout.camera import CAMERA, box_corners_3d, judge
     from layout.metrics import convex_intersection_area
 
@@ -139,6 +173,10 @@ def _checks(layouts, camera, calibration, doors, renderer) -> list[dict]:
         j = judge(lay, camera=camera)
         zones = [_swing_zone(d, m.floor_polygon_m) for d in doors]
         footprints = lay.corners_m(items)
+        tops = lay.position_m[items, 2] + 0.5 * m.particle_size_m[items, 2]
+        # A window's zone: as deep as the layouts keep tall furniture from it (ROOM.fit.window_clearance_m).
+        window_zones = [(_swing_zone(seg, m.floor_polygon_m, ROOM.fit.window_clearance_m), sill)
+                        for seg, sill, _ in windows]
         rows.append({
             "items": len(items),
             "foreground_clear": bool(np.all(feet[..., 1] <= h * (1 - CAMERA.foreground) + 1.0)),
@@ -150,6 +188,9 @@ def _checks(layouts, camera, calibration, doors, renderer) -> list[dict]:
             "good_side": not j["from_behind"],
             "doors_clear": None if not zones else all(
                 convex_intersection_area(zn, f) <= 0.01 for zn in zones for f in footprints),
+            "windows_clear": None if not window_zones else all(
+                convex_intersection_area(zn, f) <= 0.01 for zn, sill in window_zones for f, top in zip(footprints, tops)
+                if top > sill),
             "rules_met": _rules_met(lay),
             "different": all(apart_m(lay, other) >= 0.3 for q, other in enumerate(layouts) if q != k),
             "hidden": j["hidden"], "from_behind": j["from_behind"], "cut": j["cut"],
@@ -223,7 +264,7 @@ def main(argv=None) -> int:
     from augment.pipeline import furnish, measure
     from augment.render.gl import Renderer
     from augment.room import fit
-    from augment.room.openings import find_doors
+    from augment.room.openings import find_openings
     from augment.room.settings import ROOM
     from augment.synth.truth import true_doors_on_floor
     from layout.errors import LayoutError
@@ -233,6 +274,7 @@ def main(argv=None) -> int:
     renderer = Renderer()
     results = {"plan": [], "camera": []}
     door_rows, false_doors = [], 0
+    window_rows, false_windows = [], 0
     times = {"plan": [], "camera": []}
     per_photo = []
     for name, path, room, truth in photos:
@@ -245,8 +287,18 @@ def main(argv=None) -> int:
         doors = _doors_in_view(true_doors_on_floor(truth, m.calibration.camera_from_floor), m.calibration, m.floor) \
             if truth is not None else []
         entry = {"photo": name, "room": room}
-        found_doors = find_doors(m.image, m.calibration, m.floor)
+        openings = find_openings(m.image, m.calibration, m.floor)
+        found_doors = openings.doors
         found = [f.segment_m for f in found_doors]
+        windows = _windows_in_view(truth, m.calibration, m.floor) if truth is not None else []
+        for seg, _, _ in windows:
+            err = min((float(np.linalg.norm(f.segment_m.mean(axis=0) - seg.mean(axis=0))) for f in openings.windows),
+                      default=np.inf)
+            window_rows.append({"photo": name, "found": bool(err <= DOOR_MATCH_M), "centre_error_m": err})
+        if truth is not None:
+            every = [(seg, t["bottom_m"]) for seg, t in zip(true_doors_on_floor(
+                truth, m.calibration.camera_from_floor, "windows"), truth["room"]["windows"])]
+            false_windows += sum(not any(_on_window(f.segment_m, seg) for seg, _ in every) for f in openings.windows)
         for d in doors:
             err = min((float(np.linalg.norm(f.mean(axis=0) - d.mean(axis=0))) for f in found), default=np.inf)
             door_rows.append({"photo": name, "found": bool(err <= DOOR_MATCH_M), "centre_error_m": err})
@@ -259,7 +311,8 @@ def main(argv=None) -> int:
             try:
                 spec, dropped = fit.furniture_for_floor(
                     room, m.floor, m.height.height_m, path, calibration=m.calibration, warnings=warnings,
-                    found_doors=[f.feet_px.ravel() for f in found_doors] if mode == "camera" else ())
+                    found_doors=[f.feet_px.ravel() for f in found_doors] if mode == "camera" else (),
+                    found_windows=openings.windows if mode == "camera" else ())
                 # Before the camera, no corner sets either.
                 corners = fit.corner_specs(room, spec, m.calibration) if mode == "camera" else ()
                 fit.solve_suggestions(spec, SUGGESTIONS, 0, m.floor.area_m2, list(dropped), _Quiet(), [],
@@ -271,7 +324,7 @@ def main(argv=None) -> int:
             except (StagerError, LayoutError) as error:
                 entry[mode] = {"refused": str(error)[:200]}
                 continue
-            rows = _checks(layouts, cam, m.calibration, doors, renderer)
+            rows = _checks(layouts, cam, m.calibration, doors, windows, renderer)
             for r in rows:
                 r["photo"] = name
             results[mode].extend(rows)
@@ -307,11 +360,15 @@ def main(argv=None) -> int:
         sheet = contact_sheet(images)
         cv2.imwrite(str(RESULTS / "staging_worst.png"), cv2.cvtColor(sheet, cv2.COLOR_RGB2BGR))
 
-    errors = [r["centre_error_m"] for r in door_rows if r["found"]]
-    doors = {"in_view": len(door_rows), "recall": sum(r["found"] for r in door_rows) / max(len(door_rows), 1),
-             "centre_error_m_median": float(np.median(errors)) if errors else float("nan"),
-             "within_15cm": sum(e <= 0.15 for e in errors) / max(len(door_rows), 1), "false": false_doors}
+    def found_share(rows, false):
+        errors = [r["centre_error_m"] for r in rows if r["found"]]
+        return {"in_view": len(rows), "recall": sum(r["found"] for r in rows) / max(len(rows), 1),
+                "centre_error_m_median": float(np.median(errors)) if errors else float("nan"),
+                "within_15cm": sum(e <= 0.15 for e in errors) / max(len(rows), 1), "false": false}
+
+    doors, windows = found_share(door_rows, false_doors), found_share(window_rows, false_windows)
     data = {"machine": machine(seed=args.seed, count=args.count, suggestions=SUGGESTIONS), "doors": doors,
+            "windows": windows,
             "summary": {mode: {c: {"share": v[0], "n": v[1]} for c, v in s.items()} for mode, s in summary.items()},
             "layout_s_median": layout_s, "layout_s_max": layout_max, "photos": per_photo,
             "suggestions": results}
@@ -329,6 +386,11 @@ def main(argv=None) -> int:
            f"of the floor found): recall {doors['recall']:.0%} (found within {DOOR_MATCH_M} m), centre within 15 cm "
            f"for {doors['within_15cm']:.0%}, median centre error {doors['centre_error_m_median']:.2f} m; "
            f"{doors['false']} found where there is no door (targets: recall 90 %, centre within 15 cm).",
+           "", f"Windows found in the photo (renders; {windows['in_view']} true windows with 80 % of their sill in "
+           f"view, on a wall of the floor found): recall {windows['recall']:.0%} (found within {DOOR_MATCH_M} m), "
+           f"centre within 15 cm for {windows['within_15cm']:.0%}, median centre error "
+           f"{windows['centre_error_m_median']:.2f} m; {windows['false']} found where there is no window, any part "
+           "of it in view.",
            "", f"Layout stage, four suggestions, warm: median {layout_s['plan']:.2f} s (plan), "
            f"{layout_s['camera']:.2f} s (camera); slowest {layout_max['plan']:.2f} s / {layout_max['camera']:.2f} s "
            "(target under 0.5 s).", "",

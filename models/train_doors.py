@@ -1,6 +1,6 @@
 """Train the door model (``models/door_columns.onnx``) and export it to ONNX.
 
-:func:`augment.room.openings.find_doors` samples every wall of the measured floor as a
+:func:`augment.room.openings.find_openings` samples every wall of the measured floor as a
 front-on strip; this model says, per column of the strip, whether a door stands there. It
 reads what :func:`augment.room.openings.column_features` gives (the column's colours
 from the floor to 2.4 m, less the wall's own, its lightness, the steps across it) and

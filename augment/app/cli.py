@@ -286,7 +286,8 @@ def _parser():
                         "wide, stays free of furniture. Repeat for more doors. Without it, the doors "
                         "found in the photo are kept clear")
     f.add_argument("--no-auto-doors", dest="auto_doors", action="store_false",
-                   help="do not look for doors in the photo (keep clear only those given with --door)")
+                   help="do not look for doors or windows in the photo (keep clear only the doors given "
+                        "with --door)")
     f.add_argument("--asset", type=_asset, action="append", default=[], metavar="KIND=FILE",
                    help="your own model of a furniture kind (GLB, glTF or OBJ; y up, front toward +z), "
                         "stretched onto each item of that kind; repeat for more kinds "
@@ -330,7 +331,7 @@ def _parser():
                    help="camera profile from `stage calibrate`, for every photo")
     _add_height_arg(a)
     a.add_argument("--no-auto-doors", dest="auto_doors", action="store_false",
-                   help="do not look for doors in the photos")
+                   help="do not look for doors or windows in the photos")
     a.add_argument("--address", default=None, metavar="ADDRESS",
                    help="a Ray cluster to run on: host:port or ray://host:port (as `ray start --head` prints), "
                         "or auto; default: a Ray of this machine's own, started and stopped by Stager")

@@ -14,7 +14,7 @@ from .settings import DRAW
 
 def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | None = None,
                   calibration=None, disputed: np.ndarray | None = None, clicks=None,
-                  doubt_px: tuple[int, int] | None = None, doors_px=None) -> np.ndarray:
+                  doubt_px: tuple[int, int] | None = None, doors_px=None, windows_px=()) -> np.ndarray:
     """The photo with the floor tinted, its outline, and a plan of the polygon.
 
     Parameters
@@ -37,6 +37,8 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
     doors_px : (n, 4), optional
         Doors the user marked to keep clear (x1, y1, x2, y2: the feet of each door's two
         sides): a blue bar between the feet.
+    windows_px : sequence of (4, 2), optional
+        Windows found in the photo: the sill's two ends, then the top's, px; outlined.
 
     Returns
     -------
@@ -70,6 +72,10 @@ def floor_overlay(image: np.ndarray, mask: np.ndarray, polygon: FloorPolygon | N
         center = (int(doubt_px[0]), int(doubt_px[1]))
         cv2.circle(out, center, 3 * radius, (255, 255, 255), 3 * thick, cv2.LINE_AA)
         cv2.circle(out, center, 3 * radius, settings.disputed_color, thick, cv2.LINE_AA)
+    for corners in windows_px:
+        outline = np.asarray(corners, np.float64)[[0, 1, 3, 2]].round().astype(np.int32)
+        cv2.polylines(out, [outline], True, (255, 255, 255), 3 * thick, cv2.LINE_AA)
+        cv2.polylines(out, [outline], True, settings.window_color, thick, cv2.LINE_AA)
     # The user's clicks and doors on top of everything: they are what the user looks for.
     for x1, y1, x2, y2 in np.asarray(doors_px if doors_px is not None else np.zeros((0, 4)), np.float64).reshape(-1, 4):
         feet = (int(round(x1)), int(round(y1))), (int(round(x2)), int(round(y2)))

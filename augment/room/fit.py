@@ -23,6 +23,7 @@ from layout.camera import Camera, in_view_share, seats_at
 from layout.camera import faults as camera_faults
 from layout.errors import LayoutError
 from layout.geometry import polygon_area
+from layout.spec import Opening
 from layout.presets import DEFAULT_ROOM, PRESETS, corner_sets
 
 from ..errors import FurnishError
@@ -353,7 +354,7 @@ def corner_specs(source, fitted, calibration=None) -> list:
         spec, dropped = fit_spec(spec, fitted.polygon_m, fitted.height_m, camera, notes)
         if notes or not spec.items or parts["items"][0]["id"] in {d["id"] for d in dropped}:
             continue
-        out.append(dataclasses.replace(spec, camera=camera, doors=fitted.doors))
+        out.append(dataclasses.replace(spec, camera=camera, doors=fitted.doors, windows=fitted.windows))
     return out
 
 
@@ -768,7 +769,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
 
 
 def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=None, found_doors=(),
-                        calibration=None, asset_kinds=(), warnings: list):
+                        found_windows=(), calibration=None, asset_kinds=(), warnings: list):
     """The furniture to lay out on a measured floor (the pipeline's ``furniture`` stage).
 
     Parameters
@@ -784,8 +785,11 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
         The doors the user marked (:func:`augment.room.doors.doors_on_floor`); needs
         ``calibration``.
     found_doors : (n, 4) array_like
-        Doors found in the photo (:func:`augment.room.openings.find_doors`), the same way;
+        Doors found in the photo (:func:`augment.room.openings.find_openings`), the same way;
         one that will not do as a door of the layout's floor is left out, not refused.
+    found_windows : sequence of augment.room.openings.FoundWindow
+        Windows found in the photo: furniture taller than a sill keeps
+        ``ROOM.fit.window_clearance_m`` from it; one wider than its wall is left out.
     asset_kinds : iterable of str
         Kinds the user gave models of: a warning names those no item shows.
     warnings : list
@@ -829,7 +833,17 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
         except (FurnishError, LayoutError):
             continue  # not a door of this floor's walls (wider than its wall, say): a false find
         found += door
-    fitted = dataclasses.replace(fitted, doors=fitted.doors + tuple(found))
+    windows = []
+    for w in found_windows:
+        window = Opening(tuple(float(v) for v in w.segment_m.mean(axis=0)), float(np.linalg.norm(np.subtract(
+            *w.segment_m))), ROOM.fit.window_clearance_m, w.top_m - w.sill_m, w.sill_m, "found in the photo")
+        try:
+            LayoutBuilder(poly, height_m, open_edges=edges).add_window(window.at_m, window.width_m, window.sill_m,
+                                                                       window.height_m, window.clearance_m)
+        except LayoutError:
+            continue  # wider than the layout's wall: a false find, or a window round a corner
+        windows.append(window)
+    fitted = dataclasses.replace(fitted, doors=fitted.doors + tuple(found), windows=tuple(windows))
     if not fitted.items:
         # A preset's corner set where none of its furniture fits (a dining set on 3 m²): whole
         # in the frame, else cut by it rather than no staged photo.

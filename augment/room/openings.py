@@ -1,10 +1,11 @@
-"""Doors found in the photo, so the layouts keep them clear without the user marking them.
+"""Doors and windows found in the photo, so the layouts keep doors clear and tall
+furniture off windows without the user marking them.
 
 Every wall of the measured floor is a vertical plane through its foot line, so the
-calibration maps the wall to the photo: :func:`find_doors` samples each wall in view as
-a front-on strip (2 cm a sample) and takes the wall's own colour (its median 0.15-0.7 m
-up, below the windows' sills). Two readers find doors on it, and both are kept where
-they do not overlap:
+calibration maps the wall to the photo: :func:`find_openings` samples each wall in view
+as a front-on strip (2 cm a sample) and takes the wall's own colour (its median
+0.15-0.7 m up, below the windows' sills). Two readers find doors on it, and both are
+kept where they do not overlap:
 
 - the door model (``models/door_columns.onnx``, trained by ``models/train_doors.py`` on
   the synthetic photographer's rooms) gives each column a probability from its colours
@@ -17,6 +18,9 @@ they do not overlap:
 
 The feet of a run's two sides are the door, as a user would mark it
 (:func:`augment.room.doors.doors_on_floor`). ``--door`` marks one that is missed.
+Windows are read by rules on the same strip (:func:`_window_spans`): the wall's colour
+near the floor, another colour from 1.0 to 1.8 m up, a vertical edge at a side and a
+sill's line.
 """
 from __future__ import annotations
 
@@ -89,6 +93,36 @@ def column_features(lab: np.ndarray, calibration, a: np.ndarray, b: np.ndarray, 
     strip, inside, s = _wall_strip(lab, calibration, a, b, settings.step_m, settings.model_top_m)
     wall = _wall_colour(strip, inside, settings)
     return None if wall is None else (_strip_features(strip, inside, wall), s)
+
+
+@dataclass(frozen=True)
+class FoundWindow:
+    """A window found on a wall of the measured floor.
+
+    Attributes
+    ----------
+    segment_m : (2, 2) float64
+        The floor points under its two sides, meters.
+    sill_m, top_m : float
+        Its lower and upper edge above the floor, meters (the top as far as the photo
+        shows it).
+    corners_px : (4, 2) float64
+        Photo pixels of its corners: the sill's two ends, then the top's.
+    """
+
+    segment_m: np.ndarray
+    sill_m: float
+    top_m: float
+    corners_px: np.ndarray
+
+
+@dataclass(frozen=True)
+class Openings:
+    """What :func:`find_openings` finds: doors and windows, walls in the polygon's order,
+    left to right along each."""
+
+    doors: list
+    windows: list
 
 
 def _rows(step_m: float, top_m: float) -> int:
@@ -200,8 +234,8 @@ def _model_spans(features: np.ndarray, settings) -> list:
             if lo_w <= (i1 - i0) * settings.step_m <= hi_w]
 
 
-def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
-    """The doors standing on the walls of ``floor`` in ``image``.
+def find_openings(image: np.ndarray, calibration, floor) -> Openings:
+    """The doors and windows on the walls of ``floor`` in ``image``.
 
     Parameters
     ----------
@@ -213,15 +247,15 @@ def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
 
     Returns
     -------
-    list of FoundDoor
-        Left to right along each wall, walls in the polygon's order.
+    Openings
+        ``doors`` (FoundDoor) and ``windows`` (FoundWindow, :func:`_window_spans`).
     """
     settings = ROOM.doors
     lab = _lab(image)
     step = settings.step_m
     poly = np.asarray(floor.polygon_m, dtype=np.float64)
     lo_w, hi_w = settings.width_m
-    found = []
+    found, windows = [], []
     for a, b in _walls(poly, floor.edge_kind, settings):
         if np.linalg.norm(b - a) < lo_w:
             continue
@@ -260,10 +294,65 @@ def find_doors(image: np.ndarray, calibration, floor) -> list[FoundDoor]:
         spans += _model_spans(_strip_features(tall_strip[:rows], tall_inside[:rows], wall), settings)
         spans = _without_overlaps(spans)
         u = (b - a) / np.linalg.norm(b - a)
+
+        def segment(i0, i1):
+            return np.stack([a + s[i0] * u - 0.5 * step * u, a + s[i1 - 1] * u + 0.5 * step * u])
+
         for i0, i1, score in spans:
-            seg = np.stack([a + s[i0] * u - 0.5 * step * u, a + s[i1 - 1] * u + 0.5 * step * u])
+            seg = segment(i0, i1)
             found.append(FoundDoor(calibration.pixels_from_floor(seg), seg, score))
-    return found
+        in_door = np.zeros(len(s), bool)
+        for i0, i1, _ in spans:
+            in_door[i0:i1] = True
+        for i0, i1, sill, top in _window_spans(tall_strip, tall_inside, wall, in_door, settings):
+            seg = segment(i0, i1)
+            corners = np.vstack([np.column_stack([seg, np.full(2, h)]) for h in (sill, top)])
+            windows.append(FoundWindow(seg, sill, top, calibration.pixels_from_floor(corners)))
+    return Openings(found, windows)
+
+
+def _window_spans(strip: np.ndarray, inside: np.ndarray, wall: np.ndarray, in_door: np.ndarray, settings) -> list:
+    """(start, end, sill m, top m) column spans of the windows on a wall strip sampled from
+    the floor up (:func:`_wall_strip`): runs of columns, outside the doors found, that
+    differ from the wall's colour (glass, sky, a frame) over most of the band every
+    window covers (``settings.window_band_m``) and nowhere near the floor (a door or an
+    opening does), as wide as a window. The sill is the median over the run of where the
+    difference ends below the band, the top where it ends above."""
+    step = settings.step_m
+    z = (np.arange(strip.shape[0]) + 0.5) * step
+    differs = np.linalg.norm(strip - wall, axis=-1) > settings.min_difference
+    lo, hi = settings.window_band_m
+    band = inside & (z[:, None] >= lo) & (z[:, None] <= hi)
+    floor_band = inside & (z[:, None] >= settings.leaf_from_m) & (z[:, None] <= settings.window_below_m)
+    shows = band.sum(axis=0) * step >= settings.window_seen_m
+    glass = shows & ~in_door & (_column_share(differs, band) >= settings.min_share) & (
+        _column_share(differs, floor_band) < 1.0 - settings.min_share)
+    glass = cv2.morphologyEx(glass.astype(np.uint8)[None], cv2.MORPH_CLOSE, np.ones((1, 5), np.uint8))[0] > 0
+    lo_w, hi_w = settings.window_width_m
+    # A frame or a reveal at a side (the other may be a corner): light falling off across a wall has no edge.
+    sides = _upright_lines(strip[..., 0], band, shows, settings, settings.side_share)
+    out = []
+    middle = int(np.searchsorted(z, 0.5 * (lo + hi)))
+    for i0, i1 in _runs(glass):
+        near = settings.window_frame_m / step
+        if not lo_w <= (i1 - i0) * step <= hi_w or not any(
+                any(abs(e - end) <= near for e in sides) for end in (i0, i1 - 1)):
+            continue
+        sills, tops, edges = [], [], []
+        for c in range(i0, i1):
+            column = differs[:, c] | ~inside[:, c]
+            below = np.flatnonzero(~column[:middle])
+            above = np.flatnonzero(~column[middle:])
+            seen = np.flatnonzero(inside[:, c])
+            tops.append(z[middle + above[0]] - 0.5 * step if len(above) else z[seen[-1]] + 0.5 * step)
+            if len(below) and 0 < below[-1] < middle - 3:
+                k = below[-1]
+                sills.append(z[k] + 0.5 * step)
+                edges.append(abs(strip[k + 3, c, 0] - strip[k - 1, c, 0]))
+        # A sill is a line across the wall; light on a wall brightens it gradually.
+        if sills and np.median(edges) >= settings.window_sill_step:
+            out.append((i0, i1, float(np.median(sills)), float(np.median(tops))))
+    return out
 
 
 def _upright_lines(lightness: np.ndarray, low: np.ndarray, tall: np.ndarray, settings, min_share: float

@@ -145,9 +145,11 @@ def floor_in_world(truth: dict, camera_from_floor: np.ndarray) -> np.ndarray:
     return world_from_board @ np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
 
 
-def true_doors_on_floor(truth: dict, camera_from_floor: np.ndarray) -> list[np.ndarray]:
-    """The sample's true doors as (2, 2) foot segments in the floor frame of a calibration
-    of its photo (:func:`floor_in_world`), meters."""
+def true_doors_on_floor(truth: dict, camera_from_floor: np.ndarray, kind: str = "doors") -> list[np.ndarray]:
+    """The sample's true doors (or ``kind="windows"``) as (2, 2) segments of the floor
+    under their sides, in the floor frame of a calibration of its photo
+    (:func:`floor_in_world`), meters; a window's sill and top are its truth's
+    ``bottom_m`` and ``top_m``."""
     floor_from_world = np.linalg.inv(floor_in_world(truth, camera_from_floor))
     return [(np.column_stack([d["segment_m"], np.zeros(2), np.ones(2)]) @ floor_from_world.T)[:, :2]
-            for d in truth["room"]["doors"]]
+            for d in truth["room"][kind]]

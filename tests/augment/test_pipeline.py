@@ -1072,14 +1072,14 @@ def test_furniture_keeps_to_the_users_floor_mask(tmp_path, capsys):
     mask = tmp_path / "my_floor.png"
     cv2.imwrite(str(mask), allowed.astype(np.uint8) * 255)
     before = _digest(mask)
-    result = furnish(ROOMY, Board(), room="office", suggestions=1, floor_mask=mask)
+    result = furnish(ROOMY, Board(), room="living_room", suggestions=2, floor_mask=mask)
     assert _digest(mask) == before
     assert result.segmentation.method == "user mask" and np.array_equal(result.segmentation.mask, allowed)
     assert result.report["floor"]["method"] == "user mask"
-    lay = result.layouts[0]
-    assert len(lay.items) >= 2
+    footprints = [corners for lay in result.layouts for corners in lay.corners_m()]
+    assert len(footprints) >= 2
     drawn = np.zeros(allowed.shape, np.uint8)
-    for corners in lay.corners_m():
+    for corners in footprints:
         cv2.fillPoly(drawn, [np.round(result.calibration.pixels_from_floor(corners)).astype(np.int32)], 1)
     drawn = drawn.astype(bool)
     assert (drawn & allowed).sum() / drawn.sum() >= FOOTPRINT_IN_FLOOR
@@ -1139,11 +1139,11 @@ def test_the_door_in_the_photo_is_found_and_kept_clear(roomy):
     of the photographer's door and as wide within 15 cm, no other (the radiator is not a
     door); every suggestion keeps its swing zone clear, and the report and the floor
     overlay show it."""
-    from augment.room.openings import find_doors
+    from augment.room.openings import find_openings
 
     result, _ = roomy
     true = result.calibration.floor_from_pixels(_true_door_feet_px(ROOMY)[0])
-    (found,) = find_doors(result.image, result.calibration, result.floor)
+    (found,) = find_openings(result.image, result.calibration, result.floor).doors
     assert np.linalg.norm(found.segment_m.mean(axis=0) - true.mean(axis=0)) < 0.15
     assert abs(np.linalg.norm(found.segment_m[1] - found.segment_m[0]) - np.linalg.norm(true[1] - true[0])) < 0.15
     np.testing.assert_allclose(found.feet_px, result.calibration.pixels_from_floor(found.segment_m))
@@ -1161,11 +1161,11 @@ def test_the_door_in_the_photo_is_found_and_kept_clear(roomy):
 
 def test_no_door_is_found_where_there_is_none():
     """room_1: a window with a radiator under it on a wooden floor, no door in view."""
-    from augment.room.openings import find_doors
+    from augment.room.openings import find_openings
 
     m = pipeline.measure(CRAMPED, Board())
     assert json.loads(CRAMPED.with_suffix(".json").read_text())["room"]["doors"]  # its door is behind the camera
-    assert find_doors(m.image, m.calibration, m.floor) == []
+    assert find_openings(m.image, m.calibration, m.floor).doors == []
 
 
 def test_no_auto_doors_keeps_only_the_users(tmp_path, capsys):
@@ -1195,7 +1195,7 @@ def test_a_door_the_rules_miss_is_found_by_the_door_model(tmp_path, seed):
     """Rooms of the synthetic photographer whose door, in view, the colour rules alone
     miss: the door model finds it, its centre within 15 cm of the true door's (the
     truth mapped into the calibration's floor frame), and nothing else."""
-    from augment.room.openings import find_doors
+    from augment.room.openings import find_openings
     from augment.synth.truth import true_doors_on_floor
 
     m, truth = _measured_render(seed, tmp_path)
@@ -1206,17 +1206,17 @@ def test_a_door_the_rules_miss_is_found_by_the_door_model(tmp_path, seed):
         if ((px >= 0) & (px < [w, h])).all():
             true.append(feet.mean(axis=0))
     (door,) = true
-    (found,) = find_doors(m.image, m.calibration, m.floor)
+    (found,) = find_openings(m.image, m.calibration, m.floor).doors
     assert np.linalg.norm(found.segment_m.mean(axis=0) - door) < 0.15
 
 
 def _suggestions(m, room, corners: bool):
     """Four suggestions of the preset ``room`` on a measured photo (its doors found, as
     ``stage furnish`` does), with or without its corner sets; their notes and dropped items."""
-    from augment.room.openings import find_doors
+    from augment.room.openings import find_openings
 
     warnings = []
-    doors = [d.feet_px.ravel() for d in find_doors(m.image, m.calibration, m.floor)]
+    doors = [d.feet_px.ravel() for d in find_openings(m.image, m.calibration, m.floor).doors]
     spec, dropped = fit.furniture_for_floor(room, m.floor, m.height.height_m, Path("room.jpg"), found_doors=doors,
                                             calibration=m.calibration, warnings=warnings)
     others = fit.corner_specs(room, spec, m.calibration) if corners else ()
