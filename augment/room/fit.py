@@ -506,15 +506,18 @@ def _off_their_spots(lay, r: dict | None = None) -> set:
     return {m.names[i] for i in off}
 
 
-def _taken_out(lay, spec, ids: set):
+def _taken_out(lay, spec, ids: set, built: dict | None = None):
     """``lay`` with the items ``ids`` (and what stands on them) taken out, the rest where
-    it stood: a layout of ``spec`` without them."""
+    it stood: a layout of ``spec`` without them. ``built``: models of ``spec`` built
+    before, by what they leave out (the same pieces go from many tries)."""
     from layout.solver import Layout, State, energy_terms
     from layout.spec import build
 
-    gone = set(ids) | ({i.id for i in spec.items} - set(lay.model.names))  # a try of a subset
-    smaller, _ = _drop(spec, sorted(gone))
-    model, _ = build(smaller)
+    gone = frozenset(ids) | ({i.id for i in spec.items} - set(lay.model.names))  # a try of a subset
+    built = {} if built is None else built
+    if (key := (id(spec), gone)) not in built:
+        built[key] = spec, build(_drop(spec, sorted(gone))[0])[0]  # the spec held: its id stays its own
+    model = built[key][1]
     at = [lay.model.names.index(n) for n in model.names]
     pos, yaw = lay.position_m[at].copy(), lay.yaw_rad[at].copy()
     return Layout.from_state(model, pos, yaw, energy_terms(model, State(pos, yaw)), lay.trace, lay.iterations,
@@ -544,9 +547,10 @@ class _Pick:
     the hidden piece stays (the most important unit, a member of a rigid set), the piece
     in front of it goes instead."""
 
-    def __init__(self, earlier: list, spec, anchor=frozenset()):
+    def __init__(self, earlier: list, spec, anchor=frozenset(), built: dict | None = None):
         self.earlier = earlier
         self.spec = spec
+        self.built = {} if built is None else built  # models with pieces taken out (_taken_out)
         self.anchor = anchor  # the ids of the most important unit: it stays, astray or not
         groups = {g.id: g for g in spec.groups}
         # A member of a rigid set (a table's chairs) goes only with its set.
@@ -584,7 +588,7 @@ class _Pick:
         for _ in range(HIDING_ROUNDS + 1):
             if taken:
                 # Taking a piece out moves nothing else: the try stays clean.
-                lay = _taken_out(lay, self.spec, taken)
+                lay = _taken_out(lay, self.spec, taken, self.built)
                 rep, r = layout_report.evaluate(lay, walkable=False), _residuals(lay)
             camera = rep.get("camera", {})
             hiding = {}
@@ -662,6 +666,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     fit = ROOM.fit
     notes = [] if notes is None else notes
     original, dropped_before = spec, len(dropped)
+    built = {}  # models with pieces taken out, shared by the tries (_taken_out)
     corners, cornered = [c for c in corners if _kinds(c) != _kinds(spec)], None
     if spec.camera is None and corners and corners[0].camera is not None and NO_ROOM_IN_VIEW in notes:
         # Nothing of the furniture stands whole in view (furniture_for_floor laid it out without the
@@ -673,7 +678,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
         solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts))
         layouts, reports, failed, cut, astray, said, tried = [], [], None, None, None, [], set()
         for k in range(suggestions):
-            pick = _Pick(layouts, spec, anchor=frozenset(i.id for i in _units(spec)[0]))
+            pick = _Pick(layouts, spec, anchor=frozenset(i.id for i in _units(spec)[0]), built=built)
             for t in range(fit.seed_tries):
                 # Twice the very same arrangement: the photo pins it, other seeds will not help.
                 if pick.offer(solver.solve(model, seed=seed + k + t * suggestions)) or pick.pinned >= 2:
@@ -697,7 +702,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 if c in tried:
                     continue
                 tried.add(c)
-                other = _Pick(layouts, corner, anchor=frozenset(i.id for i in _units(corner)[0]))
+                other = _Pick(layouts, corner, anchor=frozenset(i.id for i in _units(corner)[0]), built=built)
                 corner_model, _ = build(corner)
                 for t in range(fit.seed_tries):
                     if other.offer(solver.solve(corner_model, seed=seed + k + t * suggestions)) or not other.lacking:
