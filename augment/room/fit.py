@@ -373,6 +373,13 @@ def too_small(area_m2: float, dropped: list) -> FurnishError:
                         + ". Show more of the floor: step back, turn toward the room, or hold the camera higher")
 
 
+def no_view(dropped: list) -> FurnishError:
+    """The photo shows too little above the floor for any piece to stand whole in it: no
+    staged photo with pieces cut by its edge."""
+    return FurnishError("no furniture stands whole in this photo (" + dropped_summary(dropped) + "). It shows too "
+                        "little above the floor: step back, and hold the camera higher and level")
+
+
 def _layout_floor(floor, height_m: float, photo: Path) -> np.ndarray:
     """The floor the layouts are made on: the measured polygon shrunk by the wall margin
     (the measured one itself when shrinking leaves no usable polygon)."""
@@ -405,9 +412,6 @@ def layout_camera(calibration) -> Camera:
 
 
 IN_NO_VIEW = "it would be cut by the photo's edge or stand in its foreground wherever it stood"
-NO_ROOM_IN_VIEW = ("the photo shows too little above the floor for any piece to stand whole in it; laid out "
-                   "without the camera, so pieces may be cut by the photo's edge (step back, or hold the camera "
-                   "higher and level)")
 
 
 # Starts for another arrangement when random ones repeat an earlier suggestion
@@ -657,22 +661,16 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     When a suggestion has no clean layout, the least important unit with an item cut
     by the photo's edge is dropped, else the one with a piece astray (the most
     important unit, a sofa or a bed, is never astray), else the least important unit
-    (the spec's last),
-    and all are solved again. Rather than drop the last unit for the camera's sake, all
-    are laid out again without the camera, with a line in ``notes``."""
+    (the spec's last), and all are solved again. The last unit gone, a corner set is
+    staged in their place; with none left, the photo is refused: no piece is shown cut
+    by the photo's edge."""
     from layout.solver import turned_state
     from layout.spec import build
 
     fit = ROOM.fit
     notes = [] if notes is None else notes
-    original, dropped_before = spec, len(dropped)
     built = {}  # models with pieces taken out, shared by the tries (_taken_out)
     corners, cornered = [c for c in corners if _kinds(c) != _kinds(spec)], None
-    if spec.camera is None and corners and corners[0].camera is not None and NO_ROOM_IN_VIEW in notes:
-        # Nothing of the furniture stands whole in view (furniture_for_floor laid it out without the
-        # camera): a corner set does.
-        notes.remove(NO_ROOM_IN_VIEW)
-        spec, cornered = _corner_instead(spec, corners.pop(0), dropped, IN_NO_VIEW)
     while True:
         model, solver = build(spec)
         solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts))
@@ -758,14 +756,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 spec, cornered = _corner_instead(spec, corners.pop(0), dropped, reason)
                 progress.grow(suggestions)
                 continue
-            if spec.camera is not None:
-                # Better pieces cut by the photo's edge than no staged photo: all again, as a plan.
-                notes.append(NO_ROOM_IN_VIEW)
-                spec, cornered = dataclasses.replace(original, camera=None), None
-                del dropped[dropped_before:]
-                continue
             dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason} for u in units for i in u)
-            raise too_small(area_m2, dropped)
+            # No piece cut by the photo's edge: rather no staged photo, and the reason.
+            raise no_view(dropped) if spec.camera is not None and by_cut else too_small(area_m2, dropped)
         spec, gone = _drop(spec, [i.id for u in gone_units for i in u])
         dropped.extend({"id": i, "kind": kinds[i], "reason": reason} for i in sorted(gone))
         # A piece kept bare for the frame and left out after all is said once, as left out.
@@ -820,11 +813,6 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
     camera = layout_camera(calibration) if calibration is not None and ROOM.fit.for_camera else None
     notes = []
     fitted, dropped = fit_spec(spec, poly, height_m, camera, notes)
-    if camera is not None and not fitted.items:
-        # Better pieces cut by the photo's edge than no staged photo at all.
-        fitted, dropped = fit_spec(spec, poly, height_m)
-        camera = None
-        notes = [NO_ROOM_IN_VIEW]
     warnings += notes
     fitted = dataclasses.replace(fitted, camera=camera)
     if doors is not None and len(doors):
@@ -850,14 +838,13 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
         windows.append(window)
     fitted = dataclasses.replace(fitted, doors=fitted.doors + tuple(found), windows=tuple(windows))
     if not fitted.items:
-        # A preset's corner set where none of its furniture fits (a dining set on 3 m²): whole
-        # in the frame, else cut by it rather than no staged photo.
-        corners = corner_specs(source, fitted, calibration) or corner_specs(source, fitted)
+        # A preset's corner set where none of its furniture fits (a dining set on 3 m², a table
+        # the frame cuts wherever it stands), whole in the frame.
+        corners = corner_specs(source, fitted, calibration)
         if not corners:
-            raise too_small(floor.area_m2, dropped)
+            raise no_view(dropped) if any(IN_NO_VIEW in d["reason"] for d in dropped) else \
+                too_small(floor.area_m2, dropped)
         fitted, note = _corner_instead(fitted, corners[0], dropped, "")
-        if fitted.camera is not None and NO_ROOM_IN_VIEW in warnings:
-            warnings.remove(NO_ROOM_IN_VIEW)
         warnings.append(note)
     kinds = {i.kind.name for i in fitted.items}
     unused = sorted(set(asset_kinds) - kinds)

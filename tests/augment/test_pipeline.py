@@ -1249,21 +1249,29 @@ def test_a_small_floor_gets_four_different_corners_not_four_twins(tmp_path):
 
 def test_furniture_cut_wherever_it_stood_gives_way_to_a_corner_in_view(tmp_path):
     """Render [9900, 7], a dining room whose table set is cut by the photo's edge
-    wherever it stands: it was laid out without the camera, cut in all four photos. Now a
-    corner set stands whole in the frame in every suggestion, the table set is reported as
-    left out and no note says the camera was given up."""
+    wherever it stands (it was laid out without the camera, cut in all four photos): a
+    corner set stands whole in the frame in every suggestion and the table set is
+    reported as left out."""
     from layout.camera import judge
 
     m, _ = _measured_render([9900, 7], tmp_path)
-    plain, notes, _ = _suggestions(m, "dining_room", corners=False)
-    assert fit.NO_ROOM_IN_VIEW in notes and all(judge(lay, camera=fit.layout_camera(m.calibration))["cut"]
-                                                 for lay in plain)
     layouts, notes, dropped = _suggestions(m, "dining_room", corners=True)
-    assert fit.NO_ROOM_IN_VIEW not in notes
     assert any(n.startswith("staged as a corner (") for n in notes), notes
     assert all(lay.model.camera is not None and judge(lay)["cut"] == [] for lay in layouts)
     assert "dining_table" in {d["id"] for d in dropped}
     assert not {"dining_table", "round_table"} & {k for lay in layouts for k in lay.model.kinds}
+
+
+def test_a_photo_where_no_piece_stands_whole_is_refused_not_staged_cut(tmp_path):
+    """Render [9900, 34] looks steeply down at an office floor: the far wall's foot near the
+    frame's top, so the desk, its chair, the bookcase and every corner set are cut by
+    the top edge or stand in the foreground wherever they stand. Before, the office was
+    laid out without the camera and the desk showed only its legs under the top edge;
+    now the photo is refused, saying why and what to do."""
+    m, _ = _measured_render([9900, 34], tmp_path)
+    with pytest.raises(FurnishError, match=r"no furniture stands whole in this photo \(desk: 0.75 m tall, it would "
+                                           r"be cut by the photo's edge.*step back, and hold the camera higher"):
+        _suggestions(m, "office", corners=True)
 
 
 def test_a_floor_too_small_for_the_dining_set_is_staged_with_a_corner_set(tmp_path):
@@ -1276,7 +1284,6 @@ def test_a_floor_too_small_for_the_dining_set_is_staged_with_a_corner_set(tmp_pa
     layouts, notes, dropped = _suggestions(m, "dining_room", corners=True)
     assert ("dining_table", "round_table") in {(d["id"], d["kind"]) for d in dropped}
     assert any(n.startswith("staged as a corner (bistro_table") for n in notes), notes
-    assert fit.NO_ROOM_IN_VIEW not in notes
     for lay in layouts:
         assert "round_table" in lay.model.kinds and lay.model.particle_size_m[lay.model.names.index(
             "bistro_table")][0] == pytest.approx(0.7)
