@@ -316,8 +316,9 @@ def _window_spans(strip: np.ndarray, inside: np.ndarray, wall: np.ndarray, in_do
     the floor up (:func:`_wall_strip`): runs of columns, outside the doors found, that
     differ from the wall's colour (glass, sky, a frame) over most of the band every
     window covers (``settings.window_band_m``) and nowhere near the floor (a door or an
-    opening does), as wide as a window. The sill is the median over the run of where the
-    difference ends below the band, the top where it ends above."""
+    opening does), as wide as a window, with a vertical edge near a side and a step in
+    lightness at the sill. The sill is the median over the run of where the difference
+    ends below the band, the top where it ends above."""
     step = settings.step_m
     z = (np.arange(strip.shape[0]) + 0.5) * step
     differs = np.linalg.norm(strip - wall, axis=-1) > settings.min_difference
@@ -333,8 +334,8 @@ def _window_spans(strip: np.ndarray, inside: np.ndarray, wall: np.ndarray, in_do
     sides = _upright_lines(strip[..., 0], band, shows, settings, settings.side_share)
     out = []
     middle = int(np.searchsorted(z, 0.5 * (lo + hi)))
+    near = settings.window_frame_m / step
     for i0, i1 in _runs(glass):
-        near = settings.window_frame_m / step
         if not lo_w <= (i1 - i0) * step <= hi_w or not any(
                 any(abs(e - end) <= near for e in sides) for end in (i0, i1 - 1)):
             continue
