@@ -262,13 +262,18 @@ def _set(items, groups=(), constraints=()):
     return {"groups": list(groups), "items": list(items), "constraints": list(constraints)}
 
 
+# A reading chair of a corner set stands with its back to a wall, not alone in the room.
+CHAIR_TO_WALL = [{"type": "against_wall", "item": "armchair", "gap": 0.1}]
+
+
 def _living_corners():
     return [
-        _set([_item("armchair", "armchair"), _item("side_table", "side_table"), _item("floor_lamp", "floor_lamp")]),
+        _set([_item("armchair", "armchair"), _item("side_table", "side_table"), _item("floor_lamp", "floor_lamp")],
+             constraints=CHAIR_TO_WALL),
         _set([_item("tv_stand", "tv_stand", size=list(TV_BENCH)), _item("plant", "plant")]),
         _set([_item("sofa", "sofa", size=list(LOVESEAT)), _item("side_table", "side_table")]),
         _set([_item("bookcase", "bookcase"), _item("plant", "plant")]),
-        _set([_item("armchair", "armchair"), _item("plant", "plant")]),
+        _set([_item("armchair", "armchair"), _item("plant", "plant")], constraints=CHAIR_TO_WALL),
         _set([_item("plant", "plant"), _item("side_table", "side_table")]),
     ]
 
@@ -277,7 +282,7 @@ def _bedroom_corners():
     return [
         _set([_item("bed", "single_bed"), _item("nightstand", "nightstand")]),
         _set([_item("dresser", "dresser"), _item("plant", "plant")]),
-        _set([_item("armchair", "armchair"), _item("floor_lamp", "floor_lamp")]),
+        _set([_item("armchair", "armchair"), _item("floor_lamp", "floor_lamp")], constraints=CHAIR_TO_WALL),
         _set([_item("wardrobe", "wardrobe"), _item("plant", "plant")]),
     ]
 
@@ -298,7 +303,8 @@ def _office_corners():
     return [
         _set([_item("desk", "desk", rules=False), _item("office_chair", "office_chair")], constraints=facing_in),
         _set([_item("desk", "desk"), _item("office_chair", "office_chair"), _item("plant", "plant")]),
-        _set([_item("bookcase", "bookcase"), _item("armchair", "armchair"), _item("floor_lamp", "floor_lamp")]),
+        _set([_item("bookcase", "bookcase"), _item("armchair", "armchair"), _item("floor_lamp", "floor_lamp")],
+             constraints=CHAIR_TO_WALL),
         _set([_item("bookcase", "bookcase"), _item("plant", "plant")]),
     ]
 

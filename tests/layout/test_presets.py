@@ -213,8 +213,15 @@ def test_corner_sets_are_other_small_groups_that_solve_clean(name):
         doc = {"room": {"polygon": [[0, 0], [2.5, 0], [2.5, 2.5], [0, 2.5]], "height": 2.6}, **s}
         model, _ = spec.build(spec.spec_from_dict(doc))
         assert set(model.kinds) - {"group"} <= set(CATALOG)
-        reports = [evaluate(lay) for lay in Solver(max_iterations=400).suggest(model, 3)]
+        layouts = Solver(max_iterations=400).suggest(model, 3)
+        reports = [evaluate(lay) for lay in layouts]
         assert any(r["overlaps"]["count"] == 0 and r["outside_m2"] == 0.0 for r in reports), s
+        # A reading chair stands with its back to a wall (0.1 m off), not out in the room.
+        for lay in layouts if "armchair" in model.names else ():
+            i = model.names.index("armchair")
+            back = lay.position_m[i, :2] - 0.5 * model.particle_size_m[i, 1] * np.array(
+                [np.cos(lay.yaw_rad[i]), np.sin(lay.yaw_rad[i])])
+            assert min(back.min(), 2.5 - back.max()) < 0.2, (s, back)
 
 
 def test_corner_sets_are_fresh_and_checked():
