@@ -588,20 +588,22 @@ class _Pick:
             for seat in seats:
                 with_it.setdefault(seat, set()).update({table} | with_it.get(table, set()))
             stays.update(seats if table in stays else ())
-        taken = {i: OFF_SPOT for i in _off_their_spots(lay, r) - self.anchor}
-        for _ in range(HIDING_ROUNDS + 1):
+        taken = {}
+        for judged in range(HIDING_ROUNDS + 1):
             if taken:
                 # Taking a piece out moves nothing else: the try stays clean.
                 lay = _taken_out(lay, self.spec, taken, self.built)
                 rep, r = layout_report.evaluate(lay, walkable=False), _residuals(lay)
             camera = rep.get("camera", {})
-            hiding = {}
+            # Again each round: without a piece, those placed at it get another spot (a lamp
+            # beside the armchair once its side table is gone).
+            hiding = {i: OFF_SPOT for i in _off_their_spots(lay, r) - self.anchor}
             for h in camera.get("hidden", ()):
                 front = camera["hidden_by"].get(h, h)
                 goes, why = (h, UNSEEN) if h not in stays else (front, IN_FRONT) if front not in stays else (None, None)
                 if goes is not None:
                     hiding.update(dict.fromkeys({goes} | with_it.get(goes, set()), why))
-            if not hiding or _ == HIDING_ROUNDS or {lay.model.names[i] for i in lay.items} <= set(hiding):
+            if not hiding or judged == HIDING_ROUNDS or {lay.model.names[i] for i in lay.items} <= set(hiding):
                 break
             taken |= hiding
         # Seating shown from behind is worse than a repeat (a sofa's back is no picture to
