@@ -101,22 +101,29 @@ def _doors_in_view(doors, calibration, floor) -> list:
     return out
 
 
-def _windows_in_view(truth, calibration, floor) -> list:
-    """The true windows (segment (2, 2) m, sill m, top m) with at least 80 % of their sill
-    in the photo, on a wall of the floor found."""
+def _true_windows(truth, calibration) -> list:
+    """The true windows as (segment (2, 2) m in the calibration's floor frame, sill m, top m)."""
     from augment.synth.truth import true_doors_on_floor
+
+    return [(seg, t["bottom_m"], t["top_m"]) for seg, t in zip(
+        true_doors_on_floor(truth, calibration.camera_from_floor, "windows"), truth["room"]["windows"])]
+
+
+def _windows_in_view(windows, calibration, floor) -> list:
+    """Of the true ``windows`` (:func:`_true_windows`), those with at least 80 % of their
+    sill in the photo, on a wall of the floor found."""
     from layout.geometry import edge_distances
 
     w, h = calibration.size_px
     out = []
-    for seg, t in zip(true_doors_on_floor(truth, calibration.camera_from_floor, "windows"), truth["room"]["windows"]):
+    for seg, sill_m, top_m in windows:
         sill = np.column_stack([seg[0] + np.linspace(0.0, 1.0, 11)[:, None] * (seg[1] - seg[0]),
-                                np.full(11, t["bottom_m"])])
+                                np.full(11, sill_m)])
         cam = sill @ calibration.camera_from_floor[:3, :3].T + calibration.camera_from_floor[:3, 3]
         px = calibration.pixels_from_floor(sill)
         shown = ((cam[:, 2] > 0) & (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)).mean()
         if shown >= 0.8 and edge_distances(seg.mean(axis=0)[None], floor.polygon_m)[0].min() < 0.3:
-            out.append((seg, t["bottom_m"], t["top_m"]))
+            out.append((seg, sill_m, top_m))
     return out
 
 
@@ -290,15 +297,15 @@ def main(argv=None) -> int:
         openings = find_openings(m.image, m.calibration, m.floor)
         found_doors = openings.doors
         found = [f.segment_m for f in found_doors]
-        windows = _windows_in_view(truth, m.calibration, m.floor) if truth is not None else []
+        every = _true_windows(truth, m.calibration) if truth is not None else []
+        windows = _windows_in_view(every, m.calibration, m.floor)
         for seg, _, _ in windows:
             err = min((float(np.linalg.norm(f.segment_m.mean(axis=0) - seg.mean(axis=0))) for f in openings.windows),
                       default=np.inf)
             window_rows.append({"photo": name, "found": bool(err <= DOOR_MATCH_M), "centre_error_m": err})
         if truth is not None:
-            every = [(seg, t["bottom_m"]) for seg, t in zip(true_doors_on_floor(
-                truth, m.calibration.camera_from_floor, "windows"), truth["room"]["windows"])]
-            false_windows += sum(not any(_on_window(f.segment_m, seg) for seg, _ in every) for f in openings.windows)
+            false_windows += sum(not any(_on_window(f.segment_m, seg) for seg, _, _ in every)
+                                 for f in openings.windows)
         for d in doors:
             err = min((float(np.linalg.norm(f.mean(axis=0) - d.mean(axis=0))) for f in found), default=np.inf)
             door_rows.append({"photo": name, "found": bool(err <= DOOR_MATCH_M), "centre_error_m": err})
