@@ -4,6 +4,8 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 COMPILED := $(VENV)/.compiled
+# The suite runs in this many processes, a test file each at a time (a file's fixtures are shared).
+TEST_WORKERS ?= 2
 # numba compiles these files' kernels on their first use (1-2 minutes) and caches them.
 KERNELS := layout/_kernels.py layout/metrics.py augment/render/staged.py
 # Mesa's EGL/OSMesa for the renderer; Chromium for the web app's browser test.
@@ -43,7 +45,7 @@ $(COMPILED): $(STAMP) $(KERNELS)
 	touch $(COMPILED)
 
 test: setup
-	$(PY) -m pytest
+	$(PY) -m pytest -n $(TEST_WORKERS) --dist loadfile
 
 demo: setup
 	$(VENV)/bin/layout solve samples/living_room.toml --suggestions 4 --seed 0 --out out/demo
