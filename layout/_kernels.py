@@ -994,7 +994,7 @@ def residual_boundary(R, P, pos, yaw, out):
         out[i] = 0.0
         if P.bounded[i] and not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
             out[i] = boundary_item(R, P, pos, yaw, i, False)
-        if P.bounded[i] and R.planes.shape[0] > 0:
+        if P.bounded[i] and P.collides[i] and R.planes.shape[0] > 0:
             out[i] += frame_item(R, P, pos, yaw, i, False)
         out[i] = -math.sqrt(out[i])
 
@@ -1713,7 +1713,8 @@ def floor_pass(R, P, pos, yaw, cs, k_access, side, t, access):
                 if not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i] + P.access_max[i]):
                     access_in_floor(R, P, pos, yaw, cs, i, k_access, True)
     for i in range(P.role.shape[0]):
-        if side[i] == t and P.bounded[i] and R.planes.shape[0] > 0:
+        # A rug lies flat: it may run past the photo's edge and into its foreground, as rugs do in photos.
+        if side[i] == t and P.bounded[i] and P.collides[i] and R.planes.shape[0] > 0:
             frame_item(R, P, pos, yaw, i, True)
         if side[i] == t and P.bounded[i] and not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
             boundary_item(R, P, pos, yaw, i, True)

@@ -260,7 +260,7 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None =
         w, d = unit[0].kind.size_m[:2] if len(unit) == 1 else _unit_rect(unit, groups)
         if not _rect_fits(poly, w, d):
             drop(unit, f"its footprint {w:.2f} x {d:.2f} m fits the {area:.1f} m\u00b2 floor at no angle")
-        elif camera is not None:
+        elif camera is not None and any(i.kind.collides for i in unit):  # a rug may run out of the photo
             top = max(i.kind.size_m[2] + i.elevation_m for i in unit)
             if in_view_share(camera, poly, (w, d, top)) > 0.0:
                 continue

@@ -89,6 +89,24 @@ def test_the_solver_keeps_a_tall_item_whole_in_the_frame():
         assert uv[:, 1].max() <= 480 * (1 - CAMERA.foreground) + 1
 
 
+def test_a_rug_may_lie_in_the_foreground_and_run_out_of_the_photo():
+    """A rug lies flat: held at a spot 3 m out, in the foreground (which reaches 4.46 m,
+    see above) and reaching past the left edge (y = 313.6 x / 500 = 1.25 m at 2 m out), it
+    stays there; a box of its footprint, 0.5 m tall, held at the same spot, is pushed
+    into the frame and out of the foreground."""
+    cam = Camera(K, looking_along_x(1.5), (640, 480))
+    for collides, stays in ((False, True), (True, False)):
+        b = LayoutBuilder([[0, -3], [9, -3], [9, 3], [0, 3]], 3.0)
+        item = b.add_item("rug", (2.0, 1.4, 0.01 if not collides else 0.5), kind="rug", collides=collides)
+        b.heat([item], (3.0, 1.2))
+        b.set_camera(cam)
+        lay = Solver().solve(b.finalize(), seed=0)
+        at = lay.position_m[item, :2]
+        assert (np.linalg.norm(at - [3.0, 1.2]) < 0.05) == stays, (collides, at)
+        if not stays:
+            assert judge(lay)["cut"] == []
+
+
 def test_no_place_in_view_for_what_the_frame_cannot_hold():
     """Pitched 40 degrees down from 1.2 m the top edge meets the floor-level ray at about
     1.2 / tan(40 - 25.6 deg) = 4.7 m (half the vertical view is atan(240 / 500)), and the
