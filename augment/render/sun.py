@@ -40,7 +40,7 @@ class SunOnFloor:
         Where they are: their mean point on the floor, meters.
     downstream : int
         +1 when the light travels along ``axes_xy[0]``, -1 against it, 0 when the floor
-        does not tell (the patches' far end runs into a wall and lights it; their near end never does).
+        does not tell (the patches' far end runs into a wall; their near end never does).
     lit_share : float
         Share of the floor seen that is in the sun.
     lo_m, cell_m, lit, seen
@@ -249,31 +249,19 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     lit = np.isin(labels, bounded[bounded > 0])
     if lit.sum() < 100:
         return None
-    log_light = np.log(np.maximum(top, 1e-4))
-    downstream = _downstream(lit, standing, valid, log_light, axes[0], margin,
-                             math.log(settings.min_median_contrast))
+    downstream = _downstream(lit, standing, axes[0], margin)
     return SunOnFloor(axes, bool(along_wall), length_m, contrast, center, downstream,
                       float(lit.sum() / valid.sum()), (float(lo[0]), float(lo[1])), float(cell), lit, valid)
 
 
-def _downstream(lit, standing, floor, log_light, axis_xy, margin, min_log_step) -> int:
+def _downstream(lit, standing, axis_xy, margin) -> int:
     """Which way along ``axis_xy`` the light travels, +1 or -1, or 0 when the floor does
     not tell: a window's sill stands above the floor, so its patch never reaches the
-    window's wall, while the far end of a patch runs into the wall it climbs and lights
-    it. Only wall lit so (``min_log_step`` over the walls' median near the floor, log) and
-    above its foot counts: not a patch that merely ends near a wall, nor sunny floor that a
-    ragged mask left out along the foot."""
-    k = 2 * margin + 3
-    off_floor = cv2.distanceTransform((~floor).astype(np.uint8), cv2.DIST_L2, 5)
-    near_floor = standing & (off_floor <= k)
-    if not near_floor.any():
-        return 0
-    above_foot = standing & (off_floor > margin) & (off_floor <= k + margin)
-    sunny_wall = above_foot & (log_light > np.median(log_light[near_floor]) + min_log_step)
-    near_wall = cv2.dilate(sunny_wall.astype(np.uint8), np.ones((2 * k + 1, 2 * k + 1), np.uint8)) > 0
+    window's wall, while the far end of a patch runs into the wall it climbs."""
     rows, cols = np.nonzero(lit)
     along = cols * axis_xy[0] + rows * axis_xy[1]
     lo_s, hi_s = np.quantile(along, [0.1, 0.9])
+    near_wall = cv2.dilate(standing.astype(np.uint8), np.ones((2 * margin + 3, 2 * margin + 3), np.uint8)) > 0
     touch = near_wall[rows, cols]
     ends = (along >= hi_s).sum(), (along <= lo_s).sum()
     plus, minus = touch[along >= hi_s].sum() / max(ends[0], 1), touch[along <= lo_s].sum() / max(ends[1], 1)
