@@ -935,6 +935,14 @@ def boundary_item(R, P, pos, yaw, i, project):
     return violation
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def framed(R, P, i):
+    """Whether the photo's frame holds particle i (:func:`frame_item`): a bounded item that
+    collides. A rug lies flat: it may run past the photo's edge and into its foreground,
+    as rugs do in photos."""
+    return P.bounded[i] and P.collides[i] and R.planes.shape[0] > 0
+
+
 @njit(cache=True, error_model="numpy")
 def frame_item(R, P, pos, yaw, i, project):
     """Keep item i's 3-D box inside the space the photo shows (the camera's frustum,
@@ -994,7 +1002,7 @@ def residual_boundary(R, P, pos, yaw, out):
         out[i] = 0.0
         if P.bounded[i] and not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
             out[i] = boundary_item(R, P, pos, yaw, i, False)
-        if P.bounded[i] and P.collides[i] and R.planes.shape[0] > 0:
+        if framed(R, P, i):
             out[i] += frame_item(R, P, pos, yaw, i, False)
         out[i] = -math.sqrt(out[i])
 
@@ -1713,8 +1721,7 @@ def floor_pass(R, P, pos, yaw, cs, k_access, side, t, access):
                 if not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i] + P.access_max[i]):
                     access_in_floor(R, P, pos, yaw, cs, i, k_access, True)
     for i in range(P.role.shape[0]):
-        # A rug lies flat: it may run past the photo's edge and into its foreground, as rugs do in photos.
-        if side[i] == t and P.bounded[i] and P.collides[i] and R.planes.shape[0] > 0:
+        if side[i] == t and framed(R, P, i):
             frame_item(R, P, pos, yaw, i, True)
         if side[i] == t and P.bounded[i] and not clear_of_walls(R, pos[i, 0], pos[i, 1], P.radius[i]):
             boundary_item(R, P, pos, yaw, i, True)
