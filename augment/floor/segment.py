@@ -524,7 +524,7 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
         wand, board_marks = clicks[~on_board], clicks[on_board]
     # When every "not floor" click is on a board, the floor clicks alone mark regions,
     # and the first pass is the floor.
-    mask_small, name, clicked_floor, clicked_other, clicked_near = (
+    mask_small, name, clicked_floor, clicked_other, clicked_near, vetoed = (
         first if first is not None and len(wand) == len(floor_clicks) else found(wand))
     mask = _full_size(mask_small, (cols, rows))
     skirting_m = board_doubt = None
@@ -543,6 +543,10 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
         mask = trimmed | (mask & (reach > 0))
         if board_doubt is not None and reach[board_doubt[1], board_doubt[0]]:
             board_doubt = None
+    # After the trim: taken out before, they would leave a skirting board's strip in
+    # pieces, which the trim no longer knows for a board.
+    if vetoed.any():
+        mask &= ~_full_size(vetoed, (cols, rows))
     if len(wand):
         other = cv2.resize(clicked_other.astype(np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
         mask &= ~other
@@ -566,9 +570,11 @@ def _full_size(mask_small: np.ndarray, size_px: tuple[int, int]) -> np.ndarray:
 def _refined(small, scale, probability, calibration, method, refine, clicks):
     """The floor at the working size for these clicks: the model's mask refined by
     GrabCut (or taken as it is, or GrabCut alone), cleaned; with the clicks' regions and
-    reach (:func:`_click_regions`) and the method's name."""
+    reach (:func:`_click_regions`), the method's name and what the model vetoes of
+    GrabCut's additions (:func:`_vetoed`, taken out after the skirting trim)."""
     shape_small = small.shape[:2]
     clicked_floor, clicked_other, clicked_near = _click_regions(small, scale, calibration, clicks)
+    vetoed = np.zeros(shape_small, bool)
     if method == "onnx" and refine:
         trimap = np.where(probability > 0.5, cv2.GC_PR_FGD, cv2.GC_PR_BGD).astype(np.uint8)
         # Only well inside a confident region is the model taken as given: its edges
@@ -581,6 +587,8 @@ def _refined(small, scale, probability, calibration, method, refine, clicks):
         _apply_clicks(trimap, clicked_floor, clicked_other, clicked_near)
         small_mask = _grabcut(small, trimap, FLOOR.segment.grabcut_iterations)
         small_mask = _restore_dropped(small_mask, probability, calibration, scale, clicked_other | clicked_near)
+        # The board's floor is pinned: what stands on it is the erasure's to find.
+        vetoed = _vetoed(small_mask, probability, clicked_floor | clicked_near | (trimap == cv2.GC_FGD))
         name = "onnx+grabcut"
     elif method == "onnx":
         small_mask = probability > 0.5
@@ -596,7 +604,7 @@ def _refined(small, scale, probability, calibration, method, refine, clicks):
         small_mask = _grabcut(small, trimap, 5)
         name = "grabcut"
     mask_small = _clean(small_mask, calibration, scale, probability, clicked_floor) & ~clicked_other
-    return mask_small, name, clicked_floor, clicked_other, clicked_near
+    return mask_small, name, clicked_floor, clicked_other, clicked_near, vetoed
 
 
 def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, scale: float,
@@ -617,18 +625,14 @@ def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, sca
         return mask
     dropped = (probability > 0.5) & ~mask & ~clicked
     dropped &= below_horizon(mask.shape, calibration.scaled(scale).horizon, 1.0)
-    edge = FLOOR.segment.restore_edge_px
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * edge + 1, 2 * edge + 1))
-    core = cv2.erode(dropped.astype(np.uint8), kernel)
-    if not core.any():
+    n, labels, region = _edge_regions(dropped)
+    if n <= 1:
         return mask
-    n, labels = cv2.connectedComponents(core, connectivity=8)
-    # Each core grown back to its region: the area is the dropped region's, not the
-    # thinner core's (a far strip of tiles loses a third of itself to the erosion).
-    region = np.where(dropped, cv2.dilate(labels.astype(np.float32), kernel).astype(np.int32), 0)
     footprint = _believed_footprint_m2(mask.shape, calibration.scaled(scale))
     area = np.bincount(region.ravel(), footprint.ravel(), minlength=n)
-    near = cv2.dilate(mask.astype(np.uint8), kernel, iterations=2) > 0
+    reach = 2 * FLOOR.segment.restore_edge_px + 1
+    near = cv2.dilate(mask.astype(np.uint8), cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (reach, reach)),
+                      iterations=2) > 0
     touching = np.zeros(n, bool)
     touching[np.unique(labels[near & (labels > 0)])] = True
     pixels = np.bincount(region.ravel(), minlength=n)
@@ -638,6 +642,33 @@ def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, sca
     if not keep.any():
         return mask
     return mask | np.isin(region, np.flatnonzero(keep))
+
+
+def _edge_regions(region: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
+    """``region`` (rows, cols) bool split into its parts thicker than
+    ``FLOOR.segment.restore_edge_px`` either side: (count + 1, the cores' labels, the
+    labels grown back over each part's full extent, whose area counts: a far strip of
+    tiles loses a third of itself to the erosion), 0 for the thin edge strips GrabCut is
+    for and the rest."""
+    edge = FLOOR.segment.restore_edge_px
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * edge + 1, 2 * edge + 1))
+    n, labels = cv2.connectedComponents(cv2.erode(region.astype(np.uint8), kernel), connectivity=8)
+    return n, labels, np.where(region, cv2.dilate(labels.astype(np.float32), kernel).astype(np.int32), 0)
+
+
+def _vetoed(mask: np.ndarray, probability: np.ndarray, settled: np.ndarray) -> np.ndarray:
+    """The floor GrabCut added where the model is sure there is none: (rows, cols) bool.
+
+    A carton's face or a wall's foot of the floor's colour fits GrabCut's colour model
+    of the floor, and it takes them in whole, though the model gives them a few percent.
+    Floor in shade that the model doubts gets 0.1-0.4 from it; what GrabCut adds at the
+    model's soft edge is thinner than an edge (``FLOOR.segment.restore_edge_px``). A
+    region thicker than that is the model's call where it gives below ``FLOOR.segment.veto_p``
+    (pixel by pixel: a region often holds both, a carton's face and the floor in its
+    shadow). Where the floor is settled (``settled``: a floor click's region and reach,
+    where GrabCut was told; the board and its margin, floor for sure) it stays."""
+    _, _, region = _edge_regions(mask & (probability <= 0.5) & ~settled)
+    return (region > 0) & (probability < FLOOR.segment.veto_p)
 
 
 def _cut_clicked(cut: np.ndarray, marks: np.ndarray) -> np.ndarray:

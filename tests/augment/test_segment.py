@@ -89,8 +89,9 @@ def test_the_board_is_floor_and_nothing_above_the_horizon_is(held_out, model):
 
 class _Doubting:
     """The shipped model, but doubting the floor near things standing on it (probability
-    0.02 within 7 working pixels of them): what the base model of commit ed2f93e gave the
-    floor behind and between cartons."""
+    0.06 within 7 working pixels of them): the base model of commit ed2f93e gave the floor
+    behind and between cartons 0.02; below ``FLOOR.segment.veto_p`` (0.05) the model now
+    overrules GrabCut there, and the doubt tested here is GrabCut's to settle."""
 
     def __init__(self, model, labels, floor):
         self.model, self.labels, self.floor = model, labels, floor
@@ -103,13 +104,13 @@ class _Doubting:
         rows, cols = p.shape
         floor = cv2.resize(self.floor.astype(np.uint8), (cols, rows), interpolation=cv2.INTER_NEAREST) > 0
         things = cv2.resize((self.labels == OTHER).astype(np.uint8), (cols, rows), interpolation=cv2.INTER_NEAREST)
-        p[floor & (cv2.dilate(things, np.ones((15, 15), np.uint8)) > 0)] = 0.02
+        p[floor & (cv2.dilate(things, np.ones((15, 15), np.uint8)) > 0)] = 0.06
         return p
 
 
 def test_floor_the_model_nearly_rules_out_is_left_to_grabcut(model, monkeypatch):
     """A render of the synthetic photographer (seed 907, render 77: a dark wooden floor
-    with cartons along the far wall), the model doubting the floor by the cartons (0.02).
+    with cartons along the far wall), the model doubting the floor by the cartons (0.06).
     Taken as sure "not floor", that floor is lost, 4 % of the floor's pixels; GrabCut,
     left to judge it, keeps it. The truth is the render's floor mask."""
 
@@ -126,7 +127,7 @@ def test_floor_the_model_nearly_rules_out_is_left_to_grabcut(model, monkeypatch)
 
     missed, extra = missed_and_extra()
     assert missed < 0.01 and extra < 0.01, (missed, extra)
-    monkeypatch.setattr(FLOOR.segment, "sure_other", 0.03)
+    monkeypatch.setattr(FLOOR.segment, "sure_other", 0.07)
     assert missed_and_extra()[0] > 0.03
 
 
@@ -1050,6 +1051,52 @@ def test_a_dropped_floor_is_judged_by_its_whole_area_not_its_core(held_out, monk
     assert _restore_dropped(small & ~band, p, cal, scale, nothing)[band].mean() > 0.99
     monkeypatch.setattr(FLOOR.segment, "restore_min_m2", 1.05 * whole_m2)
     assert not _restore_dropped(small & ~band, p, cal, scale, nothing)[band].any()
+
+
+def test_regions_grabcut_added_where_the_model_sees_no_floor_are_taken_back():
+    """GrabCut takes in a carton's face of the floor's colour whole, where the model gives
+    a few percent: such a region goes. GrabCut's thin corrections of the model's soft edge
+    stand, and so do regions the model only doubts (floor in shade) and the floor the user
+    clicked."""
+    from augment.floor.segment import _vetoed
+
+    def _veto_added(mask, p, clicked):
+        return mask & ~_vetoed(mask, p, clicked)
+
+    floor = np.zeros((120, 160), bool)
+    floor[60:] = True
+    p = np.where(floor, 0.95, 0.01).astype(np.float32)
+    face = np.zeros_like(floor)
+    face[30:60, 100:140] = True                      # a carton's face on the floor's far edge
+    edge = np.zeros_like(floor)
+    edge[58:60, :90] = True                          # two rows along the model's edge
+    mask = floor | face | edge
+    nothing = np.zeros_like(floor)
+    kept = _veto_added(mask, p, nothing)
+    assert kept[face].mean() < 0.01                  # (the peel rounds the region's corners)
+    assert kept[floor].all() and kept[edge].all()
+    doubted = np.where(face, np.float32(0.2), p)     # the model doubts: floor in shade
+    assert np.array_equal(_veto_added(mask, doubted, nothing), mask)
+    # Per pixel: the part of a region the model doubts stays, the part it is sure of goes.
+    half = np.where(face & (np.arange(160) < 120), np.float32(0.2), p)
+    kept = _veto_added(mask, half, nothing)
+    assert kept[30:60, 100:120].all() and kept[30:60, 120:140].mean() < 0.01
+    assert np.array_equal(_veto_added(mask, p, face), mask)
+
+
+def test_a_carton_of_the_floors_colour_is_not_floor(model):
+    """Render 28 of the clean tuning set 992: two faces of a grey carton by the photo's
+    edge fit GrabCut's colour model of a grey concrete floor, and were taken in whole
+    (+8 % of the area, IoU 0.944) though the model gave them 0.03. Now the polygon is
+    within 2 % of the one from the true mask, and only the carton's rim is left in."""
+    with Renderer() as renderer:
+        sample = render_sample([992, 28], renderer)
+    w, h = sample.truth["size_px"]
+    cal = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
+    seg = segment_floor(sample.image, model, cal)
+    truth_m2 = floor_polygon(sample.floor_mask, cal).area_m2
+    assert abs(floor_polygon(seg.mask, cal).area_m2 / truth_m2 - 1) < 0.02
+    assert iou(seg.mask, sample.floor_mask) > 0.97
 
 
 def test_two_floors_apart_by_a_thin_line_are_one_floor(held_out):
