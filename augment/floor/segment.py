@@ -630,9 +630,7 @@ def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, sca
         return mask
     footprint = _believed_footprint_m2(mask.shape, calibration.scaled(scale))
     area = np.bincount(region.ravel(), footprint.ravel(), minlength=n)
-    reach = 2 * FLOOR.segment.restore_edge_px + 1
-    near = cv2.dilate(mask.astype(np.uint8), cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (reach, reach)),
-                      iterations=2) > 0
+    near = cv2.dilate(mask.astype(np.uint8), _edge_kernel(), iterations=2) > 0
     touching = np.zeros(n, bool)
     touching[np.unique(labels[near & (labels > 0)])] = True
     pixels = np.bincount(region.ravel(), minlength=n)
@@ -644,14 +642,20 @@ def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, sca
     return mask | np.isin(region, np.flatnonzero(keep))
 
 
+def _edge_kernel() -> np.ndarray:
+    """The disc that peels GrabCut's edge corrections (``FLOOR.segment.restore_edge_px``
+    either side) off a region."""
+    edge = FLOOR.segment.restore_edge_px
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * edge + 1, 2 * edge + 1))
+
+
 def _edge_regions(region: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
     """``region`` (rows, cols) bool split into its parts thicker than
     ``FLOOR.segment.restore_edge_px`` either side: (count + 1, the cores' labels, the
     labels grown back over each part's full extent, whose area counts: a far strip of
     tiles loses a third of itself to the erosion), 0 for the thin edge strips GrabCut is
     for and the rest."""
-    edge = FLOOR.segment.restore_edge_px
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * edge + 1, 2 * edge + 1))
+    kernel = _edge_kernel()
     n, labels = cv2.connectedComponents(cv2.erode(region.astype(np.uint8), kernel), connectivity=8)
     return n, labels, np.where(region, cv2.dilate(labels.astype(np.float32), kernel).astype(np.int32), 0)
 
