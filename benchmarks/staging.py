@@ -31,7 +31,8 @@ shows; :func:`layout.camera.judge`):
 * ``rules_met``: every group rule holds: faces within 15 degrees, distances within 10 cm,
   "in front of"/"beside" targets within 15 cm;
 * ``different``: another arrangement than each other suggestion of the photo (other
-  furniture, or moved 0.3 m on average).
+  furniture, or moved 0.3 m on average, by centres or, if more, footprint corners:
+  :func:`augment.room.fit.apart_m`).
 And the layout stage's time for the four suggestions (warm, median over the photos).
 """
 from __future__ import annotations

@@ -417,18 +417,33 @@ IN_NO_VIEW = "it would be cut by the photo's edge or stand in its foreground whe
 # Starts for another arrangement when random ones repeat an earlier suggestion
 # (layout.solver.turned_state): half a turn, mirrored, a quarter turn each way.
 TURNS = ((math.pi, False), (0.0, True), (0.5 * math.pi, False), (-0.5 * math.pi, False))
-# Closer than this (layout.diversity) to an earlier suggestion, a try is that suggestion again.
+# Closer than this (apart_m) to an earlier suggestion, a try is that suggestion again.
 PINNED_M = 0.01
 
 
 def apart_m(a, b) -> float:
     """How far apart two suggestions are as arrangements: infinitely with other
-    furniture, else how far the same furniture moved on average (:func:`layout.diversity`)."""
-    from layout import diversity
-
+    furniture, else the symmetric chamfer distance between pieces of the same kind (a
+    swap of two chairs is no change), two pieces as far apart as their centres or, if
+    more, their footprints' corners (nearest to nearest, so a square plant turned 90
+    degrees has not moved, but a sideboard turned to the next wall has)."""
     ka = sorted(a.model.kinds[i] for i in a.items)
     kb = sorted(b.model.kinds[i] for i in b.items)
-    return math.inf if ka != kb else diversity([a, b])
+    if ka != kb:
+        return math.inf
+    dists = []
+    kinds_a = np.array([a.model.kinds[i] for i in a.items])
+    kinds_b = np.array([b.model.kinds[i] for i in b.items])
+    for kind in np.unique(kinds_a):
+        ia, ib = np.asarray(a.items)[kinds_a == kind], np.asarray(b.items)[kinds_b == kind]
+        ca, cb = a.corners_m(ia), b.corners_m(ib)  # (n, 4, 2)
+        centres = np.linalg.norm(a.position_m[ia, None, :2] - b.position_m[None, ib, :2], axis=-1)
+        gaps = np.linalg.norm(ca[:, None, :, None] - cb[None, :, None], axis=-1)  # (na, nb, 4, 4)
+        corners = 0.5 * (gaps.min(3).mean(2) + gaps.min(2).mean(2))
+        d = np.maximum(centres, corners)
+        dists.extend(d.min(1))
+        dists.extend(d.min(0))
+    return float(np.mean(dists))
 
 
 def _residuals(lay) -> dict:

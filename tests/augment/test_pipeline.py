@@ -919,6 +919,21 @@ class _SofaAndTV:
         return dataclasses.replace(self.layout, position_m=pos, yaw_rad=yaw)
 
 
+def test_a_piece_turned_where_it_stands_is_another_arrangement_unless_its_footprint_is_the_same(tmp_path):
+    """:func:`fit.apart_m` by hand: the sofa (W x D) turned 90 degrees where it stands
+    moves each footprint corner sqrt(2) (W - D) / 2 from the nearest old one; with the
+    TV unmoved, the two pieces' mean is half that. Turned 180 degrees, the footprint is
+    the same: no other arrangement (as a square plant turned 90 degrees). Moved 0.6 m
+    along y: its centre moved 0.6 m, so 0.3 m."""
+    room = _SofaAndTV(tmp_path)
+    w, d = room.spec.items[0].kind.size_m[:2]
+    first = room.placed(-90.0, 2.5, 0.0)
+    assert fit.apart_m(first, room.placed(0.0, 2.5, 0.0)) == pytest.approx(math.sqrt(2) * (w - d) / 4)
+    assert fit.apart_m(first, room.placed(90.0, 2.5, 0.0)) == pytest.approx(0.0, abs=1e-9)
+    assert fit.apart_m(first, room.placed(-90.0, 3.1, 0.0)) == pytest.approx(0.3)
+    assert fit.apart_m(first, first) == 0.0
+
+
 def test_a_tv_off_its_wall_or_not_facing_the_sofa_is_left_out(tmp_path, monkeypatch):
     """Placed by hand: the TV's back 1 m off the wall (residual 1 m > 0.3 m) is astray,
     and so are both of a sofa and TV turned 90 degrees from each other (> 30 degrees);
