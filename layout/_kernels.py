@@ -258,6 +258,15 @@ def inside_polygon(poly, x, y):
 
 
 @njit(cache=True, error_model="numpy")
+def points_inside(poly, pts):
+    """(k,) bool: :func:`inside_polygon` for each of the (k, 2) points."""
+    out = np.empty(pts.shape[0], dtype=np.bool_)
+    for k in range(pts.shape[0]):
+        out[k] = inside_polygon(poly, pts[k, 0], pts[k, 1])
+    return out
+
+
+@njit(cache=True, error_model="numpy")
 def clearance_grid(poly, origin, cell, gx, gy):
     """(gy, gx) grid: for each cell, a distance to the boundary that every point of the
     cell has at least (its center's distance minus the half diagonal), 0 where the

@@ -105,6 +105,22 @@ class Camera:
             uv = (cam @ self.K.T)[..., :2] / np.where(z > 1e-9, z, np.nan)[..., None]
         return uv, z
 
+    def rays(self, grid_px: int) -> np.ndarray:
+        """(k, 3) unit directions, floor frame, of the rays through the centres of a grid of
+        ``grid_px`` cells along the image's longer side (row by row); kept with the camera,
+        as every judged layout of a photo casts the same ones."""
+        cached = self.__dict__.setdefault("_rays", {})
+        if grid_px not in cached:
+            w, h = self.size_px
+            step = max(w, h) / grid_px
+            U, V = np.meshgrid(np.arange(step / 2, w, step), np.arange(step / 2, h, step))
+            pix = np.stack([U.ravel(), V.ravel(), np.ones(U.size)], axis=1)
+            dirs = np.linalg.solve(self.K, pix.T).T @ self.camera_from_floor[:3, :3]
+            dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+            dirs.flags.writeable = False
+            cached[grid_px] = dirs
+        return cached[grid_px]
+
     def frame_planes(self, rules: CameraRules = CAMERA) -> np.ndarray:
         """The space the photo shows, as planes through the camera's center.
 
@@ -221,16 +237,9 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
     cut = [n for n, o in zip(names, out) if o]
 
     # Visibility: rays through a grid of pixel centres.
-    step = max(w, h) / rules.grid_px
-    us = np.arange(step / 2, w, step)
-    vs = np.arange(step / 2, h, step)
-    U, V = np.meshgrid(us, vs)
-    pix = np.stack([U.ravel(), V.ravel(), np.ones(U.size)], axis=1)
-    R = cam.camera_from_floor[:3, :3]
-    dirs = (np.linalg.solve(cam.K, pix.T).T) @ R  # camera rays into the floor frame
-    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    dirs = cam.rays(rules.grid_px)
     hits = np.empty((len(dirs), len(items)))
-    ray_box_entry(np.asarray(cam.center_m, dtype=np.float64), np.ascontiguousarray(dirs), np.ascontiguousarray(pos),
+    ray_box_entry(np.asarray(cam.center_m, dtype=np.float64), dirs, np.ascontiguousarray(pos),
                   np.ascontiguousarray(yaw, dtype=np.float64), np.ascontiguousarray(size), hits)
     seen = np.isfinite(hits)
     exempt = _not_judged_for_hiding(model, items)

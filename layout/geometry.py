@@ -19,6 +19,8 @@ import numpy as np
 SIDE_NAMES = ("back", "left", "front", "right")
 # Outward unit normal of each side in the item's local frame (x front, y left).
 SIDE_NORMALS = np.array([[-1.0, 0.0], [0.0, 1.0], [1.0, 0.0], [0.0, -1.0]])
+# (along the facing, across it) of the footprint corners, in box_corners' order.
+_CORNER_SIGNS = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
 
 
 def box_corners(center_m, yaw_rad, width_m, depth_m):
@@ -40,21 +42,13 @@ def box_corners(center_m, yaw_rad, width_m, depth_m):
     """
     center_m = np.asarray(center_m, dtype=np.float64).reshape(-1, 2)
     yaw_rad = np.asarray(yaw_rad, dtype=np.float64).reshape(-1)
-    hw = 0.5 * np.asarray(width_m, dtype=np.float64).reshape(-1)
-    hd = 0.5 * np.asarray(depth_m, dtype=np.float64).reshape(-1)
-    local = np.stack(
-        [
-            np.stack([-hd, -hw], axis=-1),
-            np.stack([hd, -hw], axis=-1),
-            np.stack([hd, hw], axis=-1),
-            np.stack([-hd, hw], axis=-1),
-        ],
-        axis=1,
-    )
+    along = _CORNER_SIGNS[:, 0] * (0.5 * np.asarray(depth_m, dtype=np.float64).reshape(-1, 1))
+    across = _CORNER_SIGNS[:, 1] * (0.5 * np.asarray(width_m, dtype=np.float64).reshape(-1, 1))
     c, s = np.cos(yaw_rad)[:, None], np.sin(yaw_rad)[:, None]
-    x = c * local[..., 0] - s * local[..., 1]
-    y = s * local[..., 0] + c * local[..., 1]
-    return np.stack([x, y], axis=-1) + center_m[:, None, :]
+    out = np.empty((len(yaw_rad), 4, 2))
+    out[..., 0] = c * along - s * across + center_m[:, :1]
+    out[..., 1] = s * along + c * across + center_m[:, 1:]
+    return out
 
 
 def access_box_corners(center_m, yaw_rad, width_m, depth_m, access_depth_m):
@@ -78,21 +72,19 @@ def access_box_corners(center_m, yaw_rad, width_m, depth_m, access_depth_m):
     w = np.asarray(width_m, dtype=np.float64).reshape(-1)
     d = np.asarray(depth_m, dtype=np.float64).reshape(-1)
     a = np.asarray(access_depth_m, dtype=np.float64).reshape(-1, 4)
-    c, s = np.cos(yaw_rad), np.sin(yaw_rad)
-    out = np.empty((len(w), 4, 4, 2))
-    for k in range(4):
-        nx, ny = SIDE_NORMALS[k]
-        # Along the normal the box spans from the face outwards by the access depth.
-        half_along_normal = 0.5 * np.where(nx != 0, d, w)
-        half_across = 0.5 * np.where(nx != 0, w, d)
-        offset = half_along_normal + 0.5 * a[:, k]
-        lx, ly = nx * offset, ny * offset
-        cx = center_m[:, 0] + c * lx - s * ly
-        cy = center_m[:, 1] + s * lx + c * ly
-        # The box's local "depth" axis is the side normal.
-        box_yaw = yaw_rad + np.arctan2(ny, nx)
-        out[:, k] = box_corners(np.stack([cx, cy], -1), box_yaw, 2 * half_across, a[:, k])
-    return out
+    c, s = np.cos(yaw_rad)[:, None], np.sin(yaw_rad)[:, None]
+    nx, ny = SIDE_NORMALS[:, 0], SIDE_NORMALS[:, 1]
+    # Along the normal each box spans from the face outwards by the access depth.
+    half_along_normal = 0.5 * np.where(nx != 0, d[:, None], w[:, None])
+    half_across = 0.5 * np.where(nx != 0, w[:, None], d[:, None])
+    offset = half_along_normal + 0.5 * a
+    lx, ly = nx * offset, ny * offset
+    cx = center_m[:, :1] + c * lx - s * ly
+    cy = center_m[:, 1:] + s * lx + c * ly
+    # The box's local "depth" axis is the side normal.
+    box_yaw = yaw_rad[:, None] + np.arctan2(ny, nx)
+    return box_corners(np.stack([cx, cy], -1).reshape(-1, 2), box_yaw.ravel(), 2 * half_across.ravel(),
+                       a.ravel()).reshape(len(w), 4, 4, 2)
 
 
 def access_zones(size_m, access_depth_m):

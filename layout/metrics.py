@@ -12,13 +12,11 @@ import cv2
 import numba
 import numpy as np
 
-from .geometry import access_box_corners, box_corners, polygon_area
+from .geometry import access_box_corners, box_corners
 
 # Vertical intervals must overlap by more than this to count as a 3-D collision, so
 # that an item standing exactly on top of another does not collide with it.
 _Z_OVERLAP_TOL_M = 1e-6
-# Pairs clipped per NumPy batch in the narrow phase: bounds the temporaries to a few MB.
-_NARROW_CHUNK = 65536
 
 
 def _as_polygon(polygon_m, name, min_vertices=3):
@@ -47,117 +45,74 @@ def _as_flags(flags, n, name):
 
 
 def _signed_areas(poly):
-    """Shoelace signed areas (P,) of polygons (P, M, 2).
-
-    Padding slots must repeat the first vertex: they add zero-length edges only.
-    """
+    """Shoelace signed areas (P,) of polygons (P, M, 2)."""
     x, y = poly[..., 0], poly[..., 1]
     xn, yn = np.roll(x, -1, axis=1), np.roll(y, -1, axis=1)
     return 0.5 * (x * yn - xn * y).sum(axis=1)
 
 
-def _ccw(poly):
-    """Copy of convex polygons (P, K, 2) with clockwise ones reversed."""
-    cw = _signed_areas(poly) < 0
-    out = poly.copy()
-    out[cw] = out[cw, ::-1]
-    return out
-
-
-def _clip_batch(subject, clip):
-    """Sutherland–Hodgman clipping of many polygons, each by its own convex polygon.
-
-    Parameters
-    ----------
-    subject : (P, M, 2) float64
-        Subject polygons; any orientation, may be non-convex.
-    clip : (P, K, 2) float64
-        Convex clip polygons, counter-clockwise.
-
-    Returns
-    -------
-    poly : (P, M', 2) float64
-        Clipped polygons, each padded after its last vertex with copies of its first
-        one (an empty result is a single repeated point). A non-convex subject may yield
-        zero-area bridge edges, which leave the signed area exact.
-    """
-    poly = subject
-    n_pairs, m = poly.shape[:2]
-    count = np.full(n_pairs, m)
-    rows = np.arange(n_pairs)
-    for k in range(clip.shape[1]):
-        if m == 0:
-            break
-        a = clip[:, k]
-        edge = clip[:, (k + 1) % clip.shape[1]] - a
-        valid = np.arange(m)[None, :] < count[:, None]
-        rel = poly - a[:, None, :]
-        # Cross product with the edge: >= 0 is inside (left of a counter-clockwise edge).
-        d = edge[:, None, 0] * rel[..., 1] - edge[:, None, 1] * rel[..., 0]
-        # Padding with the first vertex makes the slot after the last vertex close the ring.
-        d_next = np.roll(d, -1, axis=1)
-        p_next = np.roll(poly, -1, axis=1)
-        inside = d >= 0
-        crosses = valid & (inside != (d_next >= 0))
-        t = np.divide(d, d - d_next, out=np.zeros_like(d), where=crosses)
-        hit = poly + t[..., None] * (p_next - poly)
-        # Vertex i then the crossing on edge i -> i+1 keeps the boundary order.
-        out = np.stack([poly, hit], axis=2).reshape(n_pairs, 2 * m, 2)
-        keep = np.stack([valid & inside, crosses], axis=2).reshape(n_pairs, 2 * m)
-        count = keep.sum(axis=1)
-        m = int(count.max())
-        slot = np.cumsum(keep, axis=1) - 1
-        r, s = np.nonzero(keep)
-        poly = np.empty((n_pairs, m, 2))
-        poly[:] = out[rows, np.argmax(keep, axis=1)][:, None, :]
-        poly[r, slot[r, s]] = out[r, s]
-    return poly
+@numba.njit(cache=True)
+def _clipped_areas(subject, clip):
+    """Areas (P,) of ``subject[p] ∩ clip[p]``: Sutherland–Hodgman by each edge of the
+    convex ``clip[p]`` (either winding), then the shoelace. A non-convex subject may
+    leave zero-area bridge edges, which keep the area exact."""
+    n_pairs, m = subject.shape[0], subject.shape[1]
+    k = clip.shape[1]
+    areas = np.zeros(n_pairs)
+    for p in range(n_pairs):
+        c = clip[p]
+        turn = 0.0
+        for a in range(k):
+            b = (a + 1) % k
+            turn += c[a, 0] * c[b, 1] - c[b, 0] * c[a, 1]
+        sign = 1.0 if turn >= 0.0 else -1.0  # inside: left of a counter-clockwise edge
+        poly = subject[p].copy()
+        count = m
+        for a in range(k):
+            if count == 0:
+                break
+            ax, ay = c[a, 0], c[a, 1]
+            ex, ey = c[(a + 1) % k, 0] - ax, c[(a + 1) % k, 1] - ay
+            out = np.empty((2 * count, 2))
+            n_out = 0
+            px, py = poly[count - 1, 0], poly[count - 1, 1]
+            dp = sign * (ex * (py - ay) - ey * (px - ax))
+            for i in range(count):
+                qx, qy = poly[i, 0], poly[i, 1]
+                dq = sign * (ex * (qy - ay) - ey * (qx - ax))
+                if (dq >= 0.0) != (dp >= 0.0):
+                    t = dp / (dp - dq)
+                    out[n_out, 0] = px + t * (qx - px)
+                    out[n_out, 1] = py + t * (qy - py)
+                    n_out += 1
+                if dq >= 0.0:
+                    out[n_out, 0] = qx
+                    out[n_out, 1] = qy
+                    n_out += 1
+                px, py, dp = qx, qy, dq
+            poly, count = out, n_out
+        twice = 0.0
+        for i in range(count):
+            j = (i + 1) % count
+            twice += poly[i, 0] * poly[j, 1] - poly[j, 0] * poly[i, 1]
+        areas[p] = abs(0.5 * twice)
+    return areas
 
 
 def pairwise_intersection_area(subject, clip):
-    """Areas (P,) in m² of ``subject[p] ∩ clip[p]`` (NumPy batch clipping).
+    """Areas (P,) in m² of ``subject[p] ∩ clip[p]`` (one compiled loop over the pairs).
 
     Parameters
     ----------
     subject : (P, M, 2) float64
         Simple polygons (any winding).
     clip : (P, K, 2) float64
-        Convex polygons.
+        Convex polygons (any winding).
     """
     if len(subject) == 0:
         return np.zeros(0)
-    return np.abs(_signed_areas(_clip_batch(subject, _ccw(clip))))
-
-
-def _clip_one(subject, clip):
-    """Sutherland–Hodgman on vertex lists: ``subject`` any simple, ``clip`` convex CCW.
-
-    Plain Python: for a single pair it is an order of magnitude faster than the NumPy
-    batch, whose per-call overhead dominates at this size.
-    """
-    out = subject
-    for (ax, ay), (bx, by) in zip(clip, clip[1:] + clip[:1]):
-        if not out:
-            break
-        ex, ey = bx - ax, by - ay
-        src, out = out, []
-        px, py = src[-1]
-        dp = ex * (py - ay) - ey * (px - ax)
-        for qx, qy in src:
-            dq = ex * (qy - ay) - ey * (qx - ax)
-            if (dq >= 0) != (dp >= 0):
-                t = dp / (dp - dq)
-                out.append((px + t * (qx - px), py + t * (qy - py)))
-            if dq >= 0:
-                out.append((qx, qy))
-            px, py, dp = qx, qy, dq
-    return out
-
-
-def _ccw_list(polygon):
-    """Vertex list of a polygon array, reversed if clockwise."""
-    pts = [tuple(v) for v in polygon.tolist()]
-    return pts[::-1] if polygon_area(polygon) < 0 else pts
+    return _clipped_areas(np.ascontiguousarray(subject, dtype=np.float64),
+                          np.ascontiguousarray(clip, dtype=np.float64))
 
 
 def convex_intersection_area(a_m, b_m):
@@ -175,8 +130,7 @@ def convex_intersection_area(a_m, b_m):
     """
     a = _as_polygon(a_m, "a_m")
     b = _as_polygon(b_m, "b_m")
-    out = _clip_one([tuple(v) for v in a.tolist()], _ccw_list(b))
-    return abs(0.5 * sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(out, out[1:] + out[:1])))
+    return float(pairwise_intersection_area(a[None], b[None])[0])
 
 
 def box_overlaps(corners_m, z_range_m, collides, min_area_m2=1e-6):
@@ -225,10 +179,7 @@ def box_overlaps(corners_m, z_range_m, collides, min_area_m2=1e-6):
     keep = z_overlap > _Z_OVERLAP_TOL_M
     first, second = first[keep], second[keep]
 
-    area = np.empty(len(first))
-    for s in range(0, len(first), _NARROW_CHUNK):
-        sl = slice(s, s + _NARROW_CHUNK)
-        area[sl] = pairwise_intersection_area(corners[first[sl]], corners[second[sl]])
+    area = pairwise_intersection_area(corners[first], corners[second])
     keep = area > min_area_m2
     pairs = np.sort(np.stack([first[keep], second[keep]], axis=1), axis=1).astype(np.int64)
     area = area[keep]

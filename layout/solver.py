@@ -153,17 +153,9 @@ def _written(v) -> float:
 
 
 def _inside(polygon_m, points_m):
-    """(k,) bool: which of the (k, 2) points lie inside the polygon (even-odd rule, one
-    pass per edge over all the points)."""
-    pts = np.asarray(points_m, dtype=np.float64).reshape(-1, 2)
-    x, y = pts[:, 0], pts[:, 1]
-    inside = np.zeros(len(pts), bool)
-    poly = np.asarray(polygon_m, dtype=np.float64)
-    for (x1, y1), (x2, y2) in zip(poly, np.roll(poly, -1, axis=0)):
-        crosses = (y1 > y) != (y2 > y)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            inside ^= crosses & (x < x1 + (y - y1) * (x2 - x1) / (y2 - y1))
-    return inside
+    """(k,) bool: which of the (k, 2) points lie inside the polygon (even-odd rule)."""
+    return K.points_inside(np.ascontiguousarray(polygon_m, dtype=np.float64),
+                           np.ascontiguousarray(points_m, dtype=np.float64).reshape(-1, 2))
 
 
 def _random_inside(polygon_m, k, rng):
