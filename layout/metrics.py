@@ -374,12 +374,15 @@ def traversability(
     door_zones_m,
     resolution_m=0.05,
     radius_m=0.25,
+    open_edges=(),
 ):
     """Whether people can walk from the doors to every side that must stay accessible.
 
     Follows Henderson et al. (Sec. 4): the floor minus blocking footprints is eroded by
     a disk the size of a person, the free part of the door zones is added back (people
     enter there), and the doors and all access zones must reach one common component.
+    Past an open edge (the photo's edge: the room goes on) the floor continues by a
+    person's width, so that only walls and furniture narrow the way.
 
     Parameters
     ----------
@@ -399,6 +402,8 @@ def traversability(
         Pixel side in meters.
     radius_m : float
         Half the width of a walking person in meters.
+    open_edges : sequence of int
+        Edges ``k -> k+1`` of ``polygon_m`` that are no wall.
 
     Returns
     -------
@@ -420,13 +425,19 @@ def traversability(
     if not resolution_m > 0 or not radius_m >= 0:
         raise ValueError("resolution_m must be > 0 and radius_m >= 0")
 
+    a = floor[np.asarray(open_edges, dtype=np.int64).reshape(-1)]
+    b = np.roll(floor, -1, axis=0)[np.asarray(open_edges, dtype=np.int64).reshape(-1)]
+    out = (b - a)[:, ::-1] * [1.0, -1.0] * (radius_m + 2 * resolution_m) / np.maximum(
+        np.linalg.norm(b - a, axis=1, keepdims=True), 1e-12)  # outward for a counter-clockwise floor
+    beyond = np.stack([a, b, b + out, a + out], axis=1)
+    reach = np.concatenate([floor, beyond.reshape(-1, 2)])
     # One blank pixel around the floor so that erosion sees the walls on every side.
-    origin = floor.min(axis=0) - resolution_m
+    origin = reach.min(axis=0) - resolution_m
     shape = tuple(
-        int(v) for v in np.ceil((floor.max(axis=0) - origin) / resolution_m)[::-1] + 1
+        int(v) for v in np.ceil((reach.max(axis=0) - origin) / resolution_m)[::-1] + 1
     )
     raster = _Raster(origin, resolution_m, shape)
-    free = raster.mask(floor)
+    free = raster.mask(floor) | raster.mask_all(beyond)
     free[raster.mask_all(corners[blocks])] = False
     r = int(round(radius_m / resolution_m))
     dy, dx = np.ogrid[-r:r + 1, -r:r + 1]
@@ -525,4 +536,5 @@ def walkability(layout) -> Traversability:
     items, corners, _, access, depth = item_geometry(layout)
     doors = layout.corners_m(m.door_particles) if len(m.door_particles) else np.zeros((0, 4, 2))
     required = np.where(_shared_sides(m, items, corners, access, depth), 0.0, depth)
-    return traversability(m.floor_polygon_m, corners, m.particle_collides[items], access, required, doors)
+    return traversability(m.floor_polygon_m, corners, m.particle_collides[items], access, required, doors,
+                          open_edges=np.flatnonzero(~m.floor_edge_wall))

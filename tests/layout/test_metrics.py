@@ -248,6 +248,39 @@ def test_wall_of_wardrobes_splits_the_room():
     assert calm.ok and calm.unreachable == ()
 
 
+def test_past_an_open_edge_people_walk_around():
+    """Three wardrobes across the room leave 0.3 m along the bottom edge, narrower than a
+    person (0.5 m): with that edge a wall the chair's side is cut off; with it open (the
+    photo's edge: the room goes on) people walk round past it, and only there."""
+    corners, access_corners, access = items(
+        [[3.0, 0.8], [3.0, 1.7], [3.0, 2.55]],
+        [np.pi, np.pi, np.pi],
+        [1.0, 0.8, 0.9],
+        [0.6, 0.6, 0.6],
+        [[0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]],
+    )
+    chair_corners, chair_access, chair_depth = items([[5.0, 1.5]], [np.pi], [0.6], [0.6], [[0, 0, 0.6, 0]])
+    corners = np.concatenate([corners, chair_corners])
+    access_corners = np.concatenate([access_corners, chair_access])
+    access = np.concatenate([access, chair_depth])
+    walled = metrics.traversability(ROOM, corners, np.ones(4, bool), access_corners, access, DOOR_LEFT)
+    assert not walled.ok and walled.unreachable == ((3, 2),)
+    for wall in (1, 2, 3):  # the right, top and left edges open instead: still closed off
+        other = metrics.traversability(ROOM, corners, np.ones(4, bool), access_corners, access, DOOR_LEFT,
+                                       open_edges=[wall])
+        assert not other.ok and other.unreachable == ((3, 2),)
+    opened = metrics.traversability(ROOM, corners, np.ones(4, bool), access_corners, access, DOOR_LEFT,
+                                    open_edges=[0])
+    assert opened.ok and opened.n_components == 1
+
+    def passable(result, x, y):
+        c, r = np.floor((np.array([x, y]) - result.origin_m) / result.resolution_m).astype(int)
+        return result.passable[r, c]
+
+    assert passable(opened, 3.0, 0.0) and not passable(walled, 3.0, 0.0)  # round the wardrobes' end
+    assert not passable(opened, 5.9, 1.5)  # the walls still keep a person's half width
+
+
 @pytest.mark.parametrize("gap_m, passable", [(0.4, False), (0.7, True)])
 def test_gap_between_boxes(gap_m, passable):
     # Two boxes across the room at x = 3 leave a gap centered on y = 1.5.
