@@ -643,6 +643,29 @@ class _Pick:
         return self.best is not None and (self.best[0][0] or self.best[0][1])
 
 
+def _far_start(model, earlier: list, rng, candidates: int = 8):
+    """Of ``candidates`` random starts of ``model``, the one whose pieces stand farthest
+    from where the nearest earlier suggestion put pieces of their kinds (mean over the
+    pieces; a kind that suggestion has not counts as the floor's size)."""
+    from layout.solver import initial_state
+
+    items = list(model.items)
+    span = float(np.ptp(model.floor_polygon_m, axis=0).max())
+    best, best_d = None, -1.0
+    for _ in range(candidates):
+        start = initial_state(model, rng)
+        d = math.inf
+        for old in earlier:
+            kinds = np.array([old.model.kinds[i] for i in old.items])
+            where = old.position_m[list(old.items), :2]
+            gaps = [np.linalg.norm(where[kinds == model.kinds[i]] - start.position_m[i, :2], axis=1).min(initial=span)
+                    for i in items]
+            d = min(d, float(np.mean(gaps)))
+        if d > best_d:
+            best, best_d = start, d
+    return best
+
+
 def _kinds(spec) -> list:
     return sorted(i.kind.name for i in spec.items)
 
@@ -703,6 +726,12 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             for angle, mirror in TURNS if pick.lacking and layouts and layouts[0].model.n == model.n else ():
                 if pick.offer(solver.solve(model, seed=seed + k, state=turned_state(layouts[0], angle, mirror))) \
                         or not pick.lacking or pick.pinned >= 2:
+                    break
+            # Starts far from the earlier suggestions: random ones settle where those did.
+            for t in range(fit.far_starts if pick.lacking and layouts else 0):
+                far_seed = seed + k + (fit.seed_tries + t) * suggestions
+                start = _far_start(model, layouts, np.random.default_rng(far_seed))
+                if pick.offer(solver.solve(model, seed=far_seed, state=start)) or not pick.lacking:
                     break
             if pick.twin:
                 for unit in _units(spec)[:0:-1]:

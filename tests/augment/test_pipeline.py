@@ -844,9 +844,10 @@ def test_contact_sheet_layout(rng):
 
 def test_a_repeated_suggestion_is_solved_again_from_another_seed(monkeypatch):
     """Seeds 0 and 1 are made to give the same layout: suggestion 2 must come from the
-    next seed tried (1 + N) instead. When every seed and every turned start repeats it,
-    suggestion 2 leaves out the least important unit, and says so; with one unit only,
-    the twin is kept, and said to be one."""
+    next seed tried (1 + N) instead. When every seed, every turned start and every start
+    far from suggestion 1 (seeds 1 + 3N, 1 + 4N) repeats it, suggestion 2 leaves out the
+    least important unit, and says so; with one unit only, the twin is kept, and said to
+    be one."""
     from layout import Solver, diversity
     from layout.spec import build
 
@@ -867,13 +868,14 @@ def test_a_repeated_suggestion_is_solved_again_from_another_seed(monkeypatch):
     assert diversity([first, second]) >= ROOM.fit.min_difference_m and notes == []
     np.testing.assert_array_equal(second.position_m, real(Solver(**{**spec.solver.__dict__}), first.model,
                                                           seed=1 + 2).position_m)
-    (first, second), notes = run(spec, {1, 3, 5})  # every try for suggestion 2 repeats suggestion 1
+    every = {1 + t * 2 for t in range(ROOM.fit.seed_tries + ROOM.fit.far_starts)}
+    (first, second), notes = run(spec, every)  # every try for suggestion 2 repeats suggestion 1
     last = fit._units(spec)[-1]
     assert sorted(second.model.names) == sorted(set(first.model.names) - {i.id for i in last})
     assert notes == [f"suggestion 2 leaves out {', '.join(sorted(i.id for i in last))} to differ from the "
                      "others: the floor in view leaves room for one arrangement of all of it"]
     alone, _ = fit._drop(spec, [i.id for u in fit._units(spec)[1:] for i in u])
-    (first, second), notes = run(alone, {1, 3, 5})
+    (first, second), notes = run(alone, every)
     np.testing.assert_array_equal(second.position_m, first.position_m)
     assert notes == ["suggestion 2 repeats an earlier one: the floor in view leaves no other arrangement of "
                      "this furniture"]
@@ -932,6 +934,24 @@ def test_a_piece_turned_where_it_stands_is_another_arrangement_unless_its_footpr
     assert fit.apart_m(first, room.placed(90.0, 2.5, 0.0)) == pytest.approx(0.0, abs=1e-9)
     assert fit.apart_m(first, room.placed(-90.0, 3.1, 0.0)) == pytest.approx(0.3)
     assert fit.apart_m(first, first) == 0.0
+
+
+def test_a_far_start_puts_the_pieces_away_from_where_the_earlier_suggestion_had_them(tmp_path):
+    """Over 20 seeds, the sofa and the TV of a far start stand on average at least 1.4
+    times as far from where suggestion 1 put them as those of a plain random start (the
+    best of eight draws against one)."""
+    from layout.solver import initial_state
+
+    room = _SofaAndTV(tmp_path)
+    model, earlier = room.layout.model, room.layout
+    idx = [model.names.index(n) for n in ("sofa", "tv")]
+
+    def away(state):
+        return float(np.mean(np.linalg.norm(state.position_m[idx, :2] - earlier.position_m[idx, :2], axis=1)))
+
+    far = np.mean([away(fit._far_start(model, [earlier], np.random.default_rng(s))) for s in range(20)])
+    plain = np.mean([away(initial_state(model, np.random.default_rng(s))) for s in range(20)])
+    assert far >= 1.4 * plain, (far, plain)
 
 
 def test_a_tv_off_its_wall_or_not_facing_the_sofa_is_left_out(tmp_path, monkeypatch):
