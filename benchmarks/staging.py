@@ -32,7 +32,13 @@ shows; :func:`layout.camera.judge`):
   "in front of"/"beside" targets within 15 cm;
 * ``different``: another arrangement than each other suggestion of the photo (other
   furniture, or moved 0.3 m on average, by centres or, if more, footprint corners:
-  :func:`augment.room.fit.apart_m`).
+  :func:`augment.room.fit.apart_m`);
+* ``different_or_forced``: different, or the repeat is one the photo forces, as the issue
+  allows: the later suggestion of the pair says in the notes that it repeats an earlier
+  one, and a search the pipeline does not make (:data:`FORCED_SEEDS` other seeds for the
+  furniture, for it without each of its less important units and for each corner set,
+  judged as the pipeline judges a try) finds no clean arrangement that differs from the
+  other suggestions.
 And the layout stage's time for the four suggestions (warm, median over the photos).
 """
 from __future__ import annotations
@@ -56,9 +62,10 @@ sys.path.insert(0, str(HERE))
 ROOMS = ("living_room", "bedroom", "office", "dining_room")
 SUGGESTIONS = 4
 CHECKS = ("foreground_clear", "whole", "visible", "visible_in_photo", "good_side", "doors_clear", "windows_clear",
-          "rules_met", "different")
+          "rules_met", "different", "different_or_forced")
 TARGET = 0.95
 DOOR_MATCH_M = 0.3  # a found door this close to a true one is that door (its error is reported)
+FORCED_SEEDS = 32  # seeds per furniture set in the search that tells a repeat the photo forces
 
 
 class _Quiet:
@@ -253,6 +260,39 @@ def _rendered_visible(lay, calibration, renderer, style: str, judged) -> dict:
     return out
 
 
+def _forced_repeats(spec, corners, layouts, notes) -> set:
+    """The suggestions (0-based) that say in ``notes`` that they repeat an earlier one and
+    could not do otherwise: no clean try of the furniture ``spec``, of it without one of its
+    less important units, or of a corner set, from :data:`FORCED_SEEDS` seeds the pipeline
+    does not use, differs from the other suggestions (judged by :class:`fit._Pick`)."""
+    import dataclasses
+
+    from augment.room import fit
+    from augment.room.settings import ROOM
+    from layout.spec import build
+
+    variants = [spec] + [fit._drop(spec, [i.id for i in u])[0] for u in fit._units(spec)[:0:-1]] + list(corners)
+    forced = set()
+    for k in range(len(layouts)):
+        if not any(n.startswith(f"suggestion {k + 1} repeats an earlier one") for n in notes):
+            continue
+        others = layouts[:k] + layouts[k + 1:]
+        found = False
+        for v in variants:
+            model, solver = build(v)
+            solver = dataclasses.replace(solver, restarts=min(solver.restarts, ROOM.fit.restarts))
+            pick = fit._Pick(others, v, anchor=frozenset(i.id for i in fit._units(v)[0]))
+            for s in range(FORCED_SEEDS):
+                pick.offer(solver.solve(model, seed=10_000 + s))
+                if found := pick.best is not None and not pick.lacking:
+                    break
+            if found:
+                break
+        if not found:
+            forced.add(k)
+    return forced
+
+
 def _share(rows, key):
     vals = [r[key] for r in rows if r[key] is not None]
     return (sum(vals) / len(vals), len(vals)) if vals else (float("nan"), 0)
@@ -333,8 +373,11 @@ def main(argv=None) -> int:
                 entry[mode] = {"refused": str(error)[:200]}
                 continue
             rows = _checks(layouts, cam, m.calibration, doors, windows, renderer)
-            for r in rows:
+            forced = _forced_repeats(spec, corners, layouts, warnings)
+            for k, r in enumerate(rows):
                 r["photo"] = name
+                r["different_or_forced"] = all(fit.apart_m(layouts[k], other) >= 0.3 or max(k, q) in forced
+                                               for q, other in enumerate(layouts) if q != k)
             results[mode].extend(rows)
             entry[mode] = {"dropped": [d["id"] for d in dropped], "notes": [w for w in warnings
                                                                             if w.startswith("suggestion")],
