@@ -271,15 +271,16 @@ def _forced_repeats(spec, corners, layouts, notes) -> set:
     from augment.room.settings import ROOM
     from layout.spec import build
 
-    variants = [spec] + [fit._drop(spec, [i.id for i in u])[0] for u in fit._units(spec)[:0:-1]] + list(corners)
+    repeats = [k for k in range(len(layouts))
+               if any(n.startswith(f"suggestion {k + 1} repeats an earlier one") for n in notes)]
+    variants = [] if not repeats else (
+        [spec] + [fit._drop(spec, [i.id for i in u])[0] for u in fit._units(spec)[:0:-1]] + list(corners))
+    built = [build(v) for v in variants]
     forced = set()
-    for k in range(len(layouts)):
-        if not any(n.startswith(f"suggestion {k + 1} repeats an earlier one") for n in notes):
-            continue
+    for k in repeats:
         others = layouts[:k] + layouts[k + 1:]
         found = False
-        for v in variants:
-            model, solver = build(v)
+        for v, (model, solver) in zip(variants, built):
             solver = dataclasses.replace(solver, restarts=min(solver.restarts, ROOM.fit.restarts))
             pick = fit._Pick(others, v, anchor=frozenset(i.id for i in fit._units(v)[0]))
             for s in range(FORCED_SEEDS):

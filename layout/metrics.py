@@ -425,8 +425,8 @@ def traversability(
     if not resolution_m > 0 or not radius_m >= 0:
         raise ValueError("resolution_m must be > 0 and radius_m >= 0")
 
-    a = floor[np.asarray(open_edges, dtype=np.int64).reshape(-1)]
-    b = np.roll(floor, -1, axis=0)[np.asarray(open_edges, dtype=np.int64).reshape(-1)]
+    edges = np.asarray(open_edges, dtype=np.int64).reshape(-1)
+    a, b = floor[edges], floor[(edges + 1) % len(floor)]
     out = (b - a)[:, ::-1] * [1.0, -1.0] * (radius_m + 2 * resolution_m) / np.maximum(
         np.linalg.norm(b - a, axis=1, keepdims=True), 1e-12)  # outward for a counter-clockwise floor
     beyond = np.stack([a, b, b + out, a + out], axis=1)

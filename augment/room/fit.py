@@ -427,13 +427,11 @@ def apart_m(a, b) -> float:
     swap of two chairs is no change), two pieces as far apart as their centres or, if
     more, their footprints' corners (nearest to nearest, so a square plant turned 90
     degrees has not moved, but a sideboard turned to the next wall has)."""
-    ka = sorted(a.model.kinds[i] for i in a.items)
-    kb = sorted(b.model.kinds[i] for i in b.items)
-    if ka != kb:
-        return math.inf
-    dists = []
     kinds_a = np.array([a.model.kinds[i] for i in a.items])
     kinds_b = np.array([b.model.kinds[i] for i in b.items])
+    if sorted(kinds_a) != sorted(kinds_b):
+        return math.inf
+    dists = []
     for kind in np.unique(kinds_a):
         ia, ib = np.asarray(a.items)[kinds_a == kind], np.asarray(b.items)[kinds_b == kind]
         ca, cb = a.corners_m(ia), b.corners_m(ib)  # (n, 4, 2)
@@ -651,16 +649,17 @@ def _far_start(model, earlier: list, rng, candidates: int = 8):
 
     items = list(model.items)
     span = float(np.ptp(model.floor_polygon_m, axis=0).max())
+    # Per earlier suggestion, per piece of this model: where that suggestion put its kind.
+    spots = []
+    for old in earlier:
+        kinds = np.array([old.model.kinds[i] for i in old.items])
+        where = old.position_m[list(old.items), :2]
+        spots.append([where[kinds == model.kinds[i]] for i in items])
     best, best_d = None, -1.0
     for _ in range(candidates):
         start = initial_state(model, rng)
-        d = math.inf
-        for old in earlier:
-            kinds = np.array([old.model.kinds[i] for i in old.items])
-            where = old.position_m[list(old.items), :2]
-            gaps = [np.linalg.norm(where[kinds == model.kinds[i]] - start.position_m[i, :2], axis=1).min(initial=span)
-                    for i in items]
-            d = min(d, float(np.mean(gaps)))
+        d = min((float(np.mean([np.linalg.norm(at - start.position_m[i, :2], axis=1).min(initial=span)
+                                for i, at in zip(items, old)])) for old in spots), default=math.inf)
         if d > best_d:
             best, best_d = start, d
     return best
