@@ -193,9 +193,11 @@ def test_stage_furnish_killed_at_random_moments_leaves_one_whole_run(tmp_path):
     assert _furnish(out, 1, 0).wait(180) == 0
     duration = time.perf_counter() - t0
     first, seen, rng = _run_of(out), [], random.Random(7)
-    for _ in range(6):
+    # A moment at random in each quarter of 0.5-1.4 runs' time: from the work before any
+    # file is written to past the last rename, each time.
+    for k in range(4):
         run = _furnish(out, 2, 1)
-        time.sleep(rng.uniform(0.5, 1.4) * duration)
+        time.sleep((0.5 + 0.225 * (k + rng.random())) * duration)
         run.kill()
         run.wait()
         seen.append(_run_of(out))
