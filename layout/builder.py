@@ -12,7 +12,7 @@ import numpy as np
 from . import _codes as codes
 from . import _kernels as K
 from .errors import LayoutError
-from .geometry import access_zones, box_corners, polygon_area, polygon_centroid, self_intersection
+from .geometry import access_zones, box_corners, polygon_area, polygon_centroid, self_intersection, stepped_wall
 from .model import Model
 
 # Default initial stiffness per kind and schedule: soft constraints fade (DECAY),
@@ -31,6 +31,8 @@ DEFAULT_STIFFNESS = {
     "curve": (0.5, codes.DECAY),
 }
 DOOR_HEIGHT_M = 2.1
+# An opening wider than the edge it is nearest stands on a wall the outline draws in steps this deep.
+STEPPED_WALL_M = 0.15
 # Across the room's bounding box: walkability is checked on a 5 cm grid, 16 M cells at this.
 MAX_ROOM_M = 200.0
 # A room's outline: curved walls drawn in short pieces stay far below this.
@@ -236,13 +238,17 @@ class LayoutBuilder:
         _, e, t = best
         a, b = poly[e], poly[(e + 1) % len(poly)]
         length = np.linalg.norm(b - a)
-        if width > length + 1e-9:
-            raise LayoutError(f"{label}: width {width:g} m is wider than its wall ({length:.2f} m)")
-        u = (b - a) / length
-        center_t = np.clip(t * length, width / 2, length - width / 2)
-        foot = a + u * center_t
+        if width <= length + 1e-9:
+            u = (b - a) / length
+            foot = a + u * np.clip(t * length, width / 2, length - width / 2)
+            segment = np.stack([foot - u * width / 2, foot + u * width / 2])
+        else:
+            segment = stepped_wall(poly, at, width, STEPPED_WALL_M)
+            if segment is None:
+                raise LayoutError(f"{label}: width {width:g} m is wider than its wall ({length:.2f} m)")
+            u = (segment[1] - segment[0]) / width
+            foot = segment.mean(axis=0)
         normal = np.array([-u[1], u[0]])
-        segment = np.stack([foot - u * width / 2, foot + u * width / 2])
         rec = dict(
             name=label, kind=what, role=codes.OBSTACLE, size=np.array([width, depth, height]),
             access=np.zeros(4), collides=True, parent=-1, offset=np.zeros(3),

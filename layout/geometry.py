@@ -151,6 +151,85 @@ def edge_distances(points, polygon_m):
     return point_segment_distances(points, poly, np.roll(poly, -1, axis=0))
 
 
+def stepped_wall(polygon_m, point_m, width_m, depth_m, step_m=0.02):
+    """The straight wall an outline draws in steps near ``point_m``: a line fit to the
+    outline on both sides of its nearest point, grown until it spans ``width_m``.
+
+    A floor found in a photo has a door's threshold or a skirting board's shadow as short
+    steps along its wall; an opening wider than the step it is nearest still stands on
+    that wall.
+
+    Parameters
+    ----------
+    polygon_m : (m, 2) float
+        Counter-clockwise outline, meters.
+    point_m : (2,) float
+        Near the opening's middle, meters.
+    width_m : float
+        The opening's width.
+    depth_m : float
+        How far the outline may stray from the line (either side) and still be that wall.
+    step_m : float
+        The outline is sampled this finely.
+
+    Returns
+    -------
+    (2, 2) float or None
+        The opening's two ends on the line, in the outline's direction (so that the floor
+        is on their left), centred as near ``point_m`` as the run allows; None where the
+        outline turns away (a corner) before it spans ``width_m``.
+    """
+    poly = np.asarray(polygon_m, dtype=np.float64)
+    point = np.asarray(point_m, dtype=np.float64)
+    ends = np.roll(poly, -1, axis=0)
+    lengths = np.linalg.norm(ends - poly, axis=1)
+    starts_s = np.concatenate([[0.0], np.cumsum(lengths)])
+    perimeter = starts_s[-1]
+    s = np.arange(0.0, perimeter, step_m)
+    k = np.minimum(np.searchsorted(starts_s, s, side="right") - 1, len(poly) - 1)
+    t = (s - starts_s[k]) / np.maximum(lengths[k], 1e-12)
+    samples = poly[k] + t[:, None] * (ends[k] - poly[k])
+    s0 = s[int(np.argmin(np.linalg.norm(samples - point, axis=1)))]
+    along = (s - s0 + perimeter / 2) % perimeter - perimeter / 2  # signed, round the outline
+
+    def fit(behind, ahead):
+        """The line through the outline from ``behind`` to ``ahead`` of the nearest point,
+        and how far it spans; None where the outline strays from it."""
+        near = (along >= -behind) & (along <= ahead)
+        pts = samples[near][np.argsort(along[near])]
+        centre = pts.mean(axis=0)
+        u = np.linalg.svd(pts - centre, full_matrices=False)[2][0]
+        u = u if np.dot(u, pts[-1] - pts[0]) >= 0 else -u
+        if np.abs((pts - centre) @ np.array([-u[1], u[0]])).max() > depth_m:
+            return None
+        proj = (pts - centre) @ u
+        return centre, u, proj.min(), proj.max()
+
+    # Grown a tenth of the width at a time on each side, as long as that side stays straight.
+    reach, grow, growing = [0.25 * width_m] * 2, 0.1 * width_m, [True, True]
+    line = fit(*reach)
+    while line is not None and line[3] - line[2] < width_m:
+        for side in (0, 1):
+            if growing[side]:
+                trial = list(reach)
+                trial[side] += grow
+                bigger = fit(*trial) if sum(trial) < perimeter else None
+                growing[side] = bigger is not None
+                if bigger is not None:
+                    reach, line = trial, bigger
+                else:  # a corner: what it let in of the next wall (depth_m at most) goes again
+                    reach[side] = max(reach[side] - depth_m, 0.25 * width_m)
+                    line = fit(*reach)
+        if not any(growing):
+            return None
+    if line is None:
+        return None
+    centre, u, lo, hi = line
+    middle = np.clip(np.dot(point - centre, u), lo + 0.5 * width_m, hi - 0.5 * width_m)
+    foot = centre + middle * u
+    return np.stack([foot - 0.5 * width_m * u, foot + 0.5 * width_m * u])
+
+
 def polygon_centroid(polygon_m):
     """Area centroid (2,) of a simple polygon in meters."""
     p = np.asarray(polygon_m, dtype=np.float64)

@@ -2,7 +2,6 @@
 the photo turned into the layout's doors, whose swing zones stay free of furniture."""
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
@@ -56,8 +55,8 @@ def doors_on_floor(doors_px, calibration, polygon_m: np.ndarray, open_edges_=())
     -------
     tuple of layout.spec.Opening
         Each at the middle of its feet moved onto the nearest wall, as wide as they are
-        apart, or as the edge of the outline it stands on where that is shorter (a wall
-        drawn in steps) and still as wide as a door.
+        apart, also where the outline draws that wall in shorter steps
+        (:func:`layout.geometry.stepped_wall`).
 
     Raises
     ------
@@ -101,9 +100,6 @@ def doors_on_floor(doors_px, calibration, polygon_m: np.ndarray, open_edges_=())
                                "(the floor overlay shows the walls found)")
         a, b = poly[k], poly[(k + 1) % len(poly)]
         t = float(np.clip(np.dot(middle - a, b - a) / np.dot(b - a, b - a), 0.0, 1.0))
-        # A wall the outline draws in steps: the door keeps the width of the step it is on.
-        step_m = math.floor(float(np.linalg.norm(b - a)) * 1e4) / 1e4
-        kept = step_m if lo <= step_m < width else width
-        doors.append(Opening(at_m=tuple(float(v) for v in a + t * (b - a)), width_m=round(kept, 4),
+        doors.append(Opening(at_m=tuple(float(v) for v in a + t * (b - a)), width_m=round(width, 4),
                              clearance_m=None, height_m=2.1, where=name))
     return tuple(doors)

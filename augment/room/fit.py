@@ -677,6 +677,22 @@ def _corner_instead(spec, corner, dropped: list, reason: str) -> tuple:
                     "little for the room's furniture to stand whole in the photo")
 
 
+def _padded(door: Opening) -> Opening:
+    """A found door whose zone reaches ``ROOM.fit.found_door_margin_m`` past its found
+    sides and depth: the finder puts a side a few centimeters in, now and then ten."""
+    margin = ROOM.fit.found_door_margin_m
+    return dataclasses.replace(door, width_m=door.width_m + 2 * margin, clearance_m=door.width_m + margin)
+
+
+def _doors_as_found(spec):
+    """``spec`` with its found doors' zones as found (:func:`_padded` undone), or None
+    where it has no padded door."""
+    margin = ROOM.fit.found_door_margin_m
+    doors = tuple(dataclasses.replace(d, width_m=d.width_m - 2 * margin, clearance_m=None)
+                  if d.where.startswith("found ") and d.clearance_m is not None else d for d in spec.doors)
+    return None if doors == spec.doors else dataclasses.replace(spec, doors=doors)
+
+
 def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress,
                       notes: list | None = None, corners=()):
     """Solve ``suggestions`` layouts, suggestion K from seed ``seed + K - 1``.
@@ -701,8 +717,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     by the photo's edge is dropped, else the one with a piece astray (the most
     important unit, a sofa or a bed, is never astray), else the least important unit
     (the spec's last), and all are solved again. The last unit gone, a corner set is
-    staged in their place; with none left, the photo is refused: no piece is shown cut
-    by the photo's edge."""
+    staged in their place; with none left, all is tried again with the found doors'
+    zones as found (no margin, :func:`_padded`), then the photo is refused: no piece is
+    shown cut by the photo's edge."""
     from layout.solver import turned_state
     from layout.spec import build
 
@@ -710,6 +727,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     notes = [] if notes is None else notes
     built = {}  # models with pieces taken out, shared by the tries (_taken_out)
     corners, cornered = [c for c in corners if _kinds(c) != _kinds(spec)], None
+    first_try = (spec, list(dropped), list(corners))
     while True:
         model, solver = build(spec)
         solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts))
@@ -801,6 +819,13 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 spec, cornered = _corner_instead(spec, corners.pop(0), dropped, reason)
                 progress.grow(suggestions)
                 continue
+            if (loose := _doors_as_found(first_try[0])) is not None:
+                spec, cornered = loose, None
+                dropped[:] = first_try[1]
+                corners = [_doors_as_found(c) or c for c in first_try[2]]
+                first_try = (loose, first_try[1], corners)
+                progress.grow(suggestions)
+                continue
             dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason} for u in units for i in u)
             # No piece cut by the photo's edge: rather no staged photo, and the reason.
             raise no_view(dropped) if spec.camera is not None and by_cut else too_small(area_m2, dropped)
@@ -865,12 +890,17 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
     found = []
     for d in np.asarray(found_doors, dtype=np.float64).reshape(-1, 4):
         try:
-            door = [dataclasses.replace(o, where=f"found {o.where}")
-                    for o in doors_on_floor([d], calibration, poly, edges)]
-            LayoutBuilder(poly, height_m, open_edges=edges).add_door(door[0].at_m, door[0].width_m)
-        except (FurnishError, LayoutError):
-            continue  # not a door of this floor's walls (wider than its wall, say): a false find
-        found += door
+            (door,) = doors_on_floor([d], calibration, poly, edges)
+        except FurnishError:
+            continue  # not a door of this floor's walls: a false find
+        door = dataclasses.replace(door, where=f"found {door.where}")
+        for door in (_padded(door), door):
+            try:
+                LayoutBuilder(poly, height_m, open_edges=edges).add_door(door.at_m, door.width_m, door.clearance_m)
+            except LayoutError:
+                continue  # wider than its wall: as found, or (not even that) a false find
+            found.append(door)
+            break
     windows = []
     for w in found_windows:
         window = Opening(tuple(float(v) for v in w.segment_m.mean(axis=0)), float(np.linalg.norm(np.subtract(

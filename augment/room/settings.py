@@ -66,6 +66,7 @@ class FitSettings:
     door_graze_m2: float = 0.005  # furniture area inside a marked door's swing zone that still leaves the door usable
     door_width_m: tuple[float, float] = (0.5, 2.5)  # a door's feet this far apart: a cupboard door to a double door
     door_from_wall_m: float = 0.5  # a door's middle at most this far from a wall of the layouts' floor (a margin in)
+    found_door_margin_m: float = 0.1  # a found door's zone reaches this far past its found sides and depth
     window_clearance_m: float = 0.4  # furniture taller than a found window's sill keeps this far from it
 
 

@@ -1172,8 +1172,11 @@ def test_a_marked_door_is_kept_clear(tmp_path, capsys):
 def test_the_door_in_the_photo_is_found_and_kept_clear(roomy):
     """room_4 has one door, green, on the wall with the radiator: it is found within 15 cm
     of the photographer's door and as wide within 15 cm, no other (the radiator is not a
-    door); every suggestion keeps its swing zone clear, and the report and the floor
-    overlay show it."""
+    door); every suggestion keeps its swing zone clear, the true door's too (the found
+    door's zone reaches ``ROOM.fit.found_door_margin_m`` past its sides and depth), and
+    the report and the floor overlay show it."""
+    from layout.metrics import convex_intersection_area
+    from layout.solver import _inside
     from augment.room.openings import find_openings
 
     result, _ = roomy
@@ -1184,14 +1187,54 @@ def test_the_door_in_the_photo_is_found_and_kept_clear(roomy):
     np.testing.assert_allclose(found.feet_px, result.calibration.pixels_from_floor(found.segment_m))
     (door,) = result.report["furniture"]["doors"]
     assert door["marked"].startswith("found door ")
+    a, b = true
+    inward = np.array([a[1] - b[1], b[0] - a[0]]) / np.linalg.norm(b - a)
+    if not _inside(result.layouts[0].model.floor_polygon_m, [(a + b) / 2 + 0.2 * inward])[0]:
+        inward = -inward
+    zone = np.array([a, b, b + np.linalg.norm(b - a) * inward, a + np.linalg.norm(b - a) * inward])
     for lay, rep in zip(result.layouts, result.reports):
         assert len(lay.model.door_segments_m) == 1
+        assert np.linalg.norm(lay.model.door_segments_m[0][1] - lay.model.door_segments_m[0][0]) == pytest.approx(
+            np.linalg.norm(found.segment_m[1] - found.segment_m[0]) + 2 * ROOM.fit.found_door_margin_m, abs=1e-3)
         assert rep["door_clearance_m2"][0] <= ROOM.fit.door_graze_m2
+        items = [i for i in lay.items if lay.model.particle_collides[i]]
+        assert max(convex_intersection_area(zone, f) for f in lay.corners_m(items)) <= 0.01
     # The overlay draws the door's feet in the door colour.
     overlay = result.overlays["overlay_floor.png"]
     (x1, y1), (x2, y2) = found.feet_px
     mid = overlay[int(round((y1 + y2) / 2)), int(round((x1 + x2) / 2))]
     assert np.abs(mid.astype(int) - DRAW.floor.door_color).max() < 40
+
+
+def test_a_found_doors_margin_gives_way_before_the_photo_is_refused(tmp_path):
+    """A 1.9 x 1.3 m floor, a side table (0.5 m square) and a 0.8 m door found in the
+    middle of a long wall: its zone with the margin (1.0 m wide, 0.9 m deep) leaves the
+    table no place, as a door the user marked that wide does (refused); the found one is
+    then kept clear as found, and the table stands beside its zone."""
+    import dataclasses
+
+    from layout.spec import Opening, load_spec
+    from layout.metrics import convex_intersection_area
+
+    spec = load_spec(write_spec(tmp_path, """
+        [room]
+        polygon = [[0, 0], [1.9, 0], [1.9, 1.3], [0, 1.3]]
+        height = 2.6
+        [[items]]
+        id = "side_table"
+        kind = "side_table"
+        """))
+    found = Opening(at_m=(0.95, 0.0), width_m=0.8, clearance_m=None, height_m=2.1, where="found door 1,2,3,4")
+    padded = fit._padded(found)
+    assert padded.width_m == pytest.approx(0.8 + 2 * ROOM.fit.found_door_margin_m)
+    marked = dataclasses.replace(padded, where="door 1,2,3,4")
+    with pytest.raises(FurnishError, match="floor too small"):
+        fit.solve_suggestions(dataclasses.replace(spec, doors=(marked,)), 1, 0, 2.47, [], pipeline._Progress(False, 1))
+    _, (lay,), _ = fit.solve_suggestions(dataclasses.replace(spec, doors=(padded,)), 1, 0, 2.47, [],
+                                         pipeline._Progress(False, 1))
+    np.testing.assert_allclose(lay.model.door_segments_m[0], [[0.55, 0.0], [1.35, 0.0]], atol=1e-9)
+    zone = np.array([[0.55, 0.0], [1.35, 0.0], [1.35, 0.8], [0.55, 0.8]])
+    assert convex_intersection_area(zone, lay.corners_m(lay.items)[0]) <= ROOM.fit.door_graze_m2
 
 
 def test_no_door_is_found_where_there_is_none():
@@ -1261,15 +1304,18 @@ def _suggestions(m, room, corners: bool):
 
 
 def test_a_small_floor_gets_four_different_corners_not_four_twins(tmp_path):
-    """Render [9900, 16], a living room whose floor in view holds the loveseat alone: all
-    four suggestions were that loveseat in one place. With the corner sets the four are
-    other furniture (each pair apart, :func:`fit.apart_m`), all whole in the frame, and
-    the notes say which suggestion stages which corner."""
+    """Render [9900, 16], a living room whose floor in view holds the loveseat alone: of
+    four suggestions, three are that loveseat in one place (twins, said in the notes).
+    With the corner sets the four are other furniture (each pair apart,
+    :func:`fit.apart_m`), all whole in the frame, and the notes say which suggestion
+    stages which corner."""
     from layout.camera import judge
 
     m, _ = _measured_render([9900, 16], tmp_path)
     plain, notes, _ = _suggestions(m, "living_room", corners=False)
-    assert max(fit.apart_m(a, b) for a in plain for b in plain if a is not b) < ROOM.fit.min_difference_m
+    twins = [k for k, a in enumerate(plain) if any(fit.apart_m(a, b) < ROOM.fit.min_difference_m
+                                                   for b in plain if b is not a)]
+    assert len(twins) >= 2 and sum("repeats an earlier one" in n for n in notes) == len(twins) - 1, notes
     layouts, notes, _ = _suggestions(m, "living_room", corners=True)
     assert all(fit.apart_m(a, b) >= ROOM.fit.min_difference_m for a in layouts for b in layouts if a is not b)
     assert all(judge(lay)["cut"] == [] for lay in layouts)
@@ -1325,10 +1371,13 @@ def test_a_floor_too_small_for_the_dining_set_is_staged_with_a_corner_set(tmp_pa
         assert lay.model.camera is not None and judge(lay)["cut"] == []
 
 
-def test_a_door_on_a_wall_drawn_in_steps_keeps_the_width_of_its_step():
-    """A 1 m door whose middle lies on a 0.8 m edge of an outline that steps 3 cm either
-    side of it: the door is kept, 0.8 m wide, where before the layout refused it as
-    wider than its wall; a door on a step narrower than a door keeps its own width."""
+def test_a_door_on_a_wall_drawn_in_steps_keeps_its_width_and_its_place():
+    """A 1 m door whose middle lies on a 0.8 m (or 0.3 m) edge of an outline that steps
+    3 cm either side of it: the door keeps its 1 m, and the layout puts its swing zone on
+    the wall the steps draw (within the steps' 3 cm), where before it shrank the door to
+    its step, or refused it as wider than its wall."""
+    from layout.builder import LayoutBuilder
+
     cal = calibrate_file(CRAMPED, Board())
     w, h = cal.size_px
     mid = cal.floor_from_pixels(np.array([[w / 2, 0.8 * h]]))[0]
@@ -1340,11 +1389,13 @@ def test_a_door_on_a_wall_drawn_in_steps_keeps_the_width_of_its_step():
               (2, 3), (-2, 3)]
         return np.array([mid + s * u + t * n for s, t in st])
 
-    (door,) = room_doors.doors_on_floor([feet_px.ravel()], cal, outline(0.8))
-    assert door.width_m == pytest.approx(0.8, abs=1e-4) and door.width_m <= 0.8
-    np.testing.assert_allclose(door.at_m, mid, atol=1e-6)
-    from layout.builder import LayoutBuilder
-
-    LayoutBuilder(outline(0.8), 2.5).add_door(door.at_m, door.width_m)  # no longer refused
-    (door,) = room_doors.doors_on_floor([feet_px.ravel()], cal, outline(0.3))
-    assert door.width_m == pytest.approx(1.0, abs=1e-3)
+    for step_m in (0.8, 0.3):
+        (door,) = room_doors.doors_on_floor([feet_px.ravel()], cal, outline(step_m))
+        assert door.width_m == pytest.approx(1.0, abs=1e-3)
+        np.testing.assert_allclose(door.at_m, mid, atol=1e-6)
+        b = LayoutBuilder(outline(step_m), 2.5)
+        b.add_door(door.at_m, door.width_m)
+        b.add_item("chair", (0.5, 0.5, 0.8))
+        segment = b.finalize().door_segments_m[0]
+        np.testing.assert_allclose(sorted(segment @ u), [mid @ u - 0.5, mid @ u + 0.5], atol=0.005)
+        assert np.all(np.abs(segment @ n - mid @ n) <= 0.03)

@@ -39,3 +39,18 @@ def test_triangulate_an_l_shape_in_either_winding():
         # the reflex corner (1, 1) must not be cut off: no triangle covers the missing square
         centroids = poly[tris].mean(axis=1)
         assert not np.any((centroids[:, 0] > 1) & (centroids[:, 1] > 1))
+
+
+def test_stepped_wall_finds_the_wall_an_outline_draws_in_steps():
+    """By hand: a 4 x 3 m room whose bottom wall has a 6 cm deep, 0.4 m wide step (a
+    door's threshold) under a 1 m opening: the opening lies on the line between the step
+    and the wall, 1 m long; by a corner it slides along its wall; on a 0.6 m wall between
+    two corners there is no place for it."""
+    from layout.geometry import stepped_wall
+
+    room = np.array([(0, 0), (1.8, 0), (1.8, 0.06), (2.2, 0.06), (2.2, 0), (4, 0), (4, 3), (0, 3)], float)
+    at = stepped_wall(room, (2.0, 0.06), 1.0, 0.15)
+    np.testing.assert_allclose(at[:, 0], [1.5, 2.5], atol=1e-9)  # in the outline's (counter-clockwise) direction
+    assert np.all((at[:, 1] > 0.0) & (at[:, 1] < 0.06))
+    np.testing.assert_allclose(stepped_wall(room, (3.7, 0.0), 1.0, 0.15), [[3.0, 0.0], [4.0, 0.0]], atol=0.01)
+    assert stepped_wall(np.array([(0, 0), (0.6, 0), (0.6, 3), (0, 3)], float), (0.3, 0.0), 1.0, 0.15) is None
