@@ -5,6 +5,7 @@ Every ``add_*`` method validates its arguments and returns an index; errors are
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -39,6 +40,22 @@ MAX_ROOM_M = 200.0
 MAX_CORNERS = 1000
 # Any length or position: a few room sizes.
 MAX_LENGTH_M = 1000.0
+
+
+@functools.lru_cache(maxsize=8)
+def _clearance(polygon_bytes: bytes, corners: int):
+    """The floor's clearance grid (:func:`layout._kernels.clearance_grid`): its origin,
+    cell (m) and cells. Every model of one photo's floor has the same (a photo's
+    suggestions build a dozen)."""
+    poly = np.frombuffer(polygon_bytes).reshape(corners, 2)
+    # About 16k cells of at least 5 cm: one lookup then settles "far inside" for
+    # most items, instead of a walk over every wall. More cells would only fall
+    # out of the cache on a large floor (the solver asks twice per item and
+    # iteration, in no spatial order).
+    lo, hi = poly.min(0), poly.max(0)
+    cell = max(0.05, float(np.sqrt(np.prod(hi - lo) / 16_000.0)))
+    gx, gy = (np.ceil((hi - lo) / cell).astype(int) + 2)
+    return lo - cell, cell, K.clearance_grid(np.ascontiguousarray(poly), lo - cell, cell, int(gx), int(gy))
 
 
 def _finite(name, value, *, positive=False, nonnegative=False, shape=None, meters=True):
@@ -530,15 +547,8 @@ class LayoutBuilder:
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)
         prev = poly - np.roll(poly, 1, axis=0)
         reflex = (prev[:, 0] * edges[:, 1] - prev[:, 1] * edges[:, 0]) < 0
-        # About 16k cells of at least 5 cm: one lookup then settles "far inside" for
-        # most items, instead of a walk over every wall. More cells would only fall
-        # out of the cache on a large floor (the solver asks twice per item and
-        # iteration, in no spatial order).
-        lo, hi = poly.min(0), poly.max(0)
-        grid_cell = max(0.05, float(np.sqrt(np.prod(hi - lo) / 16_000.0)))
-        grid_origin = lo - grid_cell
-        gx, gy = (np.ceil((hi - lo) / grid_cell).astype(int) + 2)
-        clearance = K.clearance_grid(poly, grid_origin, grid_cell, int(gx), int(gy))
+        grid_origin, grid_cell, clearance = (a.copy() if isinstance(a, np.ndarray) else a
+                                             for a in _clearance(poly.tobytes(), len(poly)))
         # Group sizes (for pictures): bounding box of member footprints in group frame.
         for g in np.flatnonzero(role == codes.GROUP)[::-1]:
             members = np.flatnonzero(parent == g)
