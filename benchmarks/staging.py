@@ -380,8 +380,8 @@ def main(argv=None) -> int:
                 r["different_or_forced"] = all(fit.apart_m(layouts[k], other) >= 0.3 or max(k, q) in forced
                                                for q, other in enumerate(layouts) if q != k)
             results[mode].extend(rows)
-            entry[mode] = {"dropped": [d["id"] for d in dropped], "notes": [w for w in warnings
-                                                                            if w.startswith("suggestion")],
+            entry[mode] = {"layout_s": round(times[mode][-1], 3), "dropped": [d["id"] for d in dropped],
+                           "notes": [w for w in warnings if w.startswith("suggestion")],
                            "faults": sum(not r[c] for r in rows for c in CHECKS if r[c] is not None)}
         ROOM.fit.for_camera = True
         per_photo.append(entry)
