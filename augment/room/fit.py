@@ -11,6 +11,7 @@ Its tuning is ``ROOM.fit`` (:mod:`augment.room.settings`), read at call time.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from pathlib import Path
 
@@ -202,6 +203,20 @@ def _units(spec) -> list[list]:
 BARE_NOTE = " stands without what it carries: "
 
 
+def _stands_in_view(camera: Camera, polygon_m, size_m) -> bool:
+    """Whether a box of ``size_m`` stands whole in the photo somewhere on the floor
+    (:func:`layout.camera.in_view_share`): asked of the same sizes again for each corner set."""
+    K, pose = (np.asarray(a, np.float64).tobytes() for a in (camera.K, camera.camera_from_floor))
+    return _in_view(K, pose, tuple(int(v) for v in camera.size_px),
+                    np.ascontiguousarray(polygon_m, dtype=np.float64).tobytes(), tuple(float(v) for v in size_m))
+
+
+@functools.lru_cache(maxsize=256)
+def _in_view(K: bytes, camera_from_floor: bytes, size_px: tuple, polygon: bytes, size_m: tuple) -> bool:
+    camera = Camera(np.frombuffer(K).reshape(3, 3), np.frombuffer(camera_from_floor).reshape(4, 4), size_px)
+    return in_view_share(camera, np.frombuffer(polygon).reshape(-1, 2), size_m) > 0.0
+
+
 def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None = None):
     """Fit a spec's furniture to a measured floor.
 
@@ -262,11 +277,11 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None =
             drop(unit, f"its footprint {w:.2f} x {d:.2f} m fits the {area:.1f} m\u00b2 floor at no angle")
         elif camera is not None and any(i.kind.collides for i in unit):  # a rug may run out of the photo
             top = max(i.kind.size_m[2] + i.elevation_m for i in unit)
-            if in_view_share(camera, poly, (w, d, top)) > 0.0:
+            if _stands_in_view(camera, poly, (w, d, top)):
                 continue
             why = f"{top:.2f} m tall, {IN_NO_VIEW} (a photo taken from higher or farther back shows more)"
             bare = unit[0].kind.bare_height_m if len(unit) == 1 and unit[0].elevation_m == 0.0 else 0.0
-            if 0.0 < bare < top and in_view_share(camera, poly, (w, d, bare)) > 0.0:
+            if 0.0 < bare < top and _stands_in_view(camera, poly, (w, d, bare)):
                 lowered = dataclasses.replace(unit[0], kind=dataclasses.replace(
                     unit[0].kind, size_m=(*unit[0].kind.size_m[:2], bare)))
                 spec = dataclasses.replace(spec, items=tuple(lowered if i.id == lowered.id else i for i in spec.items))
