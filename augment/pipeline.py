@@ -439,7 +439,7 @@ def report_dict(result: FurnishResult) -> dict:
         "furniture": {"source": result.source, "floor_polygon_m": np.round(result.spec.polygon_m, 4),
                       "height_m": result.room_height_m, "items": [i.id for i in result.spec.items],
                       "kinds": [i.kind.name for i in result.spec.items], "dropped": result.dropped,
-                      "doors": [{"at_m": list(o.at_m), "width_m": o.width_m, "marked": o.where}
+                      "doors": [{"at_m": list(o.at_m), "width_m": o.width_m, "margin_m": o.margin_m, "marked": o.where}
                                 for o in result.spec.doors],
                       "windows": [{"at_m": list(o.at_m), "width_m": o.width_m, "sill_m": o.sill_m,
                                    "height_m": o.height_m} for o in result.spec.windows],

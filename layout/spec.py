@@ -196,7 +196,9 @@ def _is_number(v):
 
 @dataclass(frozen=True)
 class Opening:
-    """A door or window as given in the spec (the builder snaps it onto a wall)."""
+    """A door or window as given in the spec (the builder snaps it onto a wall).
+    ``margin_m``: its zone reaches this much past its sides and its depth (an opening
+    found in a photo, whose sides are a few centimeters unsure)."""
 
     at_m: tuple
     width_m: float
@@ -204,6 +206,7 @@ class Opening:
     height_m: float
     sill_m: float = 0.0
     where: str = ""
+    margin_m: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -1107,11 +1110,12 @@ def build(spec: Spec, *, polygon_m=None):
     for o in spec.doors:
         _check_on_wall(r, b.polygon_m, o)
         with r.context(o.where):
-            b.add_door(o.at_m, o.width_m, o.clearance_m, o.height_m)
+            depth = o.width_m if o.clearance_m is None else o.clearance_m
+            b.add_door(o.at_m, o.width_m + 2 * o.margin_m, depth + o.margin_m, o.height_m)
     for o in spec.windows:
         _check_on_wall(r, b.polygon_m, o)
         with r.context(o.where):
-            b.add_window(o.at_m, o.width_m, o.sill_m, o.height_m, o.clearance_m)
+            b.add_window(o.at_m, o.width_m + 2 * o.margin_m, o.sill_m, o.height_m, o.clearance_m + o.margin_m)
 
     index = {}
     pending = list(groups)

@@ -695,17 +695,15 @@ def _corner_instead(spec, corner, dropped: list, reason: str) -> tuple:
 def _padded(door: Opening) -> Opening:
     """A found door whose zone reaches ``ROOM.fit.found_door_margin_m`` past its found
     sides and depth: the finder puts a side a few centimeters in, now and then ten."""
-    margin = ROOM.fit.found_door_margin_m
-    return dataclasses.replace(door, width_m=door.width_m + 2 * margin, clearance_m=door.width_m + margin)
+    return dataclasses.replace(door, margin_m=ROOM.fit.found_door_margin_m)
 
 
 def _doors_as_found(spec):
-    """``spec`` with its found doors' zones as found (:func:`_padded` undone), or None
-    where it has no padded door."""
-    margin = ROOM.fit.found_door_margin_m
-    doors = tuple(dataclasses.replace(d, width_m=d.width_m - 2 * margin, clearance_m=None)
-                  if d.where.startswith("found ") and d.clearance_m is not None else d for d in spec.doors)
-    return None if doors == spec.doors else dataclasses.replace(spec, doors=doors)
+    """``spec`` with its doors' zones as found (no margin, :func:`_padded`), or None
+    where no door has a margin."""
+    if not any(d.margin_m for d in spec.doors):
+        return None
+    return dataclasses.replace(spec, doors=tuple(dataclasses.replace(d, margin_m=0.0) for d in spec.doors))
 
 
 def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress,
@@ -911,7 +909,8 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
         door = dataclasses.replace(door, where=f"found {door.where}")
         for door in (_padded(door), door):
             try:
-                LayoutBuilder(poly, height_m, open_edges=edges).add_door(door.at_m, door.width_m, door.clearance_m)
+                LayoutBuilder(poly, height_m, open_edges=edges).add_door(
+                    door.at_m, door.width_m + 2 * door.margin_m, door.width_m + door.margin_m)
             except LayoutError:
                 continue  # wider than its wall: as found, or (not even that) a false find
             found.append(door)

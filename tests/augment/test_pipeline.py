@@ -1186,7 +1186,8 @@ def test_the_door_in_the_photo_is_found_and_kept_clear(roomy):
     assert abs(np.linalg.norm(found.segment_m[1] - found.segment_m[0]) - np.linalg.norm(true[1] - true[0])) < 0.15
     np.testing.assert_allclose(found.feet_px, result.calibration.pixels_from_floor(found.segment_m))
     (door,) = result.report["furniture"]["doors"]
-    assert door["marked"].startswith("found door ")
+    assert door["marked"].startswith("found door ") and door["margin_m"] == ROOM.fit.found_door_margin_m
+    assert door["width_m"] == pytest.approx(np.linalg.norm(found.segment_m[1] - found.segment_m[0]), abs=1e-3)
     a, b = true
     inward = np.array([a[1] - b[1], b[0] - a[0]]) / np.linalg.norm(b - a)
     if not _inside(result.layouts[0].model.floor_polygon_m, [(a + b) / 2 + 0.2 * inward])[0]:
@@ -1195,7 +1196,7 @@ def test_the_door_in_the_photo_is_found_and_kept_clear(roomy):
     for lay, rep in zip(result.layouts, result.reports):
         assert len(lay.model.door_segments_m) == 1
         assert np.linalg.norm(lay.model.door_segments_m[0][1] - lay.model.door_segments_m[0][0]) == pytest.approx(
-            np.linalg.norm(found.segment_m[1] - found.segment_m[0]) + 2 * ROOM.fit.found_door_margin_m, abs=1e-3)
+            door["width_m"] + 2 * door["margin_m"], abs=1e-3)
         assert rep["door_clearance_m2"][0] <= ROOM.fit.door_graze_m2
         items = [i for i in lay.items if lay.model.particle_collides[i]]
         assert max(convex_intersection_area(zone, f) for f in lay.corners_m(items)) <= 0.01
@@ -1226,8 +1227,9 @@ def test_a_found_doors_margin_gives_way_before_the_photo_is_refused(tmp_path):
         """))
     found = Opening(at_m=(0.95, 0.0), width_m=0.8, clearance_m=None, height_m=2.1, where="found door 1,2,3,4")
     padded = fit._padded(found)
-    assert padded.width_m == pytest.approx(0.8 + 2 * ROOM.fit.found_door_margin_m)
-    marked = dataclasses.replace(padded, where="door 1,2,3,4")
+    assert padded.width_m == 0.8 and padded.margin_m == ROOM.fit.found_door_margin_m
+    marked = dataclasses.replace(found, width_m=0.8 + 2 * padded.margin_m, clearance_m=0.8 + padded.margin_m,
+                                 where="door 1,2,3,4")
     with pytest.raises(FurnishError, match="floor too small"):
         fit.solve_suggestions(dataclasses.replace(spec, doors=(marked,)), 1, 0, 2.47, [], pipeline._Progress(False, 1))
     _, (lay,), _ = fit.solve_suggestions(dataclasses.replace(spec, doors=(padded,)), 1, 0, 2.47, [],
