@@ -547,8 +547,7 @@ class LayoutBuilder:
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)
         prev = poly - np.roll(poly, 1, axis=0)
         reflex = (prev[:, 0] * edges[:, 1] - prev[:, 1] * edges[:, 0]) < 0
-        grid_origin, grid_cell, clearance = (a.copy() if isinstance(a, np.ndarray) else a
-                                             for a in _clearance(poly.tobytes(), len(poly)))
+        grid_origin, grid_cell, clearance = _clearance(poly.tobytes(), len(poly))
         # Group sizes (for pictures): bounding box of member footprints in group frame.
         for g in np.flatnonzero(role == codes.GROUP)[::-1]:
             members = np.flatnonzero(parent == g)
@@ -608,8 +607,8 @@ class LayoutBuilder:
             floor_edge_normal=normals,
             floor_reflex=reflex,
             floor_edge_wall=self.edge_wall.copy(),
-            floor_clearance_m=clearance,
-            floor_grid_origin_m=grid_origin,
+            floor_clearance_m=clearance.copy(),  # the cache's own stays as made
+            floor_grid_origin_m=grid_origin.copy(),
             floor_grid_cell_m=np.array([grid_cell]),
             floor_frame_planes=(np.zeros((0, 4)) if self._camera is None
                                 else self._camera.frame_planes(self._camera_rules)),

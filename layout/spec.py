@@ -208,6 +208,13 @@ class Opening:
     where: str = ""
     margin_m: float = 0.0
 
+    @property
+    def zone_m(self) -> tuple[float, float]:
+        """The width and depth of the zone kept clear (a door's depth is its width
+        unless its clearance is given), the margin added."""
+        depth = self.width_m if self.clearance_m is None else self.clearance_m
+        return self.width_m + 2 * self.margin_m, depth + self.margin_m
+
 
 @dataclass(frozen=True)
 class Curve:
@@ -1110,12 +1117,12 @@ def build(spec: Spec, *, polygon_m=None):
     for o in spec.doors:
         _check_on_wall(r, b.polygon_m, o)
         with r.context(o.where):
-            depth = o.width_m if o.clearance_m is None else o.clearance_m
-            b.add_door(o.at_m, o.width_m + 2 * o.margin_m, depth + o.margin_m, o.height_m)
+            b.add_door(o.at_m, *o.zone_m, o.height_m)
     for o in spec.windows:
         _check_on_wall(r, b.polygon_m, o)
         with r.context(o.where):
-            b.add_window(o.at_m, o.width_m + 2 * o.margin_m, o.sill_m, o.height_m, o.clearance_m + o.margin_m)
+            width, depth = o.zone_m
+            b.add_window(o.at_m, width, o.sill_m, o.height_m, depth)
 
     index = {}
     pending = list(groups)

@@ -2,7 +2,6 @@
 the photo turned into the layout's doors, whose swing zones stay free of furniture."""
 from __future__ import annotations
 
-
 import numpy as np
 
 from layout.geometry import edge_distances

@@ -909,8 +909,7 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
         door = dataclasses.replace(door, where=f"found {door.where}")
         for door in (_padded(door), door):
             try:
-                LayoutBuilder(poly, height_m, open_edges=edges).add_door(
-                    door.at_m, door.width_m + 2 * door.margin_m, door.width_m + door.margin_m)
+                LayoutBuilder(poly, height_m, open_edges=edges).add_door(door.at_m, *door.zone_m)
             except LayoutError:
                 continue  # wider than its wall: as found, or (not even that) a false find
             found.append(door)
