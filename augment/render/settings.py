@@ -51,6 +51,13 @@ class StagedSettings:
     ao_bins_m: np.ndarray = field(  # (k,) part heights grouped for ambient occlusion: one blur per group
         default_factory=lambda: np.array([0.0, 0.06, 0.15, 0.3, 0.55, 0.9, 1.5, 1e9]))
     floor_cell_max_px: int = 900  # floor raster: at most this many cells a side
+    wall_samples: int = 150_000  # walls' shadows: worked out on at most this many pixels of the region
+    wall_ambient_share: float = 0.6  # a wall's light but the key, relative to the floor's: half the sky, the bounce
+    wall_foot_m: float = 0.03  # a wall takes the occlusion of the floor this far in front of its foot ...
+    wall_ao_reach_m: float = 0.3  # ... up to the height of what stands this close to that point ...
+    wall_ao_fade_m: float = 0.06  # ... fading over this above it
+    wall_run_on_m: float = 3.0  # a wall the floor in view leaves at the photo's edge goes on this far past it
+    wall_smooth_px: float = 8.0  # walls' shadows smoothed by this (Gaussian sigma, photo pixels)
     floor_cell_min_m: float = 0.004  # ... and cells no finer than this
     occlusion_long_px: int = 800  # the floor mask is read at most this large
     render_budget_px: float = 1.4e6  # rendered pixels (after supersampling) per image

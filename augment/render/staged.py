@@ -24,7 +24,8 @@ averaged over directions across the light's extent so it is soft and hardens tow
 contact; each lamp's, cast away from it; ambient occlusion from what stands over and
 beside each floor point), and the photo is multiplied by their ratio (in the photo's
 gamma, the 2.2 power the renderer also uses). Floor-level items (rugs) take the same
-shadows, and only those.
+shadows, and only those. Walls (the floor polygon's wall edges) take the key light's
+shadow and the floor's occlusion at their foot (:func:`_wall_gain`).
 
 Occlusion. The photo hides furniture where its walls or objects stand in front of it. With
 a floor mask, a pixel that shows something other than floor shows a vertical thing
@@ -860,10 +861,22 @@ def _shadow_directions(direction, softness_rad, n):
     return out
 
 
-def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings, light_map: _LightMap | None = None):
+@dataclass(frozen=True)
+class _FloorShading:
+    """The furniture's shading of the floor: (rows, cols) float32 rasters over ``grid``."""
+
+    gain: np.ndarray        # what the floor's brightness is multiplied by, in the photo's gamma
+    grid: _FloorGrid
+    key_shadow: np.ndarray  # share of the key light the furniture takes, 0-1, the floor run on past the walls
+    ao: np.ndarray          # share of the ambient light it takes, 0-1, before ``ao_strength``
+
+
+def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
+                light_map: _LightMap | None = None) -> _FloorShading:
     """What the floor's brightness is multiplied by, in the photo's gamma: (irradiance with
     the furniture / without) ** (1 / 2.2), as a (rows, cols) float32 raster over the floor
-    rectangle ``extent_m`` ((xmin, ymin), (xmax, ymax)); and its grid.
+    rectangle ``extent_m`` ((xmin, ymin), (xmax, ymax)); with its grid and the key light's
+    shadow and the occlusion it is made of (the walls take them too, :func:`_wall_gain`).
 
     The key light's shadow is the average of hard shadows cast along directions spread
     over the light's angular size (soft, and sharper near contact); ambient occlusion
@@ -878,7 +891,8 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
     shape = (int(math.ceil(size[1] / cell)) + 1, int(math.ceil(size[0] / cell)) + 1)
     grid = _FloorGrid(lo, cell, shape)
     if not casters:
-        return np.ones(shape, np.float32), grid
+        none = np.zeros(shape, np.float32)
+        return _FloorShading(np.ones(shape, np.float32), grid, none, none)
     shadow = np.zeros(shape, np.float32)
     layer = np.zeros(shape, np.uint8)
     dirs = [d for d in _shadow_directions(lighting.direction, lighting.softness_rad, settings.shadow_samples)
@@ -945,7 +959,83 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
         _Footprints([_Caster(p, None, 0.0, 0.0) for p in feet]).fill(raster, grid)
         contact = np.clip(_blur(raster.astype(np.float32), settings.contact_sigma_m / cell), 0, 1)
         ratio = ratio * (1.0 - settings.contact_strength * contact)
-    return np.power(np.clip(ratio, 0.02, 1.0), 1.0 / GAMMA).astype(np.float32), grid
+    return _FloorShading(np.power(np.clip(ratio, 0.02, 1.0), 1.0 / GAMMA).astype(np.float32), grid, shadow,
+                         ao.astype(np.float32))
+
+
+def _wall_gain(shading: _FloorShading, casters, walls_m, lighting: Lighting, K, pose, box,
+               settings: StagedSettings):
+    """What the photo's pixels that are not floor are multiplied by for the furniture's
+    shadows where they show a wall, (height, width) float32 over ``box`` (x0, y0, x1, y1;
+    undistorted pixels); and the share of each pixel whose ray meets the floor before any
+    wall (floor the mask left out: it takes the floor's gain), (height, width) float32.
+
+    A wall point (the first of ``walls_m`` (k, 2, 2) a pixel's ray meets) takes the key
+    light's shadow, by the key light's share of the wall's light (it depends on how
+    squarely the light meets the wall): it is in shadow as far as the floor it would light
+    past the wall, were the wall not there, is, since the furniture stands in front of the
+    wall. And the ambient occlusion of the floor at its foot, up to the height of what
+    stands there."""
+    x0, y0, x1, y1 = box
+    bw, bh = x1 - x0, y1 - y0
+    step = max(1, math.ceil(math.sqrt(bw * bh / settings.wall_samples)))  # the shadows are soft
+    X, Y = np.meshgrid(np.arange(0, bw, step, dtype=np.float64) + x0, np.arange(0, bh, step, dtype=np.float64) + y0)
+    shape = X.shape
+    R = pose[:3, :3]
+    cam = -R.T @ pose[:3, 3]
+    rays = (R.T @ (np.linalg.inv(K) @ np.stack([X.ravel(), Y.ravel(), np.ones(X.size)]))).T
+    reach = np.maximum(np.hypot(rays[:, 0], rays[:, 1]), 1e-12)  # horizontal meters per unit of ray
+    t_wall, which = _first_wall(walls_m, rays, cam[:2])
+    t_floor = np.full(len(rays), np.inf)
+    down = rays[:, 2] < 0
+    t_floor[down] = cam[2] / -rays[down, 2] * reach[down]
+    on_wall = np.isfinite(t_wall) & (t_wall <= t_floor)
+    grid = shading.grid
+
+    def sample(raster, xy, outside):
+        m = (grid.to_px(xy) - 0.5).astype(np.float32).reshape(shape + (2,))
+        return cv2.remap(raster, m[..., 0], m[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                         borderValue=outside).ravel()
+
+    gain = np.ones(shape, np.float32)
+    if on_wall.any():
+        p = cam + rays * (np.where(on_wall, t_wall, 0.0) / reach)[:, None]
+        e = walls_m[:, 1] - walls_m[:, 0]
+        normals = np.column_stack([-e[:, 1], e[:, 0]]) / np.maximum(np.hypot(e[:, 0], e[:, 1]), 1e-12)[:, None]
+        normals *= np.where(np.einsum("ij,ij->i", cam[:2] - walls_m[:, 0], normals) < 0, -1.0, 1.0)[:, None]
+        n = normals[np.maximum(which, 0)]
+        foot = p[:, :2] + settings.wall_foot_m * n
+        # What stands at the wall's foot, and how high: the occlusion fades above it.
+        top = np.zeros(grid.shape, np.float32)
+        for c in sorted(casters, key=lambda c: c.z_top):
+            pts = c.points if c.triangles is None else c.triangles.reshape(-1, 3)
+            fixed = np.rint((grid.to_px(pts[:, :2]) - 0.5) * (1 << _SUB)).astype(np.int32)
+            cv2.fillConvexPoly(top, cv2.convexHull(fixed), float(c.z_top), lineType=cv2.LINE_8, shift=_SUB)
+        r = max(1, round(settings.wall_ao_reach_m / grid.cell_m))
+        top = sample(cv2.dilate(top, np.ones((2 * r + 1, 2 * r + 1), np.uint8)), foot, 0.0)
+        above = np.maximum(p[:, 2] - top, 0.0) / settings.wall_ao_fade_m
+        ao = sample(shading.ao, foot, 0.0) * np.exp(-0.5 * above * above)
+        d = np.asarray(lighting.direction, dtype=np.float64)
+        d = d / np.linalg.norm(d)
+        f_key = np.zeros(len(p))
+        key = np.zeros(len(p))
+        if d[2] < -0.05 and lighting.key_fraction > 0:
+            key = sample(shading.key_shadow, p[:, :2] + (p[:, 2] / -d[2])[:, None] * d[:2], 0.0)
+            square = np.maximum(0.0, -(n @ d[:2])) / -d[2]  # the key light on the wall over that on the floor
+            f = lighting.key_fraction if lighting.sun is None else lighting.key_fraction * lighting.sun.sunlit(foot)
+            lit = f * square
+            f_key = lit / np.maximum(lit + (1.0 - f) * settings.wall_ambient_share, 1e-9)
+        ratio = np.power(np.clip(1.0 - f_key * key - (1.0 - f_key) * settings.ao_strength * ao, 0.02, 1.0),
+                         1.0 / GAMMA).reshape(shape).astype(np.float32)
+        # Smoothed over the walls alone (the outline's short steps would show as seams).
+        wall = on_wall.reshape(shape).astype(np.float32)
+        sigma = settings.wall_smooth_px / step
+        smooth = cv2.GaussianBlur(ratio * wall, (0, 0), sigma) / np.maximum(cv2.GaussianBlur(wall, (0, 0), sigma), 1e-6)
+        gain = np.where(wall > 0, smooth, 1.0).astype(np.float32)
+    floor = (t_floor < t_wall).reshape(shape).astype(np.float32)
+    up = np.array([[1.0 / step, 0, 0], [0, 1.0 / step, 0]])
+    return tuple(cv2.warpAffine(a, up, (bw, bh), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                                borderMode=cv2.BORDER_REPLICATE) for a in (gain, floor))
 
 
 # --------------------------------------------------------------------------------------
@@ -1058,22 +1148,25 @@ def _mask_occluders_cached(floor_mask, K, pose, settings):
     return _OCCLUDERS[key]
 
 
-def _wall_occluders(walls_m, rays_floor, cam_xy):
-    """Horizontal distance along each ray's azimuth to the first wall segment (n,), inf if none.
+def _first_wall(walls_m, rays_floor, cam_xy):
+    """Horizontal distance along each ray's azimuth to the first wall segment (n,), inf if
+    none; and that wall's index (n,), -1 if none.
 
     walls_m : (k, 2, 2) segments; rays_floor : (n, 3) ray directions in the floor frame."""
     d = rays_floor[:, :2] / np.maximum(np.linalg.norm(rays_floor[:, :2], axis=1), 1e-12)[:, None]
     best = np.full(len(d), np.inf)
-    for a, b in walls_m:
+    which = np.full(len(d), -1, np.int64)
+    for k, (a, b) in enumerate(walls_m):
         e = b - a
         rhs = a - cam_xy
         denom = -d[:, 0] * e[1] + d[:, 1] * e[0]
         safe = np.where(np.abs(denom) > 1e-12, denom, 1.0)
         t = (-rhs[0] * e[1] + rhs[1] * e[0]) / safe
         u = (d[:, 0] * rhs[1] - d[:, 1] * rhs[0]) / safe
-        hit = (np.abs(denom) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1)
-        best = np.where(hit & (t < best), t, best)
-    return best
+        hit = (np.abs(denom) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1) & (t < best)
+        best = np.where(hit, t, best)
+        which[hit] = k
+    return best, which
 
 
 def wall_segments(floor_polygon) -> np.ndarray:
@@ -1088,6 +1181,22 @@ def wall_segments(floor_polygon) -> np.ndarray:
     if kinds is not None:
         edges = edges[np.asarray(kinds) == "boundary"]
     return edges
+
+
+def _walls_run_on(floor_polygon, run_on_m) -> np.ndarray:
+    """The wall segments of :func:`wall_segments`, those that end at the photo's edge or the
+    far floor run on by ``run_on_m`` there: the wall goes on where the floor leaves the view."""
+    walls = wall_segments(floor_polygon)
+    kinds = getattr(floor_polygon, "edge_kind", None)
+    if kinds is None:
+        return walls
+    wall = np.asarray(kinds) == "boundary"
+    e = walls[:, 1] - walls[:, 0]
+    e = e / np.maximum(np.linalg.norm(e, axis=1), 1e-12)[:, None]
+    walls = walls.copy()
+    walls[:, 0] -= e * (run_on_m * ~np.roll(wall, 1)[wall])[:, None]
+    walls[:, 1] += e * (run_on_m * ~np.roll(wall, -1)[wall])[:, None]
+    return walls
 
 
 # --------------------------------------------------------------------------------------
@@ -1136,8 +1245,9 @@ def _check_image(image) -> np.ndarray:
 
 def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
     """Floor-frame points whose projection bounds what the furniture and its shadows can
-    touch: each box's corners grown by 0.35 m (contact darkening), and the shadows of its
-    upper corners along the key light's extreme directions and from the lamps."""
+    touch: each box's corners grown by 0.35 m (contact darkening) and raised by the fade of
+    the walls' occlusion, and the shadows of its upper corners along the key light's
+    extreme directions and from the lamps."""
     out = []
     dirs = [v for v in _shadow_directions(lighting.direction, lighting.softness_rad, 8) if v[2] < -0.05]
     for item, _ in placed:
@@ -1149,6 +1259,7 @@ def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
         world = corners @ T[:3, :3].T + T[:3, 3]
         out.append(world)
         top = world[1::2]
+        out.append(top + [0.0, 0.0, 3.0 * settings.wall_ao_fade_m])  # the walls' occlusion above it
         for v in dirs:
             out.append(top - np.outer(top[:, 2] / v[2], v))
         for lamp in lighting.lamps:
@@ -1219,10 +1330,12 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         The GL context, reused for every render.
     floor_mask : (h, w) bool, optional
         Visible floor (segmentation): what the photo shows standing in front of the
-        furniture hides it, and shadows fall only on floor pixels.
+        furniture hides it, and the floor's shadows fall on floor pixels (the walls' on
+        the rest, with ``floor_polygon``).
     floor_polygon : FloorPolygon or (n, 2) float, optional
         The floor's outline in the floor frame, meters: its wall edges (every edge of an
-        array; the ``"boundary"`` edges of a FloorPolygon) hide what lies beyond them.
+        array; the ``"boundary"`` edges of a FloorPolygon) hide what lies beyond them and,
+        with ``floor_mask``, take the furniture's shadows.
     lighting : Lighting, optional
         Estimated from the photo (:func:`estimate_lighting`) when None; pass it to reuse
         one estimate for several suggestions.
@@ -1406,19 +1519,26 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     casters = _casters(placed, settings)
     on_floor = reach[reach[:, 2] < 1e-6, :2]
     pts = np.concatenate([on_floor] + [c.points[:, :2] for c in casters])
-    gain_floor, grid = _floor_gain(casters, lighting, (pts.min(axis=0) - 0.3, pts.max(axis=0) + 0.3), settings,
-                                   light_map)
+    shading = _floor_gain(casters, lighting, (pts.min(axis=0) - 0.3, pts.max(axis=0) + 0.3), settings, light_map)
     shift = np.array([[1.0, 0, -box[0]], [0, 1, -box[1]], [0, 0, 1]])
-    H_box = shift @ K @ np.column_stack([R[:, 0], R[:, 1], tvec]) @ grid.floor_from_raster()
-    gain = cv2.warpPerspective(gain_floor, H_box, (bw, bh), flags=cv2.INTER_LINEAR,
+    H_box = shift @ K @ np.column_stack([R[:, 0], R[:, 1], tvec]) @ shading.grid.floor_from_raster()
+    gain = cv2.warpPerspective(shading.gain, H_box, (bw, bh), flags=cv2.INTER_LINEAR,
                                borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
     up = np.linalg.inv(K).T @ R[:, 2]  # the floor's pixels: up . K^-1 p < 0
     _clear_above_horizon(gain, float(up[0]), float(up[1]), float(up[2]), box[0], box[1])
+    # What the mask says is not floor: walls take shadows too (only where the walls are known).
+    if floor_mask is not None and walls is not None and len(walls):
+        wall_gain, floor_share = _wall_gain(shading, casters, _walls_run_on(floor_polygon, settings.wall_run_on_m),
+                                            lighting, K, pose, box, settings)
+        other = floor_share * gain + (1.0 - floor_share) * wall_gain
+    else:
+        other = np.ones_like(gain)
     if distorted:
         mx, my = map_x - box[0], map_y - box[1]
         rgba, low = (cv2.remap(a, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
                      for a in (rgba, low))
-        gain = cv2.remap(gain, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
+        gain, other = (cv2.remap(g, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
+                       for g in (gain, other))
     timings["shadows"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -1429,7 +1549,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     full_alpha = np.zeros((h, w), np.float32)
     full_gain = np.ones((h, w), np.float32)
     floor_roi = floor_mask[y0:y1, x0:x1] if floor_mask is not None else np.ones((1, 1), bool)
-    _composite(image[y0:y1, x0:x1], rgba, low, gain, floor_roi, floor_mask is not None,
+    _composite(image[y0:y1, x0:x1], rgba, low, gain, other, floor_roi, floor_mask is not None,
                out[y0:y1, x0:x1], full_alpha[y0:y1, x0:x1], full_gain[y0:y1, x0:x1])
     lay = _layer(out, full_alpha, full_gain, image) if layer else None
     timings["composite"] = time.perf_counter() - t
@@ -1450,7 +1570,7 @@ def _hidden(world, rays, px, floor_mask, walls, K, pose, cam_xy, settings) -> np
         mj = np.clip(np.rint((px[:, 0] + 0.5) * ms - 0.5).astype(int), 0, dmap.shape[1] - 1)
         occluder = np.minimum(occluder, dmap[mi, mj])
     if walls is not None and len(walls):
-        occluder = np.minimum(occluder, _wall_occluders(walls, (R.T @ rays).T, cam_xy))
+        occluder = np.minimum(occluder, _first_wall(walls, (R.T @ rays).T, cam_xy)[0])
     slack = settings.occlusion_m + settings.occlusion_rel * np.where(np.isfinite(occluder), occluder, 0.0)
     return reach_xy > occluder + slack
 
@@ -1466,20 +1586,20 @@ def _clear_above_horizon(gain, a, b, c, x0, y0):
 
 
 @njit(cache=True, parallel=True)
-def _composite(photo, rgba, low, gain, floor, use_floor, out, alpha_out, gain_out):
+def _composite(photo, rgba, low, gain, other, floor, use_floor, out, alpha_out, gain_out):
     """One pass over the region: the photo times its shadow gain under what shows of it,
     the premultiplied furniture over it; floor-level furniture (``low``, 0-255) takes the
-    shadows too. Shadows fall on floor pixels only when ``use_floor``.
+    shadows too. With ``use_floor``, the floor's gain on floor pixels and ``other`` on the rest.
 
     photo, out : (h, w, 3) uint8; rgba : (h, w, 4) uint8 premultiplied; low : (h, w)
-    uint8; gain : (h, w) float32; floor : (h, w) bool; alpha_out, gain_out : (h, w)
+    uint8; gain, other : (h, w) float32; floor : (h, w) bool; alpha_out, gain_out : (h, w)
     float32, written."""
     h, w = photo.shape[0], photo.shape[1]
     for i in prange(h):
         for j in range(w):
             g = gain[i, j]
             if use_floor and not floor[i, j]:
-                g = 1.0
+                g = other[i, j]
             a = rgba[i, j, 3] * (1.0 / 255.0)
             k = g * (1.0 - a)
             fg = 1.0 - low[i, j] * (1.0 / 255.0) * (1.0 - g)

@@ -90,7 +90,8 @@ def test_a_lamp_casts_its_shadow_away_from_it():
     lamp = Lamp((0.0, 0.0, 2.4), 1.5, 1.0)
     light = Lighting((0.8, 0.8, 0.8), (0.0, 0.0, -1.0), 0.0, 0.05, (0.4, 0.4, 0.4), "test", lamps=(lamp,))
     plain = replace(RENDER.staged, ao_strength=0.0, contact_strength=0.0)
-    gain, grid = _floor_gain([_Caster(box, None, 0.0, 0.4)], light, ((-0.5, -0.5), (2.0, 0.5)), plain)
+    shading = _floor_gain([_Caster(box, None, 0.0, 0.4)], light, ((-0.5, -0.5), (2.0, 0.5)), plain)
+    gain, grid = shading.gain, shading.grid
 
     def at(px, py):
         col, row = np.floor(grid.to_px([px, py])).astype(int)

@@ -13,14 +13,15 @@ import trimesh
 
 from augment.camera.board import Board
 from augment.camera.calibration import Calibration, Intrinsics
+from augment.floor.polygon import FloorPolygon
 from augment.photo.io import read_photo
 from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furniture, furniture_for, furniture_from_asset,
                                       load_asset, placed_items, world_from_item)
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
-from augment.render.staged import (Lighting, _Caster, _floor_gain, _roll_off, estimate_lighting, render_staged,
-                                   write_jpeg)
+from augment.render.staged import (Lighting, _Caster, _floor_gain, _roll_off, _walls_run_on, estimate_lighting,
+                                   render_staged, wall_segments, write_jpeg)
 from layout.catalog import CATALOG
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -231,8 +232,8 @@ def test_the_floor_darkens_in_a_thin_line_where_a_leg_stands_on_it():
 
     def gain_at(z0, distances_m):
         leg = np.array([[x, y, z] for x in (-0.02, 0.02) for y in (-0.02, 0.02) for z in (z0, z0 + 0.4)])
-        gain, grid = _floor_gain([_Caster(leg, None, z0, z0 + 0.4)], light, ((-0.6, -0.6), (0.6, 0.6)),
-                                 RENDER.staged)
+        shading = _floor_gain([_Caster(leg, None, z0, z0 + 0.4)], light, ((-0.6, -0.6), (0.6, 0.6)), RENDER.staged)
+        gain, grid = shading.gain, shading.grid
         cells = np.floor(grid.to_px(np.array([[-0.02 - d, 0.0] for d in distances_m]))).astype(int)
         return gain[cells[:, 1], cells[:, 0]]
 
@@ -252,7 +253,8 @@ def test_a_raised_tabletop_hides_the_sky_below_it_by_its_underside_alone():
 
     def gains(z0, z1, settings):
         box = np.array([[x, y, z] for x in (-0.6, 0.6) for y in (-0.3, 0.3) for z in (z0, z1)])
-        gain, grid = _floor_gain([_Caster(box, None, z0, z1)], light, ((-1.2, -1.2), (1.2, 1.2)), settings)
+        shading = _floor_gain([_Caster(box, None, z0, z1)], light, ((-1.2, -1.2), (1.2, 1.2)), settings)
+        gain, grid = shading.gain, shading.grid
         cells = np.floor(grid.to_px(np.array([[0.0, 0.0], [0.0, 0.33], [0.0, 0.4]]))).astype(int)
         return gain[cells[:, 1], cells[:, 0]]
 
@@ -295,6 +297,92 @@ def test_walls_in_the_mask_and_the_polygon_hide_what_stands_behind_them(renderer
     assert (staged.alpha > 0.5).sum() < 20
     staged = _render_box(renderer, image, calibration, near, (0.5, 0.5, 0.8), floor_polygon=poly)
     assert (staged.alpha > 0.5).sum() > 200
+
+
+def test_a_box_by_a_wall_casts_its_shadow_on_the_wall_where_the_light_would_put_it(renderer, room_small):
+    """A 0.5 x 0.5 x 0.8 m box 15 cm in front of a wall (a floor-polygon edge, the mask
+    cut there), lit along d toward the wall and sideways: the wall darkens inside the box's
+    shadow on the wall's plane (its corners moved along d onto the plane, worked out
+    here), by the key light's share of the wall's light, and is untouched 0.3 m and more
+    outside it and above the box. Lit the other way, away from the wall, the same wall
+    points keep more than 85 % of their brightness."""
+    image, _, calibration = room_small
+    h, w = image.shape[:2]
+    pose = calibration.camera_from_floor
+    R = pose[:3, :3]
+    cam = -R.T @ pose[:3, 3]
+    ys, xs = np.mgrid[0:h, 0:w]
+    rays = R.T @ np.linalg.inv(calibration.intrinsics.K) @ np.stack([xs.ravel(), ys.ravel(), np.ones(h * w)])
+    forward = R[2, :2] / np.linalg.norm(R[2, :2])
+    side = np.array([-forward[1], forward[0]])
+    wall_at = 3.2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        floor_at = np.where(rays[2] < 0, cam[2] / -rays[2], np.inf)
+    along = (cam[:2] @ forward) + floor_at * (rays[:2].T @ forward)
+    mask = ((rays[2] < 0) & (along - cam[:2] @ forward < wall_at)).reshape(h, w)
+    wall = cam[:2] + forward * wall_at
+    poly = np.array([cam[:2] - 5 * side - 2 * forward, cam[:2] + 5 * side - 2 * forward, wall + 5 * side,
+                     wall - 5 * side])
+    e1, e2 = poly[1] - poly[0], poly[2] - poly[1]
+    if e1[0] * e2[1] - e1[1] * e2[0] < 0:
+        poly = poly[::-1]
+    size = (0.5, 0.5, 0.8)
+    center = cam[:2] + forward * (wall_at - 0.15 - 0.25) + side * 0.3
+    yaw = float(np.arctan2(forward[1], forward[0]))
+    corners = _box_corners(center, size, yaw)
+    d = np.append(0.6 * forward + 0.5 * side, -0.62)
+    d /= np.linalg.norm(d)
+    # The box's shadow on the wall's plane, in (across, up) wall coordinates.
+    s = (wall_at - (corners[:, :2] - cam[:2]) @ forward) / (d[:2] @ forward)
+    on_wall = corners + s[:, None] * d
+    hull = cv2.convexHull(np.column_stack([on_wall[:, :2] @ side, on_wall[:, 2]]).astype(np.float32))
+    # Wall points in view, on a 5 cm grid, and how far each lies inside the shadow (< 0: outside).
+    u, z = np.meshgrid(np.arange(-2.0, 2.0, 0.05), np.arange(0.02, 2.0, 0.05))
+    pts = np.column_stack([(wall + np.outer(u.ravel(), side)), z.ravel()])
+    px = np.rint(_project(calibration, pts)).astype(int)
+    seen = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
+    pts, px = pts[seen], px[seen]
+    inside = np.array([cv2.pointPolygonTest(hull, (float(p[:2] @ side), float(p[2])), True) for p in pts])
+    results = {}
+    for name, direction in (("toward", d), ("away", d * [-1, -1, 1])):
+        light = Lighting((0.8, 0.78, 0.75), tuple(direction), 0.5, 0.02, (0.3, 0.25, 0.2), "test")
+        item = PlacedItem("test_box", (center[0], center[1], size[2] / 2), yaw, size, "box")
+        staged = render_staged(image, calibration, [item], renderer, assets={"test_box": _box_parts()},
+                               lighting=light, seed=0, floor_mask=mask, floor_polygon=poly)
+        clear = staged.alpha[px[:, 1], px[:, 0]] == 0
+        results[name] = (staged.gain[px[:, 1], px[:, 0]], clear)
+        full = staged
+    gain, clear = results["toward"]
+    shadowed = clear & (inside > 0.08)
+    assert shadowed.sum() >= 10, "the test needs the wall's shadow in view beside the box"
+    # The key light's share of the wall's light: 0.5 of the floor's, times how squarely it meets the wall.
+    square = -(d[:2] @ -forward) / -d[2]
+    share = 0.5 * square / (0.5 * square + 0.5 * RENDER.staged.wall_ambient_share)
+    expected = (1.0 - share) ** (1 / 2.2)  # photo gamma; occlusion may darken a little more
+    assert np.all(gain[shadowed] <= expected + 0.02) and np.all(gain[shadowed] >= expected - 0.1)
+    lit = clear & (inside < -0.3) & (pts[:, 2] > size[2] + 0.3)
+    assert lit.sum() >= 10
+    assert np.all(gain[lit] > 0.995)
+    away, clear_away = results["away"]
+    assert np.all(away[shadowed & clear_away] > 0.85)
+    # Floor the mask leaves out (a strip 20 cm wide before the box) takes the floor's shadows all the same.
+    xy = cam[:2] + (rays[:2] * np.where(np.isfinite(floor_at), floor_at, 0.0)).T
+    before = (xy - center) @ forward
+    strip = (mask.ravel() & (before > -0.45) & (before < -0.25) & (np.abs((xy - center) @ side) < 0.25)).reshape(h, w)
+    staged = render_staged(image, calibration, [item], renderer, assets={"test_box": _box_parts()}, lighting=light,
+                           seed=0, floor_mask=mask & ~strip, floor_polygon=poly)
+    at = strip & (staged.alpha == 0)
+    assert at.sum() >= 50 and np.median(staged.gain[at]) < 0.97
+    assert np.abs(staged.gain[at] - full.gain[at]).max() < 0.03
+
+
+def test_walls_run_on_past_the_photos_edge_only():
+    """A 4 x 3 m floor whose near edge is the photo's: the side walls run on past it by
+    2 m; the far wall, between two walls, stays as it is; a plain outline is all walls."""
+    square = np.array([[0, 0], [4, 0], [4, 3], [0, 3]], dtype=float)
+    poly = FloorPolygon(square, ("image", "boundary", "boundary", "boundary"), 12.0, "")
+    assert np.allclose(_walls_run_on(poly, 2.0), [[[4, -2], [4, 3]], [[4, 3], [0, 3]], [[0, 3], [0, -2]]])
+    assert np.allclose(_walls_run_on(square, 2.0), wall_segments(square))
 
 
 # --------------------------------------------------------------------------------------

@@ -161,7 +161,8 @@ def test_a_box_in_the_shade_casts_no_sun_shadow():
     for name, lit_where in (("sunlit", lambda x, y: np.ones_like(x, bool)),
                             ("shade", lambda x, y: np.zeros_like(x, bool))):
         light = Lighting((0.8, 0.8, 0.8), d, 0.6, 0.01, (0.4, 0.4, 0.4), "sun", _sun_over(lit_where))
-        gain, grid = _floor_gain([_Caster(box, None, 0.0, 0.4)], light, ((-1, -1), (1, 1)), RENDER.staged)
+        shading = _floor_gain([_Caster(box, None, 0.0, 0.4)], light, ((-1, -1), (1, 1)), RENDER.staged)
+        gain, grid = shading.gain, shading.grid
         cell = np.floor(grid.to_px(at)).astype(int)[0]
         gains[name] = float(gain[cell[1], cell[0]])
     assert gains["sunlit"] < 0.8 and gains["shade"] > 0.95
