@@ -105,9 +105,11 @@ class SunSettings:
     cell_m: float = 0.01  # the top-down view's cell ...
     rim_m: float = 0.3  # ... covering the floor in view and this much around it ...
     max_cells: int = 600  # ... grown so the view has at most this many cells a side
-    edge_sigma_m: float = 0.015  # the light is smoothed this much: a seam or grout line fades, a step stays
+    # Scales tried in turn until one finds the sun: the light smoothed this much (m; a seam
+    # or grout line fades, a step stays), and sun over shade this much across the edges
+    # (medians); the coarser scale, which sees soft edges, and more of the planks, asks more.
+    edge_scales: tuple = ((0.015, 1.65), (0.03, 1.75))
     min_contrast: float = 1.5  # a sun's edge: light this many times brighter on one side (planks differ less)
-    min_median_contrast: float = 1.65  # ... and sun over shade this much across them (medians)
     lit_level: float = 0.6  # in the sun: floor this far from the shade's light to the sun's (log)
     min_edge_m: float = 1.0  # sun's edges this long in all, at least
     board_margin_m: float = 0.08  # the board's sheet, grown by this, is left out (its edges are steps too)

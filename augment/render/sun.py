@@ -190,10 +190,21 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     if exclude_m is not None:  # the board: its paper's edges are the sharpest steps on the floor
         corners = (np.asarray(exclude_m, dtype=np.float64) - lo) / cell
         cv2.fillConvexPoly(valid.view(np.uint8), np.round(corners).astype(np.int32), 0)
+    for sigma_m, min_contrast in settings.edge_scales:  # sharp edges first, then soft ones (a blurred photo)
+        found = _patches_at(top, valid, standing, lo, cell, sigma_m, min_contrast, walls_rad, settings)
+        if found is not None:
+            return found
+    return None
+
+
+def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, walls_rad,
+                settings: SunSettings) -> SunOnFloor | None:
+    """:func:`find_sun` on the top-down view ``top`` of the floor's light, its edges read at
+    the scale ``sigma_m``, the sun at least ``min_median_contrast`` times the shade."""
     # Steps of light (the sun's edges), not lines (seams, grout): the slope of the log
     # light smoothed over a few centimetres; an ideal step of height A seen through a
     # Gaussian of sigma s has slope A / (s sqrt(2 pi)) at its centre.
-    sigma = max(1.0, settings.edge_sigma_m / cell)
+    sigma = max(1.0, sigma_m / cell)
     log = cv2.GaussianBlur(np.log(np.maximum(top, 1e-4)), (0, 0), sigma)
     dx = cv2.Sobel(log, cv2.CV_32F, 1, 0, ksize=3) / 8.0
     dy = cv2.Sobel(log, cv2.CV_32F, 0, 1, ksize=3) / 8.0
@@ -237,7 +248,7 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
         keep = valid[rr, cc]
         sides.append(float(np.median(log[rr[keep], cc[keep]])) if keep.any() else math.nan)
     sun_log, shade_log = sides
-    if not sun_log - shade_log > math.log(settings.min_median_contrast):
+    if not sun_log - shade_log > math.log(min_median_contrast):
         return None
     contrast = float(math.exp(sun_log - shade_log))
     # In the sun: floor nearly as bright as the sunny side of the edges, in patches that

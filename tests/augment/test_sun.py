@@ -68,6 +68,24 @@ def test_a_patch_that_ends_on_the_floor_gives_no_sign(rng):
     assert sun is not None and sun.downstream == 0
 
 
+def test_a_soft_edged_patch_is_read_at_the_coarser_scale(rng):
+    """A sun patch 2.4 times as bright as the shade ((120 / 80) ** 2.2, as in the
+    photographer's rooms), its light blurred by 4 cm (a window far from the floor, a soft
+    photo): the 1.5 cm scale finds no edge steep enough, the 3 cm scale finds the sun's
+    azimuth."""
+    import cv2
+    image, mask = _sunny_floor(rng)
+    level = np.where(image > 120, 120.0, 80.0) + rng.normal(0, 2.0, image.shape)
+    soft = cv2.GaussianBlur(np.clip(level, 0, 255).astype(np.uint8), (0, 0), 0.04 / MM)
+    soft[~mask] = 200
+    walls = np.radians([0.0, 90.0])
+    fine_only = replace(RENDER.sun, edge_scales=RENDER.sun.edge_scales[:1])
+    assert find_sun(soft, mask, FLOOR_FROM_IMAGE, (0.0, 0.0), walls, settings=fine_only) is None
+    sun = find_sun(soft, mask, FLOOR_FROM_IMAGE, (0.0, 0.0), walls)
+    axis = math.degrees(math.atan2(sun.axes_xy[0][1], sun.axes_xy[0][0])) % 180
+    assert abs(axis - 30.0) < 2.0
+
+
 @pytest.mark.parametrize("kind", ["planks", "plain"])
 def test_no_sun_on_planks_or_a_plain_floor(rng, kind):
     x, y = _floor_points()
