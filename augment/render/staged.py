@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+import skimage.measure
 from numba import njit, prange
 
 from layout.fileio import write_atomic
@@ -963,12 +964,14 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
                          ao.astype(np.float32))
 
 
-def _wall_gain(shading: _FloorShading, casters, walls_m, lighting: Lighting, K, pose, box,
+def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Lighting, K, pose, box,
                settings: StagedSettings):
     """What the photo's pixels that are not floor are multiplied by for the furniture's
     shadows where they show a wall, (height, width) float32 over ``box`` (x0, y0, x1, y1;
-    undistorted pixels); and the share of each pixel whose ray meets the floor before any
-    wall (floor the mask left out: it takes the floor's gain), (height, width) float32.
+    undistorted pixels); and the share of each pixel whose ray meets the floor inside
+    ``floor_m`` (n, 2) before any wall (floor the mask left out: it takes the floor's
+    gain), (height, width) float32. Past the floor's outline where it is not a wall (the
+    photo's edge), what stands is not known: 1.
 
     A wall point (the first of ``walls_m`` (k, 2, 2) a pixel's ray meets) takes the key
     light's shadow, by the key light's share of the wall's light (it depends on how
@@ -1032,7 +1035,10 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, lighting: Lighting, K, 
         sigma = settings.wall_smooth_px / step
         smooth = cv2.GaussianBlur(ratio * wall, (0, 0), sigma) / np.maximum(cv2.GaussianBlur(wall, (0, 0), sigma), 1e-6)
         gain = np.where(wall > 0, smooth, 1.0).astype(np.float32)
-    floor = (t_floor < t_wall).reshape(shape).astype(np.float32)
+    floor = t_floor < t_wall
+    hit = cam[:2] + rays[floor, :2] * (t_floor[floor] / reach[floor])[:, None]
+    floor[floor] = skimage.measure.points_in_poly(hit, floor_m)
+    floor = floor.reshape(shape).astype(np.float32)
     up = np.array([[1.0 / step, 0, 0], [0, 1.0 / step, 0]])
     return tuple(cv2.warpAffine(a, up, (bw, bh), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                                 borderMode=cv2.BORDER_REPLICATE) for a in (gain, floor))
@@ -1529,7 +1535,8 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     # What the mask says is not floor: walls take shadows too (only where the walls are known).
     if floor_mask is not None and walls is not None and len(walls):
         wall_gain, floor_share = _wall_gain(shading, casters, _walls_run_on(floor_polygon, settings.wall_run_on_m),
-                                            lighting, K, pose, box, settings)
+                                            np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon)), lighting,
+                                            K, pose, box, settings)
         other = floor_share * gain + (1.0 - floor_share) * wall_gain
     else:
         other = np.ones_like(gain)

@@ -374,6 +374,15 @@ def test_a_box_by_a_wall_casts_its_shadow_on_the_wall_where_the_light_would_put_
     at = strip & (staged.alpha == 0)
     assert at.sum() >= 50 and np.median(staged.gain[at]) < 0.97
     assert np.abs(staged.gain[at] - full.gain[at]).max() < 0.03
+    # The far edge where the floor leaves the view rather than at a wall: what stands past
+    # it is not known, and keeps its light, though the floor's raster runs on there.
+    far = [bool(np.all(np.abs((np.roll(poly, -1, axis=0)[k] - cam[:2]) @ forward - wall_at) < 1e-6)
+                and np.all(np.abs((poly[k] - cam[:2]) @ forward - wall_at) < 1e-6)) for k in range(4)]
+    open_far = FloorPolygon(poly, tuple("far" if f else "boundary" for f in far), 0.0, "")
+    light = Lighting((0.8, 0.78, 0.75), tuple(d), 0.5, 0.02, (0.3, 0.25, 0.2), "test")
+    staged = render_staged(image, calibration, [item], renderer, assets={"test_box": _box_parts()}, lighting=light,
+                           seed=0, floor_mask=mask, floor_polygon=open_far)
+    assert sum(far) == 1 and np.all(staged.gain[px[shadowed, 1], px[shadowed, 0]] == 1.0)
 
 
 def test_walls_run_on_past_the_photos_edge_only():
