@@ -1537,15 +1537,15 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         wall_gain, floor_share = _wall_gain(shading, casters, _walls_run_on(floor_polygon, settings.wall_run_on_m),
                                             np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon)), lighting,
                                             K, pose, box, settings)
-        other = floor_share * gain + (1.0 - floor_share) * wall_gain
     else:
-        other = np.ones_like(gain)
+        wall_gain, floor_share = np.ones_like(gain), np.zeros_like(gain)
     if distorted:
         mx, my = map_x - box[0], map_y - box[1]
         rgba, low = (cv2.remap(a, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
                      for a in (rgba, low))
-        gain, other = (cv2.remap(g, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
-                       for g in (gain, other))
+        gain, wall_gain = (cv2.remap(g, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
+                           for g in (gain, wall_gain))
+        floor_share = cv2.remap(floor_share, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
     timings["shadows"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -1556,7 +1556,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     full_alpha = np.zeros((h, w), np.float32)
     full_gain = np.ones((h, w), np.float32)
     floor_roi = floor_mask[y0:y1, x0:x1] if floor_mask is not None else np.ones((1, 1), bool)
-    _composite(image[y0:y1, x0:x1], rgba, low, gain, other, floor_roi, floor_mask is not None,
+    _composite(image[y0:y1, x0:x1], rgba, low, gain, wall_gain, floor_share, floor_roi, floor_mask is not None,
                out[y0:y1, x0:x1], full_alpha[y0:y1, x0:x1], full_gain[y0:y1, x0:x1])
     lay = _layer(out, full_alpha, full_gain, image) if layer else None
     timings["composite"] = time.perf_counter() - t
@@ -1593,20 +1593,21 @@ def _clear_above_horizon(gain, a, b, c, x0, y0):
 
 
 @njit(cache=True, parallel=True)
-def _composite(photo, rgba, low, gain, other, floor, use_floor, out, alpha_out, gain_out):
+def _composite(photo, rgba, low, gain, wall, share, floor, use_floor, out, alpha_out, gain_out):
     """One pass over the region: the photo times its shadow gain under what shows of it,
     the premultiplied furniture over it; floor-level furniture (``low``, 0-255) takes the
-    shadows too. With ``use_floor``, the floor's gain on floor pixels and ``other`` on the rest.
+    shadows too. With ``use_floor``, the floor's gain on floor pixels; on the rest the walls'
+    ``wall``, or the floor's where their ray meets the floor first (its ``share`` of them).
 
     photo, out : (h, w, 3) uint8; rgba : (h, w, 4) uint8 premultiplied; low : (h, w)
-    uint8; gain, other : (h, w) float32; floor : (h, w) bool; alpha_out, gain_out : (h, w)
+    uint8; gain, wall, share : (h, w) float32; floor : (h, w) bool; alpha_out, gain_out : (h, w)
     float32, written."""
     h, w = photo.shape[0], photo.shape[1]
     for i in prange(h):
         for j in range(w):
             g = gain[i, j]
             if use_floor and not floor[i, j]:
-                g = other[i, j]
+                g = share[i, j] * g + (1.0 - share[i, j]) * wall[i, j]
             a = rgba[i, j, 3] * (1.0 / 255.0)
             k = g * (1.0 - a)
             fg = 1.0 - low[i, j] * (1.0 / 255.0) * (1.0 - g)
