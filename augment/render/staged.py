@@ -736,6 +736,11 @@ class _Caster:
     z_bottom: float
     z_top: float
 
+    @property
+    def corners(self) -> np.ndarray:
+        """(k, 3) every point of the part: its vertices, or its triangles' corners."""
+        return self.points if self.triangles is None else self.triangles.reshape(-1, 3)
+
 
 def _casters(placed, settings: StagedSettings):
     out = []
@@ -752,6 +757,9 @@ def _casters(placed, settings: StagedSettings):
     return out
 
 
+_SUB = 4  # fixed-point bits for cv2's polygon filling
+
+
 @dataclass(frozen=True)
 class _FloorGrid:
     """A raster over the floor: cell (col, row) covers [origin + (col, row) * cell, + cell)."""
@@ -764,6 +772,11 @@ class _FloorGrid:
         """Continuous raster coordinates (col, row) of floor points; cell centers at +0.5."""
         return (np.asarray(xy)[..., :2] - self.origin_m) / self.cell_m
 
+    def fixed_px(self, xy) -> np.ndarray:
+        """Raster coordinates of floor points, cell centers at integers, in cv2's fixed
+        point (``_SUB`` fractional bits), int32."""
+        return np.rint((self.to_px(xy) - 0.5) * (1 << _SUB)).astype(np.int32)
+
     def centers_m(self) -> np.ndarray:
         """(rows * cols, 2) floor points of the cell centres, row by row."""
         rows, cols = np.mgrid[0:self.shape[0], 0:self.shape[1]]
@@ -774,9 +787,6 @@ class _FloorGrid:
         """3x3 map from raster (col, row, 1), cell centers at integers, to floor (x, y, 1)."""
         return np.array([[self.cell_m, 0, self.origin_m[0] + 0.5 * self.cell_m],
                          [0, self.cell_m, self.origin_m[1] + 0.5 * self.cell_m], [0, 0, 1.0]])
-
-
-_SUB = 4  # fixed-point bits for cv2's polygon filling
 
 
 class _Footprints:
@@ -800,7 +810,7 @@ class _Footprints:
                 xy = _from_source(pts, source)
             else:
                 xy = pts[:, :2] if direction is None else pts[:, :2] - (pts[:, 2:3] / direction[2]) * direction[:2]
-            fixed = np.rint((grid.to_px(xy) - 0.5) * (1 << _SUB)).astype(np.int32)
+            fixed = grid.fixed_px(xy)
             if convex:
                 for part in np.split(fixed, self.ends[:-1]):
                     cv2.fillConvexPoly(raster, cv2.convexHull(part), 1, lineType=cv2.LINE_8, shift=_SUB)
@@ -929,8 +939,7 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
         for b in np.unique(bins[counted]):
             raster[:] = 0
             # Footprints only: every part as its convex hull seen from above.
-            _Footprints([_Caster(casters[i].points if casters[i].triangles is None
-                                 else casters[i].triangles.reshape(-1, 3), None, 0.0, 0.0)
+            _Footprints([_Caster(casters[i].corners, None, 0.0, 0.0)
                          for i in np.flatnonzero(bins == b)]).fill(raster, coarse)
             z = 0.5 * (bins_m[b] + min(bins_m[b + 1], 2.5))
             blocked = _blur(raster.astype(np.float32), sigma_of(z) / coarse.cell_m)
@@ -1011,9 +1020,8 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Ligh
         # What stands at the wall's foot, and how high: the occlusion fades above it.
         top = np.zeros(grid.shape, np.float32)
         for c in sorted(casters, key=lambda c: c.z_top):
-            pts = c.points if c.triangles is None else c.triangles.reshape(-1, 3)
-            fixed = np.rint((grid.to_px(pts[:, :2]) - 0.5) * (1 << _SUB)).astype(np.int32)
-            cv2.fillConvexPoly(top, cv2.convexHull(fixed), float(c.z_top), lineType=cv2.LINE_8, shift=_SUB)
+            hull = cv2.convexHull(grid.fixed_px(c.corners))
+            cv2.fillConvexPoly(top, hull, float(c.z_top), lineType=cv2.LINE_8, shift=_SUB)
         r = max(1, round(settings.wall_ao_reach_m / grid.cell_m))
         top = sample(cv2.dilate(top, np.ones((2 * r + 1, 2 * r + 1), np.uint8)), foot, 0.0)
         above = np.maximum(p[:, 2] - top, 0.0) / settings.wall_ao_fade_m
