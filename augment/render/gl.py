@@ -141,6 +141,56 @@ def _with_shadow_offset(shadow_pass):
     return offset_pass
 
 
+# What pyrender's renderer holds of its offscreen framebuffer, the size last.
+_FRAMEBUFFER_FIELDS = ("_main_fb", "_main_cb", "_main_db", "_main_fb_ms", "_main_cb_ms", "_main_db_ms",
+                       "_main_fb_dims")
+_NO_FRAMEBUFFER = (None,) * 6 + ((None, None),)
+
+
+def _reuse_framebuffers(renderer, spares: int = 2, slack: float = 1.6) -> None:
+    """Make one pyrender renderer draw into a framebuffer it has whenever one is large enough.
+
+    pyrender makes a new framebuffer (4x multisampled) whenever the viewport's size
+    changes, and each staged photo has sizes of its own: the region its furniture
+    covers, then the light's and the lamps' square depth views. On llvmpipe a new one
+    costs 30-100 ms at a few megapixels. A framebuffer of at most ``slack`` times the
+    viewport's area is drawn into from its corner instead (:meth:`Renderer.render` crops
+    the read); the last ``spares`` others are kept for later, and go with the context."""
+    configure, delete = renderer._configure_main_framebuffer, renderer._delete_main_framebuffer
+    kept: dict = {}  # size -> the fields' values, oldest first
+
+    def fits(size, want):
+        return (size[0] >= want[0] and size[1] >= want[1]
+                and size[0] * size[1] <= slack * want[0] * want[1])
+
+    def fields():
+        return tuple(getattr(renderer, name) for name in _FRAMEBUFFER_FIELDS)
+
+    def put(values):
+        for name, value in zip(_FRAMEBUFFER_FIELDS, values):
+            setattr(renderer, name, value)
+
+    def configure_reusing():
+        want = (renderer.viewport_width, renderer.viewport_height)
+        if renderer._main_fb is not None and fits(renderer._main_fb_dims, want):
+            return
+        if renderer._main_fb is not None:
+            kept[renderer._main_fb_dims] = fields()
+        put(_NO_FRAMEBUFFER)
+        usable = [size for size in kept if fits(size, want)]
+        if usable:
+            put(kept.pop(min(usable, key=lambda size: size[0] * size[1])))
+        else:
+            configure()
+        while len(kept) > spares:
+            current = fields()
+            put(kept.pop(next(iter(kept))))
+            delete()
+            put(current)
+
+    renderer._configure_main_framebuffer = configure_reusing
+
+
 class Renderer:
     """One offscreen GL context, reused for every image (contexts are costly and some
     drivers fail when they are re-created). Use as a context manager.
@@ -168,6 +218,7 @@ class Renderer:
         """Stager's changes to a new context's renderer (pyrender's context is current)."""
         self._offscreen._renderer._shadow_mapping_pass = _with_shadow_offset(
             self._offscreen._renderer._shadow_mapping_pass)
+        _reuse_framebuffers(self._offscreen._renderer)
         # pyrender uploads textures as tightly packed rows; GL's default assumes rows padded
         # to 4 bytes, which skews any RGB texture whose width is not a multiple of 4 and
         # reads past the end of its buffer.
@@ -199,7 +250,13 @@ class Renderer:
         self._offscreen.viewport_height = int(height_px)
         platform = self._offscreen._platform
         if platform.supports_framebuffers():
-            return self._offscreen.render(scene, flags=flags, seg_node_map=seg_node_map)
+            out = self._offscreen.render(scene, flags=flags, seg_node_map=seg_node_map)
+            # Drawn from the bottom-left corner of a framebuffer that may be larger: read flipped.
+            fb_h = self._offscreen._renderer._main_fb_dims[1]
+            window = np.s_[fb_h - int(height_px):, :int(width_px)]
+            if isinstance(out, tuple):
+                return tuple(np.ascontiguousarray(a[window]) for a in out)
+            return np.ascontiguousarray(out[window])
         # OSMesa draws into a buffer of fixed size, read back as RGB. For another size
         # pyrender makes a new context, which would lose the changes above: made here.
         if (platform.viewport_width, platform.viewport_height) != (int(width_px), int(height_px)):

@@ -220,14 +220,23 @@ def apply_look(rgba: np.ndarray, look: PhotoLook, render_blur_px: float, seed: i
     (h, w, 4) uint8
     """
     settings = RENDER.look if settings is None else settings
-    extra = math.sqrt(max(look.blur_px ** 2 - render_blur_px ** 2, 0.0))
-    out = cv2.GaussianBlur(rgba, (0, 0), extra) if extra > settings.min_extra_blur_px else rgba.copy()
+    out = blur_like_photo(rgba, look, render_blur_px, settings)
     if max(look.noise_rgb) > settings.min_noise_levels:
         rng = np.random.default_rng(seed)
         n = settings.noise_tile_px
         tile = rng.standard_normal((n, n, 3), dtype=np.float32) * np.asarray(look.noise_rgb, np.float32)
         _add_noise(out, tile, int(rng.integers(n)), int(rng.integers(n)))
     return out
+
+
+def blur_like_photo(image: np.ndarray, look: PhotoLook, render_blur_px: float,
+                    settings: LookSettings | None = None) -> np.ndarray:
+    """A copy of a render-sized ``image`` (h, w) or (h, w, c) blurred from the render's edge
+    spread (``render_blur_px``, photo pixels) up to the photo's: what :func:`apply_look`
+    does to the layer, for planes that go with it."""
+    settings = RENDER.look if settings is None else settings
+    extra = math.sqrt(max(look.blur_px ** 2 - render_blur_px ** 2, 0.0))
+    return cv2.GaussianBlur(image, (0, 0), extra) if extra > settings.min_extra_blur_px else image.copy()
 
 
 @njit(cache=True, parallel=True)

@@ -62,7 +62,11 @@ class StagedSettings:
     occlusion_long_px: int = 800  # the floor mask is read at most this large
     render_budget_px: float = 1.4e6  # rendered pixels (after supersampling) per image
     max_supersample: float = 2.0  # rendered pixels per photo pixel along each axis, at most
-    min_render_scale: float = 0.6  # large photos are rendered at this scale at least, then upsampled
+    min_render_scale: float = 0.6  # large photos are rendered at this scale at least, then upsampled ...
+    # ... or lower, to 0.35, where the photo's own edge spread is wider than the render's
+    # would be (its share below): the look's blur then hides what a finer render adds.
+    blurred_render_scale: float = 0.35
+    render_blur_share: float = 0.7
     margin_px: int = 6  # around the region furniture and shadows can reach
     sun_from_floor: bool = True  # the key light from sunlit patches on the floor when they show (else a window's)
     sun_elevation_deg: float = 35.0  # the sun's height when its patches give only its direction

@@ -55,7 +55,7 @@ from ..photo.io import JPEG_QUALITY, encode_image
 from .furniture import furniture_for, part_texture, placed_items, world_from_item
 from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from .lamps import find_lamps
-from .look import PhotoLook, apply_look, estimate_look
+from .look import PhotoLook, apply_look, blur_like_photo, estimate_look
 from .settings import RENDER, StagedSettings
 from .sun import find_sun, first_hit_m, linear_luminance, wall_angles_rad
 
@@ -1167,20 +1167,33 @@ def _first_wall(walls_m, rays_floor, cam_xy):
     none; and that wall's index (n,), -1 if none.
 
     walls_m : (k, 2, 2) segments; rays_floor : (n, 3) ray directions in the floor frame."""
-    d = rays_floor[:, :2] / np.maximum(np.linalg.norm(rays_floor[:, :2], axis=1), 1e-12)[:, None]
-    best = np.full(len(d), np.inf)
-    which = np.full(len(d), -1, np.int64)
-    for k, (a, b) in enumerate(walls_m):
-        e = b - a
-        rhs = a - cam_xy
-        denom = -d[:, 0] * e[1] + d[:, 1] * e[0]
-        safe = np.where(np.abs(denom) > 1e-12, denom, 1.0)
-        t = (-rhs[0] * e[1] + rhs[1] * e[0]) / safe
-        u = (d[:, 0] * rhs[1] - d[:, 1] * rhs[0]) / safe
-        hit = (np.abs(denom) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1) & (t < best)
-        best = np.where(hit, t, best)
-        which[hit] = k
+    rays = np.ascontiguousarray(np.asarray(rays_floor)[:, :2], dtype=np.float64)
+    best = np.full(len(rays), np.inf)
+    which = np.full(len(rays), -1, np.int64)
+    _first_wall_kernel(np.ascontiguousarray(walls_m, dtype=np.float64), rays,
+                       float(cam_xy[0]), float(cam_xy[1]), best, which)
     return best, which
+
+
+@njit(cache=True, parallel=True)
+def _first_wall_kernel(walls, rays, cx, cy, best, which):
+    """Per ray (its horizontal direction), the nearest wall it crosses ahead: into ``best``, ``which``."""
+    for i in prange(rays.shape[0]):
+        n = math.hypot(rays[i, 0], rays[i, 1])
+        if n < 1e-12:
+            n = 1e-12
+        dx, dy = rays[i, 0] / n, rays[i, 1] / n
+        for k in range(walls.shape[0]):
+            ex, ey = walls[k, 1, 0] - walls[k, 0, 0], walls[k, 1, 1] - walls[k, 0, 1]
+            rx, ry = walls[k, 0, 0] - cx, walls[k, 0, 1] - cy
+            denom = ey * -dx + dy * ex
+            if abs(denom) <= 1e-12:
+                continue
+            t = (ey * -rx + ry * ex) / denom
+            u = (dx * ry - dy * rx) / denom
+            if t > 0.0 and 0.0 <= u <= 1.0 and t < best[i]:
+                best[i] = t
+                which[i] = k
 
 
 def wall_segments(floor_polygon) -> np.ndarray:
@@ -1313,11 +1326,15 @@ def _undistort_map(K, dist, roi, step=8):
     return mx, my
 
 
-def _render_scale(box_px, supersample, settings: StagedSettings):
+def _render_scale(box_px, supersample, blur_px, settings: StagedSettings):
     if supersample is not None:
         return float(supersample)
+    lowest = settings.min_render_scale
+    if blur_px > 0:  # a render this coarse is still sharper than the photo: the look blurs it to match
+        lowest = float(np.clip(settings.render_edge_px / (settings.render_blur_share * blur_px),
+                               settings.blurred_render_scale, lowest))
     s = math.sqrt(settings.render_budget_px / box_px)
-    s = float(np.clip(s, settings.min_render_scale, settings.max_supersample))
+    s = float(np.clip(s, lowest, settings.max_supersample))
     if 0.85 <= s < 1.3:
         return 1.0  # resampling by a few percent would blur more than it smooths
     return round(s * 4) / 4 if s > 1 else s
@@ -1368,7 +1385,9 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     supersample : float, optional
         Rendered pixels per photo pixel along each axis. Default: as many as
         ``settings.render_budget_px`` allows over the region furniture and shadows reach, up
-        to 2 (larger photos are rendered below 1 and upsampled); the renderer's 4x
+        to 2. Larger photos are rendered below 1 and upsampled: down to
+        ``settings.min_render_scale``, or lower where the photo's edge spread
+        (``look.blur_px``) is wider than the coarser render's. The renderer's 4x
         multisampling antialiases edges in any case.
     self_shadows : bool
         Shadows of the key light on the furniture itself (from a depth map seen from
@@ -1425,7 +1444,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     else:
         box = roi
     bw, bh = box[2] - box[0], box[3] - box[1]
-    s = _render_scale(bw * bh, supersample, settings)
+    s = _render_scale(bw * bh, supersample, look.blur_px, settings)
     rw, rh = max(1, round(bw * s)), max(1, round(bh * s))
     Kr = _scaled_K(K - np.array([[0, 0, box[0]], [0, 0, box[1]], [0, 0, 0]]), 1.0)
     Kr[0, 0] *= rw / bw
@@ -1471,8 +1490,9 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     world = (R.T.astype(np.float32) @ (rays * d - tvec[:, None].astype(np.float32))).T
     if self_shadows:
         corners = np.concatenate([_reach_points([(it, f)], lighting, settings)[:8] for it, f in placed])
-        view = _light_view(renderer, fulls, lighting, corners.min(axis=0), corners.max(axis=0),
-                           2048 if rw * rh > 2.5e6 else 1024)
+        # 1024 texels a side at any photo size: a large render is tested on every third
+        # pixel below, about as coarse as these texels on a 12 MP photo.
+        view = _light_view(renderer, fulls, lighting, corners.min(axis=0), corners.max(axis=0), 1024)
         radius_px = float(np.clip(0.3 * math.tan(lighting.softness_rad) / view.texel_m, 1.0, 8.0))
         # Tested on every second or third pixel of large renders (the shadows are soft).
         step = 3 if rw * rh > 2.5e6 else 2 if rw * rh > 6e5 else 1
@@ -1558,6 +1578,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
 
     t = time.perf_counter()
     rgba = apply_look(rgba, look, settings.render_edge_px / s, seed)
+    low = blur_like_photo(low, look, settings.render_edge_px / s)  # as soft as the rug's edges it marks
     timings["look"] = time.perf_counter() - t
 
     t = time.perf_counter()

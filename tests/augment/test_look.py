@@ -9,7 +9,8 @@ import pytest
 
 from augment.render.furniture import PlacedItem
 from augment.render.gl import Renderer
-from augment.render.look import CLEAN, PhotoLook, apply_look, edge_sigma, estimate_blur, estimate_look, estimate_noise
+from augment.render.look import (CLEAN, PhotoLook, apply_look, blur_like_photo, edge_sigma, estimate_blur,
+                                 estimate_look, estimate_noise)
 from augment.render.staged import render_staged
 from tests.augment.test_render import _truth_calibration
 
@@ -114,6 +115,20 @@ def test_the_look_given_to_a_layer():
     edge = out[60, 30:50].astype(np.float64)
     np.testing.assert_allclose(edge[:, 0], edge[:, 3] * 100 / 255, atol=4 + 3 * 2.0)
     np.testing.assert_array_equal(apply_look(rgba, CLEAN, 0.5), rgba)
+
+
+def test_a_plane_that_goes_with_the_layer_is_blurred_as_the_layer():
+    """The mark of floor-level furniture (rugs), render-sharp (sigma 0.8), comes out with the
+    photo's edge spread (2.5): sqrt(0.8^2 + extra^2) = 2.5; not at all for a sharp photo."""
+    step = np.zeros((40, 80), np.uint8)
+    step[:, 40:] = 255
+    step = cv2.GaussianBlur(step, (0, 0), 0.8)
+    before = step.copy()
+    out = blur_like_photo(step, PhotoLook((1.0, 1.0, 1.0), 2.5, 20), render_blur_px=0.8)
+    np.testing.assert_array_equal(step, before)
+    sigma, _ = edge_sigma(out[20, 20:61].astype(np.float64))
+    assert sigma == pytest.approx(2.5, rel=0.1)
+    np.testing.assert_array_equal(blur_like_photo(step, CLEAN, 0.8), step)
 
 
 def test_staged_furniture_gets_the_photos_noise_and_sharpness():

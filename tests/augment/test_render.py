@@ -20,8 +20,8 @@ from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furnitur
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
-from augment.render.staged import (Lighting, _Caster, _floor_gain, _roll_off, _walls_run_on, estimate_lighting,
-                                   render_staged, wall_segments, write_jpeg)
+from augment.render.staged import (Lighting, _Caster, _floor_gain, _render_scale, _roll_off, _walls_run_on,
+                                   estimate_lighting, render_staged, wall_segments, write_jpeg)
 from layout.catalog import CATALOG
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -166,6 +166,19 @@ def test_unit_cube_at_the_board_origin_covers_exactly_its_hull(renderer, room_sm
     assert not (wrong & ~_band(expected)).any(), "pixels off the cube's outline differ"
     # On the outline the 4x multisampled coverage is the pixel's share of the cube.
     assert abs(staged.alpha.sum() - expected.sum()) < 0.005 * expected.sum()
+
+
+def test_a_blurrier_photo_is_rendered_coarser_but_never_sharper_than_it_needs():
+    """The render scale of a 12 MP region: 0.6 by default; where the photo's edge spread
+    is wide, low enough that the render's (0.55 px / scale) stays at 0.7 of it; never
+    below 0.35; a small region keeps its supersampling."""
+    st = RENDER.staged
+    assert _render_scale(12e6, None, 0.0, st) == pytest.approx(0.6)
+    assert _render_scale(12e6, None, 1.0, st) == pytest.approx(0.6)
+    assert _render_scale(12e6, None, 1.5, st) == pytest.approx(0.55 / (0.7 * 1.5))
+    assert _render_scale(12e6, None, 4.0, st) == pytest.approx(0.35)
+    assert _render_scale(0.3e6, None, 4.0, st) == 2.0
+    assert _render_scale(12e6, 1.5, 4.0, st) == 1.5
 
 
 def test_distorted_lens_follows_the_distortion(renderer):
