@@ -36,9 +36,11 @@ $(STAMP): pyproject.toml | system-packages
 
 # Compile the solver's and the renderer's kernels into numba's cache now, by furnishing a
 # sample photo once, so that the first `stage furnish` a user runs is as quick as any
-# other; again whenever a kernel's source changes.
+# other; again whenever a kernel's source changes. Python's bytecode too: with
+# PYTHONDONTWRITEBYTECODE set (as in many containers) every command would compile it again.
 $(COMPILED): $(STAMP) $(KERNELS)
 	@echo "compiling the layout solver and the renderer (numba, once: 1-2 minutes)"
+	$(PY) -m compileall -q augment layout
 	@tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && \
 	  $(VENV)/bin/stage furnish samples/photos/room_4.jpg --suggestions 1 --out "$$tmp/out" --quiet \
 	    >"$$tmp/log" 2>&1 || { cat "$$tmp/log"; exit 1; }

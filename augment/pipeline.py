@@ -56,6 +56,7 @@ from __future__ import annotations
 
 import importlib
 import math
+import os
 import platform
 import sys
 import time
@@ -77,6 +78,7 @@ from .camera.calibrate import calibrate_file
 from .draw.calibration import calibration_overlay
 from .draw.floor import floor_overlay
 from .draw.height import height_overlay
+from .draw.settings import DRAW
 from .draw.sheet import contact_sheet
 from .errors import FurnishError
 from .floor.model import load_floor_model
@@ -301,7 +303,7 @@ def measure(photo, board, *, camera=None, model=None, floor_mask=None, clicks=No
     clock = _Clock(_Progress(False, 0)) if clock is None else clock
     with clock("calibrate"):
         image = read_photo(photo)
-        calibration = calibrate_file(photo, board, profile=camera)
+        calibration = calibrate_file(photo, board, profile=camera, image=image)
     clock.progress.step()
     with clock("segment"):
         if floor_mask is None:
@@ -333,12 +335,18 @@ def measure(photo, board, *, camera=None, model=None, floor_mask=None, clicks=No
 def overlays(m: Measurement, doors=None, windows_px=()) -> dict:
     """The three overlays of a measurement, ``{file name: (h, w, 3) uint8}``; ``doors``
     are the ones the user marked or, without, those found in the photo; ``windows_px``
-    the corners of the windows found (:class:`augment.room.openings.FoundWindow`)."""
+    the corners of the windows found (:class:`augment.room.openings.FoundWindow`). Over a
+    photo larger than ``DRAW.overlay_long_px`` on its long side they are shrunk to that."""
     seg = m.segmentation
-    return {"overlay_calibration.png": calibration_overlay(m.image, m.calibration),
-            "overlay_floor.png": floor_overlay(m.image, seg.mask, m.floor, m.calibration, seg.doubted, seg.clicks,
-                                               seg.doubt_px, doors, windows_px),
-            "overlay_height.png": height_overlay(m.image, m.calibration, m.height)}
+    pictures = {"overlay_calibration.png": calibration_overlay(m.image, m.calibration),
+                "overlay_floor.png": floor_overlay(m.image, seg.mask, m.floor, m.calibration, seg.doubted,
+                                                   seg.clicks, seg.doubt_px, doors, windows_px),
+                "overlay_height.png": height_overlay(m.image, m.calibration, m.height)}
+    scale = DRAW.overlay_long_px / max(m.image.shape[:2])
+    if scale >= 1:
+        return pictures
+    return {name: cv2.resize(p, (round(p.shape[1] * scale), round(p.shape[0] * scale)), interpolation=cv2.INTER_AREA)
+            for name, p in pictures.items()}
 
 
 # --------------------------------------------------------------------------------------
@@ -628,6 +636,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         titled = source_name if layout is None else f"layout {Path(layout).name}"
         layout_files = background.submit(layout_report.output_files, layouts, reports,
                                          title=f"{photo.stem}, {titled}: ")
+        # Drawn while the main thread renders: they need nothing from the render.
+        pictures = background.submit(overlays, m, doors if marked else found_px,
+                                     [w.corners_px for w in found_windows])
         with clock("render"):
             render = render_module.result()
             own = renderer is None
@@ -662,11 +673,11 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 scenes.append(scene_glb(m.floor, room_height, lay, seed=_seed(lay, seed), cache=cache,
                                         assets=user_models, style=style_name))
                 bar.step()
-        with clock("overlays"):
-            pictures = overlays(m, doors if marked else found_px, [w.corners_px for w in found_windows])
+        with clock("overlays"):  # the contact sheet, and the wait for the overlays
             sheet = contact_sheet(staged)
+            pictures = pictures.result()
         bar.step()
-        with clock("plans"):  # only what the plans take beyond the stages above
+        with clock("plans"):  # only the wait for the plans beyond the stages above
             layout_files = layout_files.result()
     finally:
         # On an error nothing waits for the import or the plans still running.
@@ -699,18 +710,19 @@ def output_files(result: FurnishResult) -> dict[str, bytes]:
     writes; a batch worker hands these to the driver that writes the folder)."""
     import json
 
-    files = {}
-    for k, img in enumerate(result.staged, start=1):
-        files[f"staged_{k}.jpg"] = encode_image(img, ".jpg")
-    for k, rgba in enumerate(result.layers, start=1):
-        files[f"staged_{k}_layer.png"] = encode_image(rgba, ".png")
-    files["staged_all.jpg"] = encode_image(result.contact_sheet, ".jpg")
-    for name, data in result.layout_files.items():
-        files[name] = data.encode() if isinstance(data, str) else data
-    for k, glb in enumerate(result.scenes_glb, start=1):
-        files[f"scene_{k}.glb"] = glb
-    for name, img in result.overlays.items():
-        files[name] = encode_image(img, ".png")
+    images = {f"staged_{k}.jpg": img for k, img in enumerate(result.staged, start=1)}
+    images.update({f"staged_{k}_layer.png": rgba for k, rgba in enumerate(result.layers, start=1)})
+    images["staged_all.jpg"] = result.contact_sheet
+    images.update(result.overlays)
+    # OpenCV encodes without the GIL: the images of a 12 MP photo take a second on one core.
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="encode") as pool:
+        encoded = {name: pool.submit(encode_image, img, Path(name).suffix) for name, img in images.items()}
+        files = {name: encoded[name].result() for name in images if not name.startswith("overlay_")}
+        for name, data in result.layout_files.items():
+            files[name] = data.encode() if isinstance(data, str) else data
+        for k, glb in enumerate(result.scenes_glb, start=1):
+            files[f"scene_{k}.glb"] = glb
+        files.update({name: encoded[name].result() for name in result.overlays})
     files["report.json"] = (json.dumps(result.report, indent=2, allow_nan=False) + "\n").encode()
     return files
 

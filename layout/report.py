@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import camera, metrics, plot
+from . import camera, metrics
 from .errors import LayoutError
 from .fileio import folder_problem, replaced_input, staged_folder
 from .geometry import SIDE_NAMES
@@ -152,6 +152,8 @@ def output_files(layouts, reports=None, title=""):
         ``layout_K.json`` and ``plan_K.png`` for each K, then ``energy.png`` (of
         solved layouts only).
     """
+    from . import plot  # matplotlib takes half a second to import: only once plans are drawn
+
     reports = [evaluate(lay) for lay in layouts] if reports is None else list(reports)
     files = {}
     for k, (lay, rep) in enumerate(zip(layouts, reports), start=1):

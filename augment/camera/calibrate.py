@@ -584,9 +584,10 @@ def _exif_or_board(exif: Intrinsics, detection, board: Board, size_px, where: st
     return seen
 
 
-def calibrate_file(path, board: Board, profile=None) -> Calibration:
-    """Calibrate a photo file: a camera profile first, then EXIF, then the board alone."""
-    image = read_photo(path)
+def calibrate_file(path, board: Board, profile=None, image=None) -> Calibration:
+    """Calibrate a photo file: a camera profile first, then EXIF, then the board alone.
+    ``image`` is the photo as :func:`read_photo` reads ``path``, when already read."""
+    image = read_photo(path) if image is None else image
     size_px = (image.shape[1], image.shape[0])
     if profile is not None:
         intrinsics = load_profile(profile, size_px, exif_orientation(path))

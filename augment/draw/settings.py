@@ -85,6 +85,9 @@ class DrawSettings:
     floor: FloorOverlaySettings = field(default_factory=FloorOverlaySettings)
     height: HeightOverlaySettings = field(default_factory=HeightOverlaySettings)
     sheet: SheetSettings = field(default_factory=SheetSettings)
+    # Overlays are for checking by eye: drawn over a larger photo, they are shrunk to this
+    # on the photo's long side (a 12 MP one is 10 MB of PNG and half a second to encode).
+    overlay_long_px: int = 2048
 
 
 DRAW = DrawSettings()
