@@ -336,17 +336,20 @@ def overlays(m: Measurement, doors=None, windows_px=()) -> dict:
     """The three overlays of a measurement, ``{file name: (h, w, 3) uint8}``; ``doors``
     are the ones the user marked or, without, those found in the photo; ``windows_px``
     the corners of the windows found (:class:`augment.room.openings.FoundWindow`). Over a
-    photo larger than ``DRAW.overlay_long_px`` on its long side they are shrunk to that."""
+    photo larger than ``DRAW.overlay_long_px`` on its long side, the calibration's and the
+    height's are shrunk to that; the floor's stays the photo's size: clicks that correct
+    the floor are given in its pixels."""
     seg = m.segmentation
-    pictures = {"overlay_calibration.png": calibration_overlay(m.image, m.calibration),
-                "overlay_floor.png": floor_overlay(m.image, seg.mask, m.floor, m.calibration, seg.doubted,
-                                                   seg.clicks, seg.doubt_px, doors, windows_px),
-                "overlay_height.png": height_overlay(m.image, m.calibration, m.height)}
-    scale = DRAW.overlay_long_px / max(m.image.shape[:2])
-    if scale >= 1:
-        return pictures
-    return {name: cv2.resize(p, (round(p.shape[1] * scale), round(p.shape[0] * scale)), interpolation=cv2.INTER_AREA)
-            for name, p in pictures.items()}
+    scale = min(1.0, DRAW.overlay_long_px / max(m.image.shape[:2]))
+
+    def shrunk(p):
+        size = (round(p.shape[1] * scale), round(p.shape[0] * scale))
+        return p if scale == 1.0 else cv2.resize(p, size, interpolation=cv2.INTER_AREA)
+
+    return {"overlay_calibration.png": shrunk(calibration_overlay(m.image, m.calibration)),
+            "overlay_floor.png": floor_overlay(m.image, seg.mask, m.floor, m.calibration, seg.doubted, seg.clicks,
+                                               seg.doubt_px, doors, windows_px),
+            "overlay_height.png": shrunk(height_overlay(m.image, m.calibration, m.height))}
 
 
 # --------------------------------------------------------------------------------------

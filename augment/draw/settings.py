@@ -85,8 +85,8 @@ class DrawSettings:
     floor: FloorOverlaySettings = field(default_factory=FloorOverlaySettings)
     height: HeightOverlaySettings = field(default_factory=HeightOverlaySettings)
     sheet: SheetSettings = field(default_factory=SheetSettings)
-    # Overlays are for checking by eye: drawn over a larger photo, they are shrunk to this
-    # on the photo's long side (a 12 MP one is 10 MB of PNG and half a second to encode).
+    # The calibration and height overlays are for checking by eye: drawn over a larger photo,
+    # they are shrunk to this on its long side (at 12 MP, 10 MB of PNG and 0.5 s to encode).
     overlay_long_px: int = 2048
 
 
