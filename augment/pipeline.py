@@ -150,6 +150,8 @@ class FurnishResult(Measurement):
     contact_sheet : (H, W, 3) uint8
     overlays : dict of str -> (h', w', 3) uint8
         ``overlay_calibration.png``, ``overlay_floor.png``, ``overlay_height.png``.
+    overlay_png : dict of str -> bytes
+        The same as PNG files (encoded while the photos were rendered).
     scenes_glb : list of bytes
         One glTF binary per suggestion.
     layout_files : dict of str -> bytes
@@ -184,6 +186,7 @@ class FurnishResult(Measurement):
     staged: list
     contact_sheet: np.ndarray
     overlays: dict
+    overlay_png: dict
     scenes_glb: list
     layout_files: dict
     assets: dict = field(default_factory=dict)
@@ -355,6 +358,12 @@ def overlays(m: Measurement, doors=None, windows_px=()) -> dict:
 # --------------------------------------------------------------------------------------
 # Reports
 # --------------------------------------------------------------------------------------
+
+def _drawn_overlays(m: Measurement, doors, windows_px) -> tuple[dict, dict]:
+    """:func:`overlays`, and the same as PNG files."""
+    pictures = overlays(m, doors, windows_px)
+    return pictures, {name: encode_image(picture, ".png") for name, picture in pictures.items()}
+
 
 def versions() -> dict:
     """Versions of Stager, Python and the libraries that shape the results."""
@@ -639,8 +648,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         titled = source_name if layout is None else f"layout {Path(layout).name}"
         layout_files = background.submit(layout_report.output_files, layouts, reports,
                                          title=f"{photo.stem}, {titled}: ")
-        # Drawn while the main thread renders: they need nothing from the render.
-        pictures = background.submit(overlays, m, doors if marked else found_px,
+        # Drawn and encoded while the main thread renders: they need nothing from the render.
+        pictures = background.submit(_drawn_overlays, m, doors if marked else found_px,
                                      [w.corners_px for w in found_windows])
         with clock("render"):
             render = render_module.result()
@@ -678,7 +687,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 bar.step()
         with clock("overlays"):  # the contact sheet, and the wait for the overlays
             sheet = contact_sheet(staged)
-            pictures = pictures.result()
+            pictures, overlay_png = pictures.result()
         bar.step()
         with clock("plans"):  # only the wait for the plans beyond the stages above
             layout_files = layout_files.result()
@@ -691,6 +700,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                            floor=m.floor, height=m.height, timings_s=timings, warnings=warnings,
                            room_height_m=room_height, source=source_name, spec=fitted, dropped=dropped,
                            layouts=layouts, reports=reports, staged=staged, contact_sheet=sheet, overlays=pictures,
+                           overlay_png=overlay_png,
                            scenes_glb=scenes, layout_files=layout_files, styles=styles[:len(layouts)],
                            assets={k: str(v) if isinstance(v, (str, Path)) else "parts" for k, v in
                                    (assets or {}).items()}, layers=staged_layers, erased=erased,
@@ -716,16 +726,15 @@ def output_files(result: FurnishResult) -> dict[str, bytes]:
     images = {f"staged_{k}.jpg": img for k, img in enumerate(result.staged, start=1)}
     images.update({f"staged_{k}_layer.png": rgba for k, rgba in enumerate(result.layers, start=1)})
     images["staged_all.jpg"] = result.contact_sheet
-    images.update(result.overlays)
     # OpenCV encodes without the GIL: the images of a 12 MP photo take a second on one core.
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1, thread_name_prefix="encode") as pool:
         encoded = {name: pool.submit(encode_image, img, Path(name).suffix) for name, img in images.items()}
-        files = {name: encoded[name].result() for name in images if not name.startswith("overlay_")}
-        for name, data in result.layout_files.items():
-            files[name] = data.encode() if isinstance(data, str) else data
-        for k, glb in enumerate(result.scenes_glb, start=1):
-            files[f"scene_{k}.glb"] = glb
-        files.update({name: encoded[name].result() for name in result.overlays})
+        files = {name: encoded[name].result() for name in images}
+    for name, data in result.layout_files.items():
+        files[name] = data.encode() if isinstance(data, str) else data
+    for k, glb in enumerate(result.scenes_glb, start=1):
+        files[f"scene_{k}.glb"] = glb
+    files.update(result.overlay_png)
     files["report.json"] = (json.dumps(result.report, indent=2, allow_nan=False) + "\n").encode()
     return files
 
