@@ -523,6 +523,9 @@ def test_browser_shows_a_job_sent_through_the_api(server, tmp_path):
             assert sent.status == 202, sent.text()
             job_id = sent.json()["id"]
             page.goto(f"{server}/jobs/{job_id}")
+            # The page fetches the job's options after it loads: a busy server answers late.
+            page.wait_for_function("!document.getElementById('status').textContent.startsWith('Loading the job')",
+                                   timeout=20_000)
             assert page.input_value("input[name=seed]") == "3"
             assert page.input_value("input[name=suggestions]") == "1"
             page.wait_for_selector("#download:not([hidden])", timeout=50_000)
