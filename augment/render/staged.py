@@ -57,7 +57,7 @@ from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from .lamps import find_lamps
 from .look import PhotoLook, apply_look, blur_like_photo, estimate_look
 from .settings import RENDER, StagedSettings
-from .sun import find_sun, first_hit_m, linear_luminance, wall_angles_rad
+from .sun import find_sun, linear_luminance, wall_angles_rad
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 
@@ -276,8 +276,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         ray = R.T @ np.linalg.solve(K, [cx / small_scale, cy / small_scale, 1.0])
         toward = ray[:2] / max(np.linalg.norm(ray[:2]), 1e-9)
         if walls is not None:  # the window's wall: the first one the ray meets
-            t_m = first_hit_m(cam_xy, toward, walls)
-            window_xy = None if t_m is None else cam_xy + t_m * toward
+            t_m, which = _first_wall(walls, toward[None], cam_xy)
+            window_xy = None if which[0] < 0 else cam_xy + t_m[0] * toward
     patches = None if not settings.sun_from_floor else _sun_patches(
         image, region_small if floor_mask is None else floor_mask, calibration, cam_xy, floor_polygon)
     if patches is not None:

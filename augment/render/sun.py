@@ -279,16 +279,3 @@ def _downstream(lit, standing, axis_xy, margin) -> int:
     if max(plus, minus) < 0.1 or abs(plus - minus) < 0.1:
         return 0
     return 1 if plus > minus else -1
-
-
-def first_hit_m(origin_xy, direction_xy, walls) -> float | None:
-    """Distance along a floor ray to the first wall segment (k, 2, 2) it meets, or None."""
-    p0, e = walls[:, 0], walls[:, 1] - walls[:, 0]
-    d = np.asarray(direction_xy, dtype=np.float64)
-    den = d[0] * e[:, 1] - d[1] * e[:, 0]
-    ok = np.abs(den) > 1e-12
-    w = p0 - np.asarray(origin_xy, dtype=np.float64)
-    t = np.where(ok, (w[:, 0] * e[:, 1] - w[:, 1] * e[:, 0]) / np.where(ok, den, 1), np.inf)
-    u = np.where(ok, (w[:, 0] * d[1] - w[:, 1] * d[0]) / np.where(ok, den, 1), -1)
-    hit = ok & (t > 1e-6) & (u >= 0) & (u <= 1)
-    return float(t[hit].min()) if hit.any() else None
