@@ -916,14 +916,18 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
             break
     windows = []
     for w in found_windows:
-        window = Opening(tuple(float(v) for v in w.segment_m.mean(axis=0)), float(np.linalg.norm(np.subtract(
-            *w.segment_m))), ROOM.fit.window_clearance_m, w.top_m - w.sill_m, w.sill_m, "found in the photo")
-        try:
-            LayoutBuilder(poly, height_m, open_edges=edges).add_window(window.at_m, window.width_m, window.sill_m,
-                                                                       window.height_m, window.clearance_m)
-        except LayoutError:
-            continue  # wider than the layout's wall: a false find, or a window round a corner
-        windows.append(window)
+        width_m = float(np.linalg.norm(np.subtract(*w.segment_m)))
+        # The finder reads the glass; the frame and casing either side, often the wall's colour, go with it.
+        for pad_m in (ROOM.fit.found_window_margin_m, 0.0):
+            window = Opening(tuple(float(v) for v in w.segment_m.mean(axis=0)), width_m + 2.0 * pad_m,
+                             ROOM.fit.window_clearance_m, w.top_m - w.sill_m, w.sill_m, "found in the photo")
+            try:
+                LayoutBuilder(poly, height_m, open_edges=edges).add_window(window.at_m, window.width_m, window.sill_m,
+                                                                           window.height_m, window.clearance_m)
+            except LayoutError:
+                continue  # wider than the layout's wall: a false find, or a window round a corner
+            windows.append(window)
+            break
     fitted = dataclasses.replace(fitted, doors=fitted.doors + tuple(found), windows=tuple(windows))
     if not fitted.items:
         # A preset's corner set where none of its furniture fits (a dining set on 3 m², a table

@@ -152,11 +152,13 @@ def _strip_features(strip: np.ndarray, inside: np.ndarray, wall: np.ndarray) -> 
     return stack.reshape(-1, stack.shape[-1]).astype(np.float32)
 
 
-def _walls(poly: np.ndarray, edge_kind, settings) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The walls along the floor's outline, as (start, end) foot points: runs of wall
-    edges that turn by less than ``settings.wall_turn_deg``, or by any angle over an edge
-    shorter than ``settings.jog_m`` (the outline steps round a door's threshold or a
-    casing), fitted with one straight line each."""
+def _walls(poly: np.ndarray, edge_kind, settings) -> list[tuple[np.ndarray, np.ndarray, bool, bool]]:
+    """The walls along the floor's outline, as (start, end, open start, open end): foot
+    points of runs of wall edges that turn by less than ``settings.wall_turn_deg``, or by
+    any angle over an edge shorter than ``settings.jog_m`` (the outline steps round a
+    door's threshold or a casing), fitted with one straight line each; an end is open
+    where the outline goes on along the photo's edge (the wall goes on out of view at
+    its foot, though higher up it may show)."""
     m = len(poly)
     wall = [kind == "boundary" for kind in edge_kind]
     if not any(wall):
@@ -193,7 +195,8 @@ def _walls(poly: np.ndarray, edge_kind, settings) -> list[tuple[np.ndarray, np.n
         if direction @ (pts[-1] - pts[0]) < 0:
             direction = -direction
         t = (pts - center) @ direction
-        out.append((center + t.min() * direction, center + t.max() * direction))
+        out.append((center + t.min() * direction, center + t.max() * direction,
+                    edge_kind[(chain[0] - 1) % m] == "image", edge_kind[(chain[-1] + 1) % m] == "image"))
     return out
 
 
@@ -256,7 +259,7 @@ def find_openings(image: np.ndarray, calibration, floor) -> Openings:
     poly = np.asarray(floor.polygon_m, dtype=np.float64)
     lo_w, hi_w = settings.width_m
     found, windows = [], []
-    for a, b in _walls(poly, floor.edge_kind, settings):
+    for a, b, open_a, open_b in _walls(poly, floor.edge_kind, settings):
         if np.linalg.norm(b - a) < lo_w:
             continue
         # One strip for both readers: the rules read it to top_m, the model to model_top_m.
@@ -301,11 +304,18 @@ def find_openings(image: np.ndarray, calibration, floor) -> Openings:
         for i0, i1, score in spans:
             seg = segment(i0, i1)
             found.append(FoundDoor(calibration.pixels_from_floor(seg), seg, score))
-        in_door = np.zeros(len(s), bool)
+        # Windows on the wall also where it goes on past an open end, whole steps further.
+        reach = round(settings.window_reach_m / step)
+        before, after = int(open_a) * reach, int(open_b) * reach
+        if before or after:
+            tall_strip, tall_inside, _ = _wall_strip(lab, calibration, a - before * step * u,
+                                                     b + after * step * u, step,
+                                                     max(settings.top_m, settings.model_top_m))
+        in_door = np.zeros(tall_strip.shape[1], bool)
         for i0, i1, _ in spans:
-            in_door[i0:i1] = True
+            in_door[before + i0:before + i1] = True
         for i0, i1, sill, top in _window_spans(tall_strip, tall_inside, wall, in_door, settings):
-            seg = segment(i0, i1)
+            seg = np.stack([a + ((i0 - before) * step) * u, a + ((i1 - before) * step) * u])
             corners = np.vstack([np.column_stack([seg, np.full(2, h)]) for h in (sill, top)])
             windows.append(FoundWindow(seg, sill, top, calibration.pixels_from_floor(corners)))
     return Openings(found, windows)
@@ -327,33 +337,55 @@ def _window_spans(strip: np.ndarray, inside: np.ndarray, wall: np.ndarray, in_do
     floor_band = inside & (z[:, None] >= settings.leaf_from_m) & (z[:, None] <= settings.window_below_m)
     shows = band.sum(axis=0) * step >= settings.window_seen_m
     glass = shows & ~in_door & (_column_share(differs, band) >= settings.min_share) & (
-        _column_share(differs, floor_band) < 1.0 - settings.min_share)
-    glass = cv2.morphologyEx(glass.astype(np.uint8)[None], cv2.MORPH_CLOSE, np.ones((1, 5), np.uint8))[0] > 0
+        _column_share(differs, floor_band) < settings.window_floor_share)
+    middle = int(np.searchsorted(z, 0.5 * (lo + hi)))
+    sill_m, top_m, sill_step = _window_edges(strip, differs | ~inside, inside, z, middle)
+    # A sill is a line across the wall, light on a wall brightens it gradually: a column
+    # whose wall below shows keeps its place in a window only with a step there (half the
+    # run's, which one shadowed column or a radiator's top may lack).
+    smooth_step = cv2.medianBlur(np.nan_to_num(sill_step, nan=255.0).astype(np.uint8)[None], 5)[0]
+    glass &= np.isnan(sill_m) | (smooth_step >= 0.5 * settings.window_sill_step)
+    # Glass panes either side of a mullion or a frame the wall's colour are one window.
+    bridge = np.ones((1, round(settings.window_mullion_m / step) + 1), np.uint8)
+    glass = cv2.morphologyEx(glass.astype(np.uint8)[None], cv2.MORPH_CLOSE, bridge)[0] > 0
     lo_w, hi_w = settings.window_width_m
     # A frame or a reveal at a side (the other may be a corner): light falling off across a wall has no edge.
     sides = _upright_lines(strip[..., 0], band, shows, settings, settings.side_share)
     out = []
-    middle = int(np.searchsorted(z, 0.5 * (lo + hi)))
     near = settings.window_frame_m / step
     for i0, i1 in _runs(glass):
         if not lo_w <= (i1 - i0) * step <= hi_w or not any(
                 any(abs(e - end) <= near for e in sides) for end in (i0, i1 - 1)):
             continue
-        sills, tops, edges = [], [], []
-        for c in range(i0, i1):
-            column = differs[:, c] | ~inside[:, c]
-            below = np.flatnonzero(~column[:middle])
-            above = np.flatnonzero(~column[middle:])
-            seen = np.flatnonzero(inside[:, c])
-            tops.append(z[middle + above[0]] - 0.5 * step if len(above) else z[seen[-1]] + 0.5 * step)
-            if len(below) and 0 < below[-1] < middle - 3:
-                k = below[-1]
-                sills.append(z[k] + 0.5 * step)
-                edges.append(abs(strip[k + 3, c, 0] - strip[k - 1, c, 0]))
-        # A sill is a line across the wall; light on a wall brightens it gradually.
-        if sills and np.median(edges) >= settings.window_sill_step:
-            out.append((i0, i1, float(np.median(sills)), float(np.median(tops))))
+        sills = sill_m[i0:i1][~np.isnan(sill_m[i0:i1])]
+        if len(sills) and np.median(sill_step[i0:i1][~np.isnan(sill_m[i0:i1])]) >= settings.window_sill_step:
+            out.append((i0, i1, float(np.median(sills)), float(np.median(top_m[i0:i1]))))
     return out
+
+
+def _window_edges(strip: np.ndarray, other: np.ndarray, inside: np.ndarray, z: np.ndarray, middle: int):
+    """Per column of a wall strip (Lab), where the run of samples ``other`` than the wall
+    through row ``middle`` ends below (the sill, m; NaN where no wall shows below it) and
+    above (the top, m, or the highest sample in view), and the step in colour (CIELAB
+    distance) across the sill over 8 cm (NaN with no sill): a sill board may be as light
+    as the wall. Three (columns,) float arrays."""
+    cols = other.shape[1]
+    # The wall below a sill: three samples in a row like the wall (a lone one in a sill's shadow is noise).
+    wall = ~other
+    wall[2:] &= wall[1:-1] & wall[:-2]
+    step = z[1] - z[0]
+    sill, top, edge = np.full(cols, np.nan), np.full(cols, np.nan), np.full(cols, np.nan)
+    for c in range(cols):
+        below = np.flatnonzero(wall[:middle, c])
+        above = np.flatnonzero(~other[middle:, c])
+        seen = np.flatnonzero(inside[:, c])
+        if len(seen):
+            top[c] = z[middle + above[0]] - 0.5 * step if len(above) else z[seen[-1]] + 0.5 * step
+        if len(below) and 0 < below[-1] < middle - 3:
+            k = below[-1]
+            sill[c] = z[k] + 0.5 * step
+            edge[c] = np.linalg.norm(strip[k + 3, c] - strip[k - 1, c])
+    return sill, top, edge
 
 
 def _upright_lines(lightness: np.ndarray, low: np.ndarray, tall: np.ndarray, settings, min_share: float

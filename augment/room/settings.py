@@ -67,6 +67,7 @@ class FitSettings:
     door_width_m: tuple[float, float] = (0.5, 2.5)  # a door's feet this far apart: a cupboard door to a double door
     door_from_wall_m: float = 0.5  # a door's middle at most this far from a wall of the layouts' floor (a margin in)
     found_door_margin_m: float = 0.1  # a found door's zone reaches this far past its found sides and depth
+    found_window_margin_m: float = 0.15  # a found window's zone reaches this far past its found sides
     window_clearance_m: float = 0.4  # furniture taller than a found window's sill keeps this far from it
 
 
@@ -94,12 +95,15 @@ class DoorSettings:
     model_threshold: float = 0.5  # a column is a door's where the model's probability is this or more
     model_margin: int = 64  # columns of nothing in view padded at a wall's ends, as in training
     model_top_m: float = 2.4  # the door model reads the wall up to here (a door's head and the wall above)
-    window_band_m: tuple[float, float] = (1.0, 1.8)  # every window covers this band of its wall (sill to head)
+    window_band_m: tuple[float, float] = (1.0, 1.4)  # every window covers this band of its wall (sill to head)
     window_seen_m: float = 0.2  # ... of which this much must be in view
     window_below_m: float = 0.45  # below this (and above leaf_from_m) a window's column is wall, a door's is not
+    window_floor_share: float = 0.5  # ... where less than this share differs (a sill's shadow may reach into it)
     window_width_m: tuple[float, float] = (0.4, 3.5)  # a window's width, a narrow one to a picture window
     window_frame_m: float = 0.15  # a vertical edge (the glass's, the casing's) this near one of its sides
-    window_sill_step: float = 8.0  # and at its sill the lightness (CIELAB L) steps this much over 8 cm
+    window_mullion_m: float = 0.16  # panes this far apart or nearer are one window
+    window_reach_m: float = 1.5  # windows are looked for this far past a wall's open end (its foot out of view)
+    window_sill_step: float = 8.0  # and at its sill the colour steps this much (CIELAB distance) over 8 cm
 
 
 @dataclass

@@ -74,3 +74,27 @@ def test_the_window_of_room_1_is_found_and_kept_free_of_tall_furniture():
     assert len(lay.model.window_segments_m) == 1 and rep["overlaps"]["count"] == 0
     overlay = result.overlays["overlay_floor.png"]
     assert (np.abs(overlay.astype(int) - DRAW.floor.window_color).max(axis=-1) < 30).sum() > 200
+
+
+def test_panes_split_by_a_mullion_are_one_window_and_light_beside_it_is_not_part_of_it():
+    """Two panes 1.0-1.6 and 1.74-2.2 m along, split by a 14 cm mullion the wall's colour,
+    sill 0.6 m, top 1.5 m (a low window), are one window from 1.0 to 2.2 m; with light
+    brightening the wall smoothly left of the window (L 60 -> 85 at 0.5 m along, 1.4 m
+    up), the window still ends at 1.0 m, within two samples: the lit wall has no sill."""
+    def panes(strip, Z, S):
+        strip[(Z >= 0.6) & (Z < 1.5) & (S >= 1.0) & (S < 2.2) & ~((S >= 1.6) & (S < 1.74))] = [95.0, -2.0, -8.0]
+
+    strip, inside = _strip(panes)
+    none = np.zeros(150, bool)
+    ((i0, i1, sill, top),) = _window_spans(strip, inside, WALL, none, ROOM.doors)
+    assert abs(i0 - 50) <= 1 and abs(i1 - 110) <= 1
+    assert abs(sill - 0.6) <= STEP and abs(top - 1.5) <= STEP
+
+    def lit(strip, Z, S):
+        strip[..., 0] = 60.0 + 25.0 * np.exp(-((Z - 1.4) ** 2 + (S - 0.5) ** 2) / (2 * 0.45 ** 2))
+        panes(strip, Z, S)
+
+    strip, inside = _strip(lit)
+    assert (np.linalg.norm(strip - WALL, axis=-1)[60, 40:50] > ROOM.doors.min_difference).all()  # it differs
+    ((i0, i1, _, _),) = _window_spans(strip, inside, WALL, none, ROOM.doors)
+    assert abs(i0 - 50) <= 2 and abs(i1 - 110) <= 1
