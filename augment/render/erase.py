@@ -14,8 +14,9 @@ looked at square-on), where the floor's texture has one scale and one orientatio
 3. **Texture.** What remains of the floor (grain, carpet, blotches, tile joints) is
    copied from the place beside the sheet whose rim matches the sheet's rim best (masked
    template matching, the squared differences relative to the two rims' energy, so that
-   a flat place does not win): a tiled or planked floor lines up its joints, a carpet
-   keeps its grain. The place is found on a small view, then refined at full size; the
+   a flat place does not win), among places the photo shows about as sharp as the sheet
+   (from farther back, the copy is a soft smudge): a tiled or planked floor lines up
+   its joints, a carpet keeps its grain. The place is found on a small view, then refined at full size; the
    copy runs on over the rim it was matched on, fading out, so it has no edge.
 
 The view is then mapped back into the photo and blended over the sheet's pixels with a
@@ -155,7 +156,8 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     smooth = cv2.inpaint(small_rgb, bad.astype(np.uint8) * 255, 3, cv2.INPAINT_TELEA)
     light = cv2.GaussianBlur(smooth.astype(np.float32), (0, 0), sigma)
     ring = max(2, round(settings.rim_share * short_m * small.ppm))
-    parts = _sources(small, small_rgb.astype(np.float32) - light, sheet, bad, ring)
+    parts = _sources(small, small_rgb.astype(np.float32) - light, sheet, bad, ring,
+                     _photo_density(small, (rows, cols)))
 
     # The sheet at full size, and the places its texture comes from.
     full = _TopDown(calibration, origin, ppm)
@@ -331,6 +333,20 @@ def _density_px_per_m(calibration, half_m) -> float:
     return best
 
 
+def _photo_density(view: _TopDown, shape) -> np.ndarray:
+    """(rows, cols) float: per pixel of ``view``, how many photo pixels cover a square
+    meter of floor there (the floor homography's Jacobian determinant), from a grid of
+    every eighth pixel."""
+    rows, cols = shape
+    gy, gx = np.mgrid[0:rows + 8:8, 0:cols + 8:8].astype(np.float64)
+    p = view.origin_m + (np.column_stack([gx.ravel(), gy.ravel()]) + 0.5) / view.ppm
+    d = 1e-3
+    px = [view.calibration.pixels_from_floor(p + off) for off in ((0, 0), (d, 0), (0, d))]
+    ax, ay = (px[1] - px[0]) / d, (px[2] - px[0]) / d
+    det = np.abs(ax[:, 0] * ay[:, 1] - ax[:, 1] * ay[:, 0]).reshape(gy.shape).astype(np.float32)
+    return cv2.resize(det, (gx.shape[1] * 8, gy.shape[0] * 8), interpolation=cv2.INTER_LINEAR)[:rows, :cols]
+
+
 def _printed(view: _TopDown, shape, board, lightness, valid) -> tuple[np.ndarray, np.ndarray]:
     """The print as :meth:`Board.image` lays it on the floor, in the view: (rows, cols)
     float32 grey levels, and where the sheet is (bool).
@@ -462,14 +478,22 @@ def _grow_to_paper(view: _TopDown, lab, valid, sheet_m: np.ndarray, board, colou
     return grown
 
 
-def _sources(view: _TopDown, texture, sheet_m, bad, ring, depth=0) -> list:
+def _sources(view: _TopDown, texture, sheet_m, bad, ring, density, depth=0) -> list:
     """Parts of the sheet ``sheet_m`` ((2, 2) low, high corner, meters) with the offset
     (view pixels) of the place their texture is copied from (:func:`_best_offset`): the
     whole sheet, or where no place is all floor, its halves across the longer side, and
-    theirs (to ``RENDER.erase.max_splits`` deep). Parts that find none are left out."""
+    theirs (to ``RENDER.erase.max_splits`` deep). Parts that find none are left out.
+    ``density``: :func:`_photo_density` of the view; a place the photo shows coarser
+    than ``RENDER.erase.source_sharpness`` of the part is taken only when no other is:
+    its texture, copied nearer the camera, would be a soft smudge."""
     rows, cols = bad.shape
     part = view.rectangle(sheet_m, (0, 0, cols, rows))
-    found = _best_offset(texture, part, bad, ring)
+    ys, xs = np.nonzero(part)
+    coarse = None
+    if len(ys):
+        coarse = density < RENDER.erase.source_sharpness * density[(ys.min() + ys.max()) // 2,
+                                                                   (xs.min() + xs.max()) // 2]
+    found = _best_offset(texture, part, bad, ring, coarse=coarse)
     if found is not None:
         return [(sheet_m, found)]
     if depth >= RENDER.erase.max_splits:
@@ -478,17 +502,18 @@ def _sources(view: _TopDown, texture, sheet_m, bad, ring, depth=0) -> list:
     middle = 0.5 * (sheet_m[0, axis] + sheet_m[1, axis])
     low, high = sheet_m.copy(), sheet_m.copy()
     low[1, axis] = high[0, axis] = middle
-    return (_sources(view, texture, low, bad, ring, depth + 1)
-            + _sources(view, texture, high, bad, ring, depth + 1))
+    return (_sources(view, texture, low, bad, ring, density, depth + 1)
+            + _sources(view, texture, high, bad, ring, density, depth + 1))
 
 
-def _best_offset(texture, hole, bad, ring, search=None):
+def _best_offset(texture, hole, bad, ring, search=None, coarse=None):
     """(dx, dy) minimizing the masked sum of squared differences between the rim of
     ``hole`` in ``texture`` and the rim of the place (dx, dy) away, over places whose
     hole and rim hold nothing ``bad``; None when there is no such place. ``search =
     (texture, bad, reach)``: look there instead, a box ``reach`` larger all round than
     ``texture`` and displaced from it; the offset is then relative to that
-    displacement."""
+    displacement. ``coarse`` (like ``bad``): places whose middle falls there are taken
+    only when there is no other."""
     rows, cols = hole.shape
     ys, xs = np.nonzero(hole)
     if not len(ys):
@@ -522,6 +547,10 @@ def _best_offset(texture, hole, bad, ring, search=None):
     ssd[blocked > 0.5] = np.inf
     if not np.isfinite(ssd).any():
         return None
+    if coarse is not None:
+        cy, cx = (ys.min() + ys.max()) // 2 - y0, (xs.min() + xs.max()) // 2 - x0
+        fine = np.where(coarse[cy:cy + ssd.shape[0], cx:cx + ssd.shape[1]], np.inf, ssd)
+        ssd = fine if np.isfinite(fine).any() else ssd
     py, px = np.unravel_index(int(np.argmin(ssd)), ssd.shape)
     return int(px - base_x), int(py - base_y)
 

@@ -88,6 +88,7 @@ class EraseSettings:
 
     context_share: float = 1.5  # floor shown around the sheet on each side, of its longer side: texture sources
     max_px_per_m: int = 6000  # the top-down view is as sharp as the photo at the sheet, up to this
+    source_sharpness: float = 0.8  # texture comes from floor the photo shows at least this sharp (area) as the sheet
     search_sheet_px: int = 96  # the sheet's shorter side on the small view that finds light and texture source
     light_sigma_share: float = 0.5  # light: what varies slower than this share of the shorter side (blotches: texture)
     rim_share: float = 0.07  # the rim matched when choosing the texture's source, of the sheet's shorter side
