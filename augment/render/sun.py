@@ -10,6 +10,7 @@ which way the light travels. How high the sun stands is not read here.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -46,6 +47,8 @@ class SunOnFloor:
     lo_m, cell_m, lit, seen
         The top-down view: its corner (2,) and cell (meters), and rasters (rows, cols) of
         the floor in the sun and of the floor seen.
+    edge_sigma_m : float
+        The scale the sun's edges were found at: :meth:`sunlit` is as soft (0: sharp).
     """
 
     axes_xy: tuple
@@ -59,16 +62,36 @@ class SunOnFloor:
     cell_m: float
     lit: np.ndarray = field(compare=False, repr=False)
     seen: np.ndarray = field(compare=False, repr=False)
+    edge_sigma_m: float = 0.0
+
+    @functools.cached_property
+    def _soft(self) -> np.ndarray:
+        """``lit`` with the photo's own edge: blurred over the seen floor by the scale its
+        edges were found at (thresholded noisy light has a ragged edge)."""
+        lit = self.lit.astype(np.float32) * self.seen
+        if self.edge_sigma_m <= 0:
+            return lit
+        sigma = self.edge_sigma_m / self.cell_m
+        seen = cv2.GaussianBlur(self.seen.astype(np.float32), (0, 0), sigma)
+        return cv2.GaussianBlur(lit, (0, 0), sigma) / np.maximum(seen, 1e-3)
 
     def sunlit(self, xy) -> np.ndarray:
-        """1.0 where floor points (n, 2+) lie in the sun, 0.0 where in shade, and the
-        share in the sun where the photo does not show the floor."""
-        ij = np.floor((np.asarray(xy, dtype=np.float64)[..., :2] - self.lo_m) / self.cell_m).astype(np.int64)
+        """How much floor points (n, 2+) lie in the sun: 1.0 in it, 0.0 in shade, between
+        over the width of the photo's sun edges, and the share in the sun where the photo
+        does not show the floor."""
+        f = (np.asarray(xy, dtype=np.float64)[..., :2] - self.lo_m) / self.cell_m - 0.5
+        ij = np.floor(f).astype(np.int64)
         rows, cols = self.lit.shape
-        inside = (ij[..., 0] >= 0) & (ij[..., 0] < cols) & (ij[..., 1] >= 0) & (ij[..., 1] < rows)
+        inside = (ij[..., 0] >= 0) & (ij[..., 0] < cols - 1) & (ij[..., 1] >= 0) & (ij[..., 1] < rows - 1)
         out = np.full(ij.shape[:-1], self.lit_share, dtype=np.float64)
         r, c = ij[inside, 1], ij[inside, 0]
-        out[inside] = np.where(self.seen[r, c], self.lit[r, c], self.lit_share)
+        u, v = f[inside, 0] - c, f[inside, 1] - r
+        soft = self._soft
+        value = ((1 - v) * ((1 - u) * soft[r, c] + u * soft[r, c + 1])
+                 + v * ((1 - u) * soft[r + 1, c] + u * soft[r + 1, c + 1]))
+        near = np.round(f[inside]).astype(np.int64)
+        seen = self.seen[np.clip(near[:, 1], 0, rows - 1), np.clip(near[:, 0], 0, cols - 1)]
+        out[inside] = np.where(seen, value, self.lit_share)
         return out
 
 
@@ -262,7 +285,8 @@ def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, wa
         return None
     downstream = _downstream(lit, standing, axes[0], margin)
     return SunOnFloor(axes, bool(along_wall), length_m, contrast, center, downstream,
-                      float(lit.sum() / valid.sum()), (float(lo[0]), float(lo[1])), float(cell), lit, valid)
+                      float(lit.sum() / valid.sum()), (float(lo[0]), float(lo[1])), float(cell), lit, valid,
+                      float(sigma_m))
 
 
 def _downstream(lit, standing, axis_xy, margin) -> int:
