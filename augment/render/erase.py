@@ -320,17 +320,20 @@ def _small_at(small: np.ndarray, scale: float, x, y, border) -> np.ndarray:
                      cv2.INTER_LINEAR, borderMode=border)
 
 
+def _floor_jacobians(calibration, points_m: np.ndarray) -> np.ndarray:
+    """(n, 2, 2): photo pixels per meter of floor at floor points (n, 2), by a millimeter's
+    finite difference: column 0 along x, column 1 along y."""
+    p = np.asarray(points_m, dtype=np.float64)
+    d = 1e-3
+    px = [calibration.pixels_from_floor(p + off) for off in ((0, 0), (d, 0), (0, d))]
+    return np.stack([px[1] - px[0], px[2] - px[0]], axis=-1) / d
+
+
 def _density_px_per_m(calibration, half_m) -> float:
     """The photo's sharpest pixels per meter on the floor at the corners of the rectangle
     ``+-half_m`` around the board's center."""
     corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * half_m
-    d = 1e-3
-    best = 1.0
-    for p in corners:
-        px = calibration.pixels_from_floor(np.array([p, p + [d, 0], p + [0, d]]))
-        J = np.column_stack([px[1] - px[0], px[2] - px[0]]) / d
-        best = max(best, float(np.linalg.svd(J, compute_uv=False)[0]))
-    return best
+    return max(1.0, float(np.linalg.svd(_floor_jacobians(calibration, corners), compute_uv=False)[:, 0].max()))
 
 
 def _photo_density(view: _TopDown, shape) -> np.ndarray:
@@ -339,11 +342,8 @@ def _photo_density(view: _TopDown, shape) -> np.ndarray:
     every eighth pixel."""
     rows, cols = shape
     gy, gx = np.mgrid[0:rows + 8:8, 0:cols + 8:8].astype(np.float64)
-    p = view.origin_m + (np.column_stack([gx.ravel(), gy.ravel()]) + 0.5) / view.ppm
-    d = 1e-3
-    px = [view.calibration.pixels_from_floor(p + off) for off in ((0, 0), (d, 0), (0, d))]
-    ax, ay = (px[1] - px[0]) / d, (px[2] - px[0]) / d
-    det = np.abs(ax[:, 0] * ay[:, 1] - ax[:, 1] * ay[:, 0]).reshape(gy.shape).astype(np.float32)
+    J = _floor_jacobians(view.calibration, view.origin_m + (np.column_stack([gx.ravel(), gy.ravel()]) + 0.5) / view.ppm)
+    det = np.abs(np.linalg.det(J)).reshape(gy.shape).astype(np.float32)
     return cv2.resize(det, (gx.shape[1] * 8, gy.shape[0] * 8), interpolation=cv2.INTER_LINEAR)[:rows, :cols]
 
 
@@ -483,17 +483,11 @@ def _sources(view: _TopDown, texture, sheet_m, bad, ring, density, depth=0) -> l
     (view pixels) of the place their texture is copied from (:func:`_best_offset`): the
     whole sheet, or where no place is all floor, its halves across the longer side, and
     theirs (to ``RENDER.erase.max_splits`` deep). Parts that find none are left out.
-    ``density``: :func:`_photo_density` of the view; a place the photo shows coarser
-    than ``RENDER.erase.source_sharpness`` of the part is taken only when no other is:
-    its texture, copied nearer the camera, would be a soft smudge."""
+    ``density``: :func:`_photo_density` of the view (:func:`_best_offset` prefers places
+    as sharp as the part)."""
     rows, cols = bad.shape
     part = view.rectangle(sheet_m, (0, 0, cols, rows))
-    ys, xs = np.nonzero(part)
-    coarse = None
-    if len(ys):
-        coarse = density < RENDER.erase.source_sharpness * density[(ys.min() + ys.max()) // 2,
-                                                                   (xs.min() + xs.max()) // 2]
-    found = _best_offset(texture, part, bad, ring, coarse=coarse)
+    found = _best_offset(texture, part, bad, ring, density=density)
     if found is not None:
         return [(sheet_m, found)]
     if depth >= RENDER.erase.max_splits:
@@ -506,14 +500,16 @@ def _sources(view: _TopDown, texture, sheet_m, bad, ring, density, depth=0) -> l
             + _sources(view, texture, high, bad, ring, density, depth + 1))
 
 
-def _best_offset(texture, hole, bad, ring, search=None, coarse=None):
+def _best_offset(texture, hole, bad, ring, search=None, density=None):
     """(dx, dy) minimizing the masked sum of squared differences between the rim of
     ``hole`` in ``texture`` and the rim of the place (dx, dy) away, over places whose
     hole and rim hold nothing ``bad``; None when there is no such place. ``search =
     (texture, bad, reach)``: look there instead, a box ``reach`` larger all round than
     ``texture`` and displaced from it; the offset is then relative to that
-    displacement. ``coarse`` (like ``bad``): places whose middle falls there are taken
-    only when there is no other."""
+    displacement. ``density`` (like ``bad``, photo pixels per square meter; not with
+    ``search``): a place whose middle the photo shows coarser than
+    ``RENDER.erase.source_sharpness`` of the hole's is taken only when there is no other
+    (its texture, copied nearer the camera, would be a soft smudge)."""
     rows, cols = hole.shape
     ys, xs = np.nonzero(hole)
     if not len(ys):
@@ -547,9 +543,11 @@ def _best_offset(texture, hole, bad, ring, search=None, coarse=None):
     ssd[blocked > 0.5] = np.inf
     if not np.isfinite(ssd).any():
         return None
-    if coarse is not None:
-        cy, cx = (ys.min() + ys.max()) // 2 - y0, (xs.min() + xs.max()) // 2 - x0
-        fine = np.where(coarse[cy:cy + ssd.shape[0], cx:cx + ssd.shape[1]], np.inf, ssd)
+    if density is not None:
+        my, mx = (ys.min() + ys.max()) // 2, (xs.min() + xs.max()) // 2
+        coarse = density[my - y0:my - y0 + ssd.shape[0], mx - x0:mx - x0 + ssd.shape[1]] < (
+            RENDER.erase.source_sharpness * density[my, mx])
+        fine = np.where(coarse, np.inf, ssd)
         ssd = fine if np.isfinite(fine).any() else ssd
     py, px = np.unravel_index(int(np.argmin(ssd)), ssd.shape)
     return int(px - base_x), int(py - base_y)

@@ -299,7 +299,8 @@ def find_openings(image: np.ndarray, calibration, floor) -> Openings:
         u = (b - a) / np.linalg.norm(b - a)
 
         def segment(i0, i1):
-            return np.stack([a + s[i0] * u - 0.5 * step * u, a + s[i1 - 1] * u + 0.5 * step * u])
+            """The floor under columns i0 to i1 (end exclusive) of a strip starting at a."""
+            return np.stack([a + (i0 * step) * u, a + (i1 * step) * u])
 
         for i0, i1, score in spans:
             seg = segment(i0, i1)
@@ -315,7 +316,7 @@ def find_openings(image: np.ndarray, calibration, floor) -> Openings:
         for i0, i1, _ in spans:
             in_door[before + i0:before + i1] = True
         for i0, i1, sill, top in _window_spans(tall_strip, tall_inside, wall, in_door, settings):
-            seg = np.stack([a + ((i0 - before) * step) * u, a + ((i1 - before) * step) * u])
+            seg = segment(i0 - before, i1 - before)
             corners = np.vstack([np.column_stack([seg, np.full(2, h)]) for h in (sill, top)])
             windows.append(FoundWindow(seg, sill, top, calibration.pixels_from_floor(corners)))
     return Openings(found, windows)

@@ -209,8 +209,8 @@ def test_the_texture_is_copied_from_floor_the_photo_shows_as_sharp():
 
 def test_a_place_the_photo_shows_coarser_is_copied_only_when_no_other_is():
     """A rim copied exactly 20 px right of a hole, and with noise 20 px left: the exact
-    copy is taken, unless its middle is marked coarse; all marked coarse, it is taken
-    again."""
+    copy is taken, unless the photo shows its middle at half the hole's pixels per square
+    meter; with every place but the hole so coarse, it is taken again."""
     from augment.render.erase import _best_offset
 
     rng = np.random.default_rng(3)
@@ -221,7 +221,7 @@ def test_a_place_the_photo_shows_coarser_is_copied_only_when_no_other_is():
     texture[19:41, 19:41] = texture[19:41, 39:61] + rng.normal(0, 4, (22, 22, 3))  # 20 px left, noisier
     bad = hole.copy()
     assert _best_offset(texture, hole, bad, 4) == (20, 0)
-    coarse = np.zeros_like(hole)
-    coarse[:, 60:] = True
-    assert _best_offset(texture, hole, bad, 4, coarse=coarse) == (-20, 0)
-    assert _best_offset(texture, hole, bad, 4, coarse=np.ones_like(hole)) == (20, 0)
+    density = np.ones(hole.shape, np.float32)
+    density[:, 60:] = 0.5
+    assert _best_offset(texture, hole, bad, 4, density=density) == (-20, 0)
+    assert _best_offset(texture, hole, bad, 4, density=np.where(hole, 1.0, 0.5).astype(np.float32)) == (20, 0)
