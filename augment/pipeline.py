@@ -20,9 +20,10 @@ Stages, in order (``timings_s`` has one entry per stage):
    and height (:func:`augment.room.fit.furniture_for_floor`): what cannot fit is dropped.
 6. ``layout``: ``suggestions`` layouts (:func:`augment.room.fit.solve_suggestions`:
    suggestion K from seed ``seed + K - 1``, never one with overlaps or items off the floor).
-7. ``render``: the board erased (:func:`augment.render.erase.erase_board`), each layout
-   rendered into the photo (:func:`augment.render.staged.render_staged`, one GL context
-   for all), the light estimated once.
+7. ``render``: each layout rendered into the photo (:func:`augment.render.staged.render_staged`,
+   one GL context for all) with the board erased (:func:`augment.render.erase.erase_board`);
+   the erasure, the light and the camera's look are worked out once, on a second thread
+   while ``furniture`` and ``layout`` run; this stage waits for them.
 8. ``scene``: each suggestion as a glTF scene (:func:`augment.render.gltf.scene_glb`).
 9. ``overlays``: calibration, floor and height drawn over the photo, and the contact
    sheet of the staged photos (:mod:`augment.draw`).
@@ -86,8 +87,6 @@ from .floor.polygon import floor_polygon
 from .floor.segment import read_floor_mask, segment_floor
 from .photo.io import encode_image, read_photo
 from .render.erase import erase_board, layer_over_photo
-from .render.furniture import load_assets
-from .render.gltf import scene_glb
 from .render.styles import STYLES
 from .room.fit import (broken_rules, corner_specs, dropped_summary, furniture_for_floor, furniture_source,
                        rule_count, solve_suggestions)
@@ -359,6 +358,17 @@ def overlays(m: Measurement, doors=None, windows_px=()) -> dict:
 # Reports
 # --------------------------------------------------------------------------------------
 
+def _photo_light(m: Measurement, keep_board: bool, ceiling_m: float):
+    """The board erased (None with ``keep_board``), the light and the camera's look: all
+    from the photo as taken (the board's white squares give the light, its edges the
+    sharpness), none from the layouts."""
+    from .render.staged import estimate_lighting, estimate_look
+    erased = None if keep_board else erase_board(m.image, m.calibration, m.segmentation.mask)
+    lighting = estimate_lighting(m.image, m.calibration, m.segmentation.mask, floor_polygon=m.floor,
+                                 ceiling_m=ceiling_m)
+    return erased, lighting, estimate_look(m.image, m.calibration)
+
+
 def _drawn_overlays(m: Measurement, doors, windows_px) -> tuple[dict, dict]:
     """:func:`overlays`, and the same as PNG files."""
     pictures = overlays(m, doors, windows_px)
@@ -597,23 +607,29 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     else:
         source_name, source = furniture_source(room, spec)
         styles = suggestion_styles(style, seed, suggestions)
-    user_models = load_assets(assets)
+    if assets:  # checked before any work; without them, trimesh is imported on the second thread
+        from .render.furniture import load_assets
+        user_models = load_assets(assets)
+    else:
+        user_models = {}
     steps = 6 + 3 * suggestions
     bar = _Progress(progress, steps) if reporter is None else reporter(steps)
     clock = _Clock(bar)
     # A second thread takes work that would otherwise wait for the GIL-free stretches of
     # this one: importing the renderer (pyrender and trimesh, a second or more) while
-    # OpenCV and onnxruntime find the board and the floor, and drawing the plans
-    # (matplotlib) while GL and NumPy render the suggestions.
+    # OpenCV and onnxruntime find the board and the floor; erasing the board and reading
+    # the light off the photo while the layouts are solved; drawing the plans (matplotlib)
+    # while GL and NumPy render the suggestions.
     background = ThreadPoolExecutor(max_workers=1, thread_name_prefix="furnish")
-    render_module = background.submit(importlib.import_module, "augment.render.staged")
+    background.submit(importlib.import_module, "augment.render.gltf")
     try:
         m = measure(photo, board, camera=camera, model=model, floor_mask=floor_mask, clicks=clicks,
                     height_m=height_m, clock=clock)
+        room_height = float(m.height.height_m)
+        photo_light = background.submit(_photo_light, m, keep_board, room_height)
         warnings = list(m.warnings)
         if m.floor.caveat:
             warnings.append(f"furniture is placed on the floor in view only ({m.floor.caveat})")
-        room_height = float(m.height.height_m)
         # The doors kept clear: the user's, else those found in the photo (drawn on the overlay too).
         marked = doors is not None and len(doors) > 0
         found_px, found_windows = [], []
@@ -652,18 +668,14 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         pictures = background.submit(_drawn_overlays, m, doors if marked else found_px,
                                      [w.corners_px for w in found_windows])
         with clock("render"):
-            render = render_module.result()
+            from .render import staged as render
             own = renderer is None
             gl = render.Renderer() if own else renderer
             try:
-                erased = None if keep_board else erase_board(m.image, m.calibration, m.segmentation.mask)
+                erased, lighting, camera_look = photo_light.result()
                 if erased is not None and erased.warning:
                     warnings.append(erased.warning)
                 base = m.image if erased is None else erased.image
-                # Both from the photo as taken: the board's white squares give the light, its edges the sharpness.
-                lighting = render.estimate_lighting(m.image, m.calibration, m.segmentation.mask,
-                                                    floor_polygon=m.floor, ceiling_m=room_height)
-                camera_look = render.estimate_look(m.image, m.calibration)
                 staged, staged_layers = [], []
                 for lay, style_name in zip(layouts, styles):
                     done = render.render_staged(base, m.calibration, lay, gl, floor_mask=m.segmentation.mask,
@@ -679,6 +691,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 if own:
                     gl.close()
         with clock("scene"):
+            from .render.gltf import scene_glb
             cache = {}
             scenes = []
             for lay, style_name in zip(layouts, styles):
