@@ -1,10 +1,17 @@
 """Staged photos against the truth: the synthetic photographer furnishes the room itself.
 
 Run by hand: ``python benchmarks/realism.py [--count 40] [--seed 9700] [--old d0f695e]
-[--shadowed-fill]`` (about half an hour). Writes ``results/realism.{json,md}`` and
-``results/realism_worst.png`` (``realism_shadowed_fill.*`` with ``--shadowed-fill``: the
-photographer's fill light from the ceiling casts shadows, in the empty photo and in the
-truth alike, as a real lamp there would; without it, it lights through the furniture).
+[--fill occluded|through|shadowed]`` (about half an hour). Writes
+``results/realism.{json,md}`` and ``results/realism_worst.png``, or
+``realism_<fill>_fill.*`` for another ``--fill``. The photographer's bounce light (its
+ambient light and its fill light from the ceiling's middle) in the truth:
+
+* ``occluded`` (default): the furniture hides it from the floor as from a real one, a
+  cosine-weighted share of a uniform sky (:func:`augment.synth.bounce.floor_bounce_visibility`):
+  the soft darkening under and around furniture;
+* ``through``: it lights the floor through the furniture (pyrender's own lights);
+* ``shadowed``: the fill is a wide spot that casts shadows, in the empty photo and in the
+  truth alike, as a real lamp there would; the ambient light passes through.
 
 Each case (seed ``[--seed, i]``, sizes from 1280x960 to 4032x3024, the living room, bedroom,
 dining room and office presets in turn) is an empty synthetic room with the board on the
@@ -147,7 +154,9 @@ def main(argv=None) -> int:
     parser.add_argument("--count", type=int, default=40)
     parser.add_argument("--seed", type=int, default=9700)
     parser.add_argument("--old", default="d0f695e", help="git revision of the renderer to compare with")
-    parser.add_argument("--shadowed-fill", action="store_true", help="the truth's fill light casts shadows")
+    parser.add_argument("--fill", choices=("occluded", "through", "shadowed"), default="occluded",
+                        help="the truth's bounce light: hidden from the floor by the furniture (default), "
+                             "through it, or the fill light casting shadows")
     parser.add_argument("--old-driver", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.old_driver:
@@ -179,7 +188,7 @@ def main(argv=None) -> int:
             seed = [args.seed, i]
             row = {"case": i, "size": f"{size[0]}x{size[1]}", "room": room}
             t = time.perf_counter()
-            empty = render_sample(seed, renderer, size, clutter=False, shadowed_fill=args.shadowed_fill)
+            empty = render_sample(seed, renderer, size, clutter=False, shadowed_fill=args.fill == "shadowed")
             truth = empty.truth
             photo = work / f"case_{i:02d}.jpg"
             save_as_phone(photo, empty.image, truth["K"][0][0], truth["photo"]["jpeg_quality"])
@@ -197,7 +206,7 @@ def main(argv=None) -> int:
             pieces = [(furniture_for(it, lay_seed, style=style), world_from_floor @ world_from_item(it))
                       for it in items]
             truth_f = render_sample(seed, renderer, size, clutter=False, board_drawn=False, pieces=pieces,
-                                    shadowed_fill=args.shadowed_fill)
+                                    shadowed_fill=args.fill == "shadowed", occluded_bounce=args.fill == "occluded")
             t_truth = time.perf_counter() - t
 
             cal, mask = result.calibration, result.segmentation.mask
@@ -271,9 +280,9 @@ def main(argv=None) -> int:
         summary[which]["light_error_deg_sun_in_view_median"] = med
         summary[which]["light_error_deg_sun_in_view_cases"] = n
     passed = {k: (summary["new"][k] <= v if op == "<=" else summary["new"][k] >= v) for k, (op, v) in TARGETS.items()}
-    name = "realism_shadowed_fill" if args.shadowed_fill else "realism"
-    flag = " --shadowed-fill" if args.shadowed_fill else ""
-    data = {"machine": machine(count=args.count, seed=args.seed, old=args.old, shadowed_fill=args.shadowed_fill),
+    name = "realism" if args.fill == "occluded" else f"realism_{args.fill}_fill"
+    flag = "" if args.fill == "occluded" else f" --fill {args.fill}"
+    data = {"machine": machine(count=args.count, seed=args.seed, old=args.old, fill=args.fill),
             "targets": TARGETS,
             "summary": summary, "passed": passed, "cases": rows}
     refused = [r for r in rows if "refused" in r]
@@ -306,15 +315,17 @@ def main(argv=None) -> int:
                   f"{n['shadow_iou']:.2f} / {w['shadow_iou']:.2f} / {o.get('shadow_iou', math.nan):.2f} | "
                   f"{n['light_error_deg']:.0f} / {w['light_error_deg']:.0f} / "
                   f"{o.get('light_error_deg', math.nan):.0f} |")
-    fill = ("its fill light from the ceiling's middle casts shadows (`--shadowed-fill`), its ambient light does "
-            "not" if args.shadowed_fill else "its ambient light and its fill light from the ceiling's middle (whose "
-            "pool on the floor the renderer takes for a lamp's) light through the furniture")
+    fill = {"occluded": "its bounce light (ambient and fill) reaches the floor as far as the furniture leaves a "
+                        "uniform sky open above each point; the furniture's own surfaces take it unoccluded",
+            "through": "its ambient light and its fill light from the ceiling's middle light through the furniture: "
+                       "its floor darkens only under the sun and the ceiling lamps, and the renderer's occlusion "
+                       "under furniture, which real rooms show, counts against it in shadow IoU",
+            "shadowed": "its fill light from the ceiling's middle casts shadows (`--fill shadowed`), its ambient "
+                        "light does not"}[args.fill]
     md += ["", f"`{name}_worst.png`: the six cases with the largest ΔE, each truth | new | old renderer.", "",
-           "Lamps: ceiling lamps the renderer found from their pools of light on the floor. Caveats: pyrender has "
-           f"no ambient occlusion or bounced light, and in the truth {fill}; so its floor darkens only under the "
-           "sun and the shadowed lights, and the renderer's occlusion under furniture, which real rooms show, "
-           "counts against it in shadow IoU. The old renderer reads its light off the board-erased photo, as the "
-           "pipeline then did."]
+           "Lamps: ceiling lamps the renderer found from their pools of light on the floor (the photographer's fill "
+           f"light's pool counts as one). The truth: pyrender with shadow maps, and {fill}. The old renderer reads its "
+           "light off the board-erased photo, as the pipeline then did."]
     write(name, data, md)
     worst = sorted((p for p in pictures if not math.isnan(p[0])), key=lambda p: -p[0])[:6]
     if worst:

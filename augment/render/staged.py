@@ -882,6 +882,11 @@ class _FloorShading:
     ao: np.ndarray          # share of the ambient light it takes, 0-1, before ``ao_strength``
 
 
+def _side_ao_sigma_m(height_m, settings: StagedSettings) -> float:
+    """How far beside a thing of this height its sides hide the sky from the floor (sigma)."""
+    return float(np.clip(settings.side_ao_rel * height_m, 0.015, settings.side_ao_max_m))
+
+
 def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
                 light_map: _LightMap | None = None) -> _FloorShading:
     """What the floor's brightness is multiplied by, in the photo's gamma: (irradiance with
@@ -932,8 +937,8 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
     # A part raised higher than it is tall (a tabletop, a seat) hides the sky from the floor
     # beside it no more than its underside does: its sides count only when it stands low.
     every = np.ones(len(casters), bool)
-    for key, sigma_of, weight, counted in ((bottoms, lambda z: max(0.015, 0.45 * z), 0.8, every),
-                                           (heights, lambda z: float(np.clip(0.12 * z, 0.015, 0.1)),
+    for key, sigma_of, weight, counted in ((bottoms, lambda z: max(0.015, settings.ao_under_rel * z), 0.8, every),
+                                           (heights, lambda z: _side_ao_sigma_m(z, settings),
                                             settings.side_ao_weight, bottoms < heights)):
         bins = np.where(counted, np.clip(np.searchsorted(bins_m, key, side="right") - 1, 0, nb - 1), -1)
         for b in np.unique(bins[counted]):
@@ -1280,7 +1285,7 @@ def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
     for item, _ in placed:
         W, D, Hh = item.size_m
         T = world_from_item(item)
-        g = 0.35
+        g = max(0.35, 2.5 * _side_ao_sigma_m(Hh, settings))
         corners = np.array([[x, y, z] for x in (-D / 2 - g, D / 2 + g) for y in (-W / 2 - g, W / 2 + g)
                             for z in (0.0, Hh)])
         world = corners @ T[:3, :3].T + T[:3, 3]
@@ -1553,7 +1558,9 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     casters = _casters(placed, settings)
     on_floor = reach[reach[:, 2] < 1e-6, :2]
     pts = np.concatenate([on_floor] + [c.points[:, :2] for c in casters])
-    shading = _floor_gain(casters, lighting, (pts.min(axis=0) - 0.3, pts.max(axis=0) + 0.3), settings, light_map)
+    # The raster reaches as far as the sides' occlusion spreads.
+    pad = max(0.3, 2.5 * max((_side_ao_sigma_m(it.size_m[2], settings) for it, _ in placed), default=0.0))
+    shading = _floor_gain(casters, lighting, (pts.min(axis=0) - pad, pts.max(axis=0) + pad), settings, light_map)
     shift = np.array([[1.0, 0, -box[0]], [0, 1, -box[1]], [0, 0, 1]])
     H_box = shift @ K @ np.column_stack([R[:, 0], R[:, 1], tvec]) @ shading.grid.floor_from_raster()
     gain = cv2.warpPerspective(shading.gain, H_box, (bw, bh), flags=cv2.INTER_LINEAR,

@@ -21,6 +21,7 @@ from layout.fileio import write_atomic
 
 from ..camera.board import CHARUCO_DICTIONARY, Board
 from ..render.gl import Renderer, pyrender
+from .bounce import floor_bounce_visibility
 from .camera import Shot, place_board, random_handling, random_shot, random_size
 from .photo import degrade
 from .rooms import BASEBOARD_M, Clutter, Room, add_clutter, add_furniture, random_room
@@ -90,7 +91,7 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
                   board_hidden: float = 0.0, furnished: float = 0.0, baseboard_m=BASEBOARD_M,
                   trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True,
                   pieces=(), low_sun: float = 0.0, two_floors: float = 0.0, outside: bool = True,
-                  shadowed_fill: bool = False) -> Sample:
+                  shadowed_fill: bool = False, occluded_bounce: bool = False) -> Sample:
     """Render one synthetic room photo with its ground truth.
 
     Parameters
@@ -148,7 +149,13 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         The fill light from the ceiling's middle casts shadows (a wide spot, the same
         light below the horizontal) instead of lighting through the furniture: the
         realism benchmark's truth. Off by default: the training renders stay as they were.
+    occluded_bounce : bool
+        The furniture (``pieces``) hides the bounce light (ambient and fill) from the floor
+        as it would from a real one (:func:`_hide_bounce`): the truth of the soft
+        darkening under and around furniture. Off by default; not with ``shadowed_fill``.
     """
+    if occluded_bounce and shadowed_fill:
+        raise ValueError("occluded_bounce and shadowed_fill are two models of the fill light: choose one")
     board = Board() if board is None else board
     rng = np.random.default_rng(seed)
     size_px = random_size(rng) if size_px is None else (int(size_px[0]), int(size_px[1]))
@@ -185,6 +192,8 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     shadow_px = 1024 if max(size_px) <= 800 else 2048
     color, depth_m = renderer.render(built.scene, width, height, flags=flags, shadow_map_px=shadow_px)
     labels = render_labels(renderer, built.scene, built.seg_node_map, depth_m)
+    if occluded_bounce and len(pieces):
+        color = _hide_bounce(renderer, built.scene, color, labels == FLOOR, depth_m, shot, pieces)
     for light in built.info["lights"]:
         if light["kind"] == "sun" and outside:
             light["floor_in_view"] = round(_sunlit_share(labels == FLOOR, depth_m, shot, room, light["direction"]), 4)
@@ -203,6 +212,35 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     visible[inside] = np.abs(seen - corner_depth[inside]) < _VISIBLE_DEPTH_TOL_M
     truth = _truth(seed, room, shot, board, world_from_board, corners_px, visible, built.info, photo_params)
     return Sample(image, labels == FLOOR, labels, depth_m, truth)
+
+
+def _hide_bounce(renderer: Renderer, scene, color, floor, depth_m, shot: Shot, pieces) -> np.ndarray:
+    """``color`` with the floor's bounce light dimmed by the share of the sky the furniture
+    hides from it (:func:`.bounce.floor_bounce_visibility`, on a grid about 640 points wide:
+    the occlusion is smooth). The bounce light is the render with the ambient and the fill
+    light alone; pyrender's output is linear light to the power 1/2.2. Removes the scene's
+    other lights."""
+    h, w = depth_m.shape
+    step = max(1, round(w / 640))
+    grid = floor[::step, ::step] & (depth_m[::step, ::step] > 0)
+    v, u = np.nonzero(grid)
+    z = depth_m[::step, ::step][v, u].astype(np.float64)
+    rays = np.linalg.solve(shot.K, np.stack([u * step, v * step, np.ones_like(u)]).astype(np.float64))
+    points = (rays * z).T @ shot.world_from_camera[:3, :3].T + shot.world_from_camera[:3, 3]
+    hidden = np.zeros(grid.shape, np.float32)
+    hidden[v, u] = 1.0 - floor_bounce_visibility(renderer, pieces, points)
+    # Back to every pixel: the floor's grid points only, averaged (a normalized interpolation).
+    map_x, map_y = np.meshgrid(np.arange(w, dtype=np.float32) / step, np.arange(h, dtype=np.float32) / step)
+    total = cv2.remap(hidden, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    weight = cv2.remap(grid.astype(np.float32), map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    hidden = np.where(floor & (weight > 1e-3), total / np.maximum(weight, 1e-3), 0.0).astype(np.float32)
+    for node in list(scene.light_nodes):
+        if not node.name.startswith("light2"):  # the sun (light0) and the ceiling lamps (light1)
+            scene.remove_node(node)
+    bounce, _ = renderer.render(scene, w, h)
+    linear = (color.astype(np.float32) / 255.0) ** 2.2
+    linear -= hidden[..., None] * (bounce.astype(np.float32) / 255.0) ** 2.2
+    return np.round(np.clip(linear, 0.0, 1.0) ** (1 / 2.2) * 255.0).astype(np.uint8)
 
 
 def _sunlit_share(floor, depth_m, shot, room: Room, direction) -> float:

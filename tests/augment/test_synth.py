@@ -515,3 +515,64 @@ def test_a_shadowed_fill_lights_the_same_and_casts_shadows(renderer):
     grey = [cv2.cvtColor(s.image, cv2.COLOR_RGB2GRAY).astype(float)[seen] for s in lit]
     assert grey[1].sum() < grey[0].sum()
     assert (grey[1] < grey[0] - 8).sum() > 400  # a shadow behind it (776 pixels), not a shade
+
+
+def _plate_part(half_m, z_m, thickness_m=0.01):
+    """A square plate (2 half_m a side), its underside at height z_m, item frame."""
+    import trimesh
+
+    from augment.render.furniture import Material, Part
+
+    box = trimesh.creation.box((2 * half_m, 2 * half_m, thickness_m))
+    box.apply_translation((0.0, 0.0, z_m + thickness_m / 2))
+    return Part(np.asarray(box.vertices, float), np.asarray(box.vertex_normals, float), np.asarray(box.faces),
+                Material("plate", (0.5, 0.5, 0.5)))
+
+
+def test_bounce_visibility_under_a_plate_is_the_view_factor(renderer):
+    """Below the centre of a square plate, the share of a uniform sky seen is one minus
+    the plate's view factor (four corner rectangles: the textbook formula for a plane
+    element below a corner of a parallel rectangle); far away, all of it."""
+    from augment.render.furniture import Furniture
+    from augment.synth.bounce import floor_bounce_visibility, hemisphere_directions
+
+    d = hemisphere_directions(48)
+    assert np.allclose(np.linalg.norm(d, axis=1), 1.0) and (d[:, 2] > 0).all()
+    # Cosine-weighted: the mean of cos(theta) over the hemisphere so weighted is 2/3.
+    assert abs(d[:, 2].mean() - 2 / 3) < 0.01
+    half, z = 0.5, 0.7
+    plate = Furniture("plate", "test", (2 * half, 2 * half, z), (_plate_part(half, z),))
+    seen = floor_bounce_visibility(renderer, [(plate, np.eye(4))], np.array([[0.0, 0.0, 0.0], [20.0, 0.0, 0.0]]))
+    a = b = half / z
+    corner = (a / np.hypot(1, a) * np.arctan(b / np.hypot(1, a)) + b / np.hypot(1, b) * np.arctan(a / np.hypot(1, b)))
+    view_factor = 4 * corner / (2 * np.pi)
+    assert 0.3 < view_factor < 0.5  # the case is a telling one
+    assert abs(seen[0] - (1 - view_factor)) < 0.05
+    assert seen[1] == 1.0
+
+
+def test_occluded_bounce_darkens_only_the_floor_near_furniture(renderer):
+    from augment.render.furniture import Furniture
+
+    seed = 3
+    plain = render_sample(seed, renderer, size_px=(320, 240), clutter=False, photographic=False)
+    board_xy = np.asarray(plain.truth["board"]["world_from_board"])[:2, 3]
+    plate = Furniture("plate", "test", (0.8, 0.8, 0.5), (_plate_part(0.4, 0.5),))
+    pose = np.eye(4)
+    pose[:2, 3] = board_xy
+    pieces = [(plate, pose)]
+    through = render_sample(seed, renderer, size_px=(320, 240), clutter=False, photographic=False,
+                            board_drawn=False, pieces=pieces)
+    hidden = render_sample(seed, renderer, size_px=(320, 240), clutter=False, photographic=False,
+                           board_drawn=False, pieces=pieces, occluded_bounce=True)
+    floor = hidden.labels == FLOOR
+    assert np.array_equal(hidden.image[~floor], through.image[~floor])
+    darker = hidden.image.astype(int).sum(axis=2) < through.image.astype(int).sum(axis=2)
+    assert (hidden.image.astype(int) <= through.image.astype(int)).all()
+    # The floor under the plate, seen between its edge and the floor: darker.
+    rows, cols = np.nonzero(floor & darker)
+    assert len(rows) > 50
+    points = _unproject(hidden, floor & darker)
+    assert np.median(np.linalg.norm(points[:, :2] - board_xy, axis=1)) < 0.8
+    with pytest.raises(ValueError, match="choose one"):
+        render_sample(seed, renderer, size_px=(320, 240), occluded_bounce=True, shadowed_fill=True)
