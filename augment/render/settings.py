@@ -42,11 +42,11 @@ class StagedSettings:
     floor_level_m: float = 0.02  # furniture pixels this low take the floor's shadows
     caster_min_height_m: float = 0.03  # parts lower than this cast no shadow (rugs)
     shadow_samples: int = 10  # key-light directions averaged for a soft shadow
-    ao_strength: float = 0.8  # share of the ambient light occlusion removes at most
+    ao_strength: float = 1.0  # share of the ambient light occlusion removes at most
     ao_under_rel: float = 0.45  # a footprint hides the sky from the floor below over this x its underside's height
-    side_ao_weight: float = 0.45  # occlusion by the sides of things, relative to overhead ...
-    side_ao_rel: float = 0.12  # ... spread beside them over this x their height ...
-    side_ao_max_m: float = 0.1  # ... and at most this far (Gaussian sigma)
+    side_ao_weight: float = 1.0  # occlusion by the sides of things, relative to overhead ...
+    side_ao_rel: float = 0.7  # ... spread beside them over this x their height (a wall's: about 0.9) ...
+    side_ao_max_m: float = 0.7  # ... and at most this far (Gaussian sigma)
     contact_height_m: float = 0.015  # parts whose underside is this close to the floor stand on it
     contact_band_m: float = 0.02  # their foot: the part of them this close to their underside
     contact_sigma_m: float = 0.012  # the contact shadow's spread beyond the foot's edge

@@ -1311,6 +1311,26 @@ def _roi(points_px, depth, size_px, margin):
     return (int(x0), int(y0), int(x1), int(y1))
 
 
+def _furniture_box(placed, K, pose, box, margin):
+    """The part of ``box`` (pixels of the undistorted view) the items' bounding boxes
+    cover, grown by ``margin``: all of ``box`` where one reaches behind the camera."""
+    corners = []
+    for item, _ in placed:
+        W, D, H = item.size_m
+        T = world_from_item(item)
+        c = np.array([[x, y, z] for x in (-D / 2, D / 2) for y in (-W / 2, W / 2) for z in (0.0, H)])
+        corners.append(c @ T[:3, :3].T + T[:3, 3])
+    px, depth = _project(np.concatenate(corners), K, pose)
+    if np.any(depth <= RENDER.gl.znear_m):
+        return box
+    x0, y0 = np.floor(px.min(axis=0)).astype(int) - margin
+    x1, y1 = np.ceil(px.max(axis=0)).astype(int) + margin + 1
+    x0, y0, x1, y1 = max(box[0], x0), max(box[1], y0), min(box[2], x1), min(box[3], y1)
+    if x1 <= x0 or y1 <= y0:
+        return box
+    return (int(x0), int(y0), int(x1), int(y1))
+
+
 def _undistort_map(K, dist, roi, step=8):
     """Undistorted pixel coordinates of the photo pixels of ``roi`` (two (h, w) float32
     maps), computed every ``step`` pixels and interpolated."""
@@ -1449,13 +1469,17 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     else:
         box = roi
     bw, bh = box[2] - box[0], box[3] - box[1]
-    s = _render_scale(bw * bh, supersample, look.blur_px, settings)
-    rw, rh = max(1, round(bw * s)), max(1, round(bh * s))
-    Kr = _scaled_K(K - np.array([[0, 0, box[0]], [0, 0, box[1]], [0, 0, 0]]), 1.0)
-    Kr[0, 0] *= rw / bw
-    Kr[1, 1] *= rh / bh
-    Kr[0, 2] = (Kr[0, 2] + 0.5) * rw / bw - 0.5
-    Kr[1, 2] = (Kr[1, 2] + 0.5) * rh / bh - 0.5
+    # The furniture is rendered over its own box within it (the floor's shading reaches
+    # further, but costs no rendered pixels): a wide occlusion halo leaves its resolution be.
+    fbox = _furniture_box(placed, K, pose, box, settings.margin_px)
+    fw, fh = fbox[2] - fbox[0], fbox[3] - fbox[1]
+    s = _render_scale(fw * fh, supersample, look.blur_px, settings)
+    rw, rh = max(1, round(fw * s)), max(1, round(fh * s))
+    Kr = _scaled_K(K - np.array([[0, 0, fbox[0]], [0, 0, fbox[1]], [0, 0, 0]]), 1.0)
+    Kr[0, 0] *= rw / fw
+    Kr[1, 1] *= rh / fh
+    Kr[0, 2] = (Kr[0, 2] + 0.5) * rw / fw - 0.5
+    Kr[1, 2] = (Kr[1, 2] + 0.5) * rh / fh - 0.5
     timings["setup"] = time.perf_counter() - t
 
     # The flat passes: all light, and the key light alone for its shadows (premultiplied:
@@ -1529,7 +1553,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     low[ys, xs] = np.where(world[:, 2] < settings.floor_level_m, 255, 0)
     if floor_mask is not None or (walls is not None and len(walls)):
         if floor_mask is not None and not distorted:  # the photo pixel of each render pixel
-            px = np.stack([(xs + 0.5) * (bw / rw) - 0.5 + box[0], (ys + 0.5) * (bh / rh) - 0.5 + box[1]], 1)
+            px = np.stack([(xs + 0.5) * (fw / rw) - 0.5 + fbox[0], (ys + 0.5) * (fh / rh) - 0.5 + fbox[1]], 1)
         elif floor_mask is not None:
             px = _project(world, K, pose, dist)[0]
         else:
@@ -1549,10 +1573,15 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
 
     # Back to photo pixels: resample the render onto the box.
     t = time.perf_counter()
-    if (rw, rh) != (bw, bh):
+    if (rw, rh) != (fw, fh):
         interp = cv2.INTER_AREA if s > 1 else cv2.INTER_LINEAR
-        rgba = cv2.resize(rgba, (bw, bh), interpolation=interp)
-        low = cv2.resize(low, (bw, bh), interpolation=interp)
+        rgba = cv2.resize(rgba, (fw, fh), interpolation=interp)
+        low = cv2.resize(low, (fw, fh), interpolation=interp)
+    if fbox != box:
+        at = np.s_[fbox[1] - box[1]:fbox[3] - box[1], fbox[0] - box[0]:fbox[2] - box[0]]
+        inner = rgba, low
+        rgba, low = np.zeros((bh, bw, 4), np.uint8), np.zeros((bh, bw), np.uint8)
+        rgba[at], low[at] = inner
     # Shadows: the floor raster warped onto the box, only where the floor can be (rays
     # pointing down; the warp folds the floor's far side into the sky).
     casters = _casters(placed, settings)
