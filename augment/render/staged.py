@@ -1331,6 +1331,16 @@ def _furniture_box(placed, K, pose, box, margin):
     return (int(x0), int(y0), int(x1), int(y1))
 
 
+def _in_box(rgba, low, at, shape):
+    """The furniture's layers (its own box) placed at ``at`` in transparent ones of ``shape``."""
+    if rgba.shape[:2] == tuple(shape):
+        return rgba, low
+    inner = rgba, low
+    rgba, low = np.zeros((*shape, 4), np.uint8), np.zeros(shape, np.uint8)
+    rgba[at], low[at] = inner
+    return rgba, low
+
+
 def _undistort_map(K, dist, roi, step=8):
     """Undistorted pixel coordinates of the photo pixels of ``roi`` (two (h, w) float32
     maps), computed every ``step`` pixels and interpolated."""
@@ -1471,7 +1481,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     bw, bh = box[2] - box[0], box[3] - box[1]
     # The furniture is rendered over its own box within it (the floor's shading reaches
     # further, but costs no rendered pixels): a wide occlusion halo leaves its resolution be.
-    fbox = _furniture_box(placed, K, pose, box, settings.margin_px)
+    fbox = _furniture_box(placed, K, pose, box, settings.margin_px + math.ceil(3.0 * look.blur_px))
     fw, fh = fbox[2] - fbox[0], fbox[3] - fbox[1]
     s = _render_scale(fw * fh, supersample, look.blur_px, settings)
     rw, rh = max(1, round(fw * s)), max(1, round(fh * s))
@@ -1577,11 +1587,9 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         interp = cv2.INTER_AREA if s > 1 else cv2.INTER_LINEAR
         rgba = cv2.resize(rgba, (fw, fh), interpolation=interp)
         low = cv2.resize(low, (fw, fh), interpolation=interp)
-    if fbox != box:
-        at = np.s_[fbox[1] - box[1]:fbox[3] - box[1], fbox[0] - box[0]:fbox[2] - box[0]]
-        inner = rgba, low
-        rgba, low = np.zeros((bh, bw, 4), np.uint8), np.zeros((bh, bw), np.uint8)
-        rgba[at], low[at] = inner
+    at = np.s_[fbox[1] - box[1]:fbox[3] - box[1], fbox[0] - box[0]:fbox[2] - box[0]]
+    if distorted:  # warped below as the box
+        rgba, low = _in_box(rgba, low, at, (bh, bw))
     # Shadows: the floor raster warped onto the box, only where the floor can be (rays
     # pointing down; the warp folds the floor's far side into the sky).
     casters = _casters(placed, settings)
@@ -1615,6 +1623,8 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     t = time.perf_counter()
     rgba = apply_look(rgba, look, settings.render_edge_px / s, seed)
     low = blur_like_photo(low, look, settings.render_edge_px / s)  # as soft as the rug's edges it marks
+    if not distorted:  # the look only where furniture is: a wide halo costs little
+        rgba, low = _in_box(rgba, low, at, (bh, bw))
     timings["look"] = time.perf_counter() - t
 
     t = time.perf_counter()
