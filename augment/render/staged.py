@@ -305,7 +305,9 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     else:
         elev = math.radians(65.0)
         direction = np.append(horiz * math.cos(elev), -math.sin(elev))
-        key, soft, source = 0.3, 0.3, "default"
+        # Nothing in the photo says where the light comes from: a weak, very soft key, so
+        # no shadow is thrown far in a direction that is only a guess.
+        key, soft, source = 0.15, 0.5, "default"
     sun = patches if source == "sun" else None
     lamps = ()
     if floor_mask is not None:
