@@ -1285,12 +1285,7 @@ def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
     out = []
     dirs = [v for v in _shadow_directions(lighting.direction, lighting.softness_rad, 8) if v[2] < -0.05]
     for item, _ in placed:
-        W, D, Hh = item.size_m
-        T = world_from_item(item)
-        g = max(0.35, 2.5 * _side_ao_sigma_m(Hh, settings))
-        corners = np.array([[x, y, z] for x in (-D / 2 - g, D / 2 + g) for y in (-W / 2 - g, W / 2 + g)
-                            for z in (0.0, Hh)])
-        world = corners @ T[:3, :3].T + T[:3, 3]
+        world = _item_corners(item, max(0.35, 2.5 * _side_ao_sigma_m(item.size_m[2], settings)))
         out.append(world)
         top = world[1::2]
         out.append(top + [0.0, 0.0, 3.0 * settings.wall_ao_fade_m])  # the walls' occlusion above it
@@ -1316,21 +1311,21 @@ def _roi(points_px, depth, size_px, margin):
 def _furniture_box(placed, K, pose, box, margin):
     """The part of ``box`` (pixels of the undistorted view) the items' bounding boxes
     cover, grown by ``margin``: all of ``box`` where one reaches behind the camera."""
-    corners = []
-    for item, _ in placed:
-        W, D, H = item.size_m
-        T = world_from_item(item)
-        c = np.array([[x, y, z] for x in (-D / 2, D / 2) for y in (-W / 2, W / 2) for z in (0.0, H)])
-        corners.append(c @ T[:3, :3].T + T[:3, 3])
-    px, depth = _project(np.concatenate(corners), K, pose)
-    if np.any(depth <= RENDER.gl.znear_m):
+    px, depth = _project(np.concatenate([_item_corners(item, 0.0) for item, _ in placed]), K, pose)
+    inner = _roi(px - box[:2], depth, (box[2] - box[0], box[3] - box[1]), margin)
+    if inner is None:
         return box
-    x0, y0 = np.floor(px.min(axis=0)).astype(int) - margin
-    x1, y1 = np.ceil(px.max(axis=0)).astype(int) + margin + 1
-    x0, y0, x1, y1 = max(box[0], x0), max(box[1], y0), min(box[2], x1), min(box[3], y1)
-    if x1 <= x0 or y1 <= y0:
-        return box
-    return (int(x0), int(y0), int(x1), int(y1))
+    return (inner[0] + box[0], inner[1] + box[1], inner[2] + box[0], inner[3] + box[1])
+
+
+def _item_corners(item, grow_m: float) -> np.ndarray:
+    """(8, 3) floor-frame corners of an item's bounding box, grown by ``grow_m`` across
+    the floor (its base at z = 0, its top at its height, in its own frame)."""
+    W, D, H = item.size_m
+    T = world_from_item(item)
+    c = np.array([[x, y, z] for x in (-D / 2 - grow_m, D / 2 + grow_m) for y in (-W / 2 - grow_m, W / 2 + grow_m)
+                  for z in (0.0, H)])
+    return c @ T[:3, :3].T + T[:3, 3]
 
 
 def _in_box(rgba, low, at, shape):
