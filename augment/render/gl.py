@@ -124,6 +124,33 @@ def gl_from_cv_pose(world_from_camera: np.ndarray) -> np.ndarray:
     return np.asarray(world_from_camera, dtype=np.float64) @ _CV_TO_GL
 
 
+def far_camera(center_m, radius_m: float, forward, size_px: int, distance_m: float):
+    """A camera ``distance_m`` away looking along ``forward`` (3,) at a sphere (``center_m``
+    (3,), ``radius_m``) that fills its ``size_px`` square image: nearly parallel rays, yet
+    pyrender's depth stays exact. The image's x axis is horizontal where it can be.
+
+    Returns
+    -------
+    camera_from_world : (4, 4) float64, OpenCV axes
+    K : (3, 3) float64, pixels
+    camera : pyrender.IntrinsicsCamera, near and far planes around the sphere
+    """
+    d = np.asarray(forward, dtype=np.float64)
+    d = d / np.linalg.norm(d)
+    x = np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.99 else np.array([1.0, 0.0, 0.0])
+    x /= np.linalg.norm(x)
+    R = np.stack([x, np.cross(d, x), d])
+    eye = np.asarray(center_m, dtype=np.float64) - d * distance_m
+    camera_from_world = np.eye(4)
+    camera_from_world[:3, :3], camera_from_world[:3, 3] = R, -R @ eye
+    f = 0.5 * size_px * distance_m / radius_m
+    c = 0.5 * size_px - 0.5
+    K = np.array([[f, 0.0, c], [0.0, f, c], [0.0, 0.0, 1.0]])
+    camera = pyrender.IntrinsicsCamera(fx=f, fy=f, cx=c + 0.5, cy=c + 0.5, znear=distance_m - 2.0 * radius_m,
+                                       zfar=distance_m + 2.0 * radius_m)
+    return camera_from_world, K, camera
+
+
 def _with_shadow_offset(shadow_pass):
     """Wrap one renderer's shadow pass so it writes depths pushed back by
     ``RENDER.gl.shadow_offset`` (slope-scaled, so grazing surfaces get more): pyrender's own

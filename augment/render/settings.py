@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numpy as np
 
 
 @dataclass
@@ -43,16 +42,16 @@ class StagedSettings:
     caster_min_height_m: float = 0.03  # parts lower than this cast no shadow (rugs)
     shadow_samples: int = 10  # key-light directions averaged for a soft shadow
     ao_strength: float = 1.0  # share of the ambient light occlusion removes at most
-    ao_under_rel: float = 0.45  # a footprint hides the sky from the floor below over this x its underside's height
-    side_ao_weight: float = 1.0  # occlusion by the sides of things, relative to overhead ...
-    side_ao_rel: float = 0.7  # ... spread beside them over this x their height (a wall's: about 0.9) ...
-    side_ao_max_m: float = 0.7  # ... and at most this far (Gaussian sigma)
+    ao_directions: int = 96  # sky directions sampled for the floor's occlusion (cosine-weighted) ...
+    ao_blur_rel: float = 0.5  # ... their shadows' copies blurred by this x their spacing at a typical height
+    ao_reach_rel: float = 1.75  # the occlusion beside a thing is worked out this x its height away ...
+    ao_reach_max_m: float = 1.75  # ... at most (a wall of height h hides 7 % of the sky 1.75 h away)
+    lamp_diffuse_share: float = 0.5  # share of a ceiling lamp's light reaching the floor off its shade,
+    # the ceiling and the walls near it: occluded like the sky's, the rest shadowed from the lamp
     contact_height_m: float = 0.015  # parts whose underside is this close to the floor stand on it
     contact_band_m: float = 0.02  # their foot: the part of them this close to their underside
     contact_sigma_m: float = 0.012  # the contact shadow's spread beyond the foot's edge
     contact_strength: float = 0.7  # share of all light the floor loses right at the foot's edge, at most
-    ao_bins_m: np.ndarray = field(  # (k,) part heights grouped for ambient occlusion: one blur per group
-        default_factory=lambda: np.array([0.0, 0.06, 0.15, 0.3, 0.55, 0.9, 1.5, 1e9]))
     floor_cell_max_px: int = 900  # floor raster: at most this many cells a side
     wall_samples: int = 150_000  # walls' shadows: worked out on at most this many pixels of the region
     wall_ambient_share: float = 0.6  # a wall's light but the key, relative to the floor's: half the sky, the bounce

@@ -53,7 +53,7 @@ from layout.fileio import write_atomic
 
 from ..photo.io import JPEG_QUALITY, encode_image
 from .furniture import furniture_for, part_texture, placed_items, world_from_item
-from .gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
+from .gl import Renderer, Scene, far_camera, gl_from_cv_pose, pyrender, pyrender_camera
 from .lamps import find_lamps
 from .look import PhotoLook, apply_look, blur_like_photo, estimate_look
 from .settings import RENDER, StagedSettings
@@ -615,22 +615,9 @@ _LIGHT_DISTANCE_M = 100.0
 
 
 def _light_view(renderer, meshes, lighting: Lighting, lo_m, hi_m, size_px) -> _LightView:
-    d = np.asarray(lighting.direction, dtype=np.float64)
-    d /= np.linalg.norm(d)
     center = 0.5 * (np.asarray(lo_m) + np.asarray(hi_m))
     radius = max(0.5 * float(np.linalg.norm(np.asarray(hi_m) - np.asarray(lo_m))), 0.05)
-    eye = center - d * _LIGHT_DISTANCE_M
-    x = np.cross(d, [0, 0, 1.0]) if abs(d[2]) < 0.99 else np.array([1.0, 0, 0])
-    x /= np.linalg.norm(x)
-    y = np.cross(d, x)
-    R = np.stack([x, y, d])  # OpenCV axes: z along the light
-    pose = np.eye(4)
-    pose[:3, :3], pose[:3, 3] = R, -R @ eye
-    f = 0.5 * size_px * _LIGHT_DISTANCE_M / radius
-    c = 0.5 * size_px - 0.5
-    K = np.array([[f, 0, c], [0, f, c], [0, 0, 1.0]])
-    camera = pyrender.IntrinsicsCamera(fx=f, fy=f, cx=c + 0.5, cy=c + 0.5, znear=_LIGHT_DISTANCE_M - 2 * radius,
-                                       zfar=_LIGHT_DISTANCE_M + 2 * radius)
+    pose, K, camera = far_camera(center, radius, lighting.direction, size_px, _LIGHT_DISTANCE_M)
     scene = _flat_scene(meshes, camera, gl_from_cv_pose(np.linalg.inv(pose)))
     depth = renderer.render(scene, size_px, size_px, flags=pyrender.RenderFlags.DEPTH_ONLY)
     return _LightView(pose, K, np.ascontiguousarray(depth, dtype=np.float32), 2.0 * radius / size_px)
@@ -853,6 +840,16 @@ def _blur(image, sigma_px):
     return cv2.resize(cv2.GaussianBlur(small, (0, 0), 2.5), (w, h), interpolation=cv2.INTER_LINEAR)
 
 
+def hemisphere_directions(n: int) -> np.ndarray:
+    """``n`` unit directions (n, 3) over the upper hemisphere (z > 0), cosine-weighted and
+    evenly spread (a golden-angle spiral on the disk, lifted onto the hemisphere): their
+    mean visibility is a horizontal surface's share of a uniform sky."""
+    k = np.arange(n) + 0.5
+    r = np.sqrt(k / n)
+    phi = k * math.pi * (3.0 - math.sqrt(5.0))
+    return np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1.0 - r * r)], axis=1)
+
+
 def _spiral(n):
     """``n`` points spread evenly over the unit disk (a golden-angle spiral), as
     (distance from the centre, angle) pairs."""
@@ -884,9 +881,9 @@ class _FloorShading:
     ao: np.ndarray          # share of the ambient light it takes, 0-1, before ``ao_strength``
 
 
-def _side_ao_sigma_m(height_m, settings: StagedSettings) -> float:
-    """How far beside a thing of this height its sides hide the sky from the floor (sigma)."""
-    return float(np.clip(settings.side_ao_rel * height_m, 0.015, settings.side_ao_max_m))
+def _ao_reach_m(height_m, settings: StagedSettings) -> float:
+    """How far beside a thing of this height its occlusion of the sky is worked out."""
+    return float(np.clip(settings.ao_reach_rel * height_m, 0.35, settings.ao_reach_max_m))
 
 
 def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
@@ -897,12 +894,12 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
     shadow and the occlusion it is made of (the walls take them too, :func:`_wall_gain`).
 
     The key light's shadow is the average of hard shadows cast along directions spread
-    over the light's angular size (soft, and sharper near contact); ambient occlusion
-    blurs each part's footprint by the height of its underside (a plate at height z hides
-    a cosine-weighted share of sky that falls off over about z) and, less, by its height
-    (the sides of things hide the sky near their base); what stands on the floor darkens
-    a thin line around its foot (contact). Ceiling lamps light the floor besides (their
-    share where ``light_map`` says how much the rest gives) and cast shadows of their own."""
+    over the light's angular size (soft, and sharper near contact); ambient occlusion is
+    the share of a uniform sky the parts hide, sampled over the hemisphere (under a raised
+    top and beside a cabinet alike); what stands on the floor darkens a thin line around
+    its foot (contact). Ceiling lamps light the floor besides (their share where
+    ``light_map`` says how much the rest gives), partly shadowed from the lamp, partly
+    occluded like the sky."""
     lo, hi = np.asarray(extent_m[0], dtype=np.float64), np.asarray(extent_m[1], dtype=np.float64)
     size = hi - lo
     cell = max(settings.floor_cell_min_m, float(size.max()) / settings.floor_cell_max_px)
@@ -928,29 +925,27 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
         shadow = _blur(shadow, max(0.5, 0.35 * spacing / cell))
     k = max(1, int(round(0.02 / cell)))  # occlusion is smooth: a 2 cm raster
     coarse = _FloorGrid(lo, cell * k, (shape[0] // k + 1, shape[1] // k + 1))
-    # Ambient occlusion bins: parts grouped by the height of their underside (what hides the
-    # sky from the floor below) and by their own height (what hides it from the floor beside).
-    bins_m = settings.ao_bins_m
-    nb = len(bins_m) - 1
-    free = np.ones(coarse.shape, np.float32)
+    # Ambient occlusion: the share of a uniform sky each floor point sees past the parts,
+    # the mean over cosine-weighted directions of the parts' shadows cast along them.
+    n = settings.ao_directions
+    hidden = np.zeros(coarse.shape, np.float32)
     raster = np.zeros(coarse.shape, np.uint8)
-    bottoms = np.array([c.z_bottom for c in casters])
-    heights = np.array([c.z_top - c.z_bottom for c in casters])
-    # A part raised higher than it is tall (a tabletop, a seat) hides the sky from the floor
-    # beside it no more than its underside does: its sides count only when it stands low.
-    every = np.ones(len(casters), bool)
-    for key, sigma_of, weight, counted in ((bottoms, lambda z: max(0.015, settings.ao_under_rel * z), 0.8, every),
-                                           (heights, lambda z: _side_ao_sigma_m(z, settings),
-                                            settings.side_ao_weight, bottoms < heights)):
-        bins = np.where(counted, np.clip(np.searchsorted(bins_m, key, side="right") - 1, 0, nb - 1), -1)
-        for b in np.unique(bins[counted]):
-            raster[:] = 0
-            # Footprints only: every part as its convex hull seen from above.
-            _Footprints([_Caster(casters[i].corners, None, 0.0, 0.0)
-                         for i in np.flatnonzero(bins == b)]).fill(raster, coarse)
-            z = 0.5 * (bins_m[b] + min(bins_m[b + 1], 2.5))
-            blocked = _blur(raster.astype(np.float32), sigma_of(z) / coarse.cell_m)
-            free *= 1.0 - weight * np.clip(blocked, 0, 1)
+    for up in hemisphere_directions(n):
+        raster[:] = 0
+        footprints.fill(raster, coarse, -up)
+        hidden += raster
+    height = float(np.median([c.z_top for c in casters]))
+    hidden = _blur(hidden / n, settings.ao_blur_rel * height * math.sqrt(math.pi / n) / coarse.cell_m)
+    # Past each part's reach its occlusion fades out (over the last quarter): the few
+    # directions' shadows that land that far are sampling noise, and the raster ends there.
+    near = np.zeros(coarse.shape, np.float32)
+    reach = np.round([_ao_reach_m(c.z_top, settings) for c in casters], 1)
+    for r in np.unique(reach):
+        raster[:] = 0
+        _Footprints([_Caster(casters[i].corners, None, 0.0, 0.0) for i in np.flatnonzero(reach == r)]).fill(raster, coarse)
+        dist_m = cv2.distanceTransform(1 - raster, cv2.DIST_L2, 5) * coarse.cell_m
+        near = np.maximum(near, np.clip((r - dist_m) / (0.25 * r), 0.0, 1.0))
+    free = 1.0 - hidden * near
     ao = cv2.resize(1.0 - free, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
     f_key = lighting.key_fraction
     if lighting.sun is not None:  # only the floor in the sun loses the sun
@@ -965,7 +960,9 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
         total = rest + sum(lamps)
         ratio = ratio * (rest / total).reshape(shape)
         for lamp, light in zip(lighting.lamps, lamps):
-            ratio += (light / total).reshape(shape) * (1.0 - _lamp_shadow(footprints, grid, lamp, settings))
+            direct = 1.0 - settings.lamp_diffuse_share
+            ratio += (light / total).reshape(shape) * (direct * (1.0 - _lamp_shadow(footprints, grid, lamp, settings))
+                                                       + (1.0 - direct) * (1.0 - settings.ao_strength * ao))
     # Contact: right beside a leg or a base standing on the floor, the floor sees little of
     # any light; a dark line a centimetre or two wide, at the full raster's resolution.
     feet = [c.points[c.points[:, 2] < c.z_bottom + settings.contact_band_m] for c in casters
@@ -1285,7 +1282,7 @@ def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
     out = []
     dirs = [v for v in _shadow_directions(lighting.direction, lighting.softness_rad, 8) if v[2] < -0.05]
     for item, _ in placed:
-        world = _item_corners(item, max(0.35, 2.5 * _side_ao_sigma_m(item.size_m[2], settings)))
+        world = _item_corners(item, _ao_reach_m(item.size_m[2], settings))
         out.append(world)
         top = world[1::2]
         out.append(top + [0.0, 0.0, 3.0 * settings.wall_ao_fade_m])  # the walls' occlusion above it
@@ -1593,7 +1590,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     on_floor = reach[reach[:, 2] < 1e-6, :2]
     pts = np.concatenate([on_floor] + [c.points[:, :2] for c in casters])
     # The raster reaches as far as the sides' occlusion spreads.
-    pad = max(0.3, 2.5 * max((_side_ao_sigma_m(it.size_m[2], settings) for it, _ in placed), default=0.0))
+    pad = max((_ao_reach_m(it.size_m[2], settings) for it, _ in placed), default=0.35)
     shading = _floor_gain(casters, lighting, (pts.min(axis=0) - pad, pts.max(axis=0) + pad), settings, light_map)
     shift = np.array([[1.0, 0, -box[0]], [0, 1, -box[1]], [0, 0, 1]])
     H_box = shift @ K @ np.column_stack([R[:, 0], R[:, 1], tvec]) @ shading.grid.floor_from_raster()

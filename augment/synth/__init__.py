@@ -224,9 +224,7 @@ def _hide_bounce(renderer: Renderer, scene, color, floor, depth_m, shot: Shot, p
     step = max(1, round(w / 640))
     grid = floor[::step, ::step] & (depth_m[::step, ::step] > 0)
     v, u = np.nonzero(grid)
-    z = depth_m[::step, ::step][v, u].astype(np.float64)
-    rays = np.linalg.solve(shot.K, np.stack([u * step, v * step, np.ones_like(u)]).astype(np.float64))
-    points = (rays * z).T @ shot.world_from_camera[:3, :3].T + shot.world_from_camera[:3, 3]
+    points = shot.unproject(u * step, v * step, depth_m[::step, ::step][v, u])
     hidden = np.zeros(grid.shape, np.float32)
     hidden[v, u] = 1.0 - floor_bounce_visibility(renderer, pieces, points)
     # Back to every pixel: the floor's grid points only, averaged (a normalized interpolation).
@@ -249,10 +247,7 @@ def _sunlit_share(floor, depth_m, shot, room: Room, direction) -> float:
     v, u = np.nonzero(floor[::4, ::4] & (depth_m[::4, ::4] > 0))
     if len(v) == 0:
         return 0.0
-    v, u = v * 4, u * 4
-    z = depth_m[v, u].astype(np.float64)
-    rays = np.linalg.solve(shot.K, np.stack([u, v, np.ones_like(u)]).astype(np.float64))
-    points = (rays * z).T @ shot.world_from_camera[:3, :3].T + shot.world_from_camera[:3, 3]
+    points = shot.unproject(u * 4, v * 4, depth_m[v * 4, u * 4])
     windows = [(o.segment_m(room.polygon_m), o.bottom_m, o.top_m) for o in room.openings if o.kind == "window"]
     return float(np.mean(sun_exit(points, direction, room.polygon_m, room.height_m, windows) > 0))
 

@@ -13,21 +13,12 @@ import math
 
 import numpy as np
 
-from ..render.gl import Renderer, Scene, gl_from_cv_pose, pyrender
+from ..render.gl import Renderer, Scene, far_camera, gl_from_cv_pose, pyrender
+from ..render.staged import hemisphere_directions
 
 # Far enough that the depth maps' perspective hardly differs from parallel rays; the
 # points are projected with the same camera, so what difference remains is exact.
 _DISTANCE_M = 60.0
-
-
-def hemisphere_directions(n: int) -> np.ndarray:
-    """``n`` unit directions (n, 3) over the upper hemisphere (z > 0), cosine-weighted and
-    evenly spread (a Fibonacci spiral on the disk, lifted onto the hemisphere): their mean
-    visibility is a horizontal surface's share of a uniform sky."""
-    k = np.arange(n) + 0.5
-    r = np.sqrt(k / n)
-    phi = k * math.pi * (3.0 - math.sqrt(5.0))
-    return np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1.0 - r * r)], axis=1)
 
 
 def floor_bounce_visibility(renderer: Renderer, pieces, points_m: np.ndarray, n_directions: int = 48,
@@ -65,34 +56,23 @@ def floor_bounce_visibility(renderer: Renderer, pieces, points_m: np.ndarray, n_
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
     center, radius = 0.5 * (lo + hi), max(0.5 * float(np.linalg.norm(hi - lo)), 0.05)
     size = int(min(1024, max(64, math.ceil(2.0 * radius / texel_m))))
-    f = 0.5 * size * _DISTANCE_M / radius
-    c = 0.5 * size - 0.5
     scene = Scene(bg_color=[0.0, 0.0, 0.0, 0.0])
     scene.add(mesh, name="furniture")
-    camera = pyrender.IntrinsicsCamera(fx=f, fy=f, cx=c + 0.5, cy=c + 0.5, znear=_DISTANCE_M - 2.0 * radius,
-                                       zfar=_DISTANCE_M + 2.0 * radius)
-    camera_node = scene.add(camera, name="camera")
+    # Every direction's camera has the same intrinsics: one node, moved.
+    camera_node = scene.add(far_camera(center, radius, (0.0, 0.0, -1.0), size, _DISTANCE_M)[2], name="camera")
     seen = np.zeros(len(points), np.float32)
-    directions = hemisphere_directions(n_directions)
-    for d in directions:
-        eye = center + d * _DISTANCE_M
-        forward = -d  # the camera's z, OpenCV axes
-        x = np.cross(forward, [0.0, 0.0, 1.0]) if abs(forward[2]) < 0.99 else np.array([1.0, 0.0, 0.0])
-        x /= np.linalg.norm(x)
-        y = np.cross(forward, x)
-        R = np.stack([x, y, forward])
-        world_from_camera = np.eye(4)
-        world_from_camera[:3, :3], world_from_camera[:3, 3] = R.T, eye
-        scene.set_pose(camera_node, gl_from_cv_pose(world_from_camera))
+    for d in hemisphere_directions(n_directions):
+        camera_from_world, K, _ = far_camera(center, radius, -d, size, _DISTANCE_M)
+        scene.set_pose(camera_node, gl_from_cv_pose(np.linalg.inv(camera_from_world)))
         depth = renderer.render(scene, size, size, flags=pyrender.RenderFlags.DEPTH_ONLY)
-        local = (points - eye) @ R.T
+        local = points @ camera_from_world[:3, :3].T + camera_from_world[:3, 3]
         z = local[:, 2]
-        u = np.round(f * local[:, 0] / z + c).astype(np.int64)
-        v = np.round(f * local[:, 1] / z + c).astype(np.int64)
+        u = np.round(K[0, 0] * local[:, 0] / z + K[0, 2]).astype(np.int64)
+        v = np.round(K[1, 1] * local[:, 1] / z + K[1, 2]).astype(np.int64)
         inside = (u >= 0) & (u < size) & (v >= 0) & (v < size)
         hidden = np.zeros(len(points), bool)
         nearest = depth[v[inside], u[inside]]
         hidden[inside] = (nearest > 0) & (nearest < z[inside] - bias_m)
         seen += ~hidden
-    return seen / len(directions)
+    return seen / n_directions
 

@@ -46,6 +46,12 @@ class Shot:
         uv = cam @ self.K.T
         return uv[:, :2] / uv[:, 2:3], cam[:, 2]
 
+    def unproject(self, u_px: np.ndarray, v_px: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+        """World points (k, 3) of pixels (k,) ``u_px``, ``v_px`` at depth along the axis ``depth_m`` (k,)."""
+        rays = np.linalg.solve(self.K, np.stack([u_px, v_px, np.ones_like(u_px)]).astype(np.float64))
+        cam = rays * np.asarray(depth_m, dtype=np.float64)
+        return cam.T @ self.world_from_camera[:3, :3].T + self.world_from_camera[:3, 3]
+
     def in_view(self, points_m: np.ndarray) -> np.ndarray:
         """Whether each world point (k, 3) lies in front of the camera and inside the frame (k,)."""
         px, depth = self.project(points_m)

@@ -84,7 +84,8 @@ def test_no_lamp_on_an_even_floor_or_a_windows_gradient(rng, slope):
 def test_a_lamp_casts_its_shadow_away_from_it():
     """A box 0.4 m tall between x = 0.85 and 1.15 m, a lamp 2.4 m above the origin: its
     top edge's shadow reaches 1.15 x 2.4 / 2.0 = 1.38 m. Without ambient occlusion or a
-    key light, the floor there keeps only the rest of the light: 1 / (1 + the lamp's)."""
+    key light, the floor there keeps the rest of the light and the lamp's diffuse share
+    (off its shade, the ceiling, the walls): (1 + share x the lamp's) / (1 + the lamp's)."""
     x, y = np.meshgrid([0.85, 1.15], [-0.15, 0.15])
     box = np.column_stack([np.repeat(np.column_stack([x.ravel(), y.ravel()]), 2, axis=0), np.tile([0.0, 0.4], 4)])
     lamp = Lamp((0.0, 0.0, 2.4), 1.5, 1.0)
@@ -97,7 +98,10 @@ def test_a_lamp_casts_its_shadow_away_from_it():
         col, row = np.floor(grid.to_px([px, py])).astype(int)
         return float(gain[row, col])
 
-    behind = 1.0 / (1.0 + lamp.on_floor([[1.25, 0.0]])[0])
+    share = RENDER.staged.lamp_diffuse_share
+    assert 0.0 < share < 1.0
+    lamp_light = lamp.on_floor([[1.25, 0.0]])[0]
+    behind = (1.0 + share * lamp_light) / (1.0 + lamp_light)
     assert at(1.25, 0.0) == pytest.approx(behind ** (1 / GAMMA), abs=0.02)
     assert at(0.6, 0.0) == pytest.approx(1.0, abs=1e-3)  # between the lamp and the box
     assert at(1.6, 0.0) == pytest.approx(1.0, abs=1e-3)  # past the shadow's end

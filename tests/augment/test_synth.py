@@ -14,7 +14,7 @@ from augment.render.furniture import PlacedItem, furniture_for, world_from_item
 from augment.render.gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
 from augment.synth import CEILING, FLOOR, render_labels, render_sample, write_sample
 from augment.synth.__main__ import main as synth_main
-from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, look_pose, random_handling,
+from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, Shot, look_pose, random_handling,
                                   random_shot)
 from augment.synth.rooms import ROOM_SIDE_M, WALL_HEIGHT_M, random_polygon, random_room
 from augment.synth.scene import SEG_FLOOR, SEG_WALL, _Batch
@@ -220,6 +220,17 @@ def test_project_floor_polygon_by_hand():
     assert (px[[0, 3], 1] > 1000).all()
     mask = polygon_mask(px, (100, 100))
     assert mask[80:, 30:70].all() and not mask[:75].any()
+
+
+def test_shot_unprojects_pixels_by_hand():
+    """The camera of the case above: pixel (75, 75) at 4 m depth is the floor point
+    (4, -1, 0), (25, 25) at 2 m is (2, 0.5, 1.5); projecting them back gives the pixels."""
+    shot = Shot(np.array([[100.0, 0, 50], [0, 100.0, 50], [0, 0, 1]]), look_pose([0.0, 0.0, 1.0], 0.0, 0.0, 0.0),
+                (100, 100))
+    points = shot.unproject(np.array([75, 25]), np.array([75, 25]), np.array([4.0, 2.0]))
+    assert np.allclose(points, [[4.0, -1.0, 0.0], [2.0, 0.5, 1.5]])
+    px, depth = shot.project(points)
+    assert np.allclose(px, [[75, 75], [25, 25]]) and np.allclose(depth, [4.0, 2.0])
 
 
 def test_board_geometry():
@@ -534,7 +545,8 @@ def test_bounce_visibility_under_a_plate_is_the_view_factor(renderer):
     the plate's view factor (four corner rectangles: the textbook formula for a plane
     element below a corner of a parallel rectangle); far away, all of it."""
     from augment.render.furniture import Furniture
-    from augment.synth.bounce import floor_bounce_visibility, hemisphere_directions
+    from augment.render.staged import hemisphere_directions
+    from augment.synth.bounce import floor_bounce_visibility
 
     d = hemisphere_directions(48)
     assert np.allclose(np.linalg.norm(d, axis=1), 1.0) and (d[:, 2] > 0).all()
