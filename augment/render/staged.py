@@ -174,11 +174,36 @@ def _window(small, candidates, f_small):
     n, labels, stats, centroids = cv2.connectedComponentsWithStats(bright.astype(np.uint8), connectivity=8)
     if n <= 1:
         return None
-    k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    area = int(stats[k, cv2.CC_STAT_AREA])
-    if area < 0.003 * lum.size:
-        return None
-    return centroids[k], math.sqrt(area / math.pi) / f_small
+    # A window is a compact bright quadrilateral: not a thin line of lit trim along the
+    # ceiling or a baseboard, nor a ragged pool of light.
+    for k in 1 + np.argsort(-stats[1:, cv2.CC_STAT_AREA])[:4]:
+        area = int(stats[k, cv2.CC_STAT_AREA])
+        if area < 0.003 * lum.size:
+            return None
+        ys, xs = np.nonzero(labels == k)
+        _, (a, b), _ = cv2.minAreaRect(np.column_stack([xs, ys]).astype(np.float32))
+        if min(a, b) >= 5 and max(a, b) <= 6 * min(a, b) and area >= 0.6 * a * b:
+            return centroids[k], math.sqrt(area / math.pi) / f_small
+    return None
+
+
+def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, small, candidates, small_scale) -> bool:
+    """Whether the photo shows a plain wall where the window casting sun patches at
+    ``center_m`` would have to be, were the light coming from ``up_xy``: the first wall
+    that way, between 0.9 and 2 m up, mostly in view and hardly brighter than the walls."""
+    t_m, which = _first_wall(walls, np.array([[up_xy[0], up_xy[1], 0.0]]), center_m)
+    if which[0] < 0:
+        return False
+    foot = np.asarray(center_m) + np.asarray(up_xy) * t_m[0]
+    column = np.column_stack([np.repeat(foot[None], 12, axis=0), np.linspace(0.9, 2.0, 12)])
+    px = np.rint(_project(column, K, pose, dist)[0] * small_scale).astype(int)
+    h, w = small.shape[:2]
+    inside = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
+    if inside.mean() < 0.75 or not candidates.any():
+        return False
+    lum = small @ np.array([0.299, 0.587, 0.114])
+    bright = lum[px[inside, 1], px[inside, 0]] >= 1.35 * float(np.median(lum[candidates]))
+    return float(bright.mean()) < 0.2
 
 
 def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon):
@@ -284,13 +309,17 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         axis = np.asarray(patches.axes_xy[0])
         center = np.asarray(patches.center_m)
         from_window = None if window_xy is None else center - window_xy
-        if patches.downstream:  # the patches run into the wall they climb
-            sign = float(patches.downstream)
-        elif from_window is not None and abs(axis @ from_window) >= settings.sun_window_alignment * max(
-                float(np.linalg.norm(from_window)), 1e-9):  # the window in view casts them
-            sign = 1.0 if axis @ from_window >= 0 else -1.0
-        else:  # their window is out of view: on the camera's side of them
-            sign = 1.0 if axis @ (center - cam_xy) >= 0 else -1.0
+        if not patches.downstream and from_window is not None and abs(axis @ from_window) >= (
+                settings.sun_window_alignment * max(float(np.linalg.norm(from_window)), 1e-9)):
+            sign = 1.0 if axis @ from_window >= 0 else -1.0  # the window in view casts them
+        else:
+            # The patches run into the wall they climb; else their window is out of view,
+            # on the camera's side of them. Unless a plain wall in view stands where it would be.
+            sign = float(patches.downstream) or (1.0 if axis @ (center - cam_xy) >= 0 else -1.0)
+            plain = [walls is not None and _plain_wall_upstream(center, -s * axis, walls, K, dist, pose, small,
+                                                                ~region_small, small_scale) for s in (sign, -sign)]
+            if plain[0] and not plain[1]:
+                sign = -sign
         elev = math.radians(settings.sun_elevation_deg)
         direction = np.append(sign * axis * math.cos(elev), -math.sin(elev))
         key = float(np.clip(1.0 - 1.0 / patches.contrast, *settings.sun_key_range))
@@ -942,7 +971,8 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
     reach = np.round([_ao_reach_m(c.z_top, settings) for c in casters], 1)
     for r in np.unique(reach):
         raster[:] = 0
-        _Footprints([_Caster(casters[i].corners, None, 0.0, 0.0) for i in np.flatnonzero(reach == r)]).fill(raster, coarse)
+        tops = [_Caster(casters[i].corners, None, 0.0, 0.0) for i in np.flatnonzero(reach == r)]
+        _Footprints(tops).fill(raster, coarse)
         dist_m = cv2.distanceTransform(1 - raster, cv2.DIST_L2, 5) * coarse.cell_m
         near = np.maximum(near, np.clip((r - dist_m) / (0.25 * r), 0.0, 1.0))
     free = 1.0 - hidden * near

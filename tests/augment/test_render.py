@@ -3,6 +3,7 @@ shadows, occlusion, the furniture's sizes, and the renderer's hygiene."""
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -20,8 +21,9 @@ from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furnitur
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
-from augment.render.staged import (Lighting, _Caster, _floor_gain, _render_scale, _roll_off, _walls_run_on,
-                                   estimate_lighting, render_staged, wall_segments, write_jpeg)
+from augment.render.staged import (Lighting, _Caster, _floor_gain, _plain_wall_upstream, _render_scale, _roll_off,
+                                   _walls_run_on, _window, estimate_lighting, render_staged, wall_segments,
+                                   write_jpeg)
 from layout.catalog import CATALOG
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -505,6 +507,39 @@ def test_key_light_comes_from_the_window():
     cam = (-pose[:3, :3].T @ pose[:3, 3])[:2]
     d = np.array(lighting.direction)
     assert d[2] < 0 and float(d[:2] @ (window - cam)) < 0
+
+
+def test_a_window_is_a_compact_bright_quadrilateral():
+    """Grey walls (120) with a line of lit trim 3 px wide along the ceiling, brighter than
+    anything: no window. A 40 x 30 px pane (230) beside it: that is the window, at its
+    centre, of angular radius sqrt(area / pi) / f."""
+    small = np.full((240, 320, 3), 120.0)
+    cv2.line(small, (0, 60), (319, 10), (255, 255, 255), 3)
+    candidates = np.ones((240, 320), bool)
+    assert _window(small, candidates, 250.0) is None
+    small[100:130, 200:240] = 230.0
+    (cx, cy), radius = _window(small, candidates, 250.0)
+    assert (cx, cy) == pytest.approx((219.5, 114.5), abs=0.01)
+    assert radius == pytest.approx(math.sqrt(1200 / math.pi) / 250.0, rel=1e-6)
+
+
+def test_a_plain_wall_in_view_where_the_suns_window_would_be():
+    """A level camera 1.4 m up looking along +y at a wall 4 m away (f = 250 px, 320 x 240):
+    patches at (0, 2) lit from +y would need a window on that wall at x = 0, which the
+    photo shows as plain grey wall; once a bright pane is painted there, not; from -y
+    there is no wall to tell."""
+    K = np.array([[250.0, 0, 160], [0, 250.0, 120], [0, 0, 1]])
+    pose = np.eye(4)
+    pose[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
+    pose[:3, 3] = [0.0, 1.4, 0.0]
+    walls = np.array([[[-5.0, 4.0], [5.0, 4.0]]])
+    small = np.full((240, 320, 3), 120.0)
+    everywhere = np.ones((240, 320), bool)
+    center = np.array([0.0, 2.0])
+    assert _plain_wall_upstream(center, np.array([0.0, 1.0]), walls, K, None, pose, small, everywhere, 1.0)
+    assert not _plain_wall_upstream(center, np.array([0.0, -1.0]), walls, K, None, pose, small, everywhere, 1.0)
+    small[70:160, 140:180] = 230.0
+    assert not _plain_wall_upstream(center, np.array([0.0, 1.0]), walls, K, None, pose, small, everywhere, 1.0)
 
 
 def test_furniture_takes_the_light_of_the_floor_it_stands_on(renderer):
