@@ -968,31 +968,36 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
     # Past each part's reach its occlusion fades out (over the last quarter): the few
     # directions' shadows that land that far are sampling noise, and the raster ends there.
     near = np.zeros(coarse.shape, np.float32)
-    reach = np.round([_ao_reach_m(c.z_top, settings) for c in casters], 1)
+    reach = np.ceil(np.array([_ao_reach_m(c.z_top, settings) for c in casters]) * 4.0) / 4.0  # in 25 cm steps
     for r in np.unique(reach):
         raster[:] = 0
         tops = [_Caster(casters[i].corners, None, 0.0, 0.0) for i in np.flatnonzero(reach == r)]
         _Footprints(tops).fill(raster, coarse)
-        dist_m = cv2.distanceTransform(1 - raster, cv2.DIST_L2, 5) * coarse.cell_m
+        dist_m = cv2.distanceTransform(1 - raster, cv2.DIST_L2, 3) * coarse.cell_m
         near = np.maximum(near, np.clip((r - dist_m) / (0.25 * r), 0.0, 1.0))
-    free = 1.0 - hidden * near
-    ao = cv2.resize(1.0 - free, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
+
+    def fine(raster):  # a coarse raster at the full one's cells (their centres line up)
+        return cv2.resize(raster.astype(np.float32), None, fx=k, fy=k,
+                          interpolation=cv2.INTER_LINEAR)[:shape[0], :shape[1]]
+    ao = fine(hidden * near)
     f_key = lighting.key_fraction
     if lighting.sun is not None:  # only the floor in the sun loses the sun
         f_key = (f_key * lighting.sun.sunlit(grid.centers_m())).reshape(shape).astype(np.float32)
     ratio = 1.0 - f_key * shadow - (1.0 - f_key) * settings.ao_strength * ao
     if lighting.lamps:
-        xy = grid.centers_m()
+        # The lamps' shares of the light change slowly: worked out on the coarse raster.
+        xy = coarse.centers_m()
         rest = np.ones(len(xy)) if light_map is None else light_map.at(xy)
         if lighting.sun is not None:  # the light map is the shade's
             rest = rest * (1.0 + (_sun_contrast(lighting) - 1.0) * lighting.sun.sunlit(xy))
         lamps = [lamp.on_floor(xy) for lamp in lighting.lamps]
         total = rest + sum(lamps)
-        ratio = ratio * (rest / total).reshape(shape)
+        ratio = ratio * fine((rest / total).reshape(coarse.shape))
+        direct = 1.0 - settings.lamp_diffuse_share
         for lamp, light in zip(lighting.lamps, lamps):
-            direct = 1.0 - settings.lamp_diffuse_share
-            ratio += (light / total).reshape(shape) * (direct * (1.0 - _lamp_shadow(footprints, grid, lamp, settings))
-                                                       + (1.0 - direct) * (1.0 - settings.ao_strength * ao))
+            ratio += fine((light / total).reshape(coarse.shape)) * (
+                direct * (1.0 - _lamp_shadow(footprints, grid, lamp, settings))
+                + (1.0 - direct) * (1.0 - settings.ao_strength * ao))
     # Contact: right beside a leg or a base standing on the floor, the floor sees little of
     # any light; a dark line a centimetre or two wide, at the full raster's resolution.
     feet = [c.points[c.points[:, 2] < c.z_bottom + settings.contact_band_m] for c in casters
