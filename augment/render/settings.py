@@ -9,7 +9,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 
-
 @dataclass
 class GlSettings:
     """The GL context (:mod:`augment.render.gl`)."""

@@ -162,9 +162,9 @@ def _floor_region(shape, K, pose, max_m=8.0):
     return (down & (reach < max_m)).reshape(h, w)
 
 
-def _window(small, candidates, f_small):
-    """The brightest window-like blob: (centroid xy, angular radius) or None."""
-    lum = small @ np.array([0.299, 0.587, 0.114])
+def _window(lum, candidates, f_small):
+    """The brightest window-like blob of a small photo's luminance (h, w): (centroid xy,
+    angular radius) or None."""
     if candidates.sum() < 0.01 * lum.size:
         return None
     # A window is the brightest thing in view and clearly brighter than the walls around.
@@ -187,22 +187,22 @@ def _window(small, candidates, f_small):
     return None
 
 
-def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, small, candidates, small_scale) -> bool:
+def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, lum, wall_lum, small_scale) -> bool:
     """Whether the photo shows a plain wall where the window casting sun patches at
     ``center_m`` would have to be, were the light coming from ``up_xy``: the first wall
-    that way, between 0.9 and 2 m up, mostly in view and hardly brighter than the walls."""
+    that way, between 0.9 and 2 m up, mostly in view and hardly brighter than the walls
+    (``wall_lum``, on the small photo's luminance ``lum``)."""
     t_m, which = _first_wall(walls, np.array([[up_xy[0], up_xy[1], 0.0]]), center_m)
     if which[0] < 0:
         return False
     foot = np.asarray(center_m) + np.asarray(up_xy) * t_m[0]
     column = np.column_stack([np.repeat(foot[None], 12, axis=0), np.linspace(0.9, 2.0, 12)])
     px = np.rint(_project(column, K, pose, dist)[0] * small_scale).astype(int)
-    h, w = small.shape[:2]
+    h, w = lum.shape
     inside = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
-    if inside.mean() < 0.75 or not candidates.any():
+    if inside.mean() < 0.75 or wall_lum is None:
         return False
-    lum = small @ np.array([0.299, 0.587, 0.114])
-    bright = lum[px[inside, 1], px[inside, 0]] >= 1.35 * float(np.median(lum[candidates]))
+    bright = lum[px[inside, 1], px[inside, 0]] >= 1.35 * wall_lum
     return float(bright.mean()) < 0.2
 
 
@@ -292,7 +292,9 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     R = pose[:3, :3]
     cam_xy = (-R.T @ pose[:3, 3])[:2]
     forward = R.T @ np.array([0, 0, 1.0])
-    found = _window(small, ~region_small, K[0, 0] * small_scale)
+    lum_small = small @ np.array([0.299, 0.587, 0.114])
+    wall_lum = float(np.median(lum_small[~region_small])) if (~region_small).any() else None
+    found = _window(lum_small, ~region_small, K[0, 0] * small_scale)
     horiz = forward[:2] / max(np.linalg.norm(forward[:2]), 1e-9)
     walls = None if floor_polygon is None else wall_segments(floor_polygon)
     window_xy = None
@@ -316,8 +318,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
             # The patches run into the wall they climb; else their window is out of view,
             # on the camera's side of them. Unless a plain wall in view stands where it would be.
             sign = float(patches.downstream) or (1.0 if axis @ (center - cam_xy) >= 0 else -1.0)
-            plain = [walls is not None and _plain_wall_upstream(center, -s * axis, walls, K, dist, pose, small,
-                                                                ~region_small, small_scale) for s in (sign, -sign)]
+            plain = [walls is not None and _plain_wall_upstream(center, -s * axis, walls, K, dist, pose, lum_small,
+                                                                wall_lum, small_scale) for s in (sign, -sign)]
             if plain[0] and not plain[1]:
                 sign = -sign
         elev = math.radians(settings.sun_elevation_deg)
@@ -942,6 +944,7 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
     dirs = [d for d in _shadow_directions(lighting.direction, lighting.softness_rad, settings.shadow_samples)
             if d[2] < -0.05]
     footprints = _Footprints(casters)
+    height = float(np.median([c.z_top for c in casters]))  # a typical height, for the samples' spacing
     for d in dirs:
         layer[:] = 0
         footprints.fill(layer, grid, d)
@@ -949,7 +952,6 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
     if dirs:
         shadow /= len(dirs)
         # The samples are discrete copies; blur by about their spacing at a typical height.
-        height = float(np.median([c.z_top for c in casters]))
         spacing = height * math.tan(lighting.softness_rad) * 2.0 / math.sqrt(len(dirs))
         shadow = _blur(shadow, max(0.5, 0.35 * spacing / cell))
     k = max(1, int(round(0.02 / cell)))  # occlusion is smooth: a 2 cm raster
@@ -963,7 +965,6 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
         raster[:] = 0
         footprints.fill(raster, coarse, -up)
         hidden += raster
-    height = float(np.median([c.z_top for c in casters]))
     hidden = _blur(hidden / n, settings.ao_blur_rel * height * math.sqrt(math.pi / n) / coarse.cell_m)
     # Past each part's reach its occlusion fades out (over the last quarter): the few
     # directions' shadows that land that far are sampling noise, and the raster ends there.

@@ -513,12 +513,12 @@ def test_a_window_is_a_compact_bright_quadrilateral():
     """Grey walls (120) with a line of lit trim 3 px wide along the ceiling, brighter than
     anything: no window. A 40 x 30 px pane (230) beside it: that is the window, at its
     centre, of angular radius sqrt(area / pi) / f."""
-    small = np.full((240, 320, 3), 120.0)
-    cv2.line(small, (0, 60), (319, 10), (255, 255, 255), 3)
+    lum = np.full((240, 320), 120.0)
+    cv2.line(lum, (0, 60), (319, 10), 255.0, 3)
     candidates = np.ones((240, 320), bool)
-    assert _window(small, candidates, 250.0) is None
-    small[100:130, 200:240] = 230.0
-    (cx, cy), radius = _window(small, candidates, 250.0)
+    assert _window(lum, candidates, 250.0) is None
+    lum[100:130, 200:240] = 230.0
+    (cx, cy), radius = _window(lum, candidates, 250.0)
     assert (cx, cy) == pytest.approx((219.5, 114.5), abs=0.01)
     assert radius == pytest.approx(math.sqrt(1200 / math.pi) / 250.0, rel=1e-6)
 
@@ -533,13 +533,12 @@ def test_a_plain_wall_in_view_where_the_suns_window_would_be():
     pose[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
     pose[:3, 3] = [0.0, 1.4, 0.0]
     walls = np.array([[[-5.0, 4.0], [5.0, 4.0]]])
-    small = np.full((240, 320, 3), 120.0)
-    everywhere = np.ones((240, 320), bool)
+    lum, walls_lum = np.full((240, 320), 120.0), 120.0
     center = np.array([0.0, 2.0])
-    assert _plain_wall_upstream(center, np.array([0.0, 1.0]), walls, K, None, pose, small, everywhere, 1.0)
-    assert not _plain_wall_upstream(center, np.array([0.0, -1.0]), walls, K, None, pose, small, everywhere, 1.0)
-    small[70:160, 140:180] = 230.0
-    assert not _plain_wall_upstream(center, np.array([0.0, 1.0]), walls, K, None, pose, small, everywhere, 1.0)
+    assert _plain_wall_upstream(center, np.array([0.0, 1.0]), walls, K, None, pose, lum, walls_lum, 1.0)
+    assert not _plain_wall_upstream(center, np.array([0.0, -1.0]), walls, K, None, pose, lum, walls_lum, 1.0)
+    lum[70:160, 140:180] = 230.0
+    assert not _plain_wall_upstream(center, np.array([0.0, 1.0]), walls, K, None, pose, lum, walls_lum, 1.0)
 
 
 def test_furniture_takes_the_light_of_the_floor_it_stands_on(renderer):
