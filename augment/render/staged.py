@@ -1394,12 +1394,15 @@ def _undistort_map(K, dist, roi, step=8):
 def _render_scale(box_px, supersample, blur_px, settings: StagedSettings):
     if supersample is not None:
         return float(supersample)
-    lowest = settings.min_render_scale
-    if blur_px > 0:  # a render this coarse is still sharper than the photo: the look blurs it to match
-        lowest = float(np.clip(settings.render_edge_px / (settings.render_blur_share * blur_px),
-                               settings.blurred_render_scale, lowest))
+    lowest, highest = settings.min_render_scale, settings.max_supersample
+    if blur_px > 0:
+        # The scale whose edge spread is the given share of the photo's: coarser is still
+        # sharper than the photo, finer the look blurs away (supersampling a soft photo buys nothing).
+        enough = settings.render_edge_px / (settings.render_blur_share * blur_px)
+        lowest = float(np.clip(enough, settings.blurred_render_scale, lowest))
+        highest = float(np.clip(enough, 1.0, highest))
     s = math.sqrt(settings.render_budget_px / box_px)
-    s = float(np.clip(s, lowest, settings.max_supersample))
+    s = float(np.clip(s, lowest, highest))
     if 0.85 <= s < 1.3:
         return 1.0  # resampling by a few percent would blur more than it smooths
     return round(s * 4) / 4 if s > 1 else s
@@ -1450,7 +1453,8 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     supersample : float, optional
         Rendered pixels per photo pixel along each axis. Default: as many as
         ``settings.render_budget_px`` allows over the region furniture and shadows reach, up
-        to 2. Larger photos are rendered below 1 and upsampled: down to
+        to 2, and in a soft photo no more than its edge spread asks (1 from ``look.blur_px``
+        0.8 on). Larger photos are rendered below 1 and upsampled: down to
         ``settings.min_render_scale``, or lower where the photo's edge spread
         (``look.blur_px``) is wider than the coarser render's. The renderer's 4x
         multisampling antialiases edges in any case.

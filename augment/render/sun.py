@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+from numba import njit, prange
 
 from .settings import RENDER, SunSettings
 
@@ -79,20 +80,30 @@ class SunOnFloor:
         """How much floor points (n, 2+) lie in the sun: 1.0 in it, 0.0 in shade, between
         over the width of the photo's sun edges, and the share in the sun where the photo
         does not show the floor."""
-        f = (np.asarray(xy, dtype=np.float64)[..., :2] - self.lo_m) / self.cell_m - 0.5
-        ij = np.floor(f).astype(np.int64)
-        rows, cols = self.lit.shape
-        inside = (ij[..., 0] >= 0) & (ij[..., 0] < cols - 1) & (ij[..., 1] >= 0) & (ij[..., 1] < rows - 1)
-        out = np.full(ij.shape[:-1], self.lit_share, dtype=np.float64)
-        r, c = ij[inside, 1], ij[inside, 0]
-        u, v = f[inside, 0] - c, f[inside, 1] - r
-        soft = self._soft
-        value = ((1 - v) * ((1 - u) * soft[r, c] + u * soft[r, c + 1])
-                 + v * ((1 - u) * soft[r + 1, c] + u * soft[r + 1, c + 1]))
-        near = np.round(f[inside]).astype(np.int64)
-        seen = self.seen[np.clip(near[:, 1], 0, rows - 1), np.clip(near[:, 0], 0, cols - 1)]
-        out[inside] = np.where(seen, value, self.lit_share)
-        return out
+        xy = np.asarray(xy, dtype=np.float64)
+        flat = np.ascontiguousarray(xy.reshape(-1, xy.shape[-1])[:, :2])
+        out = np.empty(len(flat))
+        _sunlit_kernel(flat, self.lo_m[0], self.lo_m[1], self.cell_m, self._soft, self.seen, self.lit_share, out)
+        return out.reshape(xy.shape[:-1])
+
+
+@njit(cache=True, parallel=True)
+def _sunlit_kernel(xy, x0, y0, cell, soft, seen, share, out):
+    """Per point, ``soft`` read bilinearly where the nearest cell is seen, else ``share``
+    (also outside the raster's inner cells)."""
+    rows, cols = soft.shape
+    for i in prange(xy.shape[0]):
+        fx = (xy[i, 0] - x0) / cell - 0.5
+        fy = (xy[i, 1] - y0) / cell - 0.5
+        c, r = math.floor(fx), math.floor(fy)
+        out[i] = share
+        if 0 <= c < cols - 1 and 0 <= r < rows - 1:
+            nc = min(max(int(round(fx)), 0), cols - 1)
+            nr = min(max(int(round(fy)), 0), rows - 1)
+            if seen[nr, nc]:
+                u, v = fx - c, fy - r
+                out[i] = ((1 - v) * ((1 - u) * soft[r, c] + u * soft[r, c + 1])
+                          + v * ((1 - u) * soft[r + 1, c] + u * soft[r + 1, c + 1]))
 
 
 def linear_luminance(rgb_uint8) -> np.ndarray:

@@ -173,13 +173,18 @@ def test_unit_cube_at_the_board_origin_covers_exactly_its_hull(renderer, room_sm
 def test_a_blurrier_photo_is_rendered_coarser_but_never_sharper_than_it_needs():
     """The render scale of a 12 MP region: 0.6 by default; where the photo's edge spread
     is wide, low enough that the render's (0.55 px / scale) stays at 0.7 of it; never
-    below 0.35; a small region keeps its supersampling."""
+    below 0.35. A small region is supersampled (2x) in a sharp photo, only as far as that
+    edge spread asks in a softer one, and not at all where one photo pixel is enough."""
     st = RENDER.staged
     assert _render_scale(12e6, None, 0.0, st) == pytest.approx(0.6)
     assert _render_scale(12e6, None, 1.0, st) == pytest.approx(0.6)
     assert _render_scale(12e6, None, 1.5, st) == pytest.approx(0.55 / (0.7 * 1.5))
     assert _render_scale(12e6, None, 4.0, st) == pytest.approx(0.35)
-    assert _render_scale(0.3e6, None, 4.0, st) == 2.0
+    assert _render_scale(0.3e6, None, 0.0, st) == 2.0
+    assert _render_scale(0.3e6, None, 0.3, st) == 2.0
+    assert _render_scale(0.3e6, None, 0.5, st) == 1.5  # 0.55 / (0.7 * 0.5) = 1.57, in quarter steps
+    assert _render_scale(0.3e6, None, 1.5, st) == 1.0
+    assert _render_scale(0.3e6, None, 4.0, st) == 1.0
     assert _render_scale(12e6, 1.5, 4.0, st) == 1.5
 
 
