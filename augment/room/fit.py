@@ -706,6 +706,40 @@ def _doors_as_found(spec):
     return dataclasses.replace(spec, doors=tuple(dataclasses.replace(d, margin_m=0.0) for d in spec.doors))
 
 
+def _wider(pick, spec, corners, solver, layouts: list, built: dict, seed: int, step: int):
+    """A repeat after every usual try: ``ROOM.fit.twin_tries`` more tries, in turn of the
+    furniture, of it without each of its less important units and of every corner set
+    (those shown already too: elsewhere on the floor, or fewer of them, they are another
+    picture), from seeds ``step`` apart past those tried before, each one run (the
+    restarts' best is the spot the earlier suggestions took) judged only when it is no
+    repeat and walkable; the first pick that is no repeat and better than ``pick``, else
+    ``pick``."""
+    from layout.metrics import walkability
+    from layout.spec import build
+
+    fit = ROOM.fit
+    once = dataclasses.replace(solver, restarts=0)
+    # (what the pick is judged as, what is solved): fewer pieces are the furniture with some left out.
+    variants = [(spec, spec)] + [(spec, _drop(spec, [i.id for i in u])[0]) for u in _units(spec)[:0:-1]] \
+        + [(c, c) for c in corners]
+    picks, models = {}, {}
+    first = seed + (fit.seed_tries + fit.far_starts) * step
+    for t in range(fit.twin_tries):
+        v = t % len(variants)
+        judged_as, solved = variants[v]
+        if v not in models:
+            models[v] = build(solved)[0]
+            picks[v] = _Pick(layouts, judged_as, anchor=frozenset(i.id for i in _units(judged_as)[0]), built=built)
+        lay = once.solve(models[v], seed=first + t // len(variants) * step)
+        if min(apart_m(old, lay) for old in layouts) < fit.min_difference_m or not walkability(lay).ok:
+            continue
+        other = picks[v]
+        other.offer(lay)
+        if other.best is not None and not other.twin and other.best[0] < pick.best[0]:
+            return other
+    return pick
+
+
 def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress,
                       notes: list | None = None, corners=()):
     """Solve ``suggestions`` layouts, suggestion K from seed ``seed + K - 1``.
@@ -723,8 +757,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     them repeat an earlier suggestion, the first suggestion turned and mirrored
     (:data:`TURNS`) is tried as a start, then the furniture without one of its less
     important units (another subset), then other furniture: ``corners``, specs on the
-    same floor (:func:`corner_specs`), each tried once per photo; a twin is kept, with a
-    line in ``notes``, when nothing gives anything else.
+    same floor (:func:`corner_specs`), each tried once per photo, then more seeds for
+    each of these (:func:`_wider`, until it finds nothing for a suggestion); a twin is
+    kept, with a line in ``notes``, when nothing gives anything else.
 
     When a suggestion has no clean layout, the least important unit with an item cut
     by the photo's edge is dropped, else the one with a piece astray (the most
@@ -745,6 +780,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
         model, solver = build(spec)
         solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts))
         layouts, reports, failed, cut, astray, said, tried = [], [], None, None, None, [], set()
+        wider_failed = False
         for k in range(suggestions):
             pick = _Pick(layouts, spec, anchor=frozenset(i.id for i in _units(spec)[0]), built=built)
             for t in range(fit.seed_tries):
@@ -785,6 +821,10 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                     pick = other
                 if not pick.twin:
                     break
+            # Where it found nothing for one suggestion, the next (with one more to differ from) has less.
+            if pick.twin and not wider_failed:
+                pick = _wider(pick, spec, corners, solver, layouts, built, seed + k, suggestions)
+                wider_failed = pick.twin
             progress.step()
             if pick.best is None:
                 failed, cut, astray = k + 1, pick.cut, pick.astray

@@ -53,6 +53,7 @@ class FitSettings:
     max_fill: float = 0.5  # summed footprint of floor-standing items: at most this share of the floor
     seed_tries: int = 3  # seeds tried per suggestion before an item is dropped
     far_starts: int = 2  # starts far from the earlier suggestions, for one that repeats them
+    twin_tries: int = 16  # a repeat still: this many more tries, in turn of each furniture set (all, fewer, corners)
     restarts: int = 4  # at most this many solver restarts per try: the tries and the drops do the rest
     rule_distance_m: float = 0.15  # a rule's distance or place off by more than this is a fault of a try
     rule_angle_deg: float = 15.0  # ... and a facing off by more than this
