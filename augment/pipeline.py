@@ -358,6 +358,18 @@ def overlays(m: Measurement, doors=None, windows_px=()) -> dict:
 # Reports
 # --------------------------------------------------------------------------------------
 
+def _warm_solver():
+    """One tiny layout solved: a fresh process loads the solver's compiled kernels from
+    numba's cache (about a second), here while the main thread's OpenCV and onnxruntime
+    find the board and the floor without the GIL."""
+    from layout.builder import LayoutBuilder
+    from layout.solver import Solver
+
+    builder = LayoutBuilder([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
+    builder.add_item("warm", (0.5, 0.5, 0.5))
+    Solver().solve(builder.finalize(), seed=0)
+
+
 def _photo_light(m: Measurement, keep_board: bool, ceiling_m: float):
     """The board erased (None with ``keep_board``), the light and the camera's look: all
     from the photo as taken (the board's white squares give the light, its edges the
@@ -616,11 +628,13 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     bar = _Progress(progress, steps) if reporter is None else reporter(steps)
     clock = _Clock(bar)
     # A second thread takes work that would otherwise wait for the GIL-free stretches of
-    # this one: importing the renderer (pyrender and trimesh, a second or more) while
-    # OpenCV and onnxruntime find the board and the floor; erasing the board and reading
+    # this one: loading the solver's kernels and importing the renderer (pyrender and
+    # trimesh, a second or more each) while OpenCV and onnxruntime find the board and the
+    # floor; erasing the board and reading
     # the light off the photo while the layouts are solved; drawing the plans (matplotlib)
     # while GL and NumPy render the suggestions.
     background = ThreadPoolExecutor(max_workers=1, thread_name_prefix="furnish")
+    background.submit(_warm_solver)
     background.submit(importlib.import_module, "augment.render.gltf")
     try:
         m = measure(photo, board, camera=camera, model=model, floor_mask=floor_mask, clicks=clicks,
