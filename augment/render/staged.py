@@ -591,9 +591,11 @@ class _LampView:
                                self.depth_m, 1.5)
 
 
-def _lamp_view(renderer, placed, lamp, size_px=1024) -> _LampView:
+def _lamp_view(renderer, placed, lamp, size_px=512) -> _LampView:
     """The furniture's depth seen from ``lamp``, as wide as it needs (75 degrees off
-    straight down at most: beyond, the lamp's light is slight and counted as seen)."""
+    straight down at most: beyond, the lamp's light is slight and counted as seen).
+    Read per vertex, 512 texels do: at 1024 a bed's duvet came out darker than the
+    synthetic photographer's truth (ΔE 5.5 against 3.5), and the view cost 0.1 s more."""
     vs, fs, count = [], [], 0
     for item, furniture in placed:
         T = world_from_item(item)
