@@ -634,7 +634,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     # the light off the photo while the layouts are solved; drawing the plans (matplotlib)
     # while GL and NumPy render the suggestions.
     background = ThreadPoolExecutor(max_workers=1, thread_name_prefix="furnish")
-    background.submit(_warm_solver)
+    if layout is None:  # a layout rendered again solves nothing
+        background.submit(_warm_solver)
     background.submit(importlib.import_module, "augment.render.gltf")
     try:
         m = measure(photo, board, camera=camera, model=model, floor_mask=floor_mask, clicks=clicks,

@@ -706,14 +706,14 @@ def _doors_as_found(spec):
     return dataclasses.replace(spec, doors=tuple(dataclasses.replace(d, margin_m=0.0) for d in spec.doors))
 
 
-def _wider(pick, spec, corners, solver, layouts: list, built: dict, seed: int, step: int):
+def _wider(pick, spec, model, corners, solver, layouts: list, built: dict, seed: int, step: int):
     """A repeat after every usual try: ``ROOM.fit.twin_tries`` more tries, in turn of the
     furniture, of it without each of its less important units and of every corner set
     (those shown already too: elsewhere on the floor, or fewer of them, they are another
     picture), from seeds ``step`` apart past those tried before, each one run (the
     restarts' best is the spot the earlier suggestions took) judged only when it is no
     repeat and walkable; the first pick that is no repeat and better than ``pick``, else
-    ``pick``."""
+    ``pick``. ``model`` is ``spec``'s, built already."""
     from layout.metrics import walkability
     from layout.spec import build
 
@@ -722,13 +722,14 @@ def _wider(pick, spec, corners, solver, layouts: list, built: dict, seed: int, s
     # (what the pick is judged as, what is solved): fewer pieces are the furniture with some left out.
     variants = [(spec, spec)] + [(spec, _drop(spec, [i.id for i in u])[0]) for u in _units(spec)[:0:-1]] \
         + [(c, c) for c in corners]
-    picks, models = {}, {}
+    picks, models = {}, {0: model}
     first = seed + (fit.seed_tries + fit.far_starts) * step
     for t in range(fit.twin_tries):
         v = t % len(variants)
         judged_as, solved = variants[v]
         if v not in models:
             models[v] = build(solved)[0]
+        if v not in picks:
             picks[v] = _Pick(layouts, judged_as, anchor=frozenset(i.id for i in _units(judged_as)[0]), built=built)
         lay = once.solve(models[v], seed=first + t // len(variants) * step)
         if min(apart_m(old, lay) for old in layouts) < fit.min_difference_m or not walkability(lay).ok:
@@ -823,7 +824,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                     break
             # Where it found nothing for one suggestion, the next (with one more to differ from) has less.
             if pick.twin and not wider_failed:
-                pick = _wider(pick, spec, corners, solver, layouts, built, seed + k, suggestions)
+                pick = _wider(pick, spec, model, corners, solver, layouts, built, seed + k, suggestions)
                 wider_failed = pick.twin
             progress.step()
             if pick.best is None:
