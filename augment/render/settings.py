@@ -71,6 +71,11 @@ class StagedSettings:
     margin_px: int = 6  # around the region furniture and shadows can reach
     sun_from_floor: bool = True  # the key light from sunlit patches on the floor when they show (else a window's)
     sun_elevation_deg: float = 35.0  # the sun's height when its patches give only its direction
+    # A window in view and no sun on the floor: daylight through it is a broad source, so its
+    # key is soft, modest and high (its shadows fall short and blurred, away from the window).
+    window_elevation_deg: float = 65.0
+    window_key: float = 0.25
+    window_softness_rad: float = 0.5
     sun_key_range: tuple[float, float] = (0.3, 0.9)  # the sun's share of the light in the sun, at least and most
     sun_softness_rad: float = 0.01  # the sun's shadows: its disc, and a window's edge blur
     # A window in view casts the patches when the line from it to them is this close to the

@@ -162,9 +162,9 @@ def _floor_region(shape, K, pose, max_m=8.0):
     return (down & (reach < max_m)).reshape(h, w)
 
 
-def _window(lum, candidates, f_small):
-    """The brightest window-like blob of a small photo's luminance (h, w): (centroid xy,
-    angular radius) or None."""
+def _window(lum, candidates):
+    """The brightest window-like blob of a small photo's luminance (h, w): its centroid
+    (x, y) in pixels, or None."""
     if candidates.sum() < 0.01 * lum.size:
         return None
     # A window is the brightest thing in view and clearly brighter than the walls around.
@@ -183,7 +183,7 @@ def _window(lum, candidates, f_small):
         ys, xs = np.nonzero(labels == k)
         _, (a, b), _ = cv2.minAreaRect(np.column_stack([xs, ys]).astype(np.float32))
         if min(a, b) >= 5 and max(a, b) <= 6 * min(a, b) and area >= 0.6 * a * b:
-            return centroids[k], math.sqrt(area / math.pi) / f_small
+            return centroids[k]
     return None
 
 
@@ -294,12 +294,12 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     forward = R.T @ np.array([0, 0, 1.0])
     lum_small = small @ np.array([0.299, 0.587, 0.114])
     wall_lum = float(np.median(lum_small[~region_small])) if (~region_small).any() else None
-    found = _window(lum_small, ~region_small, K[0, 0] * small_scale)
+    found = _window(lum_small, ~region_small)
     horiz = forward[:2] / max(np.linalg.norm(forward[:2]), 1e-9)
     walls = None if floor_polygon is None else wall_segments(floor_polygon)
     window_xy = None
     if found is not None:
-        (cx, cy), ang = found
+        cx, cy = found
         ray = R.T @ np.linalg.solve(K, [cx / small_scale, cy / small_scale, 1.0])
         toward = ray[:2] / max(np.linalg.norm(ray[:2]), 1e-9)
         if walls is not None:  # the window's wall: the first one the ray meets
@@ -327,12 +327,13 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         key = float(np.clip(1.0 - 1.0 / patches.contrast, *settings.sun_key_range))
         soft, source = settings.sun_softness_rad, "sun"
     elif found is not None:
-        elev = math.radians(35.0)
-        direction = np.append(-toward * math.cos(elev), -math.sin(elev))
         # Sunlit floor (a bright patch well above the floor's median) means direct sun.
         floor_l = floor_lin @ [0.299, 0.587, 0.114]
         sunny = floor_l.size > 0 and np.mean(floor_l > 2.2 * np.median(floor_l)) > 0.03
-        key, soft, source = (0.6, 0.03, "window") if sunny else (0.45, float(np.clip(ang, 0.06, 0.3)), "window")
+        elev = math.radians(settings.sun_elevation_deg if sunny else settings.window_elevation_deg)
+        direction = np.append(-toward * math.cos(elev), -math.sin(elev))
+        key, soft = (0.6, 0.03) if sunny else (settings.window_key, settings.window_softness_rad)
+        source = "window"
     else:
         elev = math.radians(65.0)
         direction = np.append(horiz * math.cos(elev), -math.sin(elev))
