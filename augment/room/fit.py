@@ -759,8 +759,8 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     (:data:`TURNS`) is tried as a start, then the furniture without one of its less
     important units (another subset), then other furniture: ``corners``, specs on the
     same floor (:func:`corner_specs`), each tried once per photo, then more seeds for
-    each of these (:func:`_wider`, until it finds nothing for a suggestion); a twin is
-    kept, with a line in ``notes``, when nothing gives anything else.
+    each of these (:func:`_wider`); a twin is kept, with a line in ``notes``, when nothing
+    gives anything else, and the later suggestions then keep their seeds' best.
 
     When a suggestion has no clean layout, the least important unit with an item cut
     by the photo's edge is dropped, else the one with a piece astray (the most
@@ -779,9 +779,10 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     first_try = (spec, list(dropped), list(corners))
     while True:
         model, solver = build(spec)
-        solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts))
+        solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts),
+                                     min_iterations=min(solver.min_iterations, fit.min_iterations))
         layouts, reports, failed, cut, astray, said, tried = [], [], None, None, None, [], set()
-        wider_failed = False
+        forced = False  # a suggestion's whole search found only repeats
         for k in range(suggestions):
             pick = _Pick(layouts, spec, anchor=frozenset(i.id for i in _units(spec)[0]), built=built)
             for t in range(fit.seed_tries):
@@ -789,18 +790,22 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 if pick.offer(solver.solve(model, seed=seed + k + t * suggestions)) or pick.pinned >= 2:
                     break
             pick.pinned = 0
+            # After one suggestion's whole search found only repeats, the next one's (with one
+            # more to differ from) would too: it keeps its seeds' best.
+            hopeless = forced and pick.twin
             # Turned starts from the first suggestion, when it holds all the furniture.
-            for angle, mirror in TURNS if pick.lacking and layouts and layouts[0].model.n == model.n else ():
+            for angle, mirror in TURNS if pick.lacking and layouts and layouts[0].model.n == model.n \
+                    and not hopeless else ():
                 if pick.offer(solver.solve(model, seed=seed + k, state=turned_state(layouts[0], angle, mirror))) \
                         or not pick.lacking or pick.pinned >= 2:
                     break
             # Starts far from the earlier suggestions: random ones settle where those did.
-            for t in range(fit.far_starts if pick.lacking and layouts else 0):
+            for t in range(fit.far_starts if pick.lacking and layouts and not hopeless else 0):
                 far_seed = seed + k + (fit.seed_tries + t) * suggestions
                 start = _far_start(model, layouts, np.random.default_rng(far_seed))
                 if pick.offer(solver.solve(model, seed=far_seed, state=start)) or not pick.lacking:
                     break
-            if pick.twin:
+            if pick.twin and not hopeless:
                 for unit in _units(spec)[:0:-1]:
                     smaller, _ = _drop(spec, [i.id for i in unit])
                     sub_model, _ = build(smaller)
@@ -809,7 +814,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                             break
                     if not pick.lacking:
                         break
-            for c, corner in enumerate(corners if pick.twin else ()):
+            for c, corner in enumerate(corners if pick.twin and not hopeless else ()):
                 if c in tried:
                     continue
                 tried.add(c)
@@ -822,10 +827,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                     pick = other
                 if not pick.twin:
                     break
-            # Where it found nothing for one suggestion, the next (with one more to differ from) has less.
-            if pick.twin and not wider_failed:
+            if pick.twin and not forced:
                 pick = _wider(pick, spec, model, corners, solver, layouts, built, seed + k, suggestions)
-                wider_failed = pick.twin
+                forced = pick.twin
             progress.step()
             if pick.best is None:
                 failed, cut, astray = k + 1, pick.cut, pick.astray

@@ -55,6 +55,7 @@ class FitSettings:
     far_starts: int = 2  # starts far from the earlier suggestions, for one that repeats them
     twin_tries: int = 16  # a repeat still: this many more tries, in turn of each furniture set (all, fewer, corners)
     restarts: int = 4  # at most this many solver restarts per try: the tries and the drops do the rest
+    min_iterations: int = 60  # a run may stop this early once settled (the solver's 100 is for many pieces)
     rule_distance_m: float = 0.15  # a rule's distance or place off by more than this is a fault of a try
     rule_angle_deg: float = 15.0  # ... and a facing off by more than this
     astray_m: float = 0.3  # a wall-bound piece (a TV, a wardrobe) farther off its wall than this: not clean
