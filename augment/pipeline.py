@@ -172,6 +172,9 @@ class FurnishResult(Measurement):
         (:func:`augment.render.look.estimate_look`); None when nothing was rendered.
     lighting : Lighting or None
         The light the furniture was rendered in (:func:`augment.render.staged.estimate_lighting`).
+    windows : list of FoundWindow
+        The windows found in the photo (:func:`augment.room.openings.find_openings`; none
+        with ``auto_doors=False``): their panes took no shadows.
     report : dict
         What ``report.json`` holds (:func:`report_dict`).
     """
@@ -194,6 +197,7 @@ class FurnishResult(Measurement):
     erased: object = None
     look: object = None
     lighting: object = None
+    windows: list = field(default_factory=list)
     report: dict = field(default_factory=dict)
 
 
@@ -568,7 +572,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     auto_doors : bool
         Find the windows in the photo, and without ``doors`` the doors
         (:func:`augment.room.openings.find_openings`): doors are kept clear the same way,
-        windows free of tall furniture.
+        windows free of tall furniture, and a window's pane takes no shadow.
     assets : dict, optional
         Kind -> the user's model of that kind, rendered and put in the scenes instead of
         Stager's own, stretched onto each item's box: a GLB, glTF or OBJ path (y up,
@@ -647,7 +651,11 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             warnings.append(f"furniture is placed on the floor in view only ({m.floor.caveat})")
         # The doors kept clear: the user's, else those found in the photo (drawn on the overlay too).
         marked = doors is not None and len(doors) > 0
-        found_px, found_windows = [], []
+        with clock("furniture"):
+            # Found for a layout rendered again too: a window's pane takes no shadow.
+            found = find_openings(m.image, m.calibration, m.floor) if auto_doors else None
+        found_windows = [] if found is None else found.windows
+        found_px = [f.feet_px.ravel() for f in found.doors] if found is not None and not marked else []
         if layout is not None:
             fitted, layouts, dropped = fixed_spec, [fixed_layout], []
             reports = [layout_report.evaluate(fixed_layout)]
@@ -657,10 +665,6 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             bar.step(1 + suggestions)
         else:
             with clock("furniture"):
-                found = find_openings(m.image, m.calibration, m.floor) if auto_doors else None
-                if found is not None and not marked:
-                    found_px = [f.feet_px.ravel() for f in found.doors]
-                found_windows = [] if found is None else found.windows
                 fitted, dropped = furniture_for_floor(source, m.floor, room_height, photo, doors=doors,
                                                       found_doors=found_px, found_windows=found_windows,
                                                       calibration=m.calibration, asset_kinds=user_models,
@@ -695,8 +699,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 for lay, style_name in zip(layouts, styles):
                     done = render.render_staged(base, m.calibration, lay, gl, floor_mask=m.segmentation.mask,
                                                 floor_polygon=m.floor, lighting=lighting, look=camera_look,
-                                                seed=_seed(lay, seed),
-                                                style=style_name, assets=user_models, layer=layers)
+                                                seed=_seed(lay, seed), style=style_name, assets=user_models,
+                                                layer=layers, windows_px=[w.corners_px for w in found_windows])
                     staged.append(done.image)
                     if layers:
                         staged_layers.append(done.layer if erased is None else
@@ -732,7 +736,7 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                            scenes_glb=scenes, layout_files=layout_files, styles=styles[:len(layouts)],
                            assets={k: str(v) if isinstance(v, (str, Path)) else "parts" for k, v in
                                    (assets or {}).items()}, layers=staged_layers, erased=erased,
-                           look=camera_look, lighting=lighting)
+                           look=camera_look, lighting=lighting, windows=found_windows)
     result.report = report_dict(result)
     return result
 

@@ -214,8 +214,10 @@ def main(argv=None) -> int:
             lighting = estimate_lighting(result.image, cal, mask, floor_polygon=result.floor,
                                         ceiling_m=result.room_height_m)
             t = time.perf_counter()
+            panes = [w.corners_px for w in result.windows]
             new = render_staged(base, cal, lay, renderer, floor_mask=mask, floor_polygon=result.floor,
-                                lighting=lighting, look=estimate_look(result.image, cal), seed=lay_seed, style=style)
+                                lighting=lighting, look=estimate_look(result.image, cal), seed=lay_seed, style=style,
+                                windows_px=panes)
             row["new_render_s"] = time.perf_counter() - t
             assert np.array_equal(new.image, result.staged[0]), "the re-render differs from the pipeline's"
             sun = next((np.asarray(lt["direction"]) for lt in truth["render"]["lights"] if lt["kind"] == "sun"), None)
@@ -232,7 +234,7 @@ def main(argv=None) -> int:
                                     ceiling_m=result.room_height_m)
             plain = render_staged(base, cal, lay, renderer, floor_mask=mask, floor_polygon=result.floor,
                                   lighting=lit_w, look=estimate_look(result.image, cal), seed=lay_seed, style=style,
-                                  settings=windows_only)
+                                  windows_px=panes, settings=windows_only)
             row["no_sun"] = scores(truth_f, empty, plain.image, base, plain.alpha, sheet, floor_f, sun,
                                    world_from_floor[:3, :3] @ np.asarray(lit_w.direction))
             case = {"image": base, "calibration": cal, "mask": mask, "floor": result.floor,

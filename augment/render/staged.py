@@ -1095,6 +1095,20 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Ligh
                                 borderMode=cv2.BORDER_REPLICATE) for a in (gain, floor))
 
 
+def _panes(windows_px, K, dist, box) -> np.ndarray:
+    """(height, width) bool over ``box`` (undistorted pixels): inside the windows
+    ``windows_px`` (each (4, 2) photo pixels)."""
+    x0, y0, x1, y1 = box
+    inside = np.zeros((y1 - y0, x1 - x0), np.uint8)
+    for quad in windows_px:
+        q = np.asarray(quad, dtype=np.float64).reshape(-1, 1, 2)
+        if np.any(dist):
+            q = cv2.undistortPoints(q, K, dist, P=K)
+        hull = cv2.convexHull(np.round((q.reshape(-1, 2) - [x0, y0]) * (1 << _SUB)).astype(np.int32))
+        cv2.fillConvexPoly(inside, hull, 1, lineType=cv2.LINE_8, shift=_SUB)
+    return inside > 0
+
+
 # --------------------------------------------------------------------------------------
 # Occlusion by what the photo shows in front of the furniture
 # --------------------------------------------------------------------------------------
@@ -1416,7 +1430,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                   lighting: Lighting | None = None, look: PhotoLook | None = None, seed: int = 0,
                   style: str | None = None, assets: dict | None = None,
                   supersample: float | None = None, self_shadows: bool = True, layer: bool = False,
-                  settings: StagedSettings | None = None) -> Staged:
+                  windows_px=(), settings: StagedSettings | None = None) -> Staged:
     """Render furniture into a calibrated photo, with its shadows on the photo's floor.
 
     Parameters
@@ -1466,6 +1480,10 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         the light).
     layer : bool
         Also return the RGBA layer.
+    windows_px : sequence of (4, 2) float
+        The photo's pixels of each window's corners on the walls
+        (:class:`augment.room.openings.FoundWindow`): a pane shows the outside, which the
+        furniture's shadows on the walls do not reach.
     settings : StagedSettings, optional
         Default ``RENDER.staged`` (:mod:`augment.render.settings`).
 
@@ -1646,6 +1664,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         wall_gain, floor_share = _wall_gain(shading, casters, _walls_run_on(floor_polygon, settings.wall_run_on_m),
                                             np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon)), lighting,
                                             K, pose, box, settings)
+        wall_gain[_panes(windows_px, K, dist, box)] = 1.0
     else:
         wall_gain, floor_share = np.ones_like(gain), np.zeros_like(gain)
     if distorted:

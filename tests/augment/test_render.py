@@ -304,7 +304,8 @@ def test_a_box_by_a_wall_casts_its_shadow_on_the_wall_where_the_light_would_put_
     shadow on the wall's plane (its corners moved along d onto the plane, worked out
     here), by the key light's share of the wall's light, and is untouched 0.3 m and more
     outside it and above the box. Lit the other way, away from the wall, the same wall
-    points keep more than 85 % of their brightness."""
+    points keep more than 85 % of their brightness. A window's pane in the shadow keeps
+    its light (it shows the outside)."""
     image, _, calibration = room_small
     h, w = image.shape[:2]
     pose = calibration.camera_from_floor
@@ -382,6 +383,19 @@ def test_a_box_by_a_wall_casts_its_shadow_on_the_wall_where_the_light_would_put_
     staged = render_staged(image, calibration, [item], renderer, assets={"test_box": _box_parts()}, lighting=light,
                            seed=0, floor_mask=mask, floor_polygon=open_far)
     assert sum(far) == 1 and np.all(staged.gain[px[shadowed, 1], px[shadowed, 0]] == 1.0)
+    # A window in the shadow's middle: its pane shows the outside and keeps its light; the
+    # wall beside it is shadowed as before.
+    across = (pts[:, :2] - wall) @ side
+    lo, hi = np.quantile(across[shadowed], [0.2, 0.7])
+    pane = np.array([[lo, 0.05], [hi, 0.05], [hi, 2.0], [lo, 2.0]])
+    corners_px = _project(calibration, np.column_stack([wall + np.outer(pane[:, 0], side), pane[:, 1]]))
+    staged = render_staged(image, calibration, [item], renderer, assets={"test_box": _box_parts()}, lighting=light,
+                           seed=0, floor_mask=mask, floor_polygon=poly, windows_px=[corners_px])
+    in_pane = shadowed & (across > lo + 0.05) & (across < hi - 0.05) & (pts[:, 2] > 0.1)
+    beside = shadowed & ((across < lo - 0.08) | (across > hi + 0.08))
+    assert in_pane.sum() >= 5 and beside.sum() >= 5
+    assert np.all(staged.gain[px[in_pane, 1], px[in_pane, 0]] == 1.0)
+    assert np.all(staged.gain[px[beside, 1], px[beside, 0]] <= expected + 0.02)
 
 
 def test_walls_run_on_past_the_photos_edge_only():
