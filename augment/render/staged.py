@@ -1664,7 +1664,8 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         wall_gain, floor_share = _wall_gain(shading, casters, _walls_run_on(floor_polygon, settings.wall_run_on_m),
                                             np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon)), lighting,
                                             K, pose, box, settings)
-        wall_gain[_panes(windows_px, K, dist, box)] = 1.0
+        if len(windows_px):  # no box-sized mask per render where no window was found
+            wall_gain[_panes(windows_px, K, dist, box)] = 1.0
     else:
         wall_gain, floor_share = np.ones_like(gain), np.zeros_like(gain)
     if distorted:
