@@ -70,6 +70,15 @@ def _drop_notches(poly: np.ndarray, keep: np.ndarray) -> np.ndarray:
     return np.asarray(idx)
 
 
+def _simplified(points: np.ndarray, tolerance: float, index: np.ndarray) -> np.ndarray:
+    """``index`` of the closed outline ``points`` (n, 2) that Douglas-Peucker keeps at
+    ``tolerance``, in order."""
+    approx = cv2.approxPolyDP(points.astype(np.float32).reshape(-1, 1, 2), tolerance, True)[:, 0, :]
+    # approxPolyDP returns a subset of the input points: find their indices, in order.
+    lookup = {tuple(p): i for i, p in enumerate(points.astype(np.float32))}
+    return index[np.array(sorted(lookup[tuple(p)] for p in approx))]
+
+
 def _pixel_edge(contour: np.ndarray) -> np.ndarray:
     """Move a traced outline from its boundary pixels' centers out to their outer edges.
 
@@ -268,10 +277,10 @@ def _outline_polygon(region: np.ndarray, far_ring: np.ndarray, scale: float,
     # Pixel centers of the scaled image map back to full-size pixel coordinates.
     outline_px = (_pixel_edge(contour) + 0.5) / scale - 0.5
     floor_m = calibration.floor_from_pixels(outline_px)
-    approx = cv2.approxPolyDP(floor_m.astype(np.float32).reshape(-1, 1, 2), FLOOR.polygon.simplify_m, True)[:, 0, :]
-    # approxPolyDP returns a subset of the input points: find their indices, in order.
-    lookup = {tuple(p): i for i, p in enumerate(floor_m.astype(np.float32))}
-    vertex_idx = np.array(sorted(lookup[tuple(p)] for p in approx))
+    # First in the photo, then on the floor: at a far wall one row of pixels is
+    # centimeters deep, and the steps of GrabCut's coarse mask would stay as teeth.
+    px_idx = _simplified(contour, FLOOR.polygon.simplify_share * max(h, w), np.arange(len(contour)))
+    vertex_idx = _simplified(floor_m[px_idx], FLOOR.polygon.simplify_m, px_idx)
     # A vertex where the edge kind changes (the floor meets the photo's edge) stays.
     changes = kind != np.roll(kind, 1)
     pinned = np.isin(vertex_idx, np.flatnonzero(changes))

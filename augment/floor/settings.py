@@ -79,7 +79,8 @@ class SkirtingSettings:
     board_click_reach: float = 0.10  # a "not floor" click this near a wall's column (of the long side) marks its board
     doubt_p: float = 0.3  # an uncut wall with this mean board probability may hold a board: the trim says where
     seen_p: float = 0.5  # a column where the board probability reaches this shows the board
-    gap_p: float = 0.5  # a wall whose mean gap probability reaches this has its mask edge moved up to the floor line
+    gap_p: float = 0.5  # a column whose gap probability reaches this sees the floor line above the mask's edge
+    gap_agreeing: float = 0.7  # a wall where this share of columns sees it has its mask edge moved up to the floor line
     gap_smooth_columns: int = 9  # that reach is smoothed over this many columns: a lone column's is a spike
     corner_px: float = 3.0  # the mask's top edge bending by more than this is a corner between walls
     min_wall_columns: int = 24  # a wall judged on its own needs this many columns
@@ -90,6 +91,7 @@ class PolygonSettings:
     """The floor polygon (:mod:`augment.floor.polygon`)."""
 
     long_px: int = 1024  # contours are traced at this long side at most: walls within centimeters, and fast
+    simplify_share: float = 0.0035  # the outline is first straightened this far in the photo, of its long side
     simplify_m: float = 0.05  # how far the straightened outline may stray from the mask's
     notch_area_m2: float = 0.02  # vertices cutting off less than this are noise, not corners
     corner_min_deg: float = 10.0  # edges meeting at less than this are one wall, not a corner

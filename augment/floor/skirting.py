@@ -399,10 +399,12 @@ def _extended(mask: np.ndarray, view, profiles) -> np.ndarray:
     add = np.zeros(small_mask.shape, np.uint8)
     sk = FLOOR.skirting
     for wall in _walls(cols, rows):
-        if len(wall) < sk.min_wall_columns or np.mean(p_gap[wall]) < sk.gap_p:
+        sure = p_gap[wall] >= sk.gap_p
+        if len(wall) < sk.min_wall_columns or np.mean(sure) < sk.gap_agreeing:
             continue
-        reach_px = median_filter(np.where(p_gap[wall] >= sk.gap_p, gap_m[wall] * px_per_m[wall], 0.0),
-                                 size=sk.gap_smooth_columns, mode="nearest")
+        # A wall's floor line is straight: the columns that doubt the gap take the wall's.
+        reach_m = np.where(sure, gap_m[wall], np.median(gap_m[wall][sure]))
+        reach_px = median_filter(reach_m * px_per_m[wall], size=sk.gap_smooth_columns, mode="nearest")
         for col, row, n in zip(cols[wall], rows[wall], np.round(reach_px).astype(int)):
             add[max(0, row - n):row, col] = n > 0
     if not add.any():

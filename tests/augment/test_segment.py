@@ -352,6 +352,27 @@ def test_polygon_recovers_a_known_floor(held_out):
     assert np.dot(p[:, 0], np.roll(p[:, 1], -1)) - np.dot(p[:, 1], np.roll(p[:, 0], -1)) > 0
 
 
+def test_a_far_wall_of_a_segmented_render_is_one_edge(monkeypatch):
+    """Render 9900/38 of the synthetic photographer (1280 x 960, as the staging benchmark
+    makes it): GrabCut decides the floor at 400 px, and its mask's steps of a pixel or
+    two are centimeters deep along the far wall, 6 m away. Straightened on the floor
+    alone they stayed as teeth (21 vertices, 13 of them on that wall); straightened in
+    the photo first, the floor has a vertex per corner of the room in view, and its
+    area stays that of the straightening on the floor alone and of the true mask."""
+    with Renderer() as renderer:
+        sample = render_sample([9900, 38], renderer, (1280, 960), clutter=False)
+    f = sample.truth["K"][0][0]
+    cal = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(f, (1280, 960)))
+    mask = segment_floor(sample.image, FloorModel(DEFAULT_MODEL), cal).mask
+    poly = floor_polygon(mask, cal)
+    assert len(poly.polygon_m) <= 6, poly.polygon_m
+    assert poly.area_m2 == pytest.approx(floor_polygon(sample.floor_mask, cal).area_m2, rel=0.02)
+    monkeypatch.setattr(FLOOR.polygon, "simplify_share", 0.0)
+    toothed = floor_polygon(mask, cal)
+    assert len(toothed.polygon_m) > 12
+    assert poly.area_m2 == pytest.approx(toothed.area_m2, rel=0.005)
+
+
 def test_carton_behind_a_thin_rim_of_floor_stays_inside_the_outline(held_out):
     """A floor with a carton's hole cut out just below its far edge, leaving a rim of floor
     one pixel thin behind it: the outline is the floor's own (area within 1 % of the

@@ -539,3 +539,31 @@ def test_columns_too_far_off_to_tell_a_board_are_unknown():
     for px_per_m in (2.0, 6.0):  # spans of 1 and 2 px
         out, brightness, hue_deg = skirting._board_rows(image, mask, cols, rows, np.full(10, px_per_m))
         assert np.isnan(out).all() and np.isfinite(brightness).all() and np.isfinite(hue_deg).all()
+
+
+@pytest.mark.parametrize("doubting", [0.0, 0.2, 0.5])
+def test_the_floor_line_moves_up_along_a_whole_wall_or_not_at_all(monkeypatch, doubting):
+    """A wall's floor line is straight. The gap model sees the floor line 3 cm above the
+    mask's edge in every column but a ``doubting`` share of them, in blocks of 30 columns
+    (as it did on a dark carpet below a dark board: render 9900/8, whose far wall came out
+    as a sawtooth 10 px deep). Where most columns see the gap, every column of the wall
+    moves up by the same depth; where half doubt it, none does."""
+    image, truth, _, calibration = _room(0.0)
+    band_m = 0.03
+
+    def gap(profile, scalars):
+        n = len(profile)
+        doubt = (np.arange(n) // 30) % 10 < round(10 * doubting)
+        return np.where(doubt, 0.1, 0.9), np.full(n, band_m)
+
+    monkeypatch.setattr(skirting, "floor_line_gap", gap)
+    *_, px_per_m = skirting.working_view(image, truth, calibration)
+    top = np.argmax(truth, axis=0)
+    mask = truth & (np.arange(SIZE[1])[:, None] >= top + 4)  # the edge 4 rows below the floor line
+    gained = (extend_to_floor_line(image, mask, calibration) & ~mask).sum(axis=0)
+    if doubting >= 1 - FLOOR.skirting.gap_agreeing:
+        assert gained.sum() == 0
+    else:
+        expected = np.round(band_m * np.median(px_per_m))
+        inner = gained[20:-20]  # away from the photo's edges
+        assert np.all(np.abs(inner - expected) <= 1), (inner.min(), inner.max(), expected)
