@@ -576,8 +576,8 @@ class _Pick:
     :func:`broken_rules`, a piece taken out). A piece off its spot (:func:`_off_their_spots`)
     or hidden behind others (:func:`layout.camera.judge`) is taken out of the try, as a
     stager takes it out of the shot, with the pieces placed at it (a desk's chair); where
-    the hidden piece stays (the most important unit, a member of a rigid set), the piece
-    in front of it goes instead."""
+    the hidden piece stays (the most important unit, a member of a rigid set) or comes
+    before it in the spec's order, the piece in front of it goes instead."""
 
     def __init__(self, earlier: list, spec, anchor=frozenset(), built: dict | None = None):
         self.earlier = earlier
@@ -587,6 +587,7 @@ class _Pick:
         groups = {g.id: g for g in spec.groups}
         # A member of a rigid set (a table's chairs) goes only with its set.
         self.in_sets = {i.id for i in spec.items if _rigid_root(i, groups) is not None}
+        self.rank = {i.id: k for k, i in enumerate(spec.items)}  # the spec's order: most important first
         self.best = None
         self.cut = None  # the cut pieces of the unclean try that cut fewest
         self.astray = None  # the pieces off their walls of the otherwise clean try with fewest
@@ -628,7 +629,11 @@ class _Pick:
             hiding = {i: OFF_SPOT for i in _off_their_spots(lay, r) - self.anchor}
             for h in camera.get("hidden", ()):
                 front = camera["hidden_by"].get(h, h)
-                goes, why = (h, UNSEEN) if h not in stays else (front, IN_FRONT) if front not in stays else (None, None)
+                # The less important of the two goes (a plant, not the coffee table it hides).
+                if front not in stays and (h in stays or self.rank.get(front, -1) > self.rank.get(h, -1)):
+                    goes, why = front, IN_FRONT
+                else:
+                    goes, why = (h, UNSEEN) if h not in stays else (None, None)
                 if goes is not None:
                     hiding.update(dict.fromkeys({goes} | with_it.get(goes, set()), why))
             if not hiding or judged == HIDING_ROUNDS or {lay.model.names[i] for i in lay.items} <= set(hiding):

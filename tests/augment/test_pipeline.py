@@ -1046,7 +1046,8 @@ def test_a_hidden_piece_or_the_piece_in_front_of_it_is_taken_out_of_the_shot(tmp
     """Judged hidden, the TV leaves that try, the sofa where it stood; seen, it stays. The
     sofa (the anchor) hidden behind the TV stays and the TV goes; hidden behind nothing
     that may go, nothing goes. A piece others are placed at goes with them (a sofa not
-    the anchor, its side table at its arm), and a chair at a desk with its desk."""
+    the anchor, its side table at its arm), and a chair at a desk with its desk. Of two
+    pieces that may go, the less important goes, hidden or in front."""
     from layout import report as layout_report
 
     from layout import Solver
@@ -1087,6 +1088,11 @@ def test_a_hidden_piece_or_the_piece_in_front_of_it_is_taken_out_of_the_shot(tmp
     # The desk the anchor: its chair stays with it.
     assert offered(spec, solved, {"bookcase": "office_chair"}, anchor=frozenset({"desk"}))[2] == {
         "bookcase": fit.UNSEEN}
+    # Of a hidden piece and the one in front, the later in the spec's order goes: a plant
+    # that hides the coffee table leaves the shot, not the table.
+    spec, solved = three("sofa", "coffee_table", "plant")
+    assert offered(spec, solved, {"coffee_table": "plant"})[2] == {"plant": fit.IN_FRONT}
+    assert offered(spec, solved, {"plant": "coffee_table"})[2] == {"plant": fit.UNSEEN}
 
 
 def test_the_rules_a_layout_breaks_are_named_with_how_far_off(tmp_path):
