@@ -30,6 +30,8 @@ shows; :func:`layout.camera.judge`):
   windows found in the photo are kept clear so (also scored);
 * ``rules_met``: every group rule holds: faces within 15 degrees, distances within 10 cm,
   "in front of"/"beside" targets within 15 cm;
+* ``at_walls``: every wall-bound piece (a bed's head, a wardrobe, a TV stand, a sideboard)
+  stands within 15 cm of a wall of the floor found, facing into the room within 15 degrees;
 * ``different``: another arrangement than each other suggestion of the photo (other
   furniture, or moved 0.3 m on average, by centres or, if more, footprint corners:
   :func:`augment.room.fit.apart_m`);
@@ -63,7 +65,7 @@ sys.path.insert(0, str(HERE))
 ROOMS = ("living_room", "bedroom", "office", "dining_room")
 SUGGESTIONS = 4
 CHECKS = ("foreground_clear", "whole", "visible", "visible_in_photo", "good_side", "doors_clear", "windows_clear",
-          "rules_met", "different", "different_or_forced")
+          "rules_met", "at_walls", "different", "different_or_forced")
 TARGET = 0.95
 DOOR_MATCH_M = 0.3  # a found door this close to a true one is that door (its error is reported)
 TIMED = 3  # timed solves per photo and mode, after a warm one: their median is its time
@@ -170,6 +172,14 @@ def _rules_met(lay) -> bool:
                 and np.all(np.sqrt(2.0 * np.abs(r["heat"])) <= 0.15))
 
 
+def _at_walls(lay) -> bool:
+    from layout.solver import State, residuals
+
+    r = residuals(lay.model, State(lay.position_m, lay.yaw_rad))
+    return bool(np.all(np.abs(r["wall_distance"]) <= 0.15)
+                and np.all(np.abs(r["wall_orientation"]) <= math.radians(15.0)))
+
+
 def _checks(layouts, camera, calibration, doors, windows, renderer) -> list[dict]:
     from augment.room.fit import apart_m
     from augment.pipeline import suggestion_styles
@@ -209,6 +219,7 @@ def _checks(layouts, camera, calibration, doors, windows, renderer) -> list[dict
                 convex_intersection_area(zn, f) <= 0.01 for zn, sill in window_zones for f, top in zip(footprints, tops)
                 if top > sill),
             "rules_met": _rules_met(lay),
+            "at_walls": _at_walls(lay),
             "different": all(apart_m(lay, other) >= 0.3 for q, other in enumerate(layouts) if q != k),
             "hidden": j["hidden"], "from_behind": j["from_behind"], "cut": j["cut"],
         })

@@ -389,8 +389,8 @@ def too_small(area_m2: float, dropped: list) -> FurnishError:
 
 
 def no_view(dropped: list) -> FurnishError:
-    """The photo shows too little above the floor for any piece to stand whole in it: no
-    staged photo with pieces cut by its edge."""
+    """The photo shows too little above the floor for any piece to stand whole in it, where
+    it belongs: no staged photo with pieces cut by its edge or standing off their walls."""
     return FurnishError("no furniture stands whole in this photo (" + dropped_summary(dropped) + "). It shows too "
                         "little above the floor: step back, and hold the camera higher and level")
 
@@ -565,6 +565,9 @@ def _armchairs_from_behind(lay, rep: dict) -> set:
 
 # Why a piece is left out of one suggestion (:class:`_Pick`).
 OFF_SPOT = "in view, it found no place at the piece it goes with"
+# Kinds a stager never leaves off their wall, even as the room's main piece: a bed's head,
+# storage, a TV. (A sofa or a desk may stand in the room, in its group.)
+NEVER_FLOAT = ("bed", "single_bed", "wardrobe", "dresser", "bookcase", "tv_stand", "coat_rack")
 UNSEEN = "it would stand hidden behind the others"
 IN_FRONT = "it would hide a piece that stays behind it"
 HIDING_ROUNDS = 3  # taking a piece out can show or hide others: judge again this often at most
@@ -583,7 +586,10 @@ class _Pick:
         self.earlier = earlier
         self.spec = spec
         self.built = {} if built is None else built  # models with pieces taken out (_taken_out)
-        self.anchor = anchor  # the ids of the most important unit: it stays, astray or not
+        self.anchor = anchor  # the ids of the most important unit: it stays, astray or not,
+        # unless a stager never leaves it off its wall
+        kinds = {i.id: i.kind.name for i in spec.items}
+        self.floats = frozenset(i for i in anchor if kinds.get(i) not in NEVER_FLOAT)
         groups = {g.id: g for g in spec.groups}
         # A member of a rigid set (a table's chairs) goes only with its set.
         self.in_sets = {i.id for i in spec.items if _rigid_root(i, groups) is not None}
@@ -601,7 +607,7 @@ class _Pick:
             self.cut = now if self.cut is None or len(now) < len(self.cut) else self.cut
             return False
         r = _residuals(lay)
-        astray = (_astray(lay, r) | _armchairs_from_behind(lay, rep)) - self.anchor
+        astray = (_astray(lay, r) | _armchairs_from_behind(lay, rep)) - self.floats
         if astray:
             self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
             return False
@@ -769,11 +775,12 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
 
     When a suggestion has no clean layout, the least important unit with an item cut
     by the photo's edge is dropped, else the one with a piece astray (the most
-    important unit, a sofa or a bed, is never astray), else the least important unit
-    (the spec's last), and all are solved again. The last unit gone, a corner set is
-    staged in their place; with none left, all is tried again with the found doors'
-    zones as found (no margin, :func:`_padded`), then the photo is refused: no piece is
-    shown cut by the photo's edge."""
+    important unit, a sofa or a desk, is never astray; a bed or a piece of storage,
+    :data:`NEVER_FLOAT`, is, and takes all the furniture with it), else the least
+    important unit (the spec's last), and all are solved again. The last unit gone, a
+    corner set is staged in their place; with none left, all is tried again with the
+    found doors' zones as found (no margin, :func:`_padded`), then the photo is refused:
+    no piece is shown cut by the photo's edge or standing off its wall."""
     from layout.solver import turned_state
     from layout.spec import build
 
@@ -872,7 +879,8 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             gone_units = by_cut[-1:]
         elif by_astray:
             reason = "it found no place against a wall, or facing its partner, on the floor in view with the rest"
-            gone_units = by_astray[-1:]
+            # The main piece with no place at a wall: the rest without it is no staging either.
+            gone_units = units if by_astray[-1] is units[0] else by_astray[-1:]
         else:
             reason = (f"suggestion {failed} could not place everything without overlaps or leaving the "
                       f"{area_m2:.1f} m\u00b2 floor")
@@ -890,8 +898,11 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 progress.grow(suggestions)
                 continue
             dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason} for u in units for i in u)
-            # No piece cut by the photo's edge: rather no staged photo, and the reason.
-            raise no_view(dropped) if spec.camera is not None and by_cut else too_small(area_m2, dropped)
+            # No piece cut by the photo's edge, nor standing off its wall: rather no staged
+            # photo, and the reason.
+            if spec.camera is not None and (by_cut or by_astray):
+                raise no_view(dropped)
+            raise too_small(area_m2, dropped)
         spec, gone = _drop(spec, [i.id for u in gone_units for i in u])
         dropped.extend({"id": i, "kind": kinds[i], "reason": reason} for i in sorted(gone))
         # A piece kept bare for the frame and left out after all is said once, as left out.

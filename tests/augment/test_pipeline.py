@@ -3,6 +3,7 @@ ground-truth floor of synthetic sample photos, no overlaps, complete reports and
 all-or-nothing writing, and one clear error per kind of bad input."""
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import io
 import json
@@ -919,7 +920,6 @@ class _SofaAndTV:
 
     def placed(self, sofa_yaw_deg: float, sofa_y_m: float, tv_off_wall_m: float):
         """Both on x = 3: the TV facing +y with its back ``tv_off_wall_m`` off the wall y = 0."""
-        import dataclasses
 
         pos, yaw = self.layout.position_m.copy(), self.layout.yaw_rad.copy()
         for i, (y, a) in zip(self._index, ((sofa_y_m, sofa_yaw_deg), (self.depth_m / 2 + tv_off_wall_m, 90.0))):
@@ -979,12 +979,38 @@ def test_a_tv_off_its_wall_or_not_facing_the_sofa_is_left_out(tmp_path, monkeypa
                         "its partner, on the floor in view with the rest"}]
 
 
+def test_a_tv_off_its_wall_is_astray_even_as_the_main_piece_and_takes_the_furniture_with_it(tmp_path, monkeypatch):
+    """A kind a stager never leaves off its wall (``fit.NEVER_FLOAT``) is astray also as
+    the anchor: the TV 1 m off its wall, made the anchor, leaves the try unclean, while
+    at its wall it is kept; a sofa anchor off its wall is kept. When every try leaves
+    such an anchor astray, the rest is not staged without it: the photo is refused,
+    with the reason."""
+    from augment.errors import FurnishError
+
+    room = _SofaAndTV(tmp_path)
+    pick = fit._Pick([], room.spec, anchor=frozenset({"tv"}))
+    assert not pick.offer(room.placed(-90.0, 2.5, 1.0)) and pick.best is None and pick.astray == {"tv"}
+    pick.offer(room.placed(-90.0, 2.5, 0.0))
+    assert pick.best is not None and pick.best[2] == {}
+    monkeypatch.setattr(fit, "_astray", lambda lay, r=None: {"sofa"} & set(lay.model.names))
+    pick = fit._Pick([], room.spec, anchor=frozenset({"sofa"}))
+    pick.offer(room.placed(-90.0, 2.5, 0.0))
+    assert pick.best is not None
+
+    # The TV first, astray in every try: nothing is staged, and the reason says why.
+    tv_first = dataclasses.replace(room.spec, items=room.spec.items[::-1])
+    monkeypatch.setattr(fit, "_astray", lambda lay, r=None: {"tv"} & set(lay.model.names))
+    dropped = []
+    with pytest.raises(FurnishError, match="tv, sofa: it found no place against a wall"):
+        fit.solve_suggestions(tv_first, 1, 0, 24.0, dropped, pipeline._Progress(False, 1))
+    assert {d["id"] for d in dropped} == {"tv", "sofa"}
+
+
 def test_a_side_table_off_its_spot_at_the_sofa_is_taken_out(tmp_path, monkeypatch):
     """A side table placed at the sofa's arm: where the solver put it, 0.1 m off its spot
     or turned 10 degrees, it stays; 0.3 m ahead of it (> ``rule_distance_m``, 0.15) or
     turned 20 degrees from the sofa (> ``rule_angle_deg``, 15) it is a piece a stager
     takes out of that shot."""
-    import dataclasses
 
     from layout import Solver
     from layout.spec import build
@@ -1224,7 +1250,6 @@ def test_a_found_doors_margin_gives_way_before_the_photo_is_refused(tmp_path):
     middle of a long wall: its zone with the margin (1.0 m wide, 0.9 m deep) leaves the
     table no place, as a door the user marked that wide does (refused); the found one is
     then kept clear as found, and the table stands beside its zone."""
-    import dataclasses
 
     from layout.spec import Opening, load_spec
     from layout.metrics import convex_intersection_area
@@ -1343,19 +1368,16 @@ def test_a_small_floor_gets_four_different_corners_not_four_twins(tmp_path):
             sorted(layouts[0].model.kinds[i] for i in layouts[0].items), n
 
 
-def test_furniture_cut_wherever_it_stood_gives_way_to_a_corner_in_view(tmp_path):
-    """Render [9900, 7], a dining room whose table set is cut by the photo's edge
-    wherever it stands (it was laid out without the camera, cut in all four photos): a
-    corner set stands whole in the frame in every suggestion and the table set is
-    reported as left out."""
-    from layout.camera import judge
-
+def test_furniture_whole_in_view_only_off_its_wall_is_not_staged(tmp_path):
+    """Render [9900, 7], a dining room seen from high up: the table set is cut by the
+    photo's edge wherever it stands, and the sideboard of a corner set stands whole only
+    in the middle of the floor, its back to nothing (so it was staged, in all four
+    suggestions). A sideboard never floats (``fit.NEVER_FLOAT``): the photo is refused,
+    saying why and what to do."""
     m, _ = _measured_render([9900, 7], tmp_path)
-    layouts, notes, dropped = _suggestions(m, "dining_room", corners=True)
-    assert any(n.startswith("staged as a corner (") for n in notes), notes
-    assert all(lay.model.camera is not None and judge(lay)["cut"] == [] for lay in layouts)
-    assert "dining_table" in {d["id"] for d in dropped}
-    assert not {"dining_table", "round_table"} & {k for lay in layouts for k in lay.model.kinds}
+    with pytest.raises(FurnishError, match=r"no furniture stands whole in this photo \(dining_table, .*sideboard: "
+                                           r".*step back, and hold the camera higher"):
+        _suggestions(m, "dining_room", corners=True)
 
 
 def test_a_photo_where_no_piece_stands_whole_is_refused_not_staged_cut(tmp_path):
