@@ -164,18 +164,14 @@ def _swing_zone(segment, polygon, depth_m=None) -> np.ndarray:
     return np.array([a, b, b + width * n, a + width * n])
 
 
-def _rules_met(lay) -> bool:
-    from layout.solver import State, residuals
-
-    r = residuals(lay.model, State(lay.position_m, lay.yaw_rad))
+def _rules_met(r: dict) -> bool:
+    """Every group rule holds, from a layout's residuals (:func:`layout.solver.residuals`)."""
     return bool(np.all(np.abs(r["orientation"]) <= math.radians(15.0)) and np.all(np.abs(r["distance"]) <= 0.10)
                 and np.all(np.sqrt(2.0 * np.abs(r["heat"])) <= 0.15))
 
 
-def _at_walls(lay) -> bool:
-    from layout.solver import State, residuals
-
-    r = residuals(lay.model, State(lay.position_m, lay.yaw_rad))
+def _at_walls(r: dict) -> bool:
+    """Every wall-bound piece at its wall, facing into the room, from a layout's residuals."""
     return bool(np.all(np.abs(r["wall_distance"]) <= 0.15)
                 and np.all(np.abs(r["wall_orientation"]) <= math.radians(15.0)))
 
@@ -186,6 +182,7 @@ def _checks(layouts, camera, calibration, doors, windows, renderer) -> list[dict
     from augment.room.settings import ROOM
     from layout.camera import CAMERA, box_corners_3d, judge
     from layout.metrics import convex_intersection_area
+    from layout.solver import State, residuals
 
     styles = suggestion_styles(None, 0, len(layouts))  # as stage furnish --seed 0 renders them
 
@@ -198,6 +195,7 @@ def _checks(layouts, camera, calibration, doors, windows, renderer) -> list[dict
         uv, z = camera.project(corners)
         feet = uv[:, [0, 2, 4, 6]]  # the corners at the floor (z - h/2)
         j = judge(lay, camera=camera)
+        r = residuals(m, State(lay.position_m, lay.yaw_rad))
         zones = [_swing_zone(d, m.floor_polygon_m) for d in doors]
         footprints = lay.corners_m(items)
         tops = lay.position_m[items, 2] + 0.5 * m.particle_size_m[items, 2]
@@ -218,8 +216,8 @@ def _checks(layouts, camera, calibration, doors, windows, renderer) -> list[dict
             "windows_clear": None if not window_zones else all(
                 convex_intersection_area(zn, f) <= 0.01 for zn, sill in window_zones for f, top in zip(footprints, tops)
                 if top > sill),
-            "rules_met": _rules_met(lay),
-            "at_walls": _at_walls(lay),
+            "rules_met": _rules_met(r),
+            "at_walls": _at_walls(r),
             "different": all(apart_m(lay, other) >= 0.3 for q, other in enumerate(layouts) if q != k),
             "hidden": j["hidden"], "from_behind": j["from_behind"], "cut": j["cut"],
         })
