@@ -504,20 +504,38 @@ def rule_count(lay) -> int:
     return sum(counts[k] for k in ("wall_distance", "distance", "heat", "orientation"))
 
 
-def _astray(lay, r: dict | None = None) -> set:
+def _astray(lay, r: dict | None = None, may_float=frozenset()) -> set:
     """The pieces a stager would not leave so: wall-bound ones more than
-    ``ROOM.fit.astray_m`` off every wall (a TV stand in the middle of the room), and both
-    of two that should face each other (a sofa and its TV) turned more than
-    ``ROOM.fit.astray_deg`` off; the less important of them is what goes. ``r``: the
-    layout's residuals when already computed."""
+    ``ROOM.fit.astray_m`` off their wall's distance, out in the room (a TV stand in the
+    middle of the room) or pushed to a wall they should stand clear of (a desk facing into
+    the room, its chair's place gone), or at their wall but turned more than
+    ``ROOM.fit.astray_deg`` from it (a bed askew); and both of two that should face each
+    other (a sofa and its TV) turned that far off. The pieces ``may_float`` (ids) may stand
+    out in the room, turned as their group has them; a piece that faces them goes instead.
+    ``r``: the layout's residuals when already computed."""
     from layout import _codes as codes
 
-    m = lay.model
+    fit, m = ROOM.fit, lay.model
     r = _residuals(lay) if r is None else r
-    off = set(m.wall_distance_item[np.abs(r["wall_distance"]) > ROOM.fit.astray_m])
-    turned = (np.abs(r["orientation"]) > np.radians(ROOM.fit.astray_deg)) & (m.orientation_mode == codes.FACE)
-    off.update(m.orientation_pairs[turned].ravel())
+    far = set(m.wall_distance_item[r["wall_distance"] > fit.astray_m])  # out in the room
+    off = set(m.wall_distance_item[r["wall_distance"] < -fit.astray_m]) | {i for i in far
+                                                                          if m.names[i] not in may_float}
+    askew = np.abs(r["wall_orientation"]) > np.radians(fit.astray_deg)  # the nearest wall: theirs unless far
+    off.update(i for i in m.wall_orientation_item[askew] if i not in far)
+    turned = (np.abs(r["orientation"]) > np.radians(fit.astray_deg)) & (m.orientation_mode == codes.FACE)
+    off.update(i for i in m.orientation_pairs[turned].ravel() if m.names[i] not in may_float)
     return {m.names[i] for i in off}
+
+
+def _in_groups(model) -> set:
+    """The ids of the pieces a rule ties to another of the model: placed at it (a coffee
+    table at the sofa, the sofa as its frame), at a distance from it, or facing it."""
+    i = set(model.distance_pairs.ravel()) | set(model.orientation_pairs.ravel())
+    for c in np.flatnonzero(model.heat_frame >= 0):
+        members = model.heat_members[model.heat_start[c]:model.heat_start[c + 1]]
+        if set(members) - {model.heat_frame[c]}:
+            i |= set(members) | {model.heat_frame[c]}
+    return {model.names[k] for k in i}
 
 
 def _off_their_spots(lay, r: dict | None = None) -> set:
@@ -607,7 +625,9 @@ class _Pick:
             self.cut = now if self.cut is None or len(now) < len(self.cut) else self.cut
             return False
         r = _residuals(lay)
-        astray = (_astray(lay, r) | _armchairs_from_behind(lay, rep)) - self.floats
+        # The main piece stands out in the room only with its group: alone, a stager puts it at a wall.
+        floats = self.floats & _in_groups(lay.model)
+        astray = _astray(lay, r, floats) | (_armchairs_from_behind(lay, rep) - floats)
         if astray:
             self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
             return False
@@ -645,6 +665,10 @@ class _Pick:
             if not hiding or judged == HIDING_ROUNDS or {lay.model.names[i] for i in lay.items} <= set(hiding):
                 break
             taken |= hiding
+        if taken and (astray := _astray(lay, r, self.floats & _in_groups(lay.model))):
+            # Its group taken out, the main piece stands alone where the group wanted it.
+            self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
+            return False
         # Seating shown from behind is worse than a repeat (a sofa's back is no picture to
         # show a client); a repeat is worth nothing to the user; a fault, a little less than
         # a perfect one.
@@ -693,6 +717,12 @@ def _far_start(model, earlier: list, rng, candidates: int = 8):
 
 def _kinds(spec) -> list:
     return sorted(i.kind.name for i in spec.items)
+
+
+def _arrangement(spec) -> tuple:
+    """The furniture and the kinds of rule that place it: a corner set alike in these is
+    the spec again (one desk against a wall and one facing into the room are not)."""
+    return sorted((i.kind.name, i.rules) for i in spec.items), sorted(c.type for c in spec.constraints)
 
 
 def _corner_instead(spec, corner, dropped: list, reason: str) -> tuple:
@@ -773,11 +803,14 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     each of these (:func:`_wider`); a twin is kept, with a line in ``notes``, when nothing
     gives anything else, and the later suggestions then keep their seeds' best.
 
-    When a suggestion has no clean layout, the least important unit with an item cut
-    by the photo's edge is dropped, else the one with a piece astray (the most
-    important unit, a sofa or a desk, is never astray; a bed or a piece of storage,
-    :data:`NEVER_FLOAT`, is, and takes all the furniture with it), else the least
-    important unit (the spec's last), and all are solved again. The last unit gone, a
+    A later suggestion with no clean try of its own takes the first as one (a repeat)
+    and searches on from there. When the first has no clean layout, the least important
+    unit with an item cut by the photo's edge is dropped, else the one with a piece astray
+    (the most important unit, a sofa or a desk, may stand out in the room with its group;
+    alone, or a bed or a piece of storage (:data:`NEVER_FLOAT`), it is astray off its wall
+    and takes all the furniture with it), else the least important unit (the spec's last),
+    and all are solved again; before the last unit goes, all are solved once more with
+    ``ROOM.fit.last_tries`` seeds for the first suggestion. The last unit gone, a
     corner set is staged in their place; with none left, all is tried again with the
     found doors' zones as found (no margin, :func:`_padded`), then the photo is refused:
     no piece is shown cut by the photo's edge or standing off its wall."""
@@ -787,8 +820,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     fit = ROOM.fit
     notes = [] if notes is None else notes
     built = {}  # models with pieces taken out, shared by the tries (_taken_out)
-    corners, cornered = [c for c in corners if _kinds(c) != _kinds(spec)], None
+    corners, cornered = [c for c in corners if _arrangement(c) != _arrangement(spec)], None
     first_try = (spec, list(dropped), list(corners))
+    tries, longer = fit.seed_tries, False  # seeds for the first suggestion; the longer search made
     while True:
         model, solver = build(spec)
         solver = dataclasses.replace(solver, restarts=min(solver.restarts, fit.restarts),
@@ -797,11 +831,18 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
         forced = False  # a suggestion's whole search found only repeats
         for k in range(suggestions):
             pick = _Pick(layouts, spec, anchor=frozenset(i.id for i in _units(spec)[0]), built=built)
-            for t in range(fit.seed_tries):
+            for t in range(tries if k == 0 else fit.seed_tries):  # the later ones may repeat the first
                 # Twice the very same arrangement: the photo pins it, other seeds will not help.
-                if pick.offer(solver.solve(model, seed=seed + k + t * suggestions)) or pick.pinned >= 2:
+                if pick.offer(solver.solve(model, seed=seed + k + t * suggestions)) or pick.pinned >= 2 \
+                        or (t >= fit.seed_tries and pick.best is not None):  # the longer search: any clean one
                     break
             pick.pinned = 0
+            borrowed = pick.best is None and bool(layouts)
+            if borrowed:
+                # No clean try of its own: the first suggestion is one, and the photo may allow
+                # no other; the searches for another arrangement below start from it (not
+                # with fewer of these pieces: where all of them found no place, fewer do not).
+                pick.offer(layouts[0])
             # After one suggestion's whole search found only repeats, the next one's (with one
             # more to differ from) would too: it keeps its seeds' best.
             hopeless = forced and pick.twin
@@ -817,7 +858,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 start = _far_start(model, layouts, np.random.default_rng(far_seed))
                 if pick.offer(solver.solve(model, seed=far_seed, state=start)) or not pick.lacking:
                     break
-            if pick.twin and not hopeless:
+            if pick.twin and not hopeless and not borrowed:
                 for unit in _units(spec)[:0:-1]:
                     smaller, _ = _drop(spec, [i.id for i in unit])
                     sub_model, _ = build(smaller)
@@ -886,6 +927,12 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                       f"{area_m2:.1f} m\u00b2 floor")
             gone_units = units[-1:]
         if len(gone_units) == len(units):
+            if not longer:
+                # Before the main piece, and all with it, goes: a longer search, once.
+                tries, longer = fit.last_tries, True
+                progress.grow(suggestions)
+                continue
+            tries = fit.seed_tries
             if spec.camera is not None and corners:
                 spec, cornered = _corner_instead(spec, corners.pop(0), dropped, reason)
                 progress.grow(suggestions)

@@ -52,6 +52,7 @@ class FitSettings:
     wall_margin_m: float = 0.05  # layouts keep this far inside the measured floor: its outline strays; baseboards
     max_fill: float = 0.5  # summed footprint of floor-standing items: at most this share of the floor
     seed_tries: int = 3  # seeds tried per suggestion before an item is dropped
+    last_tries: int = 12  # ... and, once, for the first suggestion before the main piece and all with it go
     far_starts: int = 2  # starts far from the earlier suggestions, for one that repeats them
     twin_tries: int = 16  # a repeat still: this many more tries, in turn of each furniture set (all, fewer, corners)
     restarts: int = 4  # at most this many solver restarts per try: the tries and the drops do the rest
