@@ -262,7 +262,8 @@ def _set(items, groups=(), constraints=()):
     return {"groups": list(groups), "items": list(items), "constraints": list(constraints)}
 
 
-# A reading chair of a corner set stands with its back to a wall, not alone in the room.
+# A reading chair of a corner set stands with its back to a wall, not alone in the room
+# (as a corner set's loveseat does).
 CHAIR_TO_WALL = [{"type": "against_wall", "item": "armchair", "gap": 0.1}]
 
 
@@ -271,7 +272,8 @@ def _living_corners():
         _set([_item("armchair", "armchair"), _item("side_table", "side_table"), _item("floor_lamp", "floor_lamp")],
              constraints=CHAIR_TO_WALL),
         _set([_item("tv_stand", "tv_stand", size=list(TV_BENCH)), _item("plant", "plant")]),
-        _set([_item("sofa", "sofa", size=list(LOVESEAT)), _item("side_table", "side_table")]),
+        _set([_item("sofa", "sofa", size=list(LOVESEAT)), _item("side_table", "side_table")],
+             constraints=[{"type": "against_wall", "item": "sofa"}]),
         _set([_item("bookcase", "bookcase"), _item("plant", "plant")]),
         _set([_item("armchair", "armchair"), _item("plant", "plant")], constraints=CHAIR_TO_WALL),
         _set([_item("plant", "plant"), _item("side_table", "side_table")]),

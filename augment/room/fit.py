@@ -528,13 +528,18 @@ def _astray(lay, r: dict | None = None, may_float=frozenset()) -> set:
 
 
 def _in_groups(model) -> set:
-    """The ids of the pieces a rule ties to another of the model: placed at it (a coffee
-    table at the sofa, the sofa as its frame), at a distance from it, or facing it."""
-    i = set(model.distance_pairs.ravel()) | set(model.orientation_pairs.ravel())
+    """The ids of the pieces that form a group a stager may pull out into the room: two
+    that face each other or keep a distance (a sofa and its TV), and a piece with another
+    placed in front of it (a coffee table before the sofa, armchairs at the table's ends)
+    with those. A rug under it or a side table at its arm alone make no group."""
+    from layout import _codes as codes
+
+    i = set(model.distance_pairs.ravel()) | set(model.orientation_pairs[model.orientation_mode == codes.FACE].ravel())
     for c in np.flatnonzero(model.heat_frame >= 0):
         members = model.heat_members[model.heat_start[c]:model.heat_start[c + 1]]
-        if set(members) - {model.heat_frame[c]}:
-            i |= set(members) | {model.heat_frame[c]}
+        ahead = [k for k in members if k != model.heat_frame[c] and model.particle_collides[k]]
+        if ahead and model.heat_target_m[c, 0] > 0.0:
+            i |= set(ahead) | {model.heat_frame[c]}
     return {model.names[k] for k in i}
 
 

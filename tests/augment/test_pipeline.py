@@ -1070,11 +1070,11 @@ def test_a_piece_pushed_to_the_wall_it_should_stand_clear_of_or_askew_at_it_is_a
 
 
 def test_the_main_piece_stands_out_in_the_room_only_with_its_group(tmp_path):
-    """A sofa with a side table at its arm and the rule to stand against a wall, solved,
-    then both moved 1 m out from the wall together: the sofa, the main piece, stands in
-    its group and the try is clean. With the side table also 0.5 m off its spot, the
-    side table is taken out of the try, and the sofa left alone 1 m off its wall is
-    astray: the try is not clean."""
+    """A sofa with a coffee table in front and a side table at its arm, and the rule to
+    stand against a wall, solved, then all moved 1 m out from the wall together: the
+    sofa, the main piece, stands in its group and the try is clean. With the coffee table
+    also 0.5 m off its spot, it is taken out of the try, and the sofa, with only a side
+    table at its arm (no group), 1 m off its wall is astray: the try is not clean."""
     from layout import Solver
     from layout.spec import build
 
@@ -1086,6 +1086,9 @@ def test_the_main_piece_stands_out_in_the_room_only_with_its_group(tmp_path):
         id = "sofa"
         kind = "sofa"
         [[items]]
+        id = "coffee"
+        kind = "coffee_table"
+        [[items]]
         id = "side"
         kind = "side_table"
         [[constraints]]
@@ -1093,17 +1096,17 @@ def test_the_main_piece_stands_out_in_the_room_only_with_its_group(tmp_path):
         item = "sofa"
         """))
     model, _ = build(spec)
-    assert fit._in_groups(model) == {"sofa", "side"}
-    assert fit._in_groups(build(fit._drop(spec, ["side"])[0])[0]) == set()
+    assert fit._in_groups(model) == {"sofa", "coffee"}
+    assert fit._in_groups(build(fit._drop(spec, ["coffee"])[0])[0]) == set()
     solved = Solver().solve(model, seed=0)
-    sofa, side = model.names.index("sofa"), model.names.index("side")
+    sofa, coffee = model.names.index("sofa"), model.names.index("coffee")
     assert fit._astray(solved) == set() and not fit._off_their_spots(solved)
     facing = np.array([math.cos(solved.yaw_rad[sofa]), math.sin(solved.yaw_rad[sofa])])
 
-    def moved(side_extra_m):
+    def moved(coffee_extra_m):
         pos = solved.position_m.copy()
         pos[:, :2] += facing  # the group's frame too
-        pos[side, :2] += side_extra_m * facing
+        pos[coffee, :2] += coffee_extra_m * facing
         return dataclasses.replace(solved, position_m=pos)
 
     pick = fit._Pick([], spec, anchor=frozenset({"sofa"}))
