@@ -165,8 +165,24 @@ def _prune_groups(groups, items) -> tuple:
     return tuple(g for g in groups if g.id in alive)
 
 
+# Kinds that serve another and go when the last piece they serve goes: no stager shows
+# a coffee table without seating, a nightstand without its bed.
+SERVES = {"coffee_table": (("sofa", "armchair"), "seating"),
+          "rug": (("sofa", "coffee_table", "bed", "single_bed"), "seating or a bed"),
+          "nightstand": (("bed", "single_bed"), "a bed"), "office_chair": (("desk",), "a desk")}
+
+
+def _why_gone(kind: str, reason: str) -> str:
+    """Why a piece left out with others goes: it served them (:data:`SERVES`), or it
+    stood on them."""
+    if kind in SERVES:
+        return f"it goes with {SERVES[kind][1]}, and none is left"
+    return f"stood on a dropped item ({reason})"
+
+
 def _drop(spec, ids: list[str]):
-    """``spec`` without the items ``ids`` (and what only they used)."""
+    """``spec`` without the items ``ids`` (and what only they used: what stands on them,
+    what serves only them, :data:`SERVES`)."""
     gone = set(ids)
     # Items stacked on a dropped item would fall to the floor: they go too.
     for c in spec.constraints:
@@ -176,6 +192,10 @@ def _drop(spec, ids: list[str]):
                 if i in gone:
                     gone.update(chain[k + 1:])
                     break
+    had = {i.kind.name for i in spec.items}
+    while orphans := {i.id for i in spec.items if i.id not in gone and (hosts := SERVES.get(i.kind.name, ((),))[0])
+                      and set(hosts) & had and not any(j.kind.name in hosts for j in spec.items if j.id not in gone)}:
+        gone |= orphans
     items = tuple(i for i in spec.items if i.id not in gone)
     return dataclasses.replace(spec, items=items, groups=_prune_groups(spec.groups, items),
                                constraints=_without(spec.constraints, gone)), gone
@@ -263,7 +283,7 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None =
         for i in unit:
             reasons.setdefault(i.id, reason)
         for i in sorted(gone - {i.id for i in unit}):
-            reasons.setdefault(i, f"stood on a dropped item ({reason})")
+            reasons.setdefault(i, _why_gone(kinds[i], reason))
 
     # Too tall: the item alone (a chair of a table set may go, the table stays).
     for it in spec.items:
@@ -393,6 +413,13 @@ def no_view(dropped: list) -> FurnishError:
     it belongs: no staged photo with pieces cut by its edge or standing off their walls."""
     return FurnishError("no furniture stands whole in this photo (" + dropped_summary(dropped) + "). It shows too "
                         "little above the floor: step back, and hold the camera higher and level")
+
+
+def no_wall(dropped: list) -> FurnishError:
+    """Laid out as a plan (no camera), the main piece finds no place at a wall."""
+    return FurnishError("no furniture finds its place on this floor (" + dropped_summary(dropped) + "): the "
+                        "outline leaves its main piece no place at a wall. Check the floor in overlay_floor.png, "
+                        "or give other furniture (--spec)")
 
 
 def _layout_floor(floor, height_m: float, photo: Path) -> np.ndarray:
@@ -931,7 +958,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             reason = (f"suggestion {failed} could not place everything without overlaps or leaving the "
                       f"{area_m2:.1f} m\u00b2 floor")
             gone_units = units[-1:]
-        if len(gone_units) == len(units):
+        asked = {i.id for u in gone_units for i in u}
+        rest, gone = _drop(spec, sorted(asked))
+        if not rest.items:  # what serves the units dropped goes with them (SERVES)
             if not longer:
                 # Before the main piece, and all with it, goes: a longer search, once.
                 tries, longer = fit.last_tries, True
@@ -949,14 +978,16 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 first_try = (loose, first_try[1], corners)
                 progress.grow(suggestions)
                 continue
-            dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason} for u in units for i in u)
+            dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason if i.id in asked
+                            else _why_gone(i.kind.name, reason)} for i in spec.items)
             # No piece cut by the photo's edge, nor standing off its wall: rather no staged
             # photo, and the reason.
             if spec.camera is not None and (by_cut or by_astray):
                 raise no_view(dropped)
-            raise too_small(area_m2, dropped)
-        spec, gone = _drop(spec, [i.id for u in gone_units for i in u])
-        dropped.extend({"id": i, "kind": kinds[i], "reason": reason} for i in sorted(gone))
+            raise no_wall(dropped) if by_astray else too_small(area_m2, dropped)
+        spec = rest
+        dropped.extend({"id": i, "kind": kinds[i], "reason": reason if i in asked else _why_gone(kinds[i], reason)}
+                       for i in sorted(gone))
         # A piece kept bare for the frame and left out after all is said once, as left out.
         notes[:] = [n for n in notes if not n.startswith(tuple(i + BARE_NOTE for i in gone))]
         progress.grow(suggestions)

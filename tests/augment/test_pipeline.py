@@ -1015,7 +1015,8 @@ def test_a_tv_off_its_wall_is_astray_even_as_the_main_piece_and_takes_the_furnit
     tv_first = dataclasses.replace(room.spec, items=room.spec.items[::-1])
     monkeypatch.setattr(fit, "_astray", lambda lay, r=None, may_float=(): {"tv"} & set(lay.model.names))
     dropped = []
-    with pytest.raises(FurnishError, match="tv, sofa: it found no place against a wall"):
+    with pytest.raises(FurnishError, match="no furniture finds its place on this floor .tv, sofa: it found no "
+                       "place against a wall"):
         fit.solve_suggestions(tv_first, 1, 0, 24.0, dropped, pipeline._Progress(False, 1))
     assert {d["id"] for d in dropped} == {"tv", "sofa"}
 
@@ -1148,6 +1149,32 @@ def test_before_the_main_piece_goes_its_suggestion_is_searched_longer(tmp_path, 
         **room.spec.solver.__dict__, "restarts": min(room.spec.solver.restarts, ROOM.fit.restarts),
         "min_iterations": min(room.spec.solver.min_iterations, ROOM.fit.min_iterations)}).solve(
         layouts[0].model, seed=7).position_m)
+
+
+def test_a_coffee_table_or_a_rug_goes_with_the_last_seat_it_serves(tmp_path):
+    """Dropping the sofa takes the coffee table (it serves seating, and none is left) and
+    the rug (under the sofa or the coffee table, both gone) with it; the side table and
+    the plant stay. With an armchair left, both stay. A spec that never had seating keeps
+    its coffee table when its rug goes. In a 0.8 m high room the sofa (0.85 m) and the
+    plant (1 m) are too tall, and the reasons say why the coffee table and rug went."""
+    def spec_of(*kinds):
+        return load_spec(write_spec(tmp_path, "[room]\nheight = 2.6\n" + "".join(
+            f'[[items]]\nid = "{k}"\nkind = "{k}"\n' for k in kinds)))
+
+    living = spec_of("sofa", "coffee_table", "rug", "side_table", "plant")
+    kept, gone = fit._drop(living, ["sofa"])
+    assert gone == {"sofa", "coffee_table", "rug"} and [i.id for i in kept.items] == ["side_table", "plant"]
+    _, gone = fit._drop(spec_of("sofa", "armchair", "coffee_table", "rug"), ["sofa"])
+    assert gone == {"sofa"}
+    _, gone = fit._drop(spec_of("coffee_table", "rug"), ["rug"])
+    assert gone == {"rug"}
+    square = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]])
+    _, dropped = fit.fit_spec(living, square, 0.8)
+    assert dropped == [
+        {"id": "sofa", "kind": "sofa", "reason": "0.85 m tall, the room is 0.80 m high"},
+        {"id": "coffee_table", "kind": "coffee_table", "reason": "it goes with seating, and none is left"},
+        {"id": "rug", "kind": "rug", "reason": "it goes with seating or a bed, and none is left"},
+        {"id": "plant", "kind": "plant", "reason": "1.00 m tall, the room is 0.80 m high"}]
 
 
 def test_a_corner_set_of_the_same_furniture_under_other_rules_is_another_arrangement():
