@@ -131,6 +131,8 @@ ARMCHAIR_GAP_M = 0.4
 RUG_UNDER_SOFA_M = 0.2
 # Gap between a sofa's arm and the side table or lamp beside it.
 ARM_GAP_M = 0.05
+# A side table or lamp with no seat to stand at keeps its back within this of a wall.
+NEAR_WALL_M = 0.3
 
 
 def kind_or_error(name, where):
@@ -297,7 +299,8 @@ def apply_default_rules(builder, items):
     * armchair of a sofa with a coffee table: at an end of the coffee table, 0.4 m off
       it, facing it (left, then right); otherwise it faces the TV from 1.5-3.2 m.
     * side table, then floor lamp: beside the sofa's arms (left, then right), turned like
-      it; a third finds no arm and gets no rule.
+      it; a third finds no arm and gets no rule; one with no seat at all stands with its
+      back within 0.3 m of a wall.
     * rug: under the sofa's front legs and the coffee table; without a sofa, under the
       coffee table or half under the foot end of a bed.
     * nightstand: beside the head of its bed (left, then right), facing like the bed.
@@ -361,6 +364,10 @@ def apply_default_rules(builder, items):
             lateral = 0.5 * (s.kind.size_m[0] + k.size_m[0]) + ARM_GAP_M
             if not _same_body(r, s):
                 _spot(builder, i, s, (back, side * lateral), applied, "beside_arm")
+        elif name in ("side_table", "floor_lamp") and i not in partner:
+            # No seat to stand at: by a wall, not alone mid-floor where balance draws it.
+            builder.wall_distance(i, 0.5 * k.size_m[1] + NEAR_WALL_M, mode="max")
+            applied.append(Rule("by_wall", i, None))
         elif name == "rug":
             if sofa is not None and not _same_body(r, sofa):
                 # Its back edge under the sofa's front legs.

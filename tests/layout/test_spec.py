@@ -522,6 +522,23 @@ def test_rules_living_room_and_rules_off_partner():
     assert catalog.TV_DISTANCE_M in model.distance_rest_m
 
 
+def test_a_side_table_or_lamp_with_no_seat_stands_by_a_wall():
+    """With no sofa or armchair, a side table (0.5 m deep) and a floor lamp (0.35 m) keep
+    their centres at most half their depth + 0.3 m from a wall (0.55 / 0.475 m, mode max);
+    beside a sofa they stand at its arms instead, with no wall rule."""
+    from layout import _codes as codes
+
+    b, items = _builder_with("side_table", "floor_lamp", "plant")
+    applied = {(r.name, r.index) for r in apply_default_rules(b, items)}
+    assert applied == {("by_wall", items[0].index), ("by_wall", items[1].index)}
+    model = b.finalize()
+    np.testing.assert_allclose(model.wall_distance_rest_m, [0.55, 0.475])
+    assert list(model.wall_distance_mode) == [codes.MAX, codes.MAX]
+    b, items = _builder_with("sofa", "side_table", "floor_lamp")
+    names = {r.name for r in apply_default_rules(b, items)}
+    assert "by_wall" not in names and "beside_arm" in names
+
+
 def test_rules_chairs_at_a_table_only_in_a_loose_group():
     b, items = _builder_with("dining_table", "chair", "chair", "chair", group="dining")
     applied = apply_default_rules(b, items)
