@@ -193,8 +193,12 @@ def _drop(spec, ids: list[str]):
                     gone.update(chain[k + 1:])
                     break
     had = {i.kind.name for i in spec.items}
-    while orphans := {i.id for i in spec.items if i.id not in gone and (hosts := SERVES.get(i.kind.name, ((),))[0])
-                      and set(hosts) & had and not any(j.kind.name in hosts for j in spec.items if j.id not in gone)}:
+    while True:  # a rug goes with the coffee table that went with the sofa
+        left = {i.kind.name for i in spec.items if i.id not in gone}
+        orphans = {i.id for i in spec.items if i.id not in gone and i.kind.name in SERVES
+                   and set(SERVES[i.kind.name][0]) & had and not set(SERVES[i.kind.name][0]) & left}
+        if not orphans:
+            break
         gone |= orphans
     items = tuple(i for i in spec.items if i.id not in gone)
     return dataclasses.replace(spec, items=items, groups=_prune_groups(spec.groups, items),
@@ -661,8 +665,7 @@ class _Pick:
         floats = self.floats & _in_groups(lay.model)
         astray = _astray(lay, r, floats) | (_armchairs_from_behind(lay, rep) - floats)
         if astray:
-            self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
-            return False
+            return self._astray_try(astray)
         # A piece goes with those placed at it (a side table at an armchair), a desk with its
         # chair and the chair with its desk; a chair at a desk that stays, stays.
         m = lay.model
@@ -699,8 +702,7 @@ class _Pick:
             taken |= hiding
         if taken and (astray := _astray(lay, r, self.floats & _in_groups(lay.model))):
             # Its group taken out, the main piece stands alone where the group wanted it.
-            self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
-            return False
+            return self._astray_try(astray)
         # Seating shown from behind is worse than a repeat (a sofa's back is no picture to
         # show a client); a repeat is worth nothing to the user; a fault, a little less than
         # a perfect one.
@@ -711,6 +713,11 @@ class _Pick:
         if self.best is None or key < self.best[0]:
             self.best = (key, lay, taken)
         return key == (False, False, 0)
+
+    def _astray_try(self, astray: set) -> bool:
+        """An unclean try with pieces ``astray``: kept as the fewest seen so far, not offered."""
+        self.astray = astray if self.astray is None or len(astray) < len(self.astray) else self.astray
+        return False
 
     @property
     def twin(self) -> bool:
@@ -960,6 +967,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             gone_units = units[-1:]
         asked = {i.id for u in gone_units for i in u}
         rest, gone = _drop(spec, sorted(asked))
+        why = {i: reason if i in asked else _why_gone(kinds[i], reason) for i in gone}
         if not rest.items:  # what serves the units dropped goes with them (SERVES)
             if not longer:
                 # Before the main piece, and all with it, goes: a longer search, once.
@@ -978,16 +986,14 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 first_try = (loose, first_try[1], corners)
                 progress.grow(suggestions)
                 continue
-            dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason if i.id in asked
-                            else _why_gone(i.kind.name, reason)} for i in spec.items)
+            dropped.extend({"id": i.id, "kind": i.kind.name, "reason": why[i.id]} for i in spec.items)
             # No piece cut by the photo's edge, nor standing off its wall: rather no staged
             # photo, and the reason.
             if spec.camera is not None and (by_cut or by_astray):
                 raise no_view(dropped)
             raise no_wall(dropped) if by_astray else too_small(area_m2, dropped)
         spec = rest
-        dropped.extend({"id": i, "kind": kinds[i], "reason": reason if i in asked else _why_gone(kinds[i], reason)}
-                       for i in sorted(gone))
+        dropped.extend({"id": i, "kind": kinds[i], "reason": why[i]} for i in sorted(gone))
         # A piece kept bare for the frame and left out after all is said once, as left out.
         notes[:] = [n for n in notes if not n.startswith(tuple(i + BARE_NOTE for i in gone))]
         progress.grow(suggestions)
