@@ -30,8 +30,10 @@ shows; :func:`layout.camera.judge`):
   windows found in the photo are kept clear so (also scored);
 * ``rules_met``: every group rule holds: faces within 15 degrees, distances within 10 cm,
   "in front of"/"beside" targets within 15 cm;
-* ``at_walls``: every wall-bound piece (a bed's head, a wardrobe, a TV stand, a sideboard)
-  stands within 15 cm of a wall of the floor found, facing into the room within 15 degrees;
+* ``at_walls``: every wall rule holds within 15 cm and 15 degrees (a bed's head, a wardrobe,
+  a TV stand, a sideboard at a wall of the floor found, facing into the room; the living
+  room's sofa, which may stand out with its group and then counts as off; a desk facing into
+  the room at its distance; a side table with no seat within 0.3 m of a wall);
 * ``different``: another arrangement than each other suggestion of the photo (other
   furniture, or moved 0.3 m on average, by centres or, if more, footprint corners:
   :func:`augment.room.fit.apart_m`);
