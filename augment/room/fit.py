@@ -172,6 +172,21 @@ SERVES = {"coffee_table": (("sofa", "armchair"), "seating"),
           "nightstand": (("bed", "single_bed"), "a bed"), "office_chair": (("desk",), "a desk")}
 
 
+# Kinds that dress a group: one of them alone (a plant, a lone side table) is no staging.
+DRESSING = ("plant", "side_table", "floor_lamp", *SERVES)
+
+
+def _lone_dressing(kinds) -> bool:
+    """Whether furniture of ``kinds`` (names) is one piece that only dresses a group."""
+    kinds = list(kinds)
+    return len(kinds) == 1 and kinds[0] in DRESSING
+
+
+def _alone(item) -> str:
+    name = item.kind.name.replace("_", " ")
+    return f"alone, {'an' if name[0] in 'aeiou' else 'a'} {name} is no staging"
+
+
 def _why_gone(kind: str, reason: str) -> str:
     """Why a piece left out with others goes: it served them (:data:`SERVES`), or it
     stood on them."""
@@ -401,7 +416,8 @@ def dropped_summary(dropped: list) -> str:
     """``"a, b: why; c: why"``: the dropped items grouped by reason, in order."""
     by_reason = {}
     for d in dropped:
-        by_reason.setdefault(d["reason"], []).append(d["id"])
+        ids = by_reason.setdefault(d["reason"], [])
+        ids += [d["id"]] if d["id"] not in ids else []  # a corner set's piece of the same id
     return "; ".join(f"{', '.join(ids)}: {reason}" for reason, ids in by_reason.items())
 
 
@@ -703,16 +719,17 @@ class _Pick:
         if taken and (astray := _astray(lay, r, self.floats & _in_groups(lay.model))):
             # Its group taken out, the main piece stands alone where the group wanted it.
             return self._astray_try(astray)
-        # Seating shown from behind is worse than a repeat (a sofa's back is no picture to
-        # show a client); a repeat is worth nothing to the user; a fault, a little less than
-        # a perfect one.
+        # Seating shown from behind, and one piece that only dresses a group (a lone plant),
+        # are worse than a repeat (no picture to show a client); a repeat is worth nothing
+        # to the user; a fault, a little less than a perfect one.
         nearest = min((apart_m(old, lay) for old in self.earlier), default=math.inf)
-        key = (bool(rep.get("camera", {}).get("from_behind")), nearest < ROOM.fit.min_difference_m,
+        key = (bool(rep.get("camera", {}).get("from_behind")), _lone_dressing(lay.model.kinds[i] for i in lay.items),
+               nearest < ROOM.fit.min_difference_m,
                camera_faults(rep.get("camera", {})) + len(broken_rules(lay, r)) + len(taken))
         self.pinned += nearest < PINNED_M
         if self.best is None or key < self.best[0]:
             self.best = (key, lay, taken)
-        return key == (False, False, 0)
+        return key == (False, False, False, 0)
 
     def _astray_try(self, astray: set) -> bool:
         """An unclean try with pieces ``astray``: kept as the fewest seen so far, not offered."""
@@ -721,13 +738,13 @@ class _Pick:
 
     @property
     def twin(self) -> bool:
-        return self.best is not None and self.best[0][1]
+        return self.best is not None and self.best[0][2]
 
     @property
     def lacking(self) -> bool:
-        """The best so far repeats an earlier suggestion or shows seating from behind:
-        other starts are worth trying (other subsets only for a repeat)."""
-        return self.best is not None and (self.best[0][0] or self.best[0][1])
+        """The best so far repeats an earlier suggestion, shows seating from behind or a
+        lone piece of dressing: other starts are worth trying (other subsets only for a repeat)."""
+        return self.best is not None and any(self.best[0][:3])
 
 
 def _far_start(model, earlier: list, rng, candidates: int = 8):
@@ -764,10 +781,11 @@ def _arrangement(spec) -> tuple:
     return sorted((i.kind.name, i.rules) for i in spec.items), sorted(c.type for c in spec.constraints)
 
 
-def _corner_instead(spec, corner, dropped: list, reason: str) -> tuple:
+def _corner_instead(spec, corner, dropped: list, why: dict) -> tuple:
     """``corner`` (a corner set, :func:`corner_specs`) to lay out in place of all of ``spec``'s
-    furniture, which no suggestion can show whole in the photo, and the note that says so."""
-    dropped.extend({"id": i.id, "kind": i.kind.name, "reason": reason} for i in spec.items)
+    furniture, which no suggestion can show whole in the photo (``why``: id -> reason),
+    and the note that says so."""
+    dropped.extend({"id": i.id, "kind": i.kind.name, "reason": why[i.id]} for i in spec.items)
     return corner, (f"staged as a corner ({', '.join(i.id for i in corner.items)}): the floor in view shows too "
                     "little for the room's furniture to stand whole in the photo")
 
@@ -849,9 +867,10 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     alone, or a bed or a piece of storage (:data:`NEVER_FLOAT`), it is astray off its wall
     and takes all the furniture with it), else the least important unit (the spec's last),
     and all are solved again; before the last unit goes, all are solved once more with
-    ``ROOM.fit.last_tries`` seeds for the first suggestion. The last unit gone, a
-    corner set is staged in their place; with none left, all is tried again with the
-    found doors' zones as found (no margin, :func:`_padded`), then the photo is refused:
+    ``ROOM.fit.last_tries`` seeds for the first suggestion. The last unit gone (or all
+    but one piece of dressing, :data:`DRESSING`), a corner set is staged in their place;
+    with none left, all is tried again with the found doors' zones as found (no margin,
+    :func:`_padded`), then the photo is refused:
     no piece is shown cut by the photo's edge or standing off its wall."""
     from layout.solver import turned_state
     from layout.spec import build
@@ -968,7 +987,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
         asked = {i.id for u in gone_units for i in u}
         rest, gone = _drop(spec, sorted(asked))
         why = {i: reason if i in asked else _why_gone(kinds[i], reason) for i in gone}
-        if not rest.items:  # what serves the units dropped goes with them (SERVES)
+        lone = spec.camera is not None and bool(corners) and _lone_dressing(i.kind.name for i in rest.items)
+        why.update({i.id: _alone(i) for i in rest.items} if lone else {})
+        if not rest.items or lone:  # what serves the units dropped goes with them (SERVES)
             if not longer:
                 # Before the main piece, and all with it, goes: a longer search, once.
                 tries, longer = fit.last_tries, True
@@ -976,7 +997,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 continue
             tries = fit.seed_tries
             if spec.camera is not None and corners:
-                spec, cornered = _corner_instead(spec, corners.pop(0), dropped, reason)
+                spec, cornered = _corner_instead(spec, corners.pop(0), dropped, why)
                 progress.grow(suggestions)
                 continue
             if (loose := _doors_as_found(first_try[0])) is not None:
@@ -1038,7 +1059,7 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
     ------
     FurnishError
         The floor is no usable room, or too small for any of the furniture (a preset: for
-        any of its corner sets too).
+        any of its corner sets too, or for more than one piece of dressing, :data:`DRESSING`).
     """
     poly = _layout_floor(floor, height_m, where)
     edges = open_edges(poly, floor)
@@ -1079,14 +1100,17 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
             windows.append(window)
             break
     fitted = dataclasses.replace(fitted, doors=fitted.doors + tuple(found), windows=tuple(windows))
-    if not fitted.items:
+    lone = isinstance(source, str) and _lone_dressing(i.kind.name for i in fitted.items)
+    if not fitted.items or lone:
         # A preset's corner set where none of its furniture fits (a dining set on 3 m², a table
-        # the frame cuts wherever it stands), whole in the frame.
+        # the frame cuts wherever it stands), whole in the frame, or only a plant does.
         corners = corner_specs(source, fitted, calibration)
+        alone = {i.id: _alone(i) for i in fitted.items}
         if not corners:
+            dropped.extend({"id": i.id, "kind": i.kind.name, "reason": alone[i.id]} for i in fitted.items)
             raise no_view(dropped) if any(IN_NO_VIEW in d["reason"] for d in dropped) else \
                 too_small(floor.area_m2, dropped)
-        fitted, note = _corner_instead(fitted, corners[0], dropped, "")
+        fitted, note = _corner_instead(fitted, corners[0], dropped, alone)
         warnings.append(note)
     kinds = {i.kind.name for i in fitted.items}
     unused = sorted(set(asset_kinds) - kinds)

@@ -1515,14 +1515,16 @@ def test_a_door_the_rules_miss_is_found_by_the_door_model(tmp_path, seed):
 
 
 def _suggestions(m, room, corners: bool):
-    """Four suggestions of the preset ``room`` on a measured photo (its doors found, as
-    ``stage furnish`` does), with or without its corner sets; their notes and dropped items."""
+    """Four suggestions of the preset ``room`` on a measured photo (its doors and windows
+    found, as ``stage furnish`` does), with or without its corner sets; their notes and
+    dropped items."""
     from augment.room.openings import find_openings
 
     warnings = []
-    doors = [d.feet_px.ravel() for d in find_openings(m.image, m.calibration, m.floor).doors]
-    spec, dropped = fit.furniture_for_floor(room, m.floor, m.height.height_m, Path("room.jpg"), found_doors=doors,
-                                            calibration=m.calibration, warnings=warnings)
+    found = find_openings(m.image, m.calibration, m.floor)
+    spec, dropped = fit.furniture_for_floor(room, m.floor, m.height.height_m, Path("room.jpg"),
+                                            found_doors=[d.feet_px.ravel() for d in found.doors],
+                                            found_windows=found.windows, calibration=m.calibration, warnings=warnings)
     others = fit.corner_specs(room, spec, m.calibration) if corners else ()
     _, layouts, _ = fit.solve_suggestions(spec, 4, 0, m.floor.area_m2, dropped, pipeline._Progress(False, 4),
                                           warnings, others)
@@ -1576,6 +1578,24 @@ def test_a_photo_where_no_piece_stands_whole_is_refused_not_staged_cut(tmp_path)
     m, _ = _measured_render([9900, 34], tmp_path)
     with pytest.raises(FurnishError, match=r"no furniture stands whole in this photo \(desk: 0.75 m tall, it would "
                                            r"be cut by the photo's edge.*step back, and hold the camera higher"):
+        _suggestions(m, "office", corners=True)
+
+
+def test_one_piece_that_only_dresses_a_group_is_no_staging(tmp_path):
+    """room_1 (a 2 m² corner) held of the living room only its side table, staged alone in
+    suggestion 1; render [9900, 6] (2.4 m² of an office) only its plant, staged alone four
+    times. A lone side table or plant is a corner set's (a plant with a side table) place,
+    or no staging: the photo is refused, saying why."""
+    m = pipeline.measure(CRAMPED, Board())
+    layouts, notes, dropped = _suggestions(m, "living_room", corners=True)
+    assert {"id": "side_table", "kind": "side_table", "reason": "alone, a side table is no staging"} in dropped
+    assert any(n.startswith("staged as a corner (") for n in notes), notes
+    for lay in layouts:
+        kinds = [lay.model.kinds[i] for i in lay.items]
+        assert len(kinds) >= 2 or kinds[0] not in fit.DRESSING, kinds
+    m, _ = _measured_render([9900, 6], tmp_path)
+    with pytest.raises(FurnishError, match=r"no furniture stands whole in this photo \(desk: .*plant: alone, a plant "
+                                           r"is no staging\)"):
         _suggestions(m, "office", corners=True)
 
 
