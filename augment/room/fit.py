@@ -635,9 +635,10 @@ def _armchairs_from_behind(lay, rep: dict) -> set:
 
 # Why a piece is left out of one suggestion (:class:`_Pick`).
 OFF_SPOT = "in view, it found no place at the piece it goes with"
-# Kinds a stager never leaves off their wall, even as the room's main piece: a bed's head,
-# storage, a TV. (A sofa or a desk may stand in the room, in its group.)
-NEVER_FLOAT = ("bed", "single_bed", "wardrobe", "dresser", "bookcase", "tv_stand", "coat_rack")
+# What the catalog puts against a wall a stager never leaves off it, even as the room's main
+# piece (a bed's head, storage, a TV), but a desk: it may face into the room, as a sofa may
+# stand in it, in its group.
+MAY_FLOAT = ("desk",)
 UNSEEN = "it would stand hidden behind the others"
 IN_FRONT = "it would hide a piece that stays behind it"
 HIDING_ROUNDS = 3  # taking a piece out can show or hide others: judge again this often at most
@@ -658,8 +659,8 @@ class _Pick:
         self.built = {} if built is None else built  # models with pieces taken out (_taken_out)
         self.anchor = anchor  # the ids of the most important unit: it stays, astray or not,
         # unless a stager never leaves it off its wall
-        kinds = {i.id: i.kind.name for i in spec.items}
-        self.floats = frozenset(i for i in anchor if kinds.get(i) not in NEVER_FLOAT)
+        kinds = {i.id: i.kind for i in spec.items}
+        self.floats = frozenset(i for i in anchor if not kinds[i].against_wall or kinds[i].name in MAY_FLOAT)
         groups = {g.id: g for g in spec.groups}
         # A member of a rigid set (a table's chairs) goes only with its set.
         self.in_sets = {i.id for i in spec.items if _rigid_root(i, groups) is not None}
@@ -864,7 +865,8 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
     and searches on from there. When the first has no clean layout, the least important
     unit with an item cut by the photo's edge is dropped, else the one with a piece astray
     (the most important unit, a sofa or a desk, may stand out in the room with its group;
-    alone, or a bed or a piece of storage (:data:`NEVER_FLOAT`), it is astray off its wall
+    alone, or a bed or a piece of storage (against a wall in the catalog, but a desk:
+    :data:`MAY_FLOAT`), it is astray off its wall
     and takes all the furniture with it), else the least important unit (the spec's last),
     and all are solved again; before the last unit goes, all are solved once more with
     ``ROOM.fit.last_tries`` seeds for the first suggestion. The last unit gone (or all

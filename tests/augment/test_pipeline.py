@@ -996,11 +996,11 @@ def test_a_tv_off_its_wall_or_not_facing_the_sofa_is_left_out(tmp_path, monkeypa
 
 
 def test_a_tv_off_its_wall_is_astray_even_as_the_main_piece_and_takes_the_furniture_with_it(tmp_path, monkeypatch):
-    """A kind a stager never leaves off its wall (``fit.NEVER_FLOAT``) is astray also as
-    the anchor: the TV 1 m off its wall, made the anchor, leaves the try unclean, while
-    at its wall it is kept; a sofa anchor turned from its TV is not astray, the TV is.
-    When every try leaves such an anchor astray, the rest is not staged without it: the
-    photo is refused, with the reason."""
+    """A kind a stager never leaves off its wall (the catalog's against a wall, but a desk:
+    ``fit.MAY_FLOAT``) is astray also as the anchor: the TV 1 m off its wall, made the
+    anchor, leaves the try unclean, while at its wall it is kept; a sofa anchor turned
+    from its TV is not astray, the TV is. When every try leaves such an anchor astray, the
+    rest is not staged without it: the photo is refused, with the reason."""
     from augment.errors import FurnishError
 
     room = _SofaAndTV(tmp_path)
@@ -1561,8 +1561,8 @@ def test_furniture_whole_in_view_only_off_its_wall_is_not_staged(tmp_path):
     """Render [9900, 7], a dining room seen from high up: the table set is cut by the
     photo's edge wherever it stands, and the sideboard of a corner set stands whole only
     in the middle of the floor, its back to nothing (so it was staged, in all four
-    suggestions). A sideboard never floats (``fit.NEVER_FLOAT``): the photo is refused,
-    saying why and what to do."""
+    suggestions). A sideboard never floats (against a wall in the catalog): the photo is
+    refused, saying why and what to do."""
     m, _ = _measured_render([9900, 7], tmp_path)
     with pytest.raises(FurnishError, match=r"no furniture stands whole in this photo \(dining_table, .*sideboard: "
                                            r".*step back, and hold the camera higher"):
