@@ -677,7 +677,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 # Rendered as layout_K.json holds them, so `--layout` renders the very same photo.
                 layouts = [lay.as_written() for lay in layouts]
         if dropped:
-            warnings.append(f"left out {len(dropped)} item(s) that do not fit the measured floor: "
+            # A corner set's piece of the same id as the room's counts once, as in the summary.
+            warnings.append(f"left out {len({d['id'] for d in dropped})} item(s) that do not fit the measured floor: "
                             + dropped_summary(dropped))
         # A plan's title names no folder (the web app's files are its own).
         titled = source_name if layout is None else f"layout {Path(layout).name}"

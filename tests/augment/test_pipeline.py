@@ -1589,6 +1589,9 @@ def test_one_piece_that_only_dresses_a_group_is_no_staging(tmp_path):
     m = pipeline.measure(CRAMPED, Board())
     layouts, notes, dropped = _suggestions(m, "living_room", corners=True)
     assert {"id": "side_table", "kind": "side_table", "reason": "alone, a side table is no staging"} in dropped
+    # The room's TV stand and a corner set's, cut alike, are said once.
+    assert [d["id"] for d in dropped].count("tv_stand") == 2
+    assert fit.dropped_summary(dropped).count("tv_stand") == 1
     assert any(n.startswith("staged as a corner (") for n in notes), notes
     for lay in layouts:
         kinds = [lay.model.kinds[i] for i in lay.items]
