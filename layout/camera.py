@@ -18,11 +18,14 @@ import numpy as np
 
 from . import _codes as codes
 from ._kernels import ray_box_entry
+from .catalog import CATALOG
 from .errors import LayoutError
 
 # Seating that is looked at and so has a good side; chairs at a table are seen from
 # any side (the arrangement needs it) and are not judged.
 FRONT_KINDS = ("sofa", "armchair", "lounge_chair", "bench")
+# A TV no seat faces is looked at for itself: its screen is not shown edge-on or from behind.
+SCREEN_KINDS = ("tv_stand",)
 TABLE_KINDS = ("dining_table", "round_table", "picnic_table", "game_table", "desk")
 
 
@@ -34,6 +37,7 @@ class CameraRules:
     foreground: float = 0.15  # the lowest share of the frame stays clear of furniture
     min_visible: float = 0.7  # share of an item's box not hidden behind other items
     back_view_deg: float = 60.0  # seen from behind: the camera within this of the item's back
+    screen_view_deg: float = 70.0  # a TV no seat faces: the camera within this of its screen's normal
     grid_px: int = 96  # rays across the image's longer side for the visibility test
 
 
@@ -207,7 +211,9 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
       table, pulled in under it, and items standing on others are not judged, and a table
       or desk is not hidden by its own chairs (:func:`seats_at`: a set is seen as one);
     - ``from_behind``: seating in :data:`FRONT_KINDS`, not at a table, nearer than the
-      floor's middle, with the camera within ``rules.back_view_deg`` of its back.
+      floor's middle, with the camera within ``rules.back_view_deg`` of its back; and a TV
+      (:data:`SCREEN_KINDS`, carrying its screen) that no seat faces, with the camera more
+      than ``rules.screen_view_deg`` off its front (edge-on or from behind).
 
     Returns
     -------
@@ -278,6 +284,16 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
             continue
         back = -np.array([np.cos(yaw[k]), np.sin(yaw[k])])
         if to_eye @ back / dist >= cos_back:
+            behind.append(names[k])
+    faced = set(model.orientation_pairs[model.orientation_mode == codes.FACE].ravel())
+    cos_screen = np.cos(np.radians(rules.screen_view_deg))
+    for k, i in enumerate(items):
+        kind = model.kinds[i]
+        if kind not in SCREEN_KINDS or i in faced or size[k, 2] <= CATALOG[kind].bare_height_m + 1e-6:
+            continue  # a bare stand is a cabinet; a TV its sofa faces is seen as the group is
+        to_eye = eye[:2] - pos[k, :2]
+        dist = np.hypot(*to_eye)
+        if dist > 1e-9 and to_eye @ np.array([np.cos(yaw[k]), np.sin(yaw[k])]) / dist < cos_screen:
             behind.append(names[k])
     return {"visible": visible, "cut": cut, "hidden": hidden, "hidden_by": hidden_by, "from_behind": behind}
 

@@ -143,6 +143,35 @@ def test_judge_finds_hidden_and_from_behind():
     assert judge(Layout.from_state(model, pos, yaw, {}, np.zeros(0), 0, 0, None, 0.0))["from_behind"] == []
 
 
+def test_a_tv_no_seat_faces_is_not_shown_edge_on():
+    """Camera at the origin looking along +x; a TV on its stand at (6, 0). Facing the
+    camera, or turned 65 degrees from it, it is fine; edge-on (90 degrees) or from behind,
+    past the 70 allowed, it is judged as seating from behind is. Bare (its TV left off for
+    the frame: 0.55 m) it is a cabinet; with a sofa facing it, the group decides."""
+    from layout.solver import Layout
+
+    cam = Camera(K, looking_along_x(1.2, 10.0), (640, 480))
+
+    def judged(turn_rad, height_m=1.25, sofa=False):
+        b = LayoutBuilder([[0, -4], [12, -4], [12, 4], [0, 4]], 3.0)
+        tv = b.add_item("tv", (1.6, 0.45, height_m), kind="tv_stand")
+        if sofa:
+            seat = b.add_item("sofa", (2.0, 0.9, 0.85), kind="sofa")
+            b.face(seat, tv)
+        b.set_camera(cam)
+        model = b.finalize()
+        pos, yaw = model.particle_init_position_m.copy(), np.zeros(model.n)
+        pos[tv], yaw[tv] = [6.0, 0.0, 0.5 * height_m], math.pi + turn_rad
+        if sofa:
+            pos[seat], yaw[seat] = [6.0, 3.0, 0.425], -0.5 * math.pi
+        return judge(Layout.from_state(model, pos, yaw, {}, np.zeros(0), 0, 0, None, 0.0))["from_behind"]
+
+    assert judged(0.0) == [] and judged(math.radians(65)) == []
+    assert judged(math.radians(90)) == ["tv"] and judged(math.pi) == ["tv"]
+    assert judged(math.radians(90), height_m=0.55) == []
+    assert judged(math.radians(90), sofa=True) == []
+
+
 def test_a_desk_is_seen_through_its_chair_but_not_through_a_bookcase():
     """Level camera 1.2 m up looking along +x. A desk 0.75 m high at x = 8 with its chair
     (placed at it by a heat rule) at x = 7 in front: the chair's 1 m box covers the desk's
