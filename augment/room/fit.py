@@ -645,8 +645,9 @@ HIDING_ROUNDS = 3  # taking a piece out can show or hide others: judge again thi
 
 
 class _Pick:
-    """The best try of one suggestion: clean first, then no seating seen from behind, then
-    different from the earlier suggestions, then with the fewest faults (the camera's,
+    """The best try of one suggestion: clean first, then no seating (or lone TV) seen from
+    behind, then not one piece of dressing alone (:data:`DRESSING`), then different from
+    the earlier suggestions, then with the fewest faults (the camera's,
     :func:`broken_rules`, a piece taken out). A piece off its spot (:func:`_off_their_spots`)
     or hidden behind others (:func:`layout.camera.judge`) is taken out of the try, as a
     stager takes it out of the shot, with the pieces placed at it (a desk's chair); where
