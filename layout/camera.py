@@ -274,26 +274,19 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
     eye = cam.center_m
     middle = np.hypot(*(poly.mean(axis=0) - eye[:2]))
     behind = []
-    cos_back = np.cos(np.radians(rules.back_view_deg))
-    for k, i in enumerate(items):
-        if model.kinds[i] not in FRONT_KINDS or at_table[k]:
-            continue
-        to_eye = eye[:2] - pos[k, :2]
-        dist = np.hypot(*to_eye)
-        if dist >= middle or dist < 1e-9:
-            continue
-        back = -np.array([np.cos(yaw[k]), np.sin(yaw[k])])
-        if to_eye @ back / dist >= cos_back:
-            behind.append(names[k])
     faced = set(model.orientation_pairs[model.orientation_mode == codes.FACE].ravel())
-    cos_screen = np.cos(np.radians(rules.screen_view_deg))
+    cos_back, cos_screen = np.cos(np.radians(rules.back_view_deg)), np.cos(np.radians(rules.screen_view_deg))
     for k, i in enumerate(items):
         kind = model.kinds[i]
-        if kind not in SCREEN_KINDS or i in faced or size[k, 2] <= CATALOG[kind].bare_height_m + 1e-6:
-            continue  # a bare stand is a cabinet; a TV its sofa faces is seen as the group is
+        seat = kind in FRONT_KINDS and not at_table[k]
+        # A bare stand is a cabinet; a TV its sofa faces is seen as the group is.
+        screen = kind in SCREEN_KINDS and i not in faced and size[k, 2] > CATALOG[kind].bare_height_m + 1e-6
         to_eye = eye[:2] - pos[k, :2]
         dist = np.hypot(*to_eye)
-        if dist > 1e-9 and to_eye @ np.array([np.cos(yaw[k]), np.sin(yaw[k])]) / dist < cos_screen:
+        if not (seat or screen) or dist < 1e-9:
+            continue
+        front = to_eye @ np.array([np.cos(yaw[k]), np.sin(yaw[k])]) / dist  # cos of the camera's angle off its front
+        if (seat and dist < middle and -front >= cos_back) or (screen and front < cos_screen):
             behind.append(names[k])
     return {"visible": visible, "cut": cut, "hidden": hidden, "hidden_by": hidden_by, "from_behind": behind}
 
