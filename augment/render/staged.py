@@ -1327,11 +1327,13 @@ def _check_image(image) -> np.ndarray:
     return a
 
 
-def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
+def _reach_points(placed, lighting: Lighting, settings: StagedSettings, floor_bounds_m=None):
     """Floor-frame points whose projection bounds what the furniture and its shadows can
     touch: each box's corners grown by 0.35 m (contact darkening) and raised by the fade of
     the walls' occlusion, and the shadows of its upper corners along the key light's
-    extreme directions and from the lamps."""
+    extreme directions and from the lamps. A lamp's shadows fall on the floor only (the
+    walls take the key light's): within ``floor_bounds_m`` ((2,), (2,)) where given, as a
+    tall piece near a ceiling lamp would otherwise stretch them over many meters."""
     out = []
     dirs = [v for v in _shadow_directions(lighting.direction, lighting.softness_rad, 8) if v[2] < -0.05]
     for item, _ in placed:
@@ -1342,7 +1344,10 @@ def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
         for v in dirs:
             out.append(top - np.outer(top[:, 2] / v[2], v))
         for lamp in lighting.lamps:
-            out.append(np.column_stack([_from_source(top, lamp.position_m), np.zeros(len(top))]))
+            xy = _from_source(top, lamp.position_m)
+            if floor_bounds_m is not None:
+                xy = np.clip(xy, floor_bounds_m[0], floor_bounds_m[1])
+            out.append(np.column_stack([xy, np.zeros(len(top))]))
     return np.concatenate(out)
 
 
@@ -1519,7 +1524,11 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     out = image.copy()
     roi = None
     if placed:
-        reach = _reach_points(placed, lighting, settings)
+        bounds = None
+        if floor_polygon is not None:
+            outline = np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon), dtype=np.float64)[:, :2]
+            bounds = (outline.min(axis=0), outline.max(axis=0))
+        reach = _reach_points(placed, lighting, settings, bounds)
         roi = _roi(*_project(reach, K, pose, dist), (w, h), settings.margin_px)
     if roi is None:  # nothing in view
         zeros, ones = np.zeros((h, w), np.float32), np.ones((h, w), np.float32)
