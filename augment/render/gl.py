@@ -218,6 +218,48 @@ def _reuse_framebuffers(renderer, spares: int = 2, slack: float = 1.6) -> None:
     renderer._configure_main_framebuffer = configure_reusing
 
 
+def _read_viewport(renderer, depth_wanted) -> None:
+    """Make one pyrender renderer read back the viewport alone, and its depth only when
+    ``depth_wanted()``. pyrender resolves and reads its whole framebuffer, which
+    :func:`_reuse_framebuffers` may have made larger, and linearizes the depth with
+    boolean indexing: a third of a staged photo's GL time on llvmpipe. The values are
+    pyrender's, to the bit."""
+    from OpenGL import GL
+
+    def read(scene, flags):
+        w, h = int(renderer.viewport_width), int(renderer.viewport_height)
+        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, renderer._main_fb_ms)
+        GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, renderer._main_fb)
+        GL.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL.GL_COLOR_BUFFER_BIT, GL.GL_LINEAR)
+        GL.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL.GL_DEPTH_BUFFER_BIT, GL.GL_NEAREST)
+        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, renderer._main_fb)
+        depth = None
+        if flags & pyrender.RenderFlags.DEPTH_ONLY or depth_wanted():
+            raw = np.frombuffer(GL.glReadPixels(0, 0, w, h, GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT),
+                                np.float32).reshape(h, w)[::-1]
+            ndc = 2.0 * raw - 1.0
+            camera = scene.main_camera_node.camera
+            near, far = camera.znear, camera.zfar
+            with np.errstate(divide="ignore"):
+                if far is None:
+                    linear = 2 * near / (1.0 - ndc)
+                else:
+                    linear = (2.0 * near * far) / (far + near - ndc * (far - near))
+            depth = np.where(raw == 1.0, np.float32(0.0), linear).astype(np.float32, copy=False)
+            if flags & pyrender.RenderFlags.DEPTH_ONLY:
+                return depth
+        rgba = bool(flags & pyrender.RenderFlags.RGBA)
+        color = np.frombuffer(GL.glReadPixels(0, 0, w, h, GL.GL_RGBA if rgba else GL.GL_RGB, GL.GL_UNSIGNED_BYTE),
+                              np.uint8).reshape(h, w, 4 if rgba else 3)[::-1]
+        return color, depth
+
+    renderer._read_main_framebuffer = read
+
+
+# The methods of pyrender's renderer that :meth:`Renderer._prepare` replaces.
+_PATCHED = ("_shadow_mapping_pass", "_configure_main_framebuffer", "_read_main_framebuffer")
+
+
 class Renderer:
     """One offscreen GL context, reused for every image (contexts are costly and some
     drivers fail when they are re-created). Use as a context manager.
@@ -229,6 +271,7 @@ class Renderer:
     """
 
     def __init__(self, width_px: int = 640, height_px: int = 480):
+        self._depth_wanted = True
         try:
             self._offscreen = pyrender.OffscreenRenderer(width_px, height_px)
         except Exception as error:  # the GL stack raises many types; all mean "no context"
@@ -246,6 +289,7 @@ class Renderer:
         self._offscreen._renderer._shadow_mapping_pass = _with_shadow_offset(
             self._offscreen._renderer._shadow_mapping_pass)
         _reuse_framebuffers(self._offscreen._renderer)
+        _read_viewport(self._offscreen._renderer, lambda: self._depth_wanted)
         # pyrender uploads textures as tightly packed rows; GL's default assumes rows padded
         # to 4 bytes, which skews any RGB texture whose width is not a multiple of 4 and
         # reads past the end of its buffer.
@@ -254,7 +298,7 @@ class Renderer:
         GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
 
     def render(self, scene, width_px: int, height_px: int, flags=None, seg_node_map=None,
-               shadow_map_px: int = 2048):
+               shadow_map_px: int = 2048, depth: bool = True):
         """Render ``scene`` from its main camera.
 
         ``shadow_map_px`` (a power of two) sizes the shadow maps of lights rendered for
@@ -266,7 +310,8 @@ class Renderer:
         color : (height_px, width_px, 3) uint8, or (height_px, width_px, 4) with ``RenderFlags.RGBA``
             (premultiplied over a transparent black background).
         depth_m : (height_px, width_px) float32
-            Distance along the optical axis, 0 where nothing was drawn.
+            Distance along the optical axis, 0 where nothing was drawn; with
+            ``depth=False`` None where skipping it saves the read (framebuffers).
         """
         if flags is None:
             flags = pyrender.RenderFlags.NONE
@@ -277,13 +322,14 @@ class Renderer:
         self._offscreen.viewport_height = int(height_px)
         platform = self._offscreen._platform
         if platform.supports_framebuffers():
-            out = self._offscreen.render(scene, flags=flags, seg_node_map=seg_node_map)
-            # Drawn from the bottom-left corner of a framebuffer that may be larger: read flipped.
-            fb_h = self._offscreen._renderer._main_fb_dims[1]
-            window = np.s_[fb_h - int(height_px):, :int(width_px)]
+            self._depth_wanted = depth
+            try:  # the viewport alone is read back (:func:`_read_viewport`)
+                out = self._offscreen.render(scene, flags=flags, seg_node_map=seg_node_map)
+            finally:
+                self._depth_wanted = True
             if isinstance(out, tuple):
-                return tuple(np.ascontiguousarray(a[window]) for a in out)
-            return np.ascontiguousarray(out[window])
+                return tuple(None if a is None else np.ascontiguousarray(a) for a in out)
+            return np.ascontiguousarray(out)
         # OSMesa draws into a buffer of fixed size, read back as RGB. For another size
         # pyrender makes a new context, which would lose the changes above: made here.
         if (platform.viewport_width, platform.viewport_height) != (int(width_px), int(height_px)):
@@ -308,9 +354,21 @@ class Renderer:
         return np.dstack([over_black, alpha]), depth
 
     def close(self) -> None:
+        """Free the context's GL objects and the context. As pyrender's ``delete`` does,
+        without its full garbage collection (0.1 s at the end of each staged photo): the
+        changes of :meth:`_prepare` close over pyrender's renderer, a cycle that only the
+        collector would free, and its ``__del__`` would then free a framebuffer of whatever
+        context is current by the id this one had. Dropped here, it goes at once."""
         if self._offscreen is not None:
-            self._offscreen.delete()
-            self._offscreen = None
+            offscreen, self._offscreen = self._offscreen, None
+            renderer = offscreen._renderer
+            offscreen._platform.make_current()
+            renderer.delete()
+            renderer._shadow_fb = None  # pyrender's delete leaves the id, a second delete frees it again
+            offscreen._platform.delete_context()
+            for name in _PATCHED:
+                renderer.__dict__.pop(name, None)
+            offscreen._renderer = offscreen._platform = None
 
     def __enter__(self) -> "Renderer":
         return self

@@ -1573,7 +1573,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     full, depth = renderer.render(_flat_scene(fulls, camera, camera_gl), rw, rh, flags=flags)
     self_shadows = self_shadows and lighting.key_fraction > 0
     if self_shadows:
-        key, _ = renderer.render(_flat_scene(keys, camera, camera_gl), rw, rh, flags=flags)
+        key, _ = renderer.render(_flat_scene(keys, camera, camera_gl), rw, rh, flags=flags, depth=False)
     timings["render"] = time.perf_counter() - t
 
     # Each furniture pixel's point on the floor frame; the key light's shadows on the

@@ -24,3 +24,67 @@ def test_a_render_into_a_larger_framebuffer_is_the_render_of_a_fresh_context():
     assert a1 - a0 > x1 - x0 and b1 - b0 > y1 - y0, "the first view must be the larger one"
     assert again.roi_px == alone.roi_px
     assert np.array_equal(again.image, alone.image)
+
+
+def test_the_read_back_is_pyrenders_own_read_of_the_viewport():
+    """The renderer reads back the viewport alone, and no depth when told: the colour and
+    depth are, to the bit, pyrender's own read of the (larger, reused) framebuffer's corner."""
+    import pyrender
+    import trimesh
+    from pyrender.renderer import Renderer as PyrenderRenderer
+
+    scene = pyrender.Scene(bg_color=[0.0, 0.0, 0.0, 0.0], ambient_light=[0.3, 0.3, 0.3])
+    scene.add(pyrender.Mesh.from_trimesh(trimesh.creation.box((1.0, 0.8, 0.6))), pose=np.eye(4))
+    pose = np.eye(4)
+    pose[:3, 3] = (0.3, 0.2, 3.0)
+    scene.add(pyrender.IntrinsicsCamera(300.0, 300.0, 160.0, 120.0, znear=0.1, zfar=20.0), pose=pose)
+    flags = pyrender.RenderFlags.RGBA | pyrender.RenderFlags.FLAT
+    with Renderer() as gl:
+        gl.render(scene, 400, 300, flags=flags)  # a larger framebuffer, reused below
+        color, depth = gl.render(scene, 320, 240, flags=flags)
+        only_color, no_depth = gl.render(scene, 320, 240, flags=flags, depth=False)
+        assert gl._offscreen._renderer._main_fb_dims == (400, 300)
+        offscreen = gl._offscreen
+        offscreen._platform.make_current()
+        try:
+            whole_color, whole_depth = PyrenderRenderer._read_main_framebuffer(
+                offscreen._renderer, scene, flags | pyrender.RenderFlags.OFFSCREEN)
+        finally:
+            offscreen._platform.make_uncurrent()
+    assert color.shape == (240, 320, 4) and depth.shape == (240, 320) and no_depth is None
+    corner = np.s_[300 - 240:, :320]
+    np.testing.assert_array_equal(color, whole_color[corner])
+    np.testing.assert_array_equal(only_color, color)
+    np.testing.assert_array_equal(depth, whole_depth[corner])
+    assert (depth == 0).any() and (depth > 2.0).any()  # background and the box both in view
+
+
+def test_a_closed_renderer_leaves_nothing_for_the_garbage_collector():
+    """Closing frees pyrender's renderer at once: were it left to the collector, its
+    ``__del__`` would free framebuffers of whatever context is current then by this
+    one's ids (a later render then fails with GL_INVALID_OPERATION)."""
+    import gc
+    import weakref
+
+    gl = Renderer()
+    gl.render(*_small_scene(), 64, 48)
+    inner = weakref.ref(gl._offscreen._renderer)
+    gc.disable()
+    try:
+        gl.close()
+        assert inner() is None
+    finally:
+        gc.enable()
+
+
+def _small_scene():
+    import pyrender
+    import trimesh
+
+    scene = pyrender.Scene()
+    scene.add(pyrender.Mesh.from_trimesh(trimesh.creation.box((1.0, 1.0, 1.0))))
+    pose = np.eye(4)
+    pose[2, 3] = 3.0
+    scene.add(pyrender.IntrinsicsCamera(60.0, 60.0, 32.0, 24.0), pose=pose)
+    scene.add(pyrender.DirectionalLight(intensity=2.0), pose=pose)
+    return (scene,)
