@@ -385,6 +385,14 @@ def _photo_light(m: Measurement, keep_board: bool, ceiling_m: float):
     return erased, lighting, estimate_look(m.image, m.calibration)
 
 
+def _scenes(floor, room_height_m: float, layouts, styles, seed: int, assets) -> list[bytes]:
+    """Each layout's 3-D scene (GLB), its furniture as rendered."""
+    from .render.gltf import scene_glb
+    cache = {}
+    return [scene_glb(floor, room_height_m, lay, seed=_seed(lay, seed), cache=cache, assets=assets, style=style_name)
+            for lay, style_name in zip(layouts, styles)]
+
+
 def _drawn_overlays(m: Measurement, doors, windows_px) -> tuple[dict, dict]:
     """:func:`overlays`, and the same as PNG files."""
     pictures = overlays(m, doors, windows_px)
@@ -636,11 +644,12 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
     # trimesh, a second or more each) while OpenCV and onnxruntime find the board and the
     # floor; erasing the board and reading
     # the light off the photo while the layouts are solved; drawing the plans (matplotlib)
-    # while GL and NumPy render the suggestions.
+    # and building the 3-D scenes while GL and NumPy render the suggestions.
     background = ThreadPoolExecutor(max_workers=1, thread_name_prefix="furnish")
     if layout is None:  # a layout rendered again solves nothing
         background.submit(_warm_solver)
     background.submit(importlib.import_module, "augment.render.gltf")
+    background.submit(importlib.import_module, "layout.plot")  # matplotlib, for the plans
     try:
         m = measure(photo, board, camera=camera, model=model, floor_mask=floor_mask, clicks=clicks,
                     height_m=height_m, clock=clock)
@@ -687,6 +696,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
         # Drawn and encoded while the main thread renders: they need nothing from the render.
         pictures = background.submit(_drawn_overlays, m, doors if marked else found_px,
                                      [w.corners_px for w in found_windows])
+        # The 3-D scenes need nothing from the render either.
+        scenes = background.submit(_scenes, m.floor, room_height, layouts, styles, seed, user_models)
         with clock("render"):
             from .render import staged as render
             own = renderer is None
@@ -710,14 +721,9 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
             finally:
                 if own:
                     gl.close()
-        with clock("scene"):
-            from .render.gltf import scene_glb
-            cache = {}
-            scenes = []
-            for lay, style_name in zip(layouts, styles):
-                scenes.append(scene_glb(m.floor, room_height, lay, seed=_seed(lay, seed), cache=cache,
-                                        assets=user_models, style=style_name))
-                bar.step()
+        with clock("scene"):  # the wait for the scenes beyond the render
+            scenes = scenes.result()
+            bar.step(len(scenes))
         with clock("overlays"):  # the contact sheet, and the wait for the overlays
             sheet = contact_sheet(staged)
             pictures, overlay_png = pictures.result()

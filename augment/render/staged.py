@@ -42,6 +42,7 @@ from __future__ import annotations
 import hashlib
 import math
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import cv2
@@ -1430,6 +1431,44 @@ def _render_scale(box_px, supersample, blur_px, settings: StagedSettings):
     return round(s * 4) / 4 if s > 1 else s
 
 
+def _shadows(placed, reach, lighting: Lighting, light_map, floor_mask, floor_polygon, walls, windows_px, K, dist,
+             pose, box, undistort, settings: StagedSettings):
+    """The furniture's shading of the photo over ``box``: the floor's gain (the floor raster
+    warped onto the box, only where the floor can be: rays pointing down, as the warp
+    folds the floor's far side into the sky), the walls' gain, and which pixels are floor
+    by the outline; warped onto the photo's pixels by ``undistort`` ((map_x, map_y) or None).
+    Needs nothing of the render: worked out beside it."""
+    R, tvec = pose[:3, :3], pose[:3, 3]
+    bw, bh = box[2] - box[0], box[3] - box[1]
+    casters = _casters(placed, settings)
+    on_floor = reach[reach[:, 2] < 1e-6, :2]
+    pts = np.concatenate([on_floor] + [c.points[:, :2] for c in casters])
+    # The raster reaches as far as the sides' occlusion spreads.
+    pad = max((_ao_reach_m(it.size_m[2], settings) for it, _ in placed), default=0.35)
+    shading = _floor_gain(casters, lighting, (pts.min(axis=0) - pad, pts.max(axis=0) + pad), settings, light_map)
+    shift = np.array([[1.0, 0, -box[0]], [0, 1, -box[1]], [0, 0, 1]])
+    H_box = shift @ K @ np.column_stack([R[:, 0], R[:, 1], tvec]) @ shading.grid.floor_from_raster()
+    gain = cv2.warpPerspective(shading.gain, H_box, (bw, bh), flags=cv2.INTER_LINEAR,
+                               borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
+    up = np.linalg.inv(K).T @ R[:, 2]  # the floor's pixels: up . K^-1 p < 0
+    _clear_above_horizon(gain, float(up[0]), float(up[1]), float(up[2]), box[0], box[1])
+    # What the mask says is not floor: walls take shadows too (only where the walls are known).
+    if floor_mask is not None and walls is not None and len(walls):
+        wall_gain, floor_share = _wall_gain(shading, casters, _walls_run_on(floor_polygon, settings.wall_run_on_m),
+                                            np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon)), lighting,
+                                            K, pose, box, settings)
+        if len(windows_px):  # no box-sized mask per render where no window was found
+            wall_gain[_panes(windows_px, K, dist, box)] = 1.0
+    else:
+        wall_gain, floor_share = np.ones_like(gain), np.zeros_like(gain)
+    if undistort is not None:
+        mx, my = undistort[0] - box[0], undistort[1] - box[1]
+        gain, wall_gain = (cv2.remap(g, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
+                           for g in (gain, wall_gain))
+        floor_share = cv2.remap(floor_share, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
+    return gain, wall_gain, floor_share
+
+
 def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                   floor_mask: np.ndarray | None = None, floor_polygon=None,
                   lighting: Lighting | None = None, look: PhotoLook | None = None, seed: int = 0,
@@ -1567,6 +1606,12 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                               for it, _ in placed])
     light_map = floor_light_map(image, floor_mask, K, dist, pose, lighting, corners.min(axis=0) - 0.5,
                                 corners.max(axis=0) + 0.5, settings)
+    # The shadows on the photo need nothing of the render: worked out on a second core
+    # meanwhile (OpenCV and NumPy let go of the interpreter in their loops).
+    beside = ThreadPoolExecutor(max_workers=1, thread_name_prefix="stager-shadows")
+    shadows = beside.submit(_shadows, placed, reach, lighting, light_map, floor_mask, floor_polygon, walls,
+                            windows_px, K, dist, pose, box, (map_x, map_y) if distorted else None, settings)
+    beside.shutdown(wait=False)  # its thread ends with the task
     fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy, settings, light_map, renderer)
     camera, camera_gl = pyrender_camera(Kr), gl_from_cv_pose(np.linalg.inv(pose))
     flags = pyrender.RenderFlags.RGBA | pyrender.RenderFlags.FLAT
@@ -1654,36 +1699,11 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     at = np.s_[fbox[1] - box[1]:fbox[3] - box[1], fbox[0] - box[0]:fbox[2] - box[0]]
     if distorted:  # warped below as the box
         rgba, low = _in_box(rgba, low, at, (bh, bw))
-    # Shadows: the floor raster warped onto the box, only where the floor can be (rays
-    # pointing down; the warp folds the floor's far side into the sky).
-    casters = _casters(placed, settings)
-    on_floor = reach[reach[:, 2] < 1e-6, :2]
-    pts = np.concatenate([on_floor] + [c.points[:, :2] for c in casters])
-    # The raster reaches as far as the sides' occlusion spreads.
-    pad = max((_ao_reach_m(it.size_m[2], settings) for it, _ in placed), default=0.35)
-    shading = _floor_gain(casters, lighting, (pts.min(axis=0) - pad, pts.max(axis=0) + pad), settings, light_map)
-    shift = np.array([[1.0, 0, -box[0]], [0, 1, -box[1]], [0, 0, 1]])
-    H_box = shift @ K @ np.column_stack([R[:, 0], R[:, 1], tvec]) @ shading.grid.floor_from_raster()
-    gain = cv2.warpPerspective(shading.gain, H_box, (bw, bh), flags=cv2.INTER_LINEAR,
-                               borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
-    up = np.linalg.inv(K).T @ R[:, 2]  # the floor's pixels: up . K^-1 p < 0
-    _clear_above_horizon(gain, float(up[0]), float(up[1]), float(up[2]), box[0], box[1])
-    # What the mask says is not floor: walls take shadows too (only where the walls are known).
-    if floor_mask is not None and walls is not None and len(walls):
-        wall_gain, floor_share = _wall_gain(shading, casters, _walls_run_on(floor_polygon, settings.wall_run_on_m),
-                                            np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon)), lighting,
-                                            K, pose, box, settings)
-        if len(windows_px):  # no box-sized mask per render where no window was found
-            wall_gain[_panes(windows_px, K, dist, box)] = 1.0
-    else:
-        wall_gain, floor_share = np.ones_like(gain), np.zeros_like(gain)
+    gain, wall_gain, floor_share = shadows.result()
     if distorted:
         mx, my = map_x - box[0], map_y - box[1]
         rgba, low = (cv2.remap(a, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
                      for a in (rgba, low))
-        gain, wall_gain = (cv2.remap(g, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
-                           for g in (gain, wall_gain))
-        floor_share = cv2.remap(floor_share, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
     timings["shadows"] = time.perf_counter() - t
 
     t = time.perf_counter()
