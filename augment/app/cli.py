@@ -946,6 +946,10 @@ def main(argv=None) -> int:
     # OpenCV's own messages (a TIFF it cannot handle, a header it cannot read) would come
     # before Stager's one error line that says the same; a user's OPENCV_LOG_LEVEL still wins.
     os.environ.setdefault("OPENCV_LOG_LEVEL", "SILENT")
+    # A staged photo renders through many short GL and NumPy calls, each taking the GIL
+    # back from the thread that draws the plans meanwhile: switching sooner than Python's
+    # 5 ms gives it back sooner (room_4's render stage 2.58 -> 2.42 s, in-process).
+    sys.setswitchinterval(1e-4)
     parser = _parser()
     args = parse(parser, argv)
     if isinstance(args, int):
