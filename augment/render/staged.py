@@ -1328,13 +1328,11 @@ def _check_image(image) -> np.ndarray:
     return a
 
 
-def _reach_points(placed, lighting: Lighting, settings: StagedSettings, floor_bounds_m=None):
+def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
     """Floor-frame points whose projection bounds what the furniture and its shadows can
     touch: each box's corners grown by 0.35 m (contact darkening) and raised by the fade of
     the walls' occlusion, and the shadows of its upper corners along the key light's
-    extreme directions and from the lamps. A lamp's shadows fall on the floor only (the
-    walls take the key light's): within ``floor_bounds_m`` ((2,), (2,)) where given, as a
-    tall piece near a ceiling lamp would otherwise stretch them over many meters."""
+    extreme directions and from the lamps."""
     out = []
     dirs = [v for v in _shadow_directions(lighting.direction, lighting.softness_rad, 8) if v[2] < -0.05]
     for item, _ in placed:
@@ -1345,10 +1343,7 @@ def _reach_points(placed, lighting: Lighting, settings: StagedSettings, floor_bo
         for v in dirs:
             out.append(top - np.outer(top[:, 2] / v[2], v))
         for lamp in lighting.lamps:
-            xy = _from_source(top, lamp.position_m)
-            if floor_bounds_m is not None:
-                xy = np.clip(xy, floor_bounds_m[0], floor_bounds_m[1])
-            out.append(np.column_stack([xy, np.zeros(len(top))]))
+            out.append(np.column_stack([_from_source(top, lamp.position_m), np.zeros(len(top))]))
     return np.concatenate(out)
 
 
@@ -1563,11 +1558,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     out = image.copy()
     roi = None
     if placed:
-        bounds = None
-        if floor_polygon is not None:
-            outline = np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon), dtype=np.float64)[:, :2]
-            bounds = (outline.min(axis=0), outline.max(axis=0))
-        reach = _reach_points(placed, lighting, settings, bounds)
+        reach = _reach_points(placed, lighting, settings)
         roi = _roi(*_project(reach, K, pose, dist), (w, h), settings.margin_px)
     if roi is None:  # nothing in view
         zeros, ones = np.zeros((h, w), np.float32), np.ones((h, w), np.float32)

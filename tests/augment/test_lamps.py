@@ -13,7 +13,7 @@ from augment.render.gl import Renderer
 from augment.render.lamps import Lamp, find_lamps
 from augment.render.settings import RENDER
 from augment.render.staged import (GAMMA, Lighting, _Caster, _floor_gain, _FloorGrid, _lamp_view, _LightMap,
-                                   _reach_points, estimate_lighting)
+                                   estimate_lighting)
 from tests.augment.test_render import PHOTOS, _truth_calibration
 
 CEILING_M = 2.5
@@ -106,28 +106,6 @@ def test_a_lamp_casts_its_shadow_away_from_it():
     assert at(0.6, 0.0) == pytest.approx(1.0, abs=1e-3)  # between the lamp and the box
     assert at(1.6, 0.0) == pytest.approx(1.0, abs=1e-3)  # past the shadow's end
     assert at(1.25, 0.4) == pytest.approx(1.0, abs=1e-3)  # beside it
-
-
-def test_a_lamps_shadow_is_worked_out_on_the_measured_floor_only():
-    """A bookcase 1.9 m tall, 0.4 m deep, its centre 1.5 m from a lamp 2.35 m up. The region
-    its shadows reach is bounded by its box grown by its occlusion's reach (1.75 m), whose
-    far top edge (x = 1.5 + 0.2 + 1.75 = 3.45 m), cast from the lamp from at most
-    ``shadow_top_share`` of its height, runs on to 3.45 x 2.35 / (2.35 - 0.75 x 2.35) =
-    13.8 m: past any room. With the floor's bounds, the lamp's points stay within them,
-    while the key light's reach (which walls take, past the floor) is kept whole."""
-    item = PlacedItem("bookcase", (1.5, 0.0, 0.95), 0.0, (0.8, 0.4, 1.9), "shelf")
-    placed = [(item, furniture_for(item, 0))]
-    lamp = Lamp((0.0, 0.0, 2.35), 1.5, 1.0)
-    light = Lighting((0.8, 0.8, 0.8), (0.6, 0.0, -0.8), 0.1, 0.05, (0.4, 0.4, 0.4), "test", lamps=(lamp,))
-    assert RENDER.lamps.shadow_top_share == 0.75
-    bounds = (np.array([-1.0, -2.0]), np.array([2.5, 2.0]))
-    free = _reach_points(placed, light, RENDER.staged)
-    kept = _reach_points(placed, light, RENDER.staged, bounds)
-    assert free[:, 0].max() == pytest.approx(13.8, abs=0.01)
-    from_lamp = np.arange(len(kept)) >= len(kept) - 4  # the box's 4 top corners cast from the lamp, last
-    assert np.all(kept[from_lamp, :2] >= bounds[0]) and np.all(kept[from_lamp, :2] <= bounds[1])
-    np.testing.assert_array_equal(kept[~from_lamp], free[~from_lamp])
-    assert kept[~from_lamp, 0].max() > 5.0  # the key light's shadows of the grown box's top, past the floor
 
 
 def test_the_floors_light_map_reads_any_number_of_points():
