@@ -1431,7 +1431,8 @@ def _shadows(placed, reach, lighting: Lighting, light_map, floor_mask, floor_pol
     """The furniture's shading of the photo over ``box``: the floor's gain (the floor raster
     warped onto the box, only where the floor can be: rays pointing down, as the warp
     folds the floor's far side into the sky), the walls' gain, and which pixels are floor
-    by the outline; warped onto the photo's pixels by ``undistort`` ((map_x, map_y) or None).
+    by the outline; warped onto the photo's pixels by ``undistort`` (the maps of
+    :func:`_undistort_map` in the box's pixels, or None).
     Needs nothing of the render: worked out beside it."""
     R, tvec = pose[:3, :3], pose[:3, 3]
     bw, bh = box[2] - box[0], box[3] - box[1]
@@ -1457,7 +1458,7 @@ def _shadows(placed, reach, lighting: Lighting, light_map, floor_mask, floor_pol
     else:
         wall_gain, floor_share = np.ones_like(gain), np.zeros_like(gain)
     if undistort is not None:
-        mx, my = undistort[0] - box[0], undistort[1] - box[1]
+        mx, my = undistort
         gain, wall_gain = (cv2.remap(g, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=1.0)
                            for g in (gain, wall_gain))
         floor_share = cv2.remap(floor_share, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)
@@ -1570,8 +1571,9 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         map_x, map_y = _undistort_map(K, dist, roi)
         box = (int(np.floor(map_x.min())) - 2, int(np.floor(map_y.min())) - 2,
                int(np.ceil(map_x.max())) + 3, int(np.ceil(map_y.max())) + 3)
+        undistort = (map_x - box[0], map_y - box[1])  # the box's pixels of each photo pixel
     else:
-        box = roi
+        box, undistort = roi, None
     bw, bh = box[2] - box[0], box[3] - box[1]
     # The furniture is rendered over its own box within it (the floor's shading reaches
     # further, but costs no rendered pixels): a wide occlusion halo leaves its resolution be.
@@ -1601,7 +1603,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     # meanwhile (OpenCV and NumPy let go of the interpreter in their loops).
     beside = ThreadPoolExecutor(max_workers=1, thread_name_prefix="stager-shadows")
     shadows = beside.submit(_shadows, placed, reach, lighting, light_map, floor_mask, floor_polygon, walls,
-                            windows_px, K, dist, pose, box, (map_x, map_y) if distorted else None, settings)
+                            windows_px, K, dist, pose, box, undistort, settings)
     beside.shutdown(wait=False)  # its thread ends with the task
     fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy, settings, light_map, renderer)
     camera, camera_gl = pyrender_camera(Kr), gl_from_cv_pose(np.linalg.inv(pose))
@@ -1692,7 +1694,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         rgba, low = _in_box(rgba, low, at, (bh, bw))
     gain, wall_gain, floor_share = shadows.result()
     if distorted:
-        mx, my = map_x - box[0], map_y - box[1]
+        mx, my = undistort
         rgba, low = (cv2.remap(a, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
                      for a in (rgba, low))
     timings["shadows"] = time.perf_counter() - t

@@ -67,7 +67,7 @@ def test_a_closed_renderer_leaves_nothing_for_the_garbage_collector():
     import weakref
 
     gl = Renderer()
-    gl.render(*_small_scene(), 64, 48)
+    gl.render(_small_scene(), 64, 48)
     inner = weakref.ref(gl._offscreen._renderer)
     gc.disable()
     try:
@@ -87,4 +87,4 @@ def _small_scene():
     pose[2, 3] = 3.0
     scene.add(pyrender.IntrinsicsCamera(60.0, 60.0, 32.0, 24.0), pose=pose)
     scene.add(pyrender.DirectionalLight(intensity=2.0), pose=pose)
-    return (scene,)
+    return scene
