@@ -958,7 +958,7 @@ def _floor_gain(casters, lighting: Lighting, extent_m, settings: StagedSettings,
         # The samples are discrete copies; blur by about their spacing at a typical height.
         spacing = height * math.tan(lighting.softness_rad) * 2.0 / math.sqrt(len(dirs))
         shadow = _blur(shadow, max(0.5, 0.35 * spacing / cell))
-    k = max(1, int(round(0.02 / cell)))  # occlusion is smooth: a 2 cm raster
+    k = max(1, int(round(settings.ao_cell_m / cell)))  # occlusion is smooth: a coarser raster
     coarse = _FloorGrid(lo, cell * k, (shape[0] // k + 1, shape[1] // k + 1))
     # Ambient occlusion: the share of a uniform sky each floor point sees past the parts,
     # the mean over cosine-weighted directions of the parts' shadows cast along them.
