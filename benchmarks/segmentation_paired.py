@@ -19,7 +19,8 @@ may be left) and, where the mask is wrong there, clicks: ``--floor-at`` or
 ``render`` keeps, per render, the photo (PNG), its true floor mask, the true visible
 floor area (as ``benchmarks/segmentation.py`` measures it) and the truth, under
 ``--cache``; ``--tall`` draws the boards 12-20 cm tall, ``--hue`` paints every room's
-trim the floor's colour. ``score`` calibrates each photo
+trim the floor's colour, ``--stress NAME`` renders one of ``segmentation.py``'s stress
+cases (use seeds other than its held-out ones to work on a change). ``score`` calibrates each photo
 from its board with the true focal length and runs the whole segmentation and the floor
 polygon with the code as it is now; a render it cannot calibrate or outline counts as
 failed, so a change to the calibration shows too. ``compare`` prints both counts and
@@ -46,12 +47,12 @@ from augment.floor.polygon import floor_polygon  # noqa: E402
 from augment.floor.model import DEFAULT_MODEL, FloorModel  # noqa: E402
 from augment.floor.segment import segment_floor  # noqa: E402
 from layout.fileio import write_atomic  # noqa: E402
-from segmentation import iou, true_visible_area_m2  # noqa: E402
+from segmentation import STRESS, iou, true_visible_area_m2  # noqa: E402
 
 TALL_BASEBOARD_M = (0.12, 0.20)
 
 
-def render(seeds: list[int], count: int, cache: Path, tall: bool, hue: bool = False) -> None:
+def render(seeds: list[int], count: int, cache: Path, tall: bool, hue: bool = False, stress: str | None = None) -> None:
     from augment.render.gl import Renderer
     from augment.synth import render_sample
 
@@ -62,6 +63,7 @@ def render(seeds: list[int], count: int, cache: Path, tall: bool, hue: bool = Fa
                 extra = {"baseboard_m": TALL_BASEBOARD_M} if tall else {}
                 if hue:
                     extra["trim_like_floor"] = 1.0
+                extra.update(STRESS.get(stress, {}))
                 sample = render_sample([seed, i], renderer, **extra)
                 stem = cache / f"{seed}_{i}"
                 write_atomic(stem.with_suffix(".png"), cv2.imencode(".png", sample.image[..., ::-1])[1].tobytes())
@@ -155,6 +157,7 @@ def main(argv=None) -> int:
     r.add_argument("--count", type=int, default=80)
     r.add_argument("--tall", action="store_true", help="boards 12-20 cm tall")
     r.add_argument("--hue", action="store_true", help="trim painted the floor's colour")
+    r.add_argument("--stress", choices=sorted(STRESS), default=None, help="one of segmentation.py's stress cases")
     r.add_argument("--cache", type=Path, default=ROOT / "data" / "paired")
     s = verbs.add_parser("score", help="segment the kept renders with the code as it is now")
     s.add_argument("--cache", type=Path, default=ROOT / "data" / "paired")
@@ -167,7 +170,7 @@ def main(argv=None) -> int:
     c.add_argument("after", type=Path)
     args = parser.parse_args(argv)
     if args.verb == "render":
-        render(args.seeds, args.count, args.cache, args.tall, args.hue)
+        render(args.seeds, args.count, args.cache, args.tall, args.hue, args.stress)
     elif args.verb == "score":
         score(args.cache, args.out, args.follow_doubt)
     else:

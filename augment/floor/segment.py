@@ -617,7 +617,8 @@ def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, sca
     for the model's soft edges, a few working pixels; a region of
     ``FLOOR.segment.restore_min_m2`` or more on the floor and not a far speck in the photo
     (``FLOOR.segment.min_part_share`` of the mask's pixels: a carton's top far off spans
-    that much floor in a few hundred pixels), thicker than an edge
+    that much floor in a few hundred pixels) unless the floor kept goes on right below it
+    (a far strip along a wall, :func:`_floor_below_share`), thicker than an edge
     (``FLOOR.segment.restore_edge_px``), below the horizon and touching the floor kept,
     is the model's call to make. Where the user clicked (``clicked``: a "not floor" region
     and every click's reach) GrabCut, told by the click, has the last word."""
@@ -635,11 +636,28 @@ def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, sca
     touching[np.unique(labels[near & (labels > 0)])] = True
     pixels = np.bincount(region.ravel(), minlength=n)
     keep = touching & (area >= FLOOR.segment.restore_min_m2)
-    keep &= pixels >= FLOOR.segment.min_part_share * np.count_nonzero(mask)
+    keep &= (pixels >= FLOOR.segment.min_part_share * np.count_nonzero(mask)) | (
+        _floor_below_share(region, mask, n) >= FLOOR.segment.restore_below_share)
     keep[0] = False
     if not keep.any():
         return mask
     return mask | np.isin(region, np.flatnonzero(keep))
+
+
+def _floor_below_share(region: np.ndarray, mask: np.ndarray, n: int) -> np.ndarray:
+    """(n,) share of each region's lower edge (labels ``region`` (rows, cols), 1..n-1: its
+    pixels whose neighbour below is not in it) that has floor of ``mask`` right below, the
+    photo upright, past a threshold bar at most (``FLOOR.segment.bridge_px``). A strip of
+    floor GrabCut cut off the far edge goes on into the floor toward the camera; a
+    carton's top sits on the carton's face."""
+    below = np.zeros_like(region)
+    below[:-1] = region[1:]
+    lower = (region > 0) & (below != region)
+    floor = np.zeros(mask.shape, bool)
+    for step in range(1, FLOOR.segment.bridge_px + 1):
+        floor[:-step] |= mask[step:]
+    edge = np.bincount(region[lower], minlength=n)
+    return np.bincount(region[lower & floor], minlength=n) / np.maximum(edge, 1)
 
 
 def _edge_kernel() -> np.ndarray:

@@ -1074,6 +1074,42 @@ def test_a_dropped_floor_is_judged_by_its_whole_area_not_its_core(held_out, monk
     assert not _restore_dropped(small & ~band, p, cal, scale, nothing)[band].any()
 
 
+def test_a_far_strip_with_the_floor_right_below_comes_back_however_few_its_pixels(held_out, monkeypatch):
+    """GrabCut cuts a few pixels off the floor's far edge (a second material along the far
+    wall: render 991/27 of a threshold set, 1.5 m² in three strips of 126-286 working
+    pixels, under the 0.5 % pixel rule's 474): such a strip, whose every column goes on
+    into the floor kept below it, comes back below the pixel rule; a patch of as many
+    pixels with no floor right below (a carton's top on its face) does not."""
+    from augment.floor.segment import _restore_dropped
+
+    cal, scale, small, floor_rows = _working_floor(held_out)
+    top = floor_rows[0]
+    band = np.zeros_like(small)
+    band[top:top + 10] = True
+    band &= small
+    p = np.where(small, 0.8, 0.02).astype(np.float32)
+    nothing = np.zeros_like(small)
+    monkeypatch.setattr(FLOOR.segment, "restore_min_m2", 0.0)
+    # The pixel rule alone would keep both out.
+    monkeypatch.setattr(FLOOR.segment, "min_part_share", 2.0 * band.sum() / small.sum())
+    assert _restore_dropped(small & ~band, p, cal, scale, nothing)[band].mean() > 0.99
+    # A carton: its top (the model's floor, dropped) above its face (not floor, 8 rows),
+    # the floor kept beside and behind it.
+    cols = np.flatnonzero(small[top + 40])
+    x0 = cols[len(cols) // 3]
+    carton_top = np.zeros_like(small)
+    carton_top[top + 30:top + 40, x0:x0 + 25] = True
+    face = np.zeros_like(small)
+    face[top + 40:top + 48, x0:x0 + 25] = True
+    assert (small[carton_top | face]).all()
+    kept = small & ~carton_top & ~face
+    back = _restore_dropped(kept, np.where(face, 0.02, p).astype(np.float32), cal, scale, nothing)
+    assert not back[carton_top].any()
+    # The same top with the floor right below it (no face) is a strip of floor.
+    back = _restore_dropped(small & ~carton_top, p, cal, scale, nothing)
+    assert back[carton_top].mean() > 0.95  # its corners: the peeled core grows back round
+
+
 def test_regions_grabcut_added_where_the_model_sees_no_floor_are_taken_back():
     """GrabCut takes in a carton's face of the floor's colour whole, where the model gives
     a few percent: such a region goes. GrabCut's thin corrections of the model's soft edge
