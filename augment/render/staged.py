@@ -163,7 +163,7 @@ def _floor_region(shape, K, pose, max_m=8.0):
     return (down & (reach < max_m)).reshape(h, w)
 
 
-def _window(lum, candidates):
+def _window(lum, candidates, settings: StagedSettings):
     """The brightest window-like blob of a small photo's luminance (h, w): its centroid
     (x, y) in pixels, or None."""
     if candidates.sum() < 0.01 * lum.size:
@@ -176,14 +176,21 @@ def _window(lum, candidates):
     if n <= 1:
         return None
     # A window is a compact bright quadrilateral: not a thin line of lit trim along the
-    # ceiling or a baseboard, nor a ragged pool of light.
+    # ceiling or a baseboard, nor a ragged pool of light; and its frame cuts it off
+    # sharply, where a lamp's glow on a wall fades out.
+    ring = np.ones((5, 5), np.uint8)
     for k in 1 + np.argsort(-stats[1:, cv2.CC_STAT_AREA])[:4]:
         area = int(stats[k, cv2.CC_STAT_AREA])
         if area < 0.003 * lum.size:
             return None
-        ys, xs = np.nonzero(labels == k)
+        blob = (labels == k).astype(np.uint8)
+        ys, xs = np.nonzero(blob)
         _, (a, b), _ = cv2.minAreaRect(np.column_stack([xs, ys]).astype(np.float32))
-        if min(a, b) >= 5 and max(a, b) <= 6 * min(a, b) and area >= 0.6 * a * b:
+        if not (min(a, b) >= 5 and max(a, b) <= 6 * min(a, b) and area >= 0.6 * a * b):
+            continue
+        outside = (cv2.dilate(blob, ring) > 0) & (blob == 0)
+        inside = (blob > 0) & (cv2.erode(blob, ring) == 0)
+        if outside.any() and np.median(lum[outside]) <= settings.window_edge_ratio * np.median(lum[inside]):
             return centroids[k]
     return None
 
@@ -295,7 +302,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     forward = R.T @ np.array([0, 0, 1.0])
     lum_small = small @ np.array([0.299, 0.587, 0.114])
     wall_lum = float(np.median(lum_small[~region_small])) if (~region_small).any() else None
-    found = _window(lum_small, ~region_small)
+    found = _window(lum_small, ~region_small, settings)
     horiz = forward[:2] / max(np.linalg.norm(forward[:2]), 1e-9)
     walls = None if floor_polygon is None else wall_segments(floor_polygon)
     window_xy = None

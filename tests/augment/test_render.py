@@ -530,16 +530,21 @@ def test_key_light_comes_from_the_window():
     assert -d[2] > np.linalg.norm(d[:2]) and lighting.softness_rad >= 0.3
 
 
-def test_a_window_is_a_compact_bright_quadrilateral():
+def test_a_window_is_a_compact_bright_quadrilateral_with_sharp_edges():
     """Grey walls (120) with a line of lit trim 3 px wide along the ceiling, brighter than
-    anything: no window. A 40 x 30 px pane (230) beside it: that is the window, at its
-    centre."""
+    anything: no window. A lamp's round glow on the wall (Gaussian, 250 at its middle,
+    sigma 25 px), brighter than the rest: no window either, its light fades out past
+    any outline. A 40 x 30 px pane (230) beside them: that is the window, at its centre."""
+    settings = RENDER.staged
     lum = np.full((240, 320), 120.0)
     cv2.line(lum, (0, 60), (319, 10), 255.0, 3)
     candidates = np.ones((240, 320), bool)
-    assert _window(lum, candidates) is None
+    assert _window(lum, candidates, settings) is None
+    yy, xx = np.mgrid[:240, :320]
+    lum = np.maximum(lum, 120.0 + 130.0 * np.exp(-((xx - 80.0) ** 2 + (yy - 90.0) ** 2) / (2 * 25.0 ** 2)))
+    assert _window(lum, candidates, settings) is None
     lum[100:130, 200:240] = 230.0
-    assert tuple(_window(lum, candidates)) == pytest.approx((219.5, 114.5), abs=0.01)
+    assert tuple(_window(lum, candidates, settings)) == pytest.approx((219.5, 114.5), abs=0.01)
 
 
 def test_a_plain_wall_in_view_where_the_suns_window_would_be():
