@@ -637,27 +637,34 @@ def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, sca
     pixels = np.bincount(region.ravel(), minlength=n)
     keep = touching & (area >= FLOOR.segment.restore_min_m2)
     keep &= (pixels >= FLOOR.segment.min_part_share * np.count_nonzero(mask)) | (
-        _floor_below_share(region, mask, n) >= FLOOR.segment.restore_below_share)
+        _floor_below_share(region, mask, n, calibration.scaled(scale)) >= FLOOR.segment.restore_below_share)
     keep[0] = False
     if not keep.any():
         return mask
     return mask | np.isin(region, np.flatnonzero(keep))
 
 
-def _floor_below_share(region: np.ndarray, mask: np.ndarray, n: int) -> np.ndarray:
+def _floor_below_share(region: np.ndarray, mask: np.ndarray, n: int, calibration) -> np.ndarray:
     """(n,) share of each region's lower edge (labels ``region`` (rows, cols), 1..n-1: its
-    pixels whose neighbour below is not in it) that has floor of ``mask`` right below, the
-    photo upright, past a threshold bar at most (``FLOOR.segment.bridge_px``). A strip of
-    floor GrabCut cut off the far edge goes on into the floor toward the camera; a
-    carton's top sits on the carton's face."""
+    pixels whose neighbour below is not in it) with floor of ``mask`` below it, the photo
+    upright, no farther on the floor than ``FLOOR.segment.restore_gap_m`` (``calibration``
+    at the mask's size). A strip of floor GrabCut cut off the far edge goes on into the
+    floor toward the camera, past a threshold bar at most; a carton's top sits on the
+    carton's face, which spans more floor than that as seen from the camera."""
     below = np.zeros_like(region)
     below[:-1] = region[1:]
-    lower = (region > 0) & (below != region)
-    floor = np.zeros(mask.shape, bool)
-    for step in range(1, FLOOR.segment.bridge_px + 1):
-        floor[:-step] |= mask[step:]
-    edge = np.bincount(region[lower], minlength=n)
-    return np.bincount(region[lower & floor], minlength=n) / np.maximum(edge, 1)
+    ys, xs = np.nonzero((region > 0) & (below != region))
+    hit = np.full(len(ys), -1)
+    for step in range(1, FLOOR.segment.restore_gap_px + 1):
+        look = (hit < 0) & (ys + step < mask.shape[0])
+        look[look] = mask[ys[look] + step, xs[look]]
+        hit[look] = ys[look] + step
+    near = hit >= 0
+    if near.any():
+        ends = [calibration.floor_from_pixels(np.column_stack([xs[near], y[near]]).astype(np.float64)) for y in (ys, hit)]
+        near[near] = np.hypot(*(ends[1] - ends[0]).T) <= FLOOR.segment.restore_gap_m
+    labels = region[ys, xs]
+    return np.bincount(labels[near], minlength=n) / np.maximum(np.bincount(labels, minlength=n), 1)
 
 
 def _edge_kernel() -> np.ndarray:

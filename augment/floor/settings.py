@@ -30,8 +30,10 @@ class SegmentSettings:
     disputed_share_warn: float = 0.10  # above this share of the floor disputed by model and mask, floor is uncertain
     restore_min_m2: float = 0.3  # a region the model calls floor and GrabCut dropped whole, this large, is floor
     restore_edge_px: int = 2  # ... when thicker than this either side: GrabCut's edge corrections are thinner
-    restore_below_share: float = 0.8  # ... and, if fewer pixels than min_part_share, the floor kept right below
-    # this share of its columns (a far strip, not a carton's top)
+    restore_below_share: float = 0.8  # ... and, if fewer pixels than min_part_share, the floor kept below this
+    # share of its lower edge (a far strip, not a carton's top) ...
+    restore_gap_m: float = 0.3  # ... this near on the floor (a threshold bar; a carton's face spans more) ...
+    restore_gap_px: int = 40  # ... looked for this far down
     veto_p: float = 0.05  # floor GrabCut added past the model, thicker than an edge, where the model gives below this
     spur_width_px: int = 5  # mask lines thinner than this and farther than spur_reach_px from the model's floor go
     spur_reach_px: int = 25  # GrabCut's spurs up walls reach farther; a sliver of floor behind a far carton, less

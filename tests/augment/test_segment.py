@@ -1077,9 +1077,10 @@ def test_a_dropped_floor_is_judged_by_its_whole_area_not_its_core(held_out, monk
 def test_a_far_strip_with_the_floor_right_below_comes_back_however_few_its_pixels(held_out, monkeypatch):
     """GrabCut cuts a few pixels off the floor's far edge (a second material along the far
     wall: render 991/27 of a threshold set, 1.5 m² in three strips of 126-286 working
-    pixels, under the 0.5 % pixel rule's 474): such a strip, whose every column goes on
-    into the floor kept below it, comes back below the pixel rule; a patch of as many
-    pixels with no floor right below (a carton's top on its face) does not."""
+    pixels, under the 0.5 % pixel rule's 474): such a strip, whose lower edge goes on into
+    the floor kept, comes back below the pixel rule, and so does one past a gap that spans
+    half of ``restore_gap_m`` on the floor (a threshold bar); a patch of as many pixels
+    above a gap that spans twice that (a carton's top above its face) does not."""
     from augment.floor.segment import _restore_dropped
 
     cal, scale, small, floor_rows = _working_floor(held_out)
@@ -1090,24 +1091,36 @@ def test_a_far_strip_with_the_floor_right_below_comes_back_however_few_its_pixel
     p = np.where(small, 0.8, 0.02).astype(np.float32)
     nothing = np.zeros_like(small)
     monkeypatch.setattr(FLOOR.segment, "restore_min_m2", 0.0)
-    # The pixel rule alone would keep both out.
+    # The pixel rule alone would keep them all out.
     monkeypatch.setattr(FLOOR.segment, "min_part_share", 2.0 * band.sum() / small.sum())
     assert _restore_dropped(small & ~band, p, cal, scale, nothing)[band].mean() > 0.99
-    # A carton: its top (the model's floor, dropped) above its face (not floor, 8 rows),
-    # the floor kept beside and behind it.
-    cols = np.flatnonzero(small[top + 40])
+    # A patch 10 rows tall, 30 rows below the far edge, with the floor kept beside it and
+    # a gap below it that spans ``span_m`` of floor, then the floor kept again.
+    cols = np.flatnonzero(small[top + 80])
     x0 = cols[len(cols) // 3]
-    carton_top = np.zeros_like(small)
-    carton_top[top + 30:top + 40, x0:x0 + 25] = True
-    face = np.zeros_like(small)
-    face[top + 40:top + 48, x0:x0 + 25] = True
-    assert (small[carton_top | face]).all()
-    kept = small & ~carton_top & ~face
-    back = _restore_dropped(kept, np.where(face, 0.02, p).astype(np.float32), cal, scale, nothing)
-    assert not back[carton_top].any()
-    # The same top with the floor right below it (no face) is a strip of floor.
-    back = _restore_dropped(small & ~carton_top, p, cal, scale, nothing)
-    assert back[carton_top].mean() > 0.95  # its corners: the peeled core grows back round
+    small_cal = cal.scaled(scale)
+
+    def floor_gap_rows(span_m):
+        y0 = top + 39
+        for rows in range(1, 60):
+            a, b = small_cal.floor_from_pixels(np.array([[x0 + 12.0, y0], [x0 + 12.0, y0 + rows + 1]]))
+            if np.hypot(*(b - a)) >= span_m:
+                return rows
+        raise AssertionError("no such gap")
+
+    gap = FLOOR.segment.restore_gap_m
+    for span_m, comes_back in ((2.0 * gap, False), (0.5 * gap, True)):
+        patch = np.zeros_like(small)
+        patch[top + 30:top + 40, x0:x0 + 25] = True
+        face = np.zeros_like(small)
+        face[top + 40:top + 40 + floor_gap_rows(span_m), x0:x0 + 25] = True
+        assert small[patch | face].all()
+        back = _restore_dropped(small & ~patch & ~face, np.where(face, 0.02, p).astype(np.float32), cal, scale,
+                                nothing)
+        if comes_back:
+            assert back[patch].mean() > 0.95  # its corners: the peeled core grows back round
+        else:
+            assert not back[patch].any()
 
 
 def test_regions_grabcut_added_where_the_model_sees_no_floor_are_taken_back():
