@@ -661,7 +661,8 @@ def _floor_below_share(region: np.ndarray, mask: np.ndarray, n: int, calibration
         hit[look] = ys[look] + step
     near = hit >= 0
     if near.any():
-        ends = [calibration.floor_from_pixels(np.column_stack([xs[near], y[near]]).astype(np.float64)) for y in (ys, hit)]
+        ends = [calibration.floor_from_pixels(np.column_stack([xs[near], y[near]]).astype(np.float64))
+                for y in (ys, hit)]
         near[near] = np.hypot(*(ends[1] - ends[0]).T) <= FLOOR.segment.restore_gap_m
     labels = region[ys, xs]
     return np.bincount(labels[near], minlength=n) / np.maximum(np.bincount(labels, minlength=n), 1)
