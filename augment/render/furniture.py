@@ -445,6 +445,50 @@ class _Shop:
     def hull(self, points, mat, shadow=True) -> Part:
         return self._add(*_hull_mesh(points), mat, True, shadow)
 
+    def leaves(self, bases, directions, lengths, widths, mat, bends, twists, segments=4) -> Part:
+        """Many small leaves at once, as :meth:`leaf` draws one (``bases``, ``directions``
+        (n, 3); the rest (n,)), coarser (``segments`` steps along each) and in one part
+        that casts no shadow: a bush's hundreds of leaves as one mesh."""
+        d = np.asarray(directions, dtype=np.float64)
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        side = np.cross(d, [0, 0, 1.0])
+        flat = np.linalg.norm(side, axis=1) < 1e-6
+        side[flat] = (1.0, 0.0, 0.0)
+        side /= np.linalg.norm(side, axis=1, keepdims=True)
+        up = np.cross(side, d)
+        c, s = np.cos(twists)[:, None], np.sin(twists)[:, None]
+        side, up = c * side + s * up, -s * side + c * up
+        ts = np.linspace(0.0, 1.0, segments + 1)
+        length = np.asarray(lengths, dtype=np.float64)[:, None]
+        half = np.asarray(widths, dtype=np.float64)[:, None] / 2 * np.sin(np.pi * ts) ** 0.8
+        mid = (np.asarray(bases, dtype=np.float64)[:, None] + (ts * length)[..., None] * d[:, None]
+               + (-0.25 * length * ts ** 2)[..., None] * np.array([0, 0, 1.0]))
+        fold = np.sin(np.asarray(bends, dtype=np.float64))[:, None, None]
+        left = mid - half[..., None] * side[:, None] + (half[..., None] * fold) * up[:, None]
+        right = mid + half[..., None] * side[:, None] + (half[..., None] * fold) * up[:, None]
+        # Points per leaf: the midrib's, then the left edge's, then the right's; both sides
+        # share them, the back's normals turned round.
+        k = segments + 1
+        pts = np.concatenate([mid, left, right], axis=1)  # (n, 3k, 3)
+        i = np.arange(segments)
+        L, M, Rt = i + k, i, i + 2 * k
+        template = np.concatenate([np.stack([M, L, L + 1], 1), np.stack([M, L + 1, M + 1], 1),
+                                   np.stack([M, M + 1, Rt + 1], 1), np.stack([M, Rt + 1, Rt], 1)])
+        tri = pts[:, template]  # (n, t, 3, 3)
+        fn = np.cross(tri[:, :, 1] - tri[:, :, 0], tri[:, :, 2] - tri[:, :, 0])
+        normals = np.zeros_like(pts)
+        for corner in range(3):
+            np.add.at(normals, (slice(None), template[:, corner]), fn)
+        normals /= np.maximum(np.linalg.norm(normals, axis=2, keepdims=True), 1e-12)
+        count = len(d)
+        faces = (template[None] + (3 * k * np.arange(count))[:, None, None]).reshape(-1, 3)
+        v = pts.reshape(-1, 3)
+        rel = pts - np.asarray(bases, dtype=np.float64)[:, None]
+        uv = np.stack([(rel * d[:, None]).sum(2), (rel * side[:, None]).sum(2)], axis=2).reshape(-1, 2)
+        back = len(v)
+        return self._add(np.concatenate([v, v]), np.concatenate([normals.reshape(-1, 3), -normals.reshape(-1, 3)]),
+                         np.concatenate([faces, faces[:, ::-1] + back]), np.concatenate([uv, uv]), mat, False, False)
+
     def leaf(self, base, direction, length, width, mat, bend=0.0, twist=0.0, shadow=True) -> Part:
         """A flat leaf (both sides) from ``base`` along ``direction``: an ellipse-like outline
         folded along its midrib by ``bend`` (radians) and drooping with its length."""
@@ -1059,18 +1103,35 @@ def _plant(shop, rng, W, D, H):
     if style == "bush":
         stem = _mat(rng, "stem", (90, 70, 50), 0.8)
         shop.rod((0, 0, top), (0, 0, H * 0.55), 0.015, stem, 8)
-        n = int(rng.integers(9, 15))
-        for k in range(n):
+        other = _mat(rng, "leaves", _pick(rng, GREENS), 0.65, spread=0.08)
+        # The canopy's shaded inside: clumps that cast the shadows, under leaves that
+        # break their outline (the leaves cast none: hundreds of casters would cost more
+        # than the clumps' shadows differ).
+        inside = _mat(rng, "leaves", tuple(int(0.55 * c) for c in _pick(rng, GREENS)), 0.8, spread=0.05)
+        clumps = []
+        for _ in range(int(rng.integers(9, 15))):
             a = rng.uniform(0, 2 * np.pi)
             rad = rng.uniform(0.0, r * 0.55)
-            z = rng.uniform(top + (H - top) * 0.35, H - 0.1)
             size = rng.uniform(0.09, 0.14) * (r / 0.2)
-            c = (rad * math.cos(a), rad * math.sin(a), z)
-            shop.ellipsoid(c, (size, size, size * 0.85), green if k % 3 else _mat(rng, "leaves", _pick(rng, GREENS),
-                                                                                   0.65, spread=0.08))
-        shop.ellipsoid((0, 0, H - 0.1), (r * 0.5, r * 0.5, 0.1), green)
-        shop.ellipsoid((r * 0.45, 0, H * 0.7), (r * 0.5, r * 0.45, 0.12), green)
-        shop.ellipsoid((-r * 0.45, 0, H * 0.72), (r * 0.5, r * 0.45, 0.12), green)
+            clumps.append(((rad * math.cos(a), rad * math.sin(a), rng.uniform(top + (H - top) * 0.35, H - 0.1)),
+                           (size, size, size * 0.85)))
+        clumps += [((0, 0, H - 0.1), (r * 0.5, r * 0.5, 0.1)), ((r * 0.45, 0, H * 0.7), (r * 0.5, r * 0.45, 0.12)),
+                   ((-r * 0.45, 0, H * 0.72), (r * 0.5, r * 0.45, 0.12))]
+        leaf = 0.085 * (r / 0.2)
+        bases, dirs = [], []
+        for c, radii in clumps:
+            shop.ellipsoid(c, 0.8 * np.asarray(radii), inside)
+            k = int(np.clip(np.prod(radii) ** (1 / 3) / leaf * 22, 16, 48))
+            u = rng.normal(size=(k, 3)) + (0, 0, 0.4)
+            u /= np.linalg.norm(u, axis=1, keepdims=True)
+            bases.append(np.asarray(c) + u * np.asarray(radii) * rng.uniform(0.55, 0.95, (k, 1)))
+            dirs.append(u + (0, 0, 0.3))
+        bases, dirs = np.concatenate(bases), np.concatenate(dirs)
+        which = np.arange(len(bases)) % 3 == 0
+        for pick, mat in ((~which, green), (which, other)):
+            m = int(pick.sum())
+            shop.leaves(bases[pick], dirs[pick], leaf * rng.uniform(0.8, 1.25, m), leaf * rng.uniform(0.45, 0.6, m),
+                        mat, rng.uniform(0.2, 0.5, m), rng.normal(0, 0.5, m))
     elif style == "fiddle leaf":
         stem = _mat(rng, "stem", (100, 80, 55), 0.8)
         n_stems = int(rng.integers(3, 6))

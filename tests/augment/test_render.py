@@ -631,6 +631,39 @@ def test_a_style_keeps_every_piece_in_its_palette():
         build_furniture("sofa", style="baroque")
 
 
+def test_a_bushs_leaves_are_one_double_sided_part_of_known_shape():
+    """Two leaves drawn at once (4 steps each): one part casting no shadow, both sides.
+    The first, 1 m along +x from the origin and 0.2 m wide, flat: its midrib droops to
+    (1, 0, -0.25) at the tip, its edges are 0.1 m off the midrib halfway (0.5, +-0.1,
+    -0.0625), it faces up and down at the stalk, a side each; the second lies wholly
+    around its own base. A bush is hundreds of such leaves over a dozen shaded clumps
+    that cast its shadows."""
+    from augment.render.furniture import _mat, _Shop
+
+    shop = _Shop()
+    mat = _mat(np.random.default_rng(0), "leaves", (60, 100, 50), 0.6)
+    part = shop.leaves([[0, 0, 0], [5, 5, 1]], [[1, 0, 0], [0, 0, 1]], [1.0, 0.3], [0.2, 0.1], mat, [0.0, 0.3],
+                       [0.0, 0.0])
+    assert shop.parts == [part] and not part.casts_shadow and not part.convex
+    half = len(part.vertices) // 2
+    first = part.vertices[:half][:15]  # the first leaf's midrib (5), left edge (5), right edge (5)
+    np.testing.assert_allclose(first[4], (1.0, 0.0, -0.25), atol=1e-12)
+    np.testing.assert_allclose(sorted(first[[7, 12], 1]), (-0.1, 0.1), atol=1e-12)
+    np.testing.assert_allclose(first[[7, 12], 0], 0.5)
+    np.testing.assert_allclose(first[[7, 12], 2], -0.0625)
+    np.testing.assert_allclose(part.vertices[half:], part.vertices[:half])
+    np.testing.assert_allclose(part.normals[half:], -part.normals[:half])
+    assert abs(part.normals[0, 2]) > 0.99  # the stalk: the droop is slight there
+    assert len(part.faces) == 2 * 2 * 4 * 4  # two sides, two leaves, four triangles a step
+    second = part.vertices[15:30]
+    assert np.linalg.norm(second - (5, 5, 1), axis=1).max() <= 0.3 + 1e-9
+    bush = next(f for f in (build_furniture("plant", (0.45, 0.45, 1.1), style_seed=s) for s in range(40))
+                if f.style == "bush")
+    leaves = sum(len(p.faces) for p in bush.parts if not p.casts_shadow) // (2 * 4 * 4)
+    clumps = [p for p in bush.parts if p.casts_shadow and p.material.name == "leaves"]
+    assert leaves >= 200 and len(clumps) >= 12
+
+
 def test_light_past_the_knee_rolls_off_toward_white_keeping_its_hue():
     light = np.array([[0.5, 0.4, 0.3], [1.0, 0.5, 0.25], [1.6, 0.8, 0.4], [2.4, 1.2, 0.6]])
     out = light * _roll_off(light, 0.8)[:, None]
