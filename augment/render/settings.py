@@ -125,7 +125,8 @@ class SunSettings:
     edge_scales: tuple = ((0.015, 1.65), (0.03, 1.75))
     min_contrast: float = 1.5  # a sun's edge: light this many times brighter on one side (planks differ less)
     lit_level: float = 0.6  # in the sun: floor this far from the shade's light to the sun's (log)
-    min_edge_m: float = 1.0  # sun's edges this long in all, at least
+    min_edge_m: float = 1.0  # sun's edges this long in all, at least ...
+    min_edge_directed_m: float = 0.5  # ... or this long where the patches' far end runs into a wall
     board_margin_m: float = 0.08  # the board's sheet, grown by this, is left out (its edges are steps too)
     min_peak_share: float = 0.12  # an edge family this strong against the strongest
     wall_tol_deg: float = 4.0  # edges this close to a wall's direction run along it

@@ -247,7 +247,7 @@ def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, wa
     inner = cv2.erode(valid.astype(np.uint8), np.ones((2 * margin + 1, 2 * margin + 1), np.uint8)) > 0
     edges = inner & (step >= math.log(settings.min_contrast))
     length_m = float(edges.sum()) * cell / (2.5 * sigma)  # an edge is about 2.5 sigma wide
-    if length_m < settings.min_edge_m:
+    if length_m < settings.min_edge_directed_m:
         return None
     weight = step[edges]
     edge_deg = (np.degrees(np.arctan2(dy[edges], dx[edges])) + 90.0) % 180.0
@@ -295,6 +295,8 @@ def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, wa
     if lit.sum() < 100:
         return None
     downstream = _downstream(lit, standing, axes[0], margin)
+    if length_m < settings.min_edge_m and not downstream:
+        return None  # a small patch is trusted only when its far end says which way the light goes
     return SunOnFloor(axes, bool(along_wall), length_m, contrast, center, downstream,
                       float(lit.sum() / valid.sum()), (float(lo[0]), float(lo[1])), float(cell), lit, valid,
                       float(sigma_m))

@@ -68,6 +68,30 @@ def test_a_patch_that_ends_on_the_floor_gives_no_sign(rng):
     assert sun is not None and sun.downstream == 0
 
 
+def test_a_small_patch_counts_only_when_its_far_end_runs_into_a_wall(rng):
+    """A patch 12 cm wide along 30 degrees, 0.86 m of edges in all (under the 1 m that
+    makes a patch the sun): running into the wall at x = 1.5 m it is found, the light
+    travelling toward the wall (+x); as small, ending on the floor, it is not, as nothing
+    says which way its light goes (a reversed sun is worse than none)."""
+    def patch(x0, width, end_x):
+        x, y = _floor_points()
+        lit = (x > x0) & (x < end_x) & (np.abs(y - (x - x0) * math.tan(math.radians(30.0))) < width / 2)
+        level = np.where(lit, 170.0, 80.0) + rng.normal(0, 2.0, x.shape)
+        image = np.repeat(np.clip(level, 0, 255)[..., None], 3, axis=2).astype(np.uint8)
+        mask = x < 1.5
+        image[~mask] = 200
+        return image, mask
+
+    sun = find_sun(*patch(1.2, 0.12, 9.0), FLOOR_FROM_IMAGE, (0.0, 0.0))
+    assert sun is not None and 0.5 <= sun.edge_m < RENDER.sun.min_edge_m
+    assert sun.downstream * sun.axes_xy[0][0] > 0
+    assert abs(math.degrees(math.atan2(sun.axes_xy[0][1], sun.axes_xy[0][0])) % 180 - 30.0) < 3.0
+    image, mask = patch(1.0, 0.1, 1.2)
+    assert find_sun(image, mask, FLOOR_FROM_IMAGE, (0.0, 0.0)) is None
+    found = find_sun(image, mask, FLOOR_FROM_IMAGE, (0.0, 0.0), settings=replace(RENDER.sun, min_edge_m=0.5))
+    assert found is not None and found.downstream == 0 and found.edge_m < RENDER.sun.min_edge_m
+
+
 def test_a_soft_edged_patch_is_read_at_the_coarser_scale(rng):
     """A sun patch 2.4 times as bright as the shade ((120 / 80) ** 2.2, as in the
     photographer's rooms), its light blurred by 4 cm (a window far from the floor, a soft
