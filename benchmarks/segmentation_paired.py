@@ -20,8 +20,8 @@ may be left) and, where the mask is wrong there, clicks: ``--floor-at`` or
 floor area (as ``benchmarks/segmentation.py`` measures it) and the truth, under
 ``--cache``; ``--tall`` draws the boards 12-20 cm tall, ``--hue`` paints every room's
 trim the floor's colour, ``--stress NAME`` renders one of ``segmentation.py``'s stress
-cases (use seeds other than its held-out ones to work on a change). ``score`` calibrates each photo
-from its board with the true focal length and runs the whole segmentation and the floor
+cases (use seeds other than its held-out ones to work on a change). ``score`` calibrates
+each photo from its board with the true focal length and runs the whole segmentation and the floor
 polygon with the code as it is now; a render it cannot calibrate or outline counts as
 failed, so a change to the calibration shows too. ``compare`` prints both counts and
 every render that crosses 5 %, moves by more than a point, or fails on one side only.

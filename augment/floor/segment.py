@@ -624,12 +624,13 @@ def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, sca
     and every click's reach) GrabCut, told by the click, has the last word."""
     if calibration is None:
         return mask
+    small_cal = calibration.scaled(scale)
     dropped = (probability > 0.5) & ~mask & ~clicked
-    dropped &= below_horizon(mask.shape, calibration.scaled(scale).horizon, 1.0)
+    dropped &= below_horizon(mask.shape, small_cal.horizon, 1.0)
     n, labels, region = _edge_regions(dropped)
     if n <= 1:
         return mask
-    footprint = _believed_footprint_m2(mask.shape, calibration.scaled(scale))
+    footprint = _believed_footprint_m2(mask.shape, small_cal)
     area = np.bincount(region.ravel(), footprint.ravel(), minlength=n)
     near = cv2.dilate(mask.astype(np.uint8), _edge_kernel(), iterations=2) > 0
     touching = np.zeros(n, bool)
@@ -637,7 +638,7 @@ def _restore_dropped(mask: np.ndarray, probability: np.ndarray, calibration, sca
     pixels = np.bincount(region.ravel(), minlength=n)
     keep = touching & (area >= FLOOR.segment.restore_min_m2)
     keep &= (pixels >= FLOOR.segment.min_part_share * np.count_nonzero(mask)) | (
-        _floor_below_share(region, mask, n, calibration.scaled(scale)) >= FLOOR.segment.restore_below_share)
+        _floor_below_share(region, mask, n, small_cal) >= FLOOR.segment.restore_below_share)
     keep[0] = False
     if not keep.any():
         return mask

@@ -378,6 +378,31 @@ def _hull_mesh(points):
 _ICO = trimesh.creation.icosphere(subdivisions=2)
 
 
+def _leaf_outlines(bases, directions, lengths, widths, bends, twists, steps: int):
+    """Leaves' outlines, (n, steps + 1, 3) each: midrib, left and right edge from the
+    stalk to the tip (an ellipse-like outline, folded along the midrib by ``bends``
+    radians, drooping with its length, turned by ``twists`` about it); with the leaves'
+    unit directions and across-vectors, (n, 3). ``bases``, ``directions`` (n, 3), the
+    rest (n,)."""
+    d = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
+    d = d / np.linalg.norm(d, axis=1, keepdims=True)
+    side = np.cross(d, [0, 0, 1.0])
+    side[np.linalg.norm(side, axis=1) < 1e-6] = (1.0, 0.0, 0.0)
+    side /= np.linalg.norm(side, axis=1, keepdims=True)
+    up = np.cross(side, d)
+    c, s = np.cos(np.asarray(twists, dtype=np.float64))[:, None], np.sin(np.asarray(twists, dtype=np.float64))[:, None]
+    side, up = c * side + s * up, -s * side + c * up
+    ts = np.linspace(0.0, 1.0, steps + 1)
+    length = np.asarray(lengths, dtype=np.float64).reshape(-1, 1)
+    half = (np.asarray(widths, dtype=np.float64).reshape(-1, 1) / 2 * np.sin(np.pi * ts) ** 0.8)[..., None]
+    mid = (np.asarray(bases, dtype=np.float64).reshape(-1, 1, 3) + (ts * length)[..., None] * d[:, None]
+           + (-0.25 * length * ts ** 2)[..., None] * np.array([0, 0, 1.0]))
+    fold = np.sin(np.asarray(bends, dtype=np.float64)).reshape(-1, 1, 1)
+    left = mid - half * side[:, None] + (half * fold) * up[:, None]
+    right = mid + half * side[:, None] + (half * fold) * up[:, None]
+    return mid, left, right, d, side
+
+
 class _Shop:
     """Collects the parts of one piece of furniture, in the builder frame."""
 
@@ -449,23 +474,7 @@ class _Shop:
         """Many small leaves at once, as :meth:`leaf` draws one (``bases``, ``directions``
         (n, 3); the rest (n,)), coarser (``segments`` steps along each) and in one part
         that casts no shadow: a bush's hundreds of leaves as one mesh."""
-        d = np.asarray(directions, dtype=np.float64)
-        d /= np.linalg.norm(d, axis=1, keepdims=True)
-        side = np.cross(d, [0, 0, 1.0])
-        flat = np.linalg.norm(side, axis=1) < 1e-6
-        side[flat] = (1.0, 0.0, 0.0)
-        side /= np.linalg.norm(side, axis=1, keepdims=True)
-        up = np.cross(side, d)
-        c, s = np.cos(twists)[:, None], np.sin(twists)[:, None]
-        side, up = c * side + s * up, -s * side + c * up
-        ts = np.linspace(0.0, 1.0, segments + 1)
-        length = np.asarray(lengths, dtype=np.float64)[:, None]
-        half = np.asarray(widths, dtype=np.float64)[:, None] / 2 * np.sin(np.pi * ts) ** 0.8
-        mid = (np.asarray(bases, dtype=np.float64)[:, None] + (ts * length)[..., None] * d[:, None]
-               + (-0.25 * length * ts ** 2)[..., None] * np.array([0, 0, 1.0]))
-        fold = np.sin(np.asarray(bends, dtype=np.float64))[:, None, None]
-        left = mid - half[..., None] * side[:, None] + (half[..., None] * fold) * up[:, None]
-        right = mid + half[..., None] * side[:, None] + (half[..., None] * fold) * up[:, None]
+        mid, left, right, d, side = _leaf_outlines(bases, directions, lengths, widths, bends, twists, segments)
         # Points per leaf: the midrib's, then the left edge's, then the right's; both sides
         # share them, the back's normals turned round.
         k = segments + 1
@@ -492,24 +501,10 @@ class _Shop:
     def leaf(self, base, direction, length, width, mat, bend=0.0, twist=0.0, shadow=True) -> Part:
         """A flat leaf (both sides) from ``base`` along ``direction``: an ellipse-like outline
         folded along its midrib by ``bend`` (radians) and drooping with its length."""
-        d = np.asarray(direction, dtype=np.float64)
-        d /= np.linalg.norm(d)
-        side = np.cross(d, [0, 0, 1.0])
-        if np.linalg.norm(side) < 1e-6:
-            side = np.array([1.0, 0, 0])
-        side /= np.linalg.norm(side)
-        c, s = math.cos(twist), math.sin(twist)
-        up = np.cross(side, d)
-        side, up = c * side + s * up, -s * side + c * up
-        ts = np.linspace(0.0, 1.0, 7)
-        half = width / 2 * np.sin(np.pi * ts) ** 0.8
-        droop = -0.25 * length * ts ** 2
-        mid = base + np.outer(ts * length, d) + np.outer(droop, [0, 0, 1.0])
-        fold = math.sin(bend)
-        left = mid - np.outer(half, side) + np.outer(half * fold, up)
-        right = mid + np.outer(half, side) + np.outer(half * fold, up)
+        mid, left, right, d, side = (a[0] for a in _leaf_outlines(base, direction, [length], [width], [bend],
+                                                                   [twist], 6))
         pts = np.concatenate([mid, left[1:-1], right[1:-1]])
-        k = len(ts)
+        k = len(mid)
         L = lambda i: k + i - 1  # noqa: E731  (left[i], i in 1..k-2)
         R = lambda i: k + (k - 2) + i - 1  # noqa: E731
         tris = []
