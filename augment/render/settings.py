@@ -40,8 +40,9 @@ class StagedSettings:
     floor_level_m: float = 0.02  # furniture pixels this low take the floor's shadows
     caster_min_height_m: float = 0.03  # parts lower than this cast no shadow (rugs)
     shadow_samples: int = 10  # key-light directions averaged for a soft shadow
-    window_edge_ratio: float = 0.85  # a window's outline: the light 2 px outside at most this x 2 px inside
-    # (windows 0.3-0.7, a lamp's glow on a wall 0.97-0.99, at 320 px)
+    window_clipped: float = 245.0  # luminance (0-255, at 320 px) a blown-out window reaches
+    window_edge_ratio: float = 0.9  # a window's outline: the light 2 px outside at most this x 2 px inside
+    # (windows 0.3-0.7, 0.87 in a cream frame on bright walls; a lamp's glow on a wall 0.97-0.99, at 320 px)
     ao_strength: float = 1.0  # share of the ambient light occlusion removes at most
     ao_directions: int = 96  # sky directions sampled for the floor's occlusion (cosine-weighted) ...
     ao_blur_rel: float = 0.5  # ... their shadows' copies blurred by this x their spacing at a typical height

@@ -168,9 +168,10 @@ def _window(lum, candidates, settings: StagedSettings):
     (x, y) in pixels, or None."""
     if candidates.sum() < 0.01 * lum.size:
         return None
-    # A window is the brightest thing in view and clearly brighter than the walls around.
+    # A window is the brightest thing in view and clearly brighter than the walls around,
+    # or blown out where bright walls leave no headroom for that.
     peak = float(np.percentile(lum[candidates], 99.5))
-    thresh = max(120.0, 0.85 * peak, 1.35 * float(np.median(lum[candidates])))
+    thresh = max(120.0, 0.85 * peak, min(1.35 * float(np.median(lum[candidates])), settings.window_clipped))
     bright = (lum >= thresh) & candidates
     n, labels, stats, centroids = cv2.connectedComponentsWithStats(bright.astype(np.uint8), connectivity=8)
     if n <= 1:

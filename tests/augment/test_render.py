@@ -547,6 +547,22 @@ def test_a_window_is_a_compact_bright_quadrilateral_with_sharp_edges():
     assert tuple(_window(lum, candidates, settings)) == pytest.approx((219.5, 114.5), abs=0.01)
 
 
+def test_a_blown_out_window_on_bright_walls_is_a_window():
+    """Bright walls (200) leave a window no room to be 1.35 x brighter: a 40 x 30 px pane
+    blown out to 252 in a cream frame (220, 3 px) is still the window; a lamp's glow on
+    the same walls (Gaussian to 252) is not."""
+    settings = RENDER.staged
+    lum = np.full((240, 320), 200.0)
+    candidates = np.ones((240, 320), bool)
+    yy, xx = np.mgrid[:240, :320]
+    glow = np.maximum(lum, 200.0 + 52.0 * np.exp(-((xx - 80.0) ** 2 + (yy - 90.0) ** 2) / (2 * 25.0 ** 2)))
+    assert _window(glow, candidates, settings) is None
+    lum[97:133, 197:243] = 220.0
+    lum[100:130, 200:240] = 252.0
+    found = _window(lum, candidates, settings)
+    assert found is not None and tuple(found) == pytest.approx((219.5, 114.5), abs=0.01)
+
+
 def test_a_plain_wall_in_view_where_the_suns_window_would_be():
     """A level camera 1.4 m up looking along +y at a wall 4 m away (f = 250 px, 320 x 240):
     patches at (0, 2) lit from +y would need a window on that wall at x = 0, which the
