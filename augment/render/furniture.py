@@ -1115,11 +1115,12 @@ def _plant(shop, rng, W, D, H):
         leaf = 0.085 * (r / 0.2)
         bases, dirs = [], []
         for c, radii in clumps:
-            shop.ellipsoid(c, 0.8 * np.asarray(radii), inside)
-            k = int(np.clip(np.prod(radii) ** (1 / 3) / leaf * 22, 16, 48))
+            # Leaves root at the clump's surface and beyond: a clump shows only in gaps.
+            shop.ellipsoid(c, 0.6 * np.asarray(radii), inside)
+            k = int(np.clip(np.prod(radii) ** (1 / 3) / leaf * 28, 20, 60))
             u = rng.normal(size=(k, 3)) + (0, 0, 0.4)
             u /= np.linalg.norm(u, axis=1, keepdims=True)
-            bases.append(np.asarray(c) + u * np.asarray(radii) * rng.uniform(0.55, 0.95, (k, 1)))
+            bases.append(np.asarray(c) + u * np.asarray(radii) * rng.uniform(0.6, 1.0, (k, 1)))
             dirs.append(u + (0, 0, 0.3))
         bases, dirs = np.concatenate(bases), np.concatenate(dirs)
         which = np.arange(len(bases)) % 3 == 0
