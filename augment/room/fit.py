@@ -483,6 +483,13 @@ TURNS = ((math.pi, False), (0.0, True), (0.5 * math.pi, False), (-0.5 * math.pi,
 PINNED_M = 0.01
 
 
+def footprint_m2(lay) -> float:
+    """Floor the pieces of ``lay`` that stand on it take up (a rug, which others stand on, not counted)."""
+    m = lay.model
+    items = [i for i in lay.items if m.particle_collides[i]]
+    return float(np.sum(m.particle_size_m[items, 0] * m.particle_size_m[items, 1]))
+
+
 def apart_m(a, b) -> float:
     """How far apart two suggestions are as arrangements: infinitely with other
     furniture, else the symmetric chamfer distance between pieces of the same kind (a
@@ -646,8 +653,9 @@ HIDING_ROUNDS = 3  # taking a piece out can show or hide others: judge again thi
 
 class _Pick:
     """The best try of one suggestion: clean first, then no seating (or lone TV) seen from
-    behind, then not one piece of dressing alone (:data:`DRESSING`), then different from
-    the earlier suggestions, then with the fewest faults (the camera's,
+    behind, then not one piece of dressing alone (:data:`DRESSING`), then furnishing at
+    least ``ROOM.fit.sparse_share`` of the floor the first suggestion furnishes
+    (:func:`footprint_m2`), then different from the earlier suggestions, then with the fewest faults (the camera's,
     :func:`broken_rules`, a piece taken out). A piece off its spot (:func:`_off_their_spots`)
     or hidden behind others (:func:`layout.camera.judge`) is taken out of the try, as a
     stager takes it out of the shot, with the pieces placed at it (a desk's chair); where
@@ -721,17 +729,19 @@ class _Pick:
         if taken and (astray := _astray(lay, r, self.floats & _in_groups(lay.model))):
             # Its group taken out, the main piece stands alone where the group wanted it.
             return self._astray_try(astray)
-        # Seating shown from behind, and one piece that only dresses a group (a lone plant),
-        # are worse than a repeat (no picture to show a client); a repeat is worth nothing
-        # to the user; a fault, a little less than a perfect one.
+        # Seating shown from behind, one piece that only dresses a group (a lone plant) and
+        # a lone armchair where the first suggestion staged a sofa set are worse than a
+        # repeat, which the suggestion's own style makes another look; a fault is a little
+        # less than a perfect one.
         nearest = min((apart_m(old, lay) for old in self.earlier), default=math.inf)
+        sparse = bool(self.earlier) and footprint_m2(lay) < ROOM.fit.sparse_share * footprint_m2(self.earlier[0])
         key = (bool(rep.get("camera", {}).get("from_behind")), _lone_dressing(lay.model.kinds[i] for i in lay.items),
-               nearest < ROOM.fit.min_difference_m,
+               sparse, nearest < ROOM.fit.min_difference_m,
                camera_faults(rep.get("camera", {})) + len(broken_rules(lay, r)) + len(taken))
         self.pinned += nearest < PINNED_M
         if self.best is None or key < self.best[0]:
             self.best = (key, lay, taken)
-        return key == (False, False, False, 0)
+        return key == (False, False, False, False, 0)
 
     def _astray_try(self, astray: set) -> bool:
         """An unclean try with pieces ``astray``: kept as the fewest seen so far, not offered."""
@@ -740,13 +750,13 @@ class _Pick:
 
     @property
     def twin(self) -> bool:
-        return self.best is not None and self.best[0][2]
+        return self.best is not None and self.best[0][3]
 
     @property
     def lacking(self) -> bool:
-        """The best so far repeats an earlier suggestion, shows seating from behind or a
-        lone piece of dressing: other starts are worth trying (other subsets only for a repeat)."""
-        return self.best is not None and any(self.best[0][:3])
+        """The best so far repeats an earlier suggestion, shows seating from behind, a lone
+        piece of dressing or little furniture: other starts are worth trying (other subsets only for a repeat)."""
+        return self.best is not None and any(self.best[0][:4])
 
 
 def _far_start(model, earlier: list, rng, candidates: int = 8):

@@ -1557,6 +1557,34 @@ def test_a_small_floor_gets_four_different_corners_not_four_twins(tmp_path):
             sorted(layouts[0].model.kinds[i] for i in layouts[0].items), n
 
 
+def test_a_sofa_set_is_not_followed_by_a_lone_armchair():
+    """room_4's floor in view holds one arrangement of the sofa set (sofa, coffee table,
+    rug). Its suggestions 3 and 4 used to stage a corner set cut down to an armchair
+    (0.6 m² against the set's 2.6 m²): an empty living room in a listing. A repeat of
+    the set, in the suggestion's own style, is the better picture: every suggestion
+    furnishes at least ``sparse_share`` of the floor the first one does."""
+    m = pipeline.measure(ROOMY, Board())
+    layouts, notes, _ = _suggestions(m, "living_room", corners=True)
+    first = fit.footprint_m2(layouts[0])
+    assert first > 2.0
+    for lay in layouts[1:]:
+        assert fit.footprint_m2(lay) >= ROOM.fit.sparse_share * first, [lay.model.kinds[i] for i in lay.items]
+    assert any("repeats an earlier one" in n for n in notes), notes
+
+
+def test_footprint_counts_what_stands_on_the_floor_not_rugs():
+    """A sofa 2.0 x 0.9 m, a coffee table 1.1 x 0.6 m on a 2.4 x 1.7 m rug: 2.46 m²."""
+    from layout.spec import build, spec_from_dict
+
+    spec = spec_from_dict({"room": {"polygon": [[0, 0], [5, 0], [5, 4], [0, 4]], "height": 2.5},
+                           "items": [{"id": "sofa", "kind": "sofa", "size": [2.0, 0.9, 0.85]},
+                                     {"id": "table", "kind": "coffee_table", "size": [1.1, 0.6, 0.45]},
+                                     {"id": "rug", "kind": "rug", "size": [2.4, 1.7, 0.01]}]})
+    model, solver = build(spec)
+    lay = solver.solve(model, seed=0)
+    assert fit.footprint_m2(lay) == pytest.approx(2.0 * 0.9 + 1.1 * 0.6)
+
+
 def test_furniture_whole_in_view_only_off_its_wall_is_not_staged(tmp_path):
     """Render [9900, 7], a dining room seen from high up: the table set is cut by the
     photo's edge wherever it stands, and the sideboard of a corner set stands whole only
