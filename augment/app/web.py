@@ -246,7 +246,7 @@ def _page() -> str:
 
     options = "".join(f'<option value="{name}"{" selected" if name == DEFAULT_ROOM else ""}>'
                       f'{html.escape(name.replace("_", " "))}</option>' for name in PRESETS)
-    styles = '<option value="" selected>a different one for each suggestion</option>' + "".join(
+    styles = '<option value="" selected>different per suggestion</option>' + "".join(
         f'<option value="{name}">{html.escape(name.replace("_", " "))}</option>' for name in STYLES)
     return (STATIC_DIR / "index.html").read_text(encoding="utf-8").replace("<!-- PRESETS -->", options).replace(
         "<!-- STYLES -->", styles)

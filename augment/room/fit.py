@@ -851,6 +851,21 @@ def _wider(pick, spec, model, corners, solver, layouts: list, built: dict, seed:
     return pick
 
 
+def _said_once(said: list[str]) -> list[str]:
+    """Notes ``"suggestion K <what>"``, those of several suggestions alike said once:
+    ``"suggestions 3 and 4 repeat an earlier one: ..."`` (in the order first said)."""
+    by_what = {}
+    for note in said:
+        _, k, what = note.split(" ", 2)
+        by_what.setdefault(what, []).append(k)
+    merged = []
+    for what, ks in by_what.items():
+        verb, rest = what.split(" ", 1)
+        merged.append(f"suggestion {ks[0]} {what}" if len(ks) == 1 else
+                      f"suggestions {', '.join(ks[:-1])} and {ks[-1]} {verb.removesuffix('s')} {rest}")
+    return merged
+
+
 def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped: list, progress,
                       notes: list | None = None, corners=()):
     """Solve ``suggestions`` layouts, suggestion K from seed ``seed + K - 1``.
@@ -980,7 +995,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 said.append(f"suggestion {k + 1} leaves out {', '.join(left)} to differ from the others: the floor "
                             "in view leaves room for one arrangement of all of it")
         if failed is None:
-            notes.extend(([cornered] if cornered else []) + said)
+            notes.extend(([cornered] if cornered else []) + _said_once(said))
             return spec, layouts, reports
         units = _units(spec)
         kinds = {i.id: i.kind.name for i in spec.items}

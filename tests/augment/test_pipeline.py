@@ -8,6 +8,7 @@ import hashlib
 import io
 import json
 import math
+import re
 import sys
 import textwrap
 from pathlib import Path
@@ -1543,18 +1544,48 @@ def test_a_small_floor_gets_four_different_corners_not_four_twins(tmp_path):
     plain, notes, _ = _suggestions(m, "living_room", corners=False)
     repeats = [k for k in range(1, 4) if any(fit.apart_m(plain[k], b) < ROOM.fit.min_difference_m
                                              for b in plain[:k])]
-    assert repeats and [k for k in range(1, 4) if f"suggestion {k + 1} repeats an earlier one: the floor in view "
-                        "leaves no other arrangement of this furniture" in notes] == repeats, notes
+    said = [n for n in notes if n.endswith(" an earlier one: the floor in view leaves no other arrangement of "
+                                           "this furniture")]
+    assert repeats and len(said) == 1 and _numbers(said[0]) == [k + 1 for k in repeats], notes
     layouts, notes, _ = _suggestions(m, "living_room", corners=True)
     assert all(fit.apart_m(a, b) >= ROOM.fit.min_difference_m for a in layouts for b in layouts if a is not b)
     assert all(judge(lay)["cut"] == [] for lay in layouts)
-    cornered = [n for n in notes if "stages another corner set" in n]
-    assert len(cornered) >= 2 and not any("repeats an earlier one" in n for n in notes), notes
+    cornered = [k for n in notes if "stage another corner set" in n or "stages another corner set" in n
+                for k in _numbers(n)]
+    assert len(cornered) >= 2 and not any(" an earlier one" in n for n in notes), notes
     # A suggestion said to stage another set shows other furniture than the first.
-    for n in cornered:
-        k = int(n.split()[1])
+    for k in cornered:
         assert sorted(layouts[k - 1].model.kinds[i] for i in layouts[k - 1].items) != \
-            sorted(layouts[0].model.kinds[i] for i in layouts[0].items), n
+            sorted(layouts[0].model.kinds[i] for i in layouts[0].items), k
+
+
+def _numbers(note: str) -> list[int]:
+    """The suggestions a note is of: "suggestion 2 ..." or "suggestions 2, 3 and 4 ..."."""
+    head = note.split(":")[0].split(" leave")[0].split(" repeat")[0].split(" stage")[0]
+    return [int(k) for k in re.findall(r"\d+", head)]
+
+
+def test_notes_alike_for_several_suggestions_are_said_once():
+    """room_4-like notes: four suggestions leave out the same hidden piece, two repeat
+    the first. Said once each, in the order first said, the verb agreeing."""
+    said = ["suggestion 1 leaves out side_table: it would stand hidden behind the others",
+            "suggestion 2 leaves out side_table: it would stand hidden behind the others",
+            "suggestion 2 leaves out rug to differ from the others: the floor in view leaves room for one "
+            "arrangement of all of it",
+            "suggestion 3 repeats an earlier one: the floor in view leaves no other arrangement of this furniture",
+            "suggestion 4 repeats an earlier one: the floor in view leaves no other arrangement of this furniture",
+            "suggestion 4 stages another corner set (armchair): the floor in view leaves room for one "
+            "arrangement of the room's furniture"]
+    assert fit._said_once(said) == [
+        "suggestions 1 and 2 leave out side_table: it would stand hidden behind the others",
+        said[2],
+        "suggestions 3 and 4 repeat an earlier one: the floor in view leaves no other arrangement of this furniture",
+        said[5]]
+    third = "suggestion 3 leaves out side_table: it would stand hidden behind the others"
+    assert fit._said_once(said[:2] + [third]) == [
+        "suggestions 1, 2 and 3 leave out side_table: it would stand hidden behind the others"]
+    assert _numbers("suggestions 1, 2 and 3 leave out side_table: it would") == [1, 2, 3]
+    assert _numbers(said[3]) == [3]
 
 
 def test_a_sofa_set_is_not_followed_by_a_lone_armchair():
@@ -1569,7 +1600,7 @@ def test_a_sofa_set_is_not_followed_by_a_lone_armchair():
     assert first > 2.0
     for lay in layouts[1:]:
         assert fit.footprint_m2(lay) >= ROOM.fit.sparse_share * first, [lay.model.kinds[i] for i in lay.items]
-    assert any("repeats an earlier one" in n for n in notes), notes
+    assert any(" an earlier one: " in n for n in notes), notes
 
 
 def test_footprint_counts_what_stands_on_the_floor_not_rugs():
