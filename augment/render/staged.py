@@ -215,6 +215,23 @@ def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, lum, wall_lum, s
     return float(bright.mean()) < 0.2
 
 
+def _nearer_edge_upstream(center_m, axis_xy, walls, floor_polygon) -> float:
+    """Which way along ``axis_xy`` the sun's light travels (+1.0 or -1.0) when, looking
+    back against it from its patches at ``center_m``, neither way meets a wall in view:
+    the window is past the photo's edge, and a patch lies within a few meters of its
+    window (sill to head height over the sun's slope), so past the nearer edge. 0.0 when
+    a wall is met either way (then the walls tell, :func:`_plain_wall_upstream`)."""
+    ups = np.array([[-axis_xy[0], -axis_xy[1], 0.0], [axis_xy[0], axis_xy[1], 0.0]])
+    if (_first_wall(walls, ups, center_m)[1] >= 0).any():
+        return 0.0
+    poly = np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon), dtype=np.float64)
+    edges = np.stack([poly, np.roll(poly, -1, axis=0)], axis=1)
+    out_m, _ = _first_wall(edges, ups, center_m)  # where each way leaves the floor in view
+    if not np.isfinite(out_m).all() or abs(out_m[0] - out_m[1]) < 0.1:
+        return 0.0
+    return 1.0 if out_m[0] < out_m[1] else -1.0
+
+
 def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon):
     """:func:`augment.render.sun.find_sun` on this photo (the board's sheet left out), or None."""
     mask = np.asarray(floor_mask, dtype=bool)
@@ -327,6 +344,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
             # The patches run into the wall they climb; else their window is out of view,
             # on the camera's side of them. Unless a plain wall in view stands where it would be.
             sign = float(patches.downstream) or (1.0 if axis @ (center - cam_xy) >= 0 else -1.0)
+            if not patches.downstream and walls is not None:
+                sign = _nearer_edge_upstream(center, axis, walls, floor_polygon) or sign
             plain = [walls is not None and _plain_wall_upstream(center, -s * axis, walls, K, dist, pose, lum_small,
                                                                 wall_lum, small_scale) for s in (sign, -sign)]
             if plain[0] and not plain[1]:

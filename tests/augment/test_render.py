@@ -20,9 +20,9 @@ from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furnitur
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
-from augment.render.staged import (Lighting, _Caster, _floor_gain, _plain_wall_upstream, _render_scale, _roll_off,
-                                   _walls_run_on, _window, estimate_lighting, render_staged, wall_segments,
-                                   write_jpeg)
+from augment.render.staged import (Lighting, _Caster, _floor_gain, _nearer_edge_upstream, _plain_wall_upstream,
+                                   _render_scale, _roll_off, _walls_run_on, _window, estimate_lighting, render_staged,
+                                   wall_segments, write_jpeg)
 from layout.catalog import CATALOG
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -579,6 +579,22 @@ def test_a_plain_wall_in_view_where_the_suns_window_would_be():
     assert not _plain_wall_upstream(center, np.array([0.0, -1.0]), walls, K, None, pose, lum, walls_lum, 1.0)
     lum[70:160, 140:180] = 230.0
     assert not _plain_wall_upstream(center, np.array([0.0, 1.0]), walls, K, None, pose, lum, walls_lum, 1.0)
+
+
+def test_a_sun_whose_window_is_out_of_view_comes_from_the_nearer_photo_edge():
+    """A floor in view 4 m wide, 3 m deep: its far edge a wall, its sides and near edge the
+    photo's edges. Patches at x = 1 with their edges along x: looking back along -x the
+    floor leaves the view 1 m away, along +x 3 m away, and neither way meets a wall, so
+    the window is past the left edge and the light travels along +x. Patches at x = 3.5
+    are lit from the right (-1). Along y the far wall is met: the walls tell, not this."""
+    poly = FloorPolygon(np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [0.0, 3.0]]),
+                        ("image", "image", "boundary", "image"), 12.0, "")
+    walls = wall_segments(poly)
+    assert _nearer_edge_upstream(np.array([1.0, 1.5]), np.array([1.0, 0.0]), walls, poly) == 1.0
+    assert _nearer_edge_upstream(np.array([1.0, 1.5]), np.array([-1.0, 0.0]), walls, poly) == -1.0
+    assert _nearer_edge_upstream(np.array([3.5, 1.5]), np.array([1.0, 0.0]), walls, poly) == -1.0
+    assert _nearer_edge_upstream(np.array([2.0, 1.5]), np.array([1.0, 0.0]), walls, poly) == 0.0  # halfway: no telling
+    assert _nearer_edge_upstream(np.array([1.0, 1.5]), np.array([0.0, 1.0]), walls, poly) == 0.0
 
 
 def test_furniture_takes_the_light_of_the_floor_it_stands_on(renderer):
