@@ -341,8 +341,9 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                 settings.sun_window_alignment * max(float(np.linalg.norm(from_window)), 1e-9)):
             sign = 1.0 if axis @ from_window >= 0 else -1.0  # the window in view casts them
         else:
-            # The patches run into the wall they climb; else their window is out of view,
-            # on the camera's side of them. Unless a plain wall in view stands where it would be.
+            # The patches run into the wall they climb; else their window is out of view:
+            # past the nearer photo edge where no wall in view stands behind them either
+            # way, else on the camera's side. Unless a plain wall in view stands where it would be.
             sign = float(patches.downstream) or (1.0 if axis @ (center - cam_xy) >= 0 else -1.0)
             if not patches.downstream and walls is not None:
                 sign = _nearer_edge_upstream(center, axis, walls, floor_polygon) or sign
