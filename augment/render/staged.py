@@ -224,8 +224,7 @@ def _nearer_edge_upstream(center_m, axis_xy, walls, floor_polygon) -> float:
     ups = np.array([[-axis_xy[0], -axis_xy[1], 0.0], [axis_xy[0], axis_xy[1], 0.0]])
     if (_first_wall(walls, ups, center_m)[1] >= 0).any():
         return 0.0
-    poly = np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon), dtype=np.float64)
-    edges = np.stack([poly, np.roll(poly, -1, axis=0)], axis=1)
+    edges = wall_segments(getattr(floor_polygon, "polygon_m", floor_polygon))  # every edge, the photo's too
     out_m, _ = _first_wall(edges, ups, center_m)  # where each way leaves the floor in view
     if not np.isfinite(out_m).all() or abs(out_m[0] - out_m[1]) < 0.1:
         return 0.0
