@@ -58,7 +58,7 @@ from .gl import Renderer, Scene, far_camera, gl_from_cv_pose, pyrender, pyrender
 from .lamps import find_lamps
 from .look import PhotoLook, apply_look, blur_like_photo, estimate_look
 from .settings import RENDER, StagedSettings
-from .sun import find_sun, linear_luminance, wall_angles_rad
+from .sun import find_sun, linear_luminance, unit_colour, wall_angles_rad
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 
@@ -97,6 +97,9 @@ class Lighting:
     lamps : tuple of Lamp
         Ceiling lamps whose pools of light the floor shows (:mod:`augment.render.lamps`):
         light besides the rest, from above, with shadows of their own.
+    key_rgb : (3,) tuple of float
+        The key light's colour over ``irradiance_rgb`` (luminance 1): the sun's, read off
+        its patches against the shade beside them.
     """
 
     irradiance_rgb: tuple
@@ -107,11 +110,13 @@ class Lighting:
     source: str
     sun: object = field(default=None, compare=False, repr=False)
     lamps: tuple = ()
+    key_rgb: tuple = (1.0, 1.0, 1.0)
 
     def to_json(self) -> dict:
         return {"source": self.source, "direction": [round(float(v), 4) for v in self.direction],
                 "key_fraction": round(float(self.key_fraction), 3), "softness_rad": round(float(self.softness_rad), 3),
                 "irradiance_rgb": [round(float(v), 4) for v in self.irradiance_rgb],
+                "key_rgb": [round(float(v), 3) for v in self.key_rgb],
                 "lamps": [lamp.to_json() for lamp in self.lamps]}
 
 
@@ -354,6 +359,11 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         direction = np.append(sign * axis * math.cos(elev), -math.sin(elev))
         key = float(np.clip(1.0 - 1.0 / patches.contrast, *settings.sun_key_range))
         soft, source = settings.sun_softness_rad, "sun"
+        # The sun's colour against the shade's: on the paper in the sun, the two mixed.
+        ratio = np.asarray(patches.ratio_rgb, dtype=np.float64)
+        if patches.sunlit(np.zeros((1, 2)))[0] > 0.5:
+            irradiance = irradiance * np.asarray(unit_colour(1.0 / ratio))
+        key_rgb = unit_colour(ratio - 1.0)
     elif found is not None:
         # Sunlit floor (a bright patch well above the floor's median) means direct sun.
         floor_l = floor_lin @ [0.299, 0.587, 0.114]
@@ -369,6 +379,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         # no shadow is thrown far in a direction that is only a guess.
         key, soft, source = 0.15, 0.5, "default"
     sun = patches if source == "sun" else None
+    if sun is None:
+        key_rgb = (1.0, 1.0, 1.0)
     lamps = ()
     if floor_mask is not None:
         lamps = find_lamps(image, np.asarray(floor_mask, dtype=bool), calibration,
@@ -376,7 +388,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                            float(floor_rgb @ [0.2126, 0.7152, 0.0722]),
                            None if sun is None else (lambda xy: sun.sunlit(xy) > 0.25))
     return Lighting(tuple(float(v) for v in irradiance), tuple(float(v) for v in direction), key, soft,
-                    tuple(float(v) for v in floor_rgb), source, sun, lamps)
+                    tuple(float(v) for v in floor_rgb), source, sun, lamps, tuple(float(v) for v in key_rgb))
 
 
 # --------------------------------------------------------------------------------------
@@ -426,7 +438,8 @@ def _vertex_light(v, n, albedo, roughness, metal, emissive, ao, lighting: Lighti
     fill = (around[:, None] * E + settings.bounce * floor * (0.5 - 0.5 * nz)[:, None]) * diffuse
     fill += (settings.metal_env * metal * (0.6 + 0.4 * np.maximum(nz, 0.0)))[:, None] * albedo * E
     ndl = np.maximum(n @ l, 0.0)
-    key = (f_key * ndl / sin_e)[:, None] * E * diffuse
+    E_key = E * np.asarray(lighting.key_rgb, dtype=np.float64)
+    key = (f_key * ndl / sin_e)[:, None] * E_key * diffuse
     # Highlight: normalized Blinn-Phong with Schlick's Fresnel.
     view = cam_pos - v
     view /= np.maximum(np.linalg.norm(view, axis=1, keepdims=True), 1e-9)
@@ -437,7 +450,7 @@ def _vertex_light(v, n, albedo, roughness, metal, emissive, ao, lighting: Lighti
     f0 = 0.04 * (1.0 - metal)[:, None] + albedo * metal[:, None]
     fresnel = f0 + (1.0 - f0) * ((1.0 - np.clip((view * half).sum(1), 0, 1)) ** 5)[:, None]
     lobe = (power + 8.0) / (8.0 * np.pi) * np.clip((n * half).sum(1), 0, 1) ** power * ndl
-    key += np.minimum(lobe, 50.0)[:, None] * fresnel * (f_key * np.pi / sin_e) * E
+    key += np.minimum(lobe, 50.0)[:, None] * fresnel * (f_key * np.pi / sin_e) * E_key
     return fill * ao[:, None] + emissive * float(E.max()), key * ao[:, None]
 
 

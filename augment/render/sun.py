@@ -10,6 +10,7 @@ which way the light travels. How high the sun stands is not read here.
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
@@ -50,6 +51,8 @@ class SunOnFloor:
         the floor in the sun and of the floor seen.
     edge_sigma_m : float
         The scale the sun's edges were found at: :meth:`sunlit` is as soft (0: sharp).
+    ratio_rgb : (3,) float
+        ``contrast`` per channel (linear RGB): the sun's colour against the shade's.
     """
 
     axes_xy: tuple
@@ -64,6 +67,7 @@ class SunOnFloor:
     lit: np.ndarray = field(compare=False, repr=False)
     seen: np.ndarray = field(compare=False, repr=False)
     edge_sigma_m: float = 0.0
+    ratio_rgb: tuple = (1.0, 1.0, 1.0)
 
     @functools.cached_property
     def _soft(self) -> np.ndarray:
@@ -106,11 +110,13 @@ def _sunlit_kernel(xy, x0, y0, cell, soft, seen, share, out):
                           + v * ((1 - u) * soft[r + 1, c] + u * soft[r + 1, c + 1]))
 
 
+_REC709 = np.array([0.2126, 0.7152, 0.0722])
+
+
 def linear_luminance(rgb_uint8) -> np.ndarray:
     """Luminance (...,) float32 in linear light of sRGB-ish pixels (..., 3) uint8 (the
     renderer's 2.2 power, Rec. 709 weights)."""
-    return ((np.asarray(rgb_uint8, dtype=np.float32) / 255.0) ** 2.2) @ np.array([0.2126, 0.7152, 0.0722],
-                                                                                 np.float32)
+    return ((np.asarray(rgb_uint8, dtype=np.float32) / 255.0) ** 2.2) @ _REC709.astype(np.float32)
 
 
 def wall_angles_rad(polygon_m: np.ndarray, edge_kinds=None) -> np.ndarray:
@@ -227,8 +233,42 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     for sigma_m, min_contrast in settings.edge_scales:  # sharp edges first, then soft ones (a blurred photo)
         found = _patches_at(top, valid, standing, lo, cell, sigma_m, min_contrast, walls_rad, settings)
         if found is not None:
-            return found
+            return dataclasses.replace(found, ratio_rgb=_ratio_rgb(top_rgb, found, settings))
     return None
+
+
+def unit_colour(ratio, limit: float | None = None) -> tuple:
+    """A light's colour from ``ratio`` (3,), linear RGB over another light's: scaled to
+    luminance 1, each channel within ``1 / limit`` and ``limit`` of it (default
+    ``RENDER.sun.max_tint``); white where a channel is not positive."""
+    limit = RENDER.sun.max_tint if limit is None else limit
+    ratio = np.asarray(ratio, dtype=np.float64)
+    lum = float(ratio @ _REC709)
+    if not lum > 0 or np.any(ratio <= 0):
+        return (1.0, 1.0, 1.0)
+    tint = np.clip(ratio / lum, 1.0 / limit, limit)
+    return tuple(float(v) for v in tint / (tint @ _REC709))
+
+
+def _ratio_rgb(top_rgb, found: SunOnFloor, settings: SunSettings) -> tuple:
+    """The sunlit floor's light over the shade's beside it, per channel (medians; the
+    floor's own colour cancels): the sun's colour against the rest of the light. Floor
+    within ``settings.colour_gap_m`` of a sun edge (the penumbra) is left out, the shade
+    is read within ``settings.colour_ring_m`` of the patches, and clipped pixels not at
+    all; grey (the contrast in each channel) when either side shows too little."""
+    lit = found.lit.astype(np.uint8)
+    gap = max(1, round(settings.colour_gap_m / found.cell_m))
+    ring = max(gap + 1, round(settings.colour_ring_m / found.cell_m))
+    unclipped = found.seen & (top_rgb.max(axis=2) < 250)
+    sun = unclipped & (cv2.erode(lit, np.ones((2 * gap + 1,) * 2, np.uint8)) > 0)
+    near = cv2.dilate(lit, np.ones((2 * ring + 1,) * 2, np.uint8)) > 0
+    shade = unclipped & near & ~(cv2.dilate(lit, np.ones((2 * gap + 1,) * 2, np.uint8)) > 0)
+    grey = (found.contrast,) * 3
+    if sun.sum() < 50 or shade.sum() < 50:
+        return grey
+    linear = (top_rgb.astype(np.float32) / 255.0) ** 2.2
+    ratio = np.median(linear[sun], axis=0) / np.maximum(np.median(linear[shade], axis=0), 1e-4)
+    return tuple(float(v) for v in ratio) if np.all(ratio > 1.0) else grey
 
 
 def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, walls_rad,

@@ -12,8 +12,8 @@ from augment.camera.board import Board
 from augment.camera.calibrate import calibrate_photo, exif_intrinsics
 from augment.render.gl import Renderer
 from augment.render.settings import RENDER
-from augment.render.staged import Lighting, _Caster, _floor_gain, _in_beam, estimate_lighting
-from augment.render.sun import SunOnFloor, find_sun, wall_angles_rad
+from augment.render.staged import Lighting, _Caster, _floor_gain, _in_beam, _vertex_light, estimate_lighting
+from augment.render.sun import SunOnFloor, find_sun, unit_colour, wall_angles_rad
 
 # A camera 3 m above the floor looking straight down: 6 mm of floor a pixel, x right, y down.
 W, H, MM = 640, 480, 0.006
@@ -60,6 +60,44 @@ def test_the_sun_s_azimuth_from_its_patch_and_the_walls(rng):
     assert 2.5 < sun.contrast < 6.0  # (170 / 80) ** 2.2 = 5.3: the median over an edge's flanks reads less
     # The patch runs into the wall at x = 1.5 m: the light travels toward +x.
     assert sun.downstream * sun.axes_xy[0][0] > 0
+
+
+def test_the_suns_colour_against_the_shade_is_read_off_its_patch(rng):
+    """A brown floor (albedo 0.6, 0.45, 0.3) under bluish shade light 0.25 x (0.9, 1, 1.15)
+    and a warm sun adding 0.5 x (1.25, 1, 0.7): the sunlit floor over the shade is
+    1 + sun / shade per channel, (3.78, 3.0, 2.22), whatever the floor's colour. The
+    key light then shines in the sun's own colour, (2.78, 2.0, 1.22) at luminance 1."""
+    x, y = _floor_points()
+    a = math.radians(30.0)
+    lit = (x > -0.8) & (np.abs(y - (x + 0.8) * math.tan(a) + 0.1) < 0.4)
+    shade, sun_light = 0.25 * np.array([0.9, 1.0, 1.15]), 0.5 * np.array([1.25, 1.0, 0.7])
+    light = np.where(lit[..., None], shade + sun_light, shade)
+    linear = np.array([0.6, 0.45, 0.3]) * light * rng.normal(1.0, 0.01, x.shape)[..., None]
+    image = np.round(255 * np.clip(linear, 0, 1) ** (1 / 2.2)).astype(np.uint8)
+    mask = x < 1.5
+    image[~mask] = 200
+    sun = find_sun(image, mask, FLOOR_FROM_IMAGE, (0.0, 0.0))
+    expected = 1 + sun_light / shade
+    np.testing.assert_allclose(sun.ratio_rgb, expected, rtol=0.05)
+    colour = np.array(unit_colour(np.asarray(sun.ratio_rgb) - 1.0))
+    np.testing.assert_allclose(colour / colour[1], (expected - 1) / (expected[1] - 1), rtol=0.06)
+    assert colour @ [0.2126, 0.7152, 0.0722] == pytest.approx(1.0)
+    # A grey sun over grey shade: white, and a ratio below 1 in a channel says nothing.
+    assert unit_colour([2.0, 2.0, 2.0]) == pytest.approx((1.0, 1.0, 1.0))
+    assert unit_colour([1.0, -0.5, 1.0]) == (1.0, 1.0, 1.0)
+
+
+def test_the_key_light_shines_in_its_own_colour():
+    """A white face turned up to a key light straight overhead, all of the light: what
+    it sends back is the irradiance times the key's colour, highlight included."""
+    lighting = Lighting((0.5, 0.5, 0.5), (0.0, 0.0, -1.0), 1.0, 0.01, (0.3, 0.3, 0.3), "sun",
+                        key_rgb=(1.2, 1.0, 0.7))
+    plain = replace(RENDER.staged, front_fill=0.0, bounce=0.0)
+    one = np.ones(1)
+    fill, key = _vertex_light(np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]), np.ones((1, 3)), one, 0 * one,
+                              np.zeros((1, 3)), one, lighting, np.array([0.5, 0.0, 3.0]), np.array([0.0, 1.0]), plain)
+    np.testing.assert_allclose(fill, 0.0, atol=1e-12)
+    np.testing.assert_allclose(key[0] / key[0, 1], [1.2, 1.0, 0.7], rtol=1e-9)
 
 
 def test_a_patch_that_ends_on_the_floor_gives_no_sign(rng):
