@@ -309,8 +309,9 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         region_small = _floor_region(small.shape[:2], _scaled_K(K, small_scale), pose)
     floor_lin = _to_linear(small[region_small]) if region_small.any() else _to_linear(white)
     floor_rgb = np.median(floor_lin, axis=0)
-    near = _project(np.column_stack([0.5 * np.cos(np.linspace(0, 2 * np.pi, 24)),
-                                     0.5 * np.sin(np.linspace(0, 2 * np.pi, 24)), np.zeros(24)]), K, pose, dist)[0]
+    # The floor around the board: 24 points 0.5 m from its centre.
+    around_m = 0.5 * np.column_stack([np.cos(np.linspace(0, 2 * np.pi, 24)), np.sin(np.linspace(0, 2 * np.pi, 24))])
+    near = _project(np.column_stack([around_m, np.zeros(24)]), K, pose, dist)[0]
     ring = _sample_rgb(image, near, max(radius, 1))
     ring = ring[~np.isnan(ring[:, 0])]
     if len(ring) >= 6:
@@ -337,6 +338,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
             window_xy = None if which[0] < 0 else cam_xy + t_m[0] * toward
     patches = None if not settings.sun_from_floor else _sun_patches(
         image, region_small if floor_mask is None else floor_mask, calibration, cam_xy, floor_polygon)
+    key_rgb = (1.0, 1.0, 1.0)
     if patches is not None:
         axis = np.asarray(patches.axes_xy[0])
         center = np.asarray(patches.center_m)
@@ -359,9 +361,10 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         direction = np.append(sign * axis * math.cos(elev), -math.sin(elev))
         key = float(np.clip(1.0 - 1.0 / patches.contrast, *settings.sun_key_range))
         soft, source = settings.sun_softness_rad, "sun"
-        # The sun's colour against the shade's: on the paper in the sun, the two mixed.
+        # The sun's colour against the shade's: on the paper in the sun, the two mixed
+        # (the sheet itself is left out of the sunlit floor: the floor around it tells).
         ratio = np.asarray(patches.ratio_rgb, dtype=np.float64)
-        if patches.sunlit(np.zeros((1, 2)))[0] > 0.5:
+        if np.median(patches.sunlit(around_m)) > 0.5:
             irradiance = irradiance * np.asarray(unit_colour(1.0 / ratio))
         key_rgb = unit_colour(ratio - 1.0)
     elif found is not None:
@@ -379,8 +382,6 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         # no shadow is thrown far in a direction that is only a guess.
         key, soft, source = 0.15, 0.5, "default"
     sun = patches if source == "sun" else None
-    if sun is None:
-        key_rgb = (1.0, 1.0, 1.0)
     lamps = ()
     if floor_mask is not None:
         lamps = find_lamps(image, np.asarray(floor_mask, dtype=bool), calibration,

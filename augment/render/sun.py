@@ -52,7 +52,8 @@ class SunOnFloor:
     edge_sigma_m : float
         The scale the sun's edges were found at: :meth:`sunlit` is as soft (0: sharp).
     ratio_rgb : (3,) float
-        ``contrast`` per channel (linear RGB): the sun's colour against the shade's.
+        ``contrast`` per channel (linear RGB): the sun's colour against the shade's; all
+        1 where not read (the key light is then white).
     """
 
     axes_xy: tuple
