@@ -139,16 +139,31 @@ def test_manifest_rows_are_read_with_their_own_options(tmp_path):
         next(read_tasks(bad, DEFAULTS))
 
 
+def _parent(pid: int) -> int:
+    """The parent of process ``pid`` (0 once it is gone)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return 0
+    return int(stat[stat.rindex(")") + 2:].split()[1])  # after the name, which may hold spaces
+
+
 def _worker_pids(name: str) -> list[int]:
-    """Processes whose title (Ray's ``ray::Class.method``) contains ``name``."""
-    pids = []
+    """This test process's descendants whose title (Ray's ``ray::Class.method``) contains
+    ``name``: another suite's Ray workers on the machine are not this cluster's."""
+    pids, me = [], os.getpid()
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
             try:
-                if name in (entry / "cmdline").read_bytes().decode(errors="replace"):
-                    pids.append(int(entry.name))
+                if name not in (entry / "cmdline").read_bytes().decode(errors="replace"):
+                    continue
             except OSError:
-                pass
+                continue
+            pid = int(entry.name)
+            while pid > 1 and pid != me:
+                pid = _parent(pid)
+            if pid == me:
+                pids.append(int(entry.name))
     return pids
 
 
