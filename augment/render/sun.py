@@ -260,15 +260,16 @@ def _ratio_rgb(top_rgb, found: SunOnFloor, settings: SunSettings) -> tuple:
     lit = found.lit.astype(np.uint8)
     gap = max(1, round(settings.colour_gap_m / found.cell_m))
     ring = max(gap + 1, round(settings.colour_ring_m / found.cell_m))
+    clear = np.ones((2 * gap + 1,) * 2, np.uint8)
     unclipped = found.seen & (top_rgb.max(axis=2) < 250)
-    sun = unclipped & (cv2.erode(lit, np.ones((2 * gap + 1,) * 2, np.uint8)) > 0)
+    sun = unclipped & (cv2.erode(lit, clear) > 0)
     near = cv2.dilate(lit, np.ones((2 * ring + 1,) * 2, np.uint8)) > 0
-    shade = unclipped & near & ~(cv2.dilate(lit, np.ones((2 * gap + 1,) * 2, np.uint8)) > 0)
+    shade = unclipped & near & ~(cv2.dilate(lit, clear) > 0)
     grey = (found.contrast,) * 3
     if sun.sum() < 50 or shade.sum() < 50:
         return grey
-    linear = (top_rgb.astype(np.float32) / 255.0) ** 2.2
-    ratio = np.median(linear[sun], axis=0) / np.maximum(np.median(linear[shade], axis=0), 1e-4)
+    sun_rgb, shade_rgb = (np.median((top_rgb[side].astype(np.float32) / 255.0) ** 2.2, axis=0) for side in (sun, shade))
+    ratio = sun_rgb / np.maximum(shade_rgb, 1e-4)
     return tuple(float(v) for v in ratio) if np.all(ratio > 1.0) else grey
 
 
