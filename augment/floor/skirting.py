@@ -44,7 +44,9 @@ rules see no step.
 
 Whether the mask holds the board can differ from wall to wall: GrabCut may stop at the
 floor line along one wall and at the board's top along another. When the photo as a
-whole does not show a board, each wall is judged on its own (its columns between corners
+whole shows a board, the stretches of wall the board model is sure hold none are left
+(their strip is floor, the board stands above the mask's edge); when it does not, each
+wall is judged on its own (its columns between corners
 of the mask's top edge), and the walls where the board model is sure of one are cut
 (where the photo leans to no board, only if the rules see a step on them too: a strip
 of floor along one wall fools the model more often than one along every wall), and the
@@ -213,6 +215,21 @@ def _walls(cols: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
         corners = cv2.approxPolyDP(line, FLOOR.skirting.corner_px, False)[1:-1, 0, 0]
         walls.extend(np.split(stretch, np.searchsorted(cols[stretch], corners)))
     return walls
+
+
+def _no_board_columns(cols: np.ndarray, rows: np.ndarray, p_board: np.ndarray) -> np.ndarray:
+    """(k,) bool: the columns where the board model, averaged over the
+    ``FLOOR.skirting.min_wall_columns`` nearest of their stretch (:func:`_stretches`), stays
+    below ``FLOOR.skirting.no_wall_board_p``: GrabCut stopped at the floor line there, and
+    the strip below the mask's edge is floor even where the photo shows a board elsewhere."""
+    out = np.zeros(len(cols), bool)
+    half = FLOOR.skirting.min_wall_columns // 2
+    for stretch in _stretches(cols, rows):
+        summed = np.concatenate([[0.0], np.cumsum(p_board[stretch])])
+        i = np.arange(len(stretch))
+        lo, hi = np.maximum(i - half, 0), np.minimum(i + half + 1, len(stretch))
+        out[stretch] = (summed[hi] - summed[lo]) / (hi - lo) < FLOOR.skirting.no_wall_board_p
+    return out
 
 
 def _walls_with_a_board(walls, p_board: np.ndarray, whole: np.ndarray) -> np.ndarray:
@@ -513,7 +530,7 @@ def _rules_cut(small_image, small_mask, cols, rows, px_per_m, p_board, p_mean, w
         if not shown_mode.any():
             return none
     else:
-        judged = np.ones(len(cols), bool)
+        judged = ~_no_board_columns(cols, rows, p_board)
     t, shown, height_m = t_mode, shown_mode, t_mode / px_per_m
     median = float(np.median(height_m[shown]))
     agree = shown & (height_m > 0.5 * median) & (height_m < 1.5 * median)
