@@ -58,7 +58,7 @@ from .gl import Renderer, Scene, far_camera, gl_from_cv_pose, pyrender, pyrender
 from .lamps import find_lamps
 from .look import PhotoLook, apply_look, blur_like_photo, estimate_look
 from .settings import RENDER, StagedSettings
-from .sun import find_sun, linear_luminance, unit_colour, wall_angles_rad
+from .sun import REC709, find_sun, linear_luminance, unit_colour, wall_angles_rad
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 
@@ -386,7 +386,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     if floor_mask is not None:
         lamps = find_lamps(image, np.asarray(floor_mask, dtype=bool), calibration,
                            RENDER.lamps.ceiling_m if ceiling_m is None else float(ceiling_m),
-                           float(floor_rgb @ [0.2126, 0.7152, 0.0722]),
+                           float(floor_rgb @ REC709),
                            None if sun is None else (lambda xy: sun.sunlit(xy) > 0.25))
     return Lighting(tuple(float(v) for v in irradiance), tuple(float(v) for v in direction), key, soft,
                     tuple(float(v) for v in floor_rgb), source, sun, lamps, tuple(float(v) for v in key_rgb))
@@ -511,7 +511,7 @@ def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, 
     ok[ok] = floor_mask[ij[ok, 1], ij[ok, 0]]
     if ok.sum() < 50:
         return None
-    reference = max(float(np.asarray(lighting.floor_rgb) @ [0.2126, 0.7152, 0.0722]), 1e-6)
+    reference = max(float(np.asarray(lighting.floor_rgb) @ REC709), 1e-6)
     lum = np.zeros(len(xy), np.float32)
     lum[ok] = linear_luminance(image[ij[ok, 1], ij[ok, 0]])
     if lighting.sun is not None:  # the light in the shade: the sun's beam is traced apart

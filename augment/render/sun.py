@@ -111,13 +111,13 @@ def _sunlit_kernel(xy, x0, y0, cell, soft, seen, share, out):
                           + v * ((1 - u) * soft[r + 1, c] + u * soft[r + 1, c + 1]))
 
 
-_REC709 = np.array([0.2126, 0.7152, 0.0722])
+REC709 = np.array([0.2126, 0.7152, 0.0722])
 
 
 def linear_luminance(rgb_uint8) -> np.ndarray:
     """Luminance (...,) float32 in linear light of sRGB-ish pixels (..., 3) uint8 (the
     renderer's 2.2 power, Rec. 709 weights)."""
-    return ((np.asarray(rgb_uint8, dtype=np.float32) / 255.0) ** 2.2) @ _REC709.astype(np.float32)
+    return ((np.asarray(rgb_uint8, dtype=np.float32) / 255.0) ** 2.2) @ REC709.astype(np.float32)
 
 
 def wall_angles_rad(polygon_m: np.ndarray, edge_kinds=None) -> np.ndarray:
@@ -244,11 +244,11 @@ def unit_colour(ratio, limit: float | None = None) -> tuple:
     ``RENDER.sun.max_tint``); white where a channel is not positive."""
     limit = RENDER.sun.max_tint if limit is None else limit
     ratio = np.asarray(ratio, dtype=np.float64)
-    lum = float(ratio @ _REC709)
+    lum = float(ratio @ REC709)
     if not lum > 0 or np.any(ratio <= 0):
         return (1.0, 1.0, 1.0)
     tint = np.clip(ratio / lum, 1.0 / limit, limit)
-    return tuple(float(v) for v in tint / (tint @ _REC709))
+    return tuple(float(v) for v in tint / (tint @ REC709))
 
 
 def _ratio_rgb(top_rgb, found: SunOnFloor, settings: SunSettings) -> tuple:
