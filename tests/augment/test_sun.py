@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from augment.camera.board import Board
+from augment.camera.calibration import Calibration, Intrinsics
 from augment.camera.calibrate import calibrate_photo, exif_intrinsics
 from augment.render.gl import Renderer
 from augment.render.settings import RENDER
@@ -98,6 +99,59 @@ def test_the_key_light_shines_in_its_own_colour():
                               np.zeros((1, 3)), one, lighting, np.array([0.5, 0.0, 3.0]), np.array([0.0, 1.0]), plain)
     np.testing.assert_allclose(fill, 0.0, atol=1e-12)
     np.testing.assert_allclose(key[0] / key[0, 1], [1.2, 1.0, 0.7], rtol=1e-9)
+
+
+def _photo_of_a_sunny_floor(rng, band_centre_m, shade, sun):
+    """A brown floor (albedo 0.55, 0.45, 0.35) with the board's sheet (paper, 0.85) at the
+    origin, under ``shade`` (3,) light and ``sun`` (3,) more in a band 1.6 m wide along
+    30 degrees, ``band_centre_m`` across from the origin; seen 2.5 m up, 65 degrees down.
+    Returns the photo, its floor mask and its exact calibration."""
+    w, h, f = 640, 480, 500.0
+    K = np.array([[f, 0, (w - 1) / 2], [0, f, (h - 1) / 2], [0, 0, 1.0]])
+    down = math.radians(65.0)
+    z = np.array([0.0, math.cos(down), -math.sin(down)])
+    world_from_camera = np.eye(4)
+    world_from_camera[:3, :3] = np.column_stack([[1.0, 0.0, 0.0], np.cross(z, [1.0, 0.0, 0.0]), z])
+    world_from_camera[:3, 3] = [0.0, -1.2, 2.5]
+    camera_from_floor = np.linalg.inv(world_from_camera)
+    R, t = camera_from_floor[:3, :3], camera_from_floor[:3, 3]
+    image_from_floor = K @ np.column_stack([R[:, 0], R[:, 1], t])
+    v, u = np.mgrid[0:h, 0:w]
+    p = np.stack([u, v, np.ones_like(u)], -1).astype(float) @ np.linalg.inv(image_from_floor).T
+    x, y = p[..., 0] / p[..., 2], p[..., 1] / p[..., 2]
+    a = math.radians(30.0)
+    lit = (np.abs(-math.sin(a) * x + math.cos(a) * y - band_centre_m) < 0.8) & (x > -1.5)
+    paper = (np.abs(x) < 0.21) & (np.abs(y) < 0.1485)
+    albedo = np.where(paper[..., None], 0.85, np.array([0.55, 0.45, 0.35]))
+    light = np.where(lit[..., None], shade + sun, shade)
+    linear = albedo * light * rng.normal(1.0, 0.01, x.shape)[..., None]
+    image = np.round(255 * np.clip(linear, 0, 1) ** (1 / 2.2)).astype(np.uint8)
+    mask = y < 3.0
+    image[~mask] = 190  # a wall
+    horizon = np.linalg.inv(K).T @ R[:, 2]
+    horizon *= np.sign(horizon @ [w / 2, h - 1, 1])
+    calibration = Calibration(
+        size_px=(w, h), intrinsics=Intrinsics(K, np.zeros(5), "truth", 0.0), camera_from_floor=camera_from_floor,
+        camera_height_m=2.5, floor_plane_camera=np.append(R[:, 2], -R[:, 2] @ t),
+        image_from_floor=image_from_floor / image_from_floor[2, 2], horizon=horizon / np.hypot(*horizon[:2]),
+        rms_px=0.0, corners_px=np.zeros((0, 2)), corner_ids=np.zeros(0, np.int64), detector="truth", board=Board())
+    return image, mask, calibration
+
+
+@pytest.mark.parametrize("band_centre_m", [0.0, 1.3])  # the board in the sun, and beside it in the shade
+def test_the_rest_of_the_light_takes_the_shades_colour_where_the_board_lies_in_the_sun(rng, band_centre_m):
+    """Bluish shade 0.2 x (0.85, 1, 1.2) and a warm sun adding 0.45 x (1.25, 1, 0.7). The
+    paper shows the shade's light plus the sun's where it lies in the sun, (1.13, 1, 0.85)
+    of green: the light but the key's is then the paper's over the sun's contrast per
+    channel, the shade's (0.85, 1, 1.2), as where the paper lies in the shade. The key is
+    the sun's own colour, sun / shade at luminance 1: (1.375, 0.934, 0.545)."""
+    shade, sun = 0.2 * np.array([0.85, 1.0, 1.2]), 0.45 * np.array([1.25, 1.0, 0.7])
+    image, mask, calibration = _photo_of_a_sunny_floor(rng, band_centre_m, shade, sun)
+    lighting = estimate_lighting(image, calibration, mask)
+    assert lighting.source == "sun"
+    irradiance = np.asarray(lighting.irradiance_rgb)
+    np.testing.assert_allclose(irradiance / irradiance[1], shade / shade[1], rtol=0.04)
+    np.testing.assert_allclose(lighting.key_rgb, unit_colour(sun / shade), rtol=0.05)
 
 
 def test_a_patch_that_ends_on_the_floor_gives_no_sign(rng):
