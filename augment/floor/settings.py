@@ -77,7 +77,7 @@ class SkirtingSettings:
     profile_context: int = 8  # with the mean of this many columns either side, as the models were trained
     no_board_p: float = 0.15  # below this mean board probability the photo shows no board; to board_p, rules decide
     board_p: float = 0.5  # from this mean the photo (or a wall) shows a board, whatever the rules say
-    no_wall_board_p: float = 0.05  # where the photo shows a board, columns whose model averages below this hold none
+    no_wall_board_p: float = 0.05  # where the photo shows a board, runs of wall averaging below this hold none
     alone_p: float = 0.3  # below this mean over the photo, a wall only the board model is sure of needs the rules' step
     rules_near_m: float = 0.04  # a wall's rules' height within this of the depth model's is kept
     learned_near_m: float = 0.02  # else the board's lower edge is looked for this far either side of the model's height

@@ -220,15 +220,21 @@ def _walls(cols: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
 def _no_board_columns(cols: np.ndarray, rows: np.ndarray, p_board: np.ndarray) -> np.ndarray:
     """(k,) bool: the columns where the board model, averaged over the
     ``FLOOR.skirting.min_wall_columns`` nearest of their stretch (:func:`_stretches`), stays
-    below ``FLOOR.skirting.no_wall_board_p``: GrabCut stopped at the floor line there, and
-    the strip below the mask's edge is floor even where the photo shows a board elsewhere."""
+    below ``FLOOR.skirting.no_wall_board_p``, in runs of that many columns at least:
+    GrabCut stopped at the floor line there, and the strip below the mask's edge is floor
+    even where the photo shows a board elsewhere. A shorter run (a corner, a short piece
+    of wall) is left to the rules: cut beside cut columns, it would stand as a spike."""
     out = np.zeros(len(cols), bool)
-    half = FLOOR.skirting.min_wall_columns // 2
+    least = FLOOR.skirting.min_wall_columns
     for stretch in _stretches(cols, rows):
         summed = np.concatenate([[0.0], np.cumsum(p_board[stretch])])
         i = np.arange(len(stretch))
-        lo, hi = np.maximum(i - half, 0), np.minimum(i + half + 1, len(stretch))
-        out[stretch] = (summed[hi] - summed[lo]) / (hi - lo) < FLOOR.skirting.no_wall_board_p
+        lo, hi = np.maximum(i - least // 2, 0), np.minimum(i + least // 2 + 1, len(stretch))
+        low = (summed[hi] - summed[lo]) / (hi - lo) < FLOOR.skirting.no_wall_board_p
+        edges = np.diff(np.concatenate([[0], low.astype(np.int8), [0]]))
+        for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+            if b - a >= least:
+                out[stretch[a:b]] = True
     return out
 
 

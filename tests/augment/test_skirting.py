@@ -355,6 +355,24 @@ def test_a_board_on_one_wall_is_cut_when_the_other_walls_show_none(monkeypatch):
     assert trim_skirting(sample.image, mask, calibration)[1] is None
 
 
+def test_only_long_runs_of_wall_the_board_model_is_sure_of_are_left_uncut():
+    """A straight stretch of 200 columns: the board model sure of a board on the first 80,
+    of none on the next 80 (left uncut, but for the half window where the average still
+    sees the board), then sure of one again. Past a jump, a piece of wall 8 columns wide
+    (a corner) it is sure of none on stays with the rules: left uncut beside cut walls it
+    would stand as a spike."""
+    cols = np.arange(208)
+    rows = np.where(cols < 200, 100, 130)
+    p = np.full(208, 0.9)
+    p[80:160] = 0.01
+    p[200:] = 0.01
+    none = skirting._no_board_columns(cols, rows, p)
+    half = FLOOR.skirting.min_wall_columns // 2
+    assert none[80 + half:160 - half].all() and not none[:80].any() and not none[160:].any()
+    p[80:160] = 0.2  # a board the model half sees: the rules decide
+    assert not skirting._no_board_columns(cols, rows, p).any()
+
+
 def test_a_wall_whose_mask_stops_at_the_floor_line_is_not_cut_where_another_shows_a_board(monkeypatch):
     """Seed 950 render 16: the mask ends at the board's top along the right wall and at
     the floor line along the far one, whose board stands above the mask's edge. The
