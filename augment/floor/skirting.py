@@ -46,13 +46,13 @@ Whether the mask holds the board can differ from wall to wall: GrabCut may stop 
 floor line along one wall and at the board's top along another. When the photo as a
 whole shows a board, the stretches of wall the board model is sure hold none are left
 (their strip is floor, the board stands above the mask's edge); when it does not, each
-wall is judged on its own (its columns between corners
-of the mask's top edge), and the walls where the board model is sure of one are cut
-(where the photo leans to no board, only if the rules see a step on them too: a strip
-of floor along one wall fools the model more often than one along every wall), and the
-walls whose strip the user clicked as not floor (a board darker than the floor
-and of its hue looks like shade to both the rules and the model), at the depth model's
-height where the rules see no strip on them (a board of the floor's colour).
+wall is judged on its own (its columns between corners of the mask's top edge), and
+the walls where the board model is sure of one are cut (where the photo leans to no
+board, only if the rules see a step on them too: a strip of floor along one wall fools
+the model more often than one along every wall), and the walls whose strip the user
+clicked as not floor (a board darker than the floor and of its hue looks like shade to
+both the rules and the model), at the depth model's height where the rules see no strip
+on them (a board of the floor's colour).
 
 A board of the floor's colour that the board model leans to without being sure of is
 left; :func:`trim_skirting` then says where it may be (``doubt_px``, on the wall left

@@ -111,7 +111,7 @@ def _sunlit_kernel(xy, x0, y0, cell, soft, seen, share, out):
                           + v * ((1 - u) * soft[r + 1, c] + u * soft[r + 1, c + 1]))
 
 
-REC709 = np.array([0.2126, 0.7152, 0.0722])
+REC709 = np.array([0.2126, 0.7152, 0.0722])  # luminance of linear RGB (Rec. 709 primaries)
 
 
 def linear_luminance(rgb_uint8) -> np.ndarray:
