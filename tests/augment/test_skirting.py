@@ -380,7 +380,7 @@ def test_a_wall_whose_mask_stops_at_the_floor_line_is_not_cut_where_another_show
     cut every wall, took the far wall's strip of floor for a board. The board model gives
     that wall's columns 0.00-0.10: they are left, and the right wall's board is still
     cut. The polygon against the true mask's: -0.4 % (-5.9 % cutting every wall) when
-    written."""
+    written. A "not floor" click on the far wall's strip still trims it."""
     from augment.floor.model import DEFAULT_MODEL, FloorModel
     from augment.floor.polygon import floor_polygon
     from augment.floor.segment import segment_floor
@@ -391,6 +391,11 @@ def test_a_wall_whose_mask_stops_at_the_floor_line_is_not_cut_where_another_show
     seg = segment_floor(sample.image, model, calibration)
     assert seg.skirting_m is not None and 0.04 < seg.skirting_m < 0.09  # the right wall's board, 6 cm
     assert abs(floor_polygon(seg.mask, calibration).area_m2 / true_m2 - 1) < 0.02
+    # The user has the last word: "not floor" on the far wall's strip trims that wall
+    # (12-13 rows when written), the veto notwithstanding.
+    top = {x: int(np.flatnonzero(seg.mask[:, x])[0]) for x in (200, 330)}
+    clicked = segment_floor(sample.image, model, calibration, clicks=[(330, top[330] + 3, 0)])
+    assert all(np.flatnonzero(clicked.mask[:, x])[0] - top[x] >= 5 for x in top)
     monkeypatch.setattr(FLOOR.skirting, "no_wall_board_p", 0.0)  # every wall cut
     seg = segment_floor(sample.image, model, calibration)
     assert floor_polygon(seg.mask, calibration).area_m2 / true_m2 - 1 < -0.04
