@@ -172,6 +172,15 @@ def _prefix_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
     return (0.5 * (take(ordered, lo, axis=1) + take(ordered, hi, axis=1)))[:, 0]
 
 
+def _running_mean(values: np.ndarray, half: int) -> np.ndarray:
+    """Mean over axis 0 of ``values`` (k, ...) of the entries up to ``half`` either side
+    of each (fewer at the ends), from a running sum."""
+    k = len(values)
+    summed = np.cumsum(np.concatenate([np.zeros((1,) + values.shape[1:], values.dtype), values]), axis=0)
+    lo, hi = np.maximum(np.arange(k) - half, 0), np.minimum(np.arange(k) + half + 1, k)
+    return (summed[hi] - summed[lo]) / (hi - lo).reshape((-1,) + (1,) * (values.ndim - 1))
+
+
 def _stretches(cols: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
     """Indices into ``cols`` per unbroken stretch of the mask's top edge: split where a
     column is missing or the edge jumps by more than ``FLOOR.skirting.step_px`` rows."""
@@ -227,10 +236,7 @@ def _no_board_columns(cols: np.ndarray, rows: np.ndarray, p_board: np.ndarray) -
     out = np.zeros(len(cols), bool)
     least = FLOOR.skirting.min_wall_columns
     for stretch in _stretches(cols, rows):
-        summed = np.concatenate([[0.0], np.cumsum(p_board[stretch])])
-        i = np.arange(len(stretch))
-        lo, hi = np.maximum(i - least // 2, 0), np.minimum(i + least // 2 + 1, len(stretch))
-        low = (summed[hi] - summed[lo]) / (hi - lo) < FLOOR.skirting.no_wall_board_p
+        low = _running_mean(p_board[stretch], least // 2) < FLOOR.skirting.no_wall_board_p
         edges = np.diff(np.concatenate([[0], low.astype(np.int8), [0]]))
         for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
             if b - a >= least:
@@ -298,11 +304,7 @@ def board_profiles(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
     floor = np.where(floor.any(axis=1)[:, None], floor, lowest).astype(np.float32)
     reference = (log_colour * floor[..., None]).sum(axis=1) / np.maximum(floor.sum(axis=1), 1)[:, None]
     own = (log_colour - reference[:, None]) * inside[..., None]
-    k = len(cols)
-    summed = np.cumsum(np.concatenate([np.zeros((1,) + own.shape[1:], np.float32), own]), axis=0)
-    lo = np.maximum(np.arange(k) - sk.profile_context, 0)
-    hi = np.minimum(np.arange(k) + sk.profile_context + 1, k)
-    context = (summed[hi] - summed[lo]) / (hi - lo)[:, None, None]
+    context = _running_mean(own, sk.profile_context)
     profile = np.concatenate([own, context, inside[..., None].astype(np.float32)], axis=2).transpose(0, 2, 1)
     below = mask[np.clip(rows[:, None] + np.arange(1, 40)[None], 0, h - 1), cols[:, None]].mean(axis=1)
     scalars = np.column_stack([np.log(px_per_m) / 5, below])
