@@ -503,8 +503,8 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
     extent = detection.corners_px.max(axis=0) - detection.corners_px.min(axis=0)
     if extent.max() < settings.min_board_extent_px:
         raise CalibrationError(
-            f"the board in {where} is only {extent.max():.0f} px across (at least {settings.min_board_extent_px} "
-            "needed): move the board closer to the camera or use a larger board")
+            f"the board in {where} is only {math.floor(extent.max())} px across (at least "
+            f"{settings.min_board_extent_px} needed): move the board closer to the camera or use a larger board")
     warnings = []
     exif_ruled_out = False
     if intrinsics is None:

@@ -803,3 +803,16 @@ def test_saddle_points_on_one_line_make_no_giant_view(monkeypatch):
     grid = np.stack(np.meshgrid(np.arange(7) * 30.0 + 200, np.arange(5) * 12.0 + 300), -1).reshape(-1, 2)
     detect._find_rectified(gray, grid, Board(), (150, 260, 450, 400))
     assert sizes and max(max(s) for s in sizes) <= CAMERA.detect.rectified_max_px
+
+
+def test_a_board_too_small_is_said_smaller_than_the_size_it_needs(monkeypatch):
+    """room_4's board spans 130.8 px between its outer inner corners. Asked for 131 px, the
+    refusal said "only 131 px across (at least 131 needed)": the size rounded up to the
+    one it fails. It now says the whole pixels it has, 130."""
+    image = cv2.imread(str(Path(__file__).parents[2] / "samples/photos/room_4.jpg"))[..., ::-1].copy()
+    corners = calibrate_photo(image, Board()).corners_px
+    extent = float((corners.max(axis=0) - corners.min(axis=0)).max())
+    assert 130.5 < extent < 131  # the case: rounding gives the size asked for
+    monkeypatch.setattr(CAMERA.calibrate, "min_board_extent_px", 131)
+    with pytest.raises(CalibrationError, match=r"only 130 px across \(at least 131 needed\)"):
+        calibrate_photo(image, Board())
