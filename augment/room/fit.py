@@ -995,9 +995,9 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 said.append(f"suggestion {k + 1} leaves out {', '.join(left)} to differ from the others: the floor "
                             "in view leaves room for one arrangement of all of it")
         if failed is None:
-            # A piece left out on the way that the corner set staged at last (the same id and
-            # kind) is in the photo: it is not said to be left out.
-            staged = {(i.id, i.kind.name) for i in spec.items}
+            # A piece left out on the way that a suggestion stages after all (the same id and
+            # kind: a corner set's) is in the photos: it is not said to be left out.
+            staged = {(lay.model.names[i], lay.model.kinds[i]) for lay in layouts for i in lay.items}
             dropped[:] = [d for d in dropped if (d["id"], d["kind"]) not in staged]
             notes.extend(([cornered] if cornered else []) + _said_once(said))
             return spec, layouts, reports

@@ -1666,6 +1666,19 @@ def test_one_piece_that_only_dresses_a_group_is_no_staging(tmp_path):
         _suggestions(m, "office", corners=True)
 
 
+def test_a_piece_a_corner_set_stages_is_not_said_to_be_left_out():
+    """room_3's living room: the room's TV stand is cut by the photo's edge wherever it
+    stands with the rest, while suggestion 3 stages a corner set's TV stand (with a plant)
+    whole. The warnings said "left out ... tv_stand" beside that photo; now only what no
+    suggestion shows is said to be left out."""
+    m = pipeline.measure(PHOTOS / "room_3.jpg", Board())
+    layouts, notes, dropped = _suggestions(m, "living_room", corners=True)
+    shown = {(lay.model.names[i], lay.model.kinds[i]) for lay in layouts for i in lay.items}
+    assert ("tv_stand", "tv_stand") in shown, shown
+    assert any(n.startswith("suggestion 3 stages another corner set (tv_stand") for n in notes), notes
+    assert dropped and not shown & {(d["id"], d["kind"]) for d in dropped}, dropped
+
+
 def test_a_floor_too_small_for_the_dining_set_is_staged_with_a_corner_set(tmp_path):
     """Render [9900, 11] shows 7 m² of a dining room, too little for its table set at any
     angle (the preset's round table for four, 1.84 m across with its chairs): the photo was
