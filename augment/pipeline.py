@@ -687,7 +687,8 @@ def furnish(photo, board, *, room: str | None = None, spec=None, suggestions: in
                 layouts = [lay.as_written() for lay in layouts]
         if dropped:
             # A corner set's piece of the same id as the room's counts once, as in the summary.
-            warnings.append(f"left out {len({d['id'] for d in dropped})} item(s) that do not fit the measured floor: "
+            n = len({d['id'] for d in dropped})
+            warnings.append(f"left out {n} item{' that does' if n == 1 else 's that do'} not fit the measured floor: "
                             + dropped_summary(dropped))
         # A plan's title names no folder (the web app's files are its own).
         titled = source_name if layout is None else f"layout {Path(layout).name}"

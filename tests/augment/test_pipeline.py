@@ -176,7 +176,7 @@ def test_report_is_complete(roomy):
     # wall facing the sofa for the stand: it is left out, and that alone is said of it.
     assert [d["id"] for d in report["furniture"]["dropped"]] == ["tv_stand"]
     assert [w for w in report["warnings"] if "tv_stand" in w] == [
-        "left out 1 item(s) that do not fit the measured floor: tv_stand: it found no place against a wall, "
+        "left out 1 item that does not fit the measured floor: tv_stand: it found no place against a wall, "
         "or facing its partner, on the floor in view with the rest"]
     assert [s["k"] for s in report["suggestions"]] == [1, 2, 3]
     for s in report["suggestions"]:
