@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import re
 from pathlib import Path
 
 import cv2
@@ -412,13 +413,35 @@ def corner_specs(source, fitted, calibration=None) -> list:
     return out
 
 
+_TALL = re.compile(r"(\d+\.\d+ m) tall, (.*)")  # a reason that names the piece's height
+
+
 def dropped_summary(dropped: list) -> str:
-    """``"a, b: why; c: why"``: the dropped items grouped by reason, in order."""
-    by_reason = {}
+    """``"a, b: why; c: why"``: the dropped items grouped by reason, in order. Reasons
+    that differ only in the piece's height are said once: ``"a 0.85 m, b, c 1.00 m tall:
+    each would ..."``."""
+    by_reason = {}  # reason without the height -> {id: height or None}
     for d in dropped:
-        ids = by_reason.setdefault(d["reason"], [])
-        ids += [d["id"]] if d["id"] not in ids else []  # a corner set's piece of the same id
-    return "; ".join(f"{', '.join(ids)}: {reason}" for reason, ids in by_reason.items())
+        tall = _TALL.fullmatch(d["reason"])
+        reason, height = (tall[2], tall[1]) if tall else (d["reason"], None)
+        by_reason.setdefault(reason, {}).setdefault(d["id"], height)  # a corner set's piece of the same id
+    parts = []
+    for reason, items in by_reason.items():
+        if not any(items.values()):
+            parts.append(f"{', '.join(items)}: {reason}")
+        elif len(items) == 1:
+            ((item, height),) = items.items()
+            parts.append(f"{item}: {height} tall, {reason}")
+        else:
+            runs = []  # the pieces in turn, those of one height in a row named with it once
+            for item, height in items.items():
+                if runs and runs[-1][1] == height:
+                    runs[-1][0].append(item)
+                else:
+                    runs.append(([item], height))
+            named = ", ".join(f"{', '.join(ids)} {h}" if h else ", ".join(ids) for ids, h in runs)
+            parts.append(f"{named} tall: {re.sub(r'^it ', 'each ', reason)}")
+    return "; ".join(parts)
 
 
 def too_small(area_m2: float, dropped: list) -> FurnishError:

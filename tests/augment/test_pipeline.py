@@ -1635,7 +1635,7 @@ def test_a_photo_where_no_piece_stands_whole_is_refused_not_staged_cut(tmp_path)
     laid out without the camera and the desk showed only its legs under the top edge;
     now the photo is refused, saying why and what to do."""
     m, _ = _measured_render([9900, 34], tmp_path)
-    with pytest.raises(FurnishError, match=r"no furniture stands whole in this photo \(desk: 0.75 m tall, it would "
+    with pytest.raises(FurnishError, match=r"no furniture stands whole in this photo \(desk 0.75 m, .*tall: each would "
                                            r"be cut by the photo's edge.*step back, and hold the camera higher"):
         _suggestions(m, "office", corners=True)
 
@@ -1661,9 +1661,27 @@ def test_one_piece_that_only_dresses_a_group_is_no_staging(tmp_path):
         kinds = [lay.model.kinds[i] for i in lay.items]
         assert len(kinds) >= 2 or kinds[0] not in fit.DRESSING, kinds
     m, _ = _measured_render([9900, 6], tmp_path)
-    with pytest.raises(FurnishError, match=r"no furniture stands whole in this photo \(desk: .*plant: alone, a plant "
+    with pytest.raises(FurnishError, match=r"no furniture stands whole in this photo \(desk .*plant: alone, a plant "
                                            r"is no staging\)"):
         _suggestions(m, "office", corners=True)
+
+
+def test_pieces_left_out_for_one_reason_at_different_heights_are_said_once():
+    """room_2's living room left out four pieces each "N m tall, it would be cut by the
+    photo's edge ... wherever it stood (...)", the long reason written four times over.
+    Reasons that differ only in the height are said once, each piece with its height; a
+    reason of one piece, and the others, read as before."""
+    cut = fit.IN_NO_VIEW + " (a photo taken from higher or farther back shows more)"
+    dropped = [{"id": "sofa", "kind": "sofa", "reason": f"0.85 m tall, {cut}"},
+               {"id": "coffee_table", "kind": "coffee_table", "reason": "it goes with seating, and none is left"},
+               {"id": "plant", "kind": "plant", "reason": f"1.00 m tall, {cut}"},
+               {"id": "lamp", "kind": "floor_lamp", "reason": f"1.00 m tall, {cut}"},
+               {"id": "desk", "kind": "desk", "reason": "0.75 m tall, the room is 0.70 m high"},
+               {"id": "plant", "kind": "plant", "reason": f"1.00 m tall, {cut}"}]  # a corner set's, the same
+    assert fit.dropped_summary(dropped) == (
+        "sofa 0.85 m, plant, lamp 1.00 m tall: each would be cut by the photo's edge or stand in its foreground "
+        "wherever it stood (a photo taken from higher or farther back shows more); coffee_table: it goes with "
+        "seating, and none is left; desk: 0.75 m tall, the room is 0.70 m high")
 
 
 def test_a_piece_a_corner_set_stages_is_not_said_to_be_left_out():
