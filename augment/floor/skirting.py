@@ -227,8 +227,8 @@ def _walls(cols: np.ndarray, rows: np.ndarray) -> list[np.ndarray]:
 
 
 def _no_board_columns(cols: np.ndarray, rows: np.ndarray, p_board: np.ndarray) -> np.ndarray:
-    """(k,) bool: the columns where the board model, averaged over the
-    ``FLOOR.skirting.min_wall_columns`` nearest of their stretch (:func:`_stretches`), stays
+    """(k,) bool: the columns where the board model, averaged over the column and half of
+    ``FLOOR.skirting.min_wall_columns`` either side in its stretch (:func:`_stretches`), stays
     below ``FLOOR.skirting.no_wall_board_p``, in runs of that many columns at least:
     GrabCut stopped at the floor line there, and the strip below the mask's edge is floor
     even where the photo shows a board elsewhere. A shorter run (a corner, a short piece
