@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 import math
 import re
 from pathlib import Path
@@ -432,14 +433,9 @@ def dropped_summary(dropped: list) -> str:
         elif len(items) == 1:
             ((item, height),) = items.items()
             parts.append(f"{item}: {height} tall, {reason}")
-        else:
-            runs = []  # the pieces in turn, those of one height in a row named with it once
-            for item, height in items.items():
-                if runs and runs[-1][1] == height:
-                    runs[-1][0].append(item)
-                else:
-                    runs.append(([item], height))
-            named = ", ".join(f"{', '.join(ids)} {h}" if h else ", ".join(ids) for ids, h in runs)
+        else:  # the pieces in turn, those of one height in a row named with it once
+            named = ", ".join(" ".join([", ".join(i for i, _ in run)] + ([h] if h else []))
+                              for h, run in itertools.groupby(items.items(), key=lambda kv: kv[1]))
             parts.append(f"{named} tall: {re.sub(r'^it ', 'each ', reason)}")
     return "; ".join(parts)
 
