@@ -66,7 +66,7 @@ class Lamp:
 
 
 def find_lamps(image: np.ndarray, floor_mask: np.ndarray, calibration, ceiling_m: float, reference: float,
-               left_out=None, settings: LampSettings | None = None) -> tuple:
+               left_out=None, settings: LampSettings | None = None, inside=None) -> tuple:
     """The ceiling lamps whose pools of light the photo's floor shows.
 
     Parameters
@@ -85,6 +85,9 @@ def find_lamps(image: np.ndarray, floor_mask: np.ndarray, calibration, ceiling_m
         Floor points (n, 2) -> (n,) bool: floor not to read (sunlit patches).
     settings : LampSettings, optional
         Default ``RENDER.lamps``.
+    inside : callable, optional
+        Floor points (n, 2) -> (n,) bool: in the room, where a lamp can hang (not behind
+        a wall in view). A pool is looked for there only.
 
     Returns
     -------
@@ -103,6 +106,8 @@ def find_lamps(image: np.ndarray, floor_mask: np.ndarray, calibration, ceiling_m
     # The search reads a subset of the cells when the floor in view is large.
     every = max(1, len(xy) // settings.search_cells)
     candidates = _candidates(xy, settings.cell_m * 2, settings)
+    if inside is not None:
+        candidates = candidates[np.asarray(inside(candidates), dtype=bool)]
     for _ in range(settings.max_lamps):
         basis, _ = np.linalg.qr(np.column_stack(columns))
         rest = light - basis @ (basis.T @ light)
@@ -112,6 +117,8 @@ def find_lamps(image: np.ndarray, floor_mask: np.ndarray, calibration, ceiling_m
         # Refined on a finer grid around the coarse best, with every cell.
         offsets = np.arange(-2, 3) * (settings.cell_m / 2)
         near = best[0] + np.stack(np.meshgrid(offsets, offsets), axis=-1).reshape(-1, 2)
+        if inside is not None:
+            near = near[np.asarray(inside(near), dtype=bool)]
         best = _best_pool(xy, rest, basis, [best[1]], near, settings)
         if best is None:
             break
@@ -210,6 +217,8 @@ def _best_pool(xy, rest, basis, widths, candidates, settings: LampSettings):
     """The pool (centre (2,), width) that explains most of ``rest`` (the light the model so
     far leaves, (n,)) beside ``basis`` (n, k, orthonormal), brighter than the floor around
     it and not implausibly so; None when none is."""
+    if len(candidates) == 0:
+        return None
     gain, amplitude = _pool_fits(np.ascontiguousarray(xy, np.float64), np.ascontiguousarray(rest, np.float64),
                                  np.ascontiguousarray(basis, np.float64), np.asarray(widths, np.float64),
                                  np.ascontiguousarray(candidates, np.float64))

@@ -387,7 +387,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         lamps = find_lamps(image, np.asarray(floor_mask, dtype=bool), calibration,
                            RENDER.lamps.ceiling_m if ceiling_m is None else float(ceiling_m),
                            float(floor_rgb @ REC709),
-                           None if sun is None else (lambda xy: sun.sunlit(xy) > 0.25))
+                           None if sun is None else (lambda xy: sun.sunlit(xy) > 0.25),
+                           inside=None if walls is None or len(walls) == 0 else _in_room(walls, cam_xy))
     return Lighting(tuple(float(v) for v in irradiance), tuple(float(v) for v in direction), key, soft,
                     tuple(float(v) for v in floor_rgb), source, sun, lamps, tuple(float(v) for v in key_rgb))
 
@@ -1293,6 +1294,16 @@ def _first_wall_kernel(walls, rays, cx, cy, best, which):
             if t > 0.0 and 0.0 <= u <= 1.0 and t < best[i]:
                 best[i] = t
                 which[i] = k
+
+
+def _in_room(walls_m, cam_xy, slack_m: float = 0.1):
+    """Floor points (n, 2) -> (n,) bool: not behind a wall in view (seen from the camera's
+    foot, no wall segment (k, 2, 2) crosses the way there more than ``slack_m`` before it)."""
+    def inside(xy):
+        way = np.asarray(xy, dtype=np.float64)[:, :2] - np.asarray(cam_xy, dtype=np.float64)
+        wall_m, _ = _first_wall(walls_m, way, cam_xy)
+        return wall_m >= np.linalg.norm(way, axis=1) - slack_m
+    return inside
 
 
 def wall_segments(floor_polygon) -> np.ndarray:

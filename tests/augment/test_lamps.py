@@ -12,7 +12,7 @@ from augment.render.furniture import PlacedItem, furniture_for
 from augment.render.gl import Renderer
 from augment.render.lamps import Lamp, find_lamps
 from augment.render.settings import RENDER
-from augment.render.staged import (GAMMA, Lighting, _Caster, _floor_gain, _FloorGrid, _lamp_view, _LightMap,
+from augment.render.staged import (GAMMA, Lighting, _Caster, _floor_gain, _FloorGrid, _in_room, _lamp_view, _LightMap,
                                    estimate_lighting)
 from tests.augment.test_render import PHOTOS, _truth_calibration
 
@@ -72,6 +72,33 @@ def test_a_pool_painted_on_the_floor_is_found_where_it_is(rng):
     assert lamp.position_m[2] == pytest.approx(HEIGHT_M)
     assert lamp.width_m == pytest.approx(width)
     assert lamp.peak == pytest.approx(1.5, rel=0.15)
+
+
+def test_no_lamp_is_hung_behind_a_wall(rng):
+    """The same pool, with a wall said to stand 0.3 m before its centre: the lamp above
+    it would hang in the next room, so none is put there."""
+    image, mask, calibration = _truth_calibration("room_1", 0.5)
+    rows, cols = np.nonzero(mask)
+    centre = np.median(calibration.floor_from_pixels(np.column_stack([cols, rows]).astype(np.float64)), axis=0)
+    width = 0.6 * HEIGHT_M
+    painted, _ = _painted_floor(calibration, mask,
+                                lambda xy: 1.0 + 1.5 * (1 + ((xy - centre) ** 2).sum(1) / width ** 2) ** -1.5, rng)
+    assert len(find_lamps(painted, mask, calibration, CEILING_M, 0.18)) == 1
+
+    def inside(xy):
+        return np.asarray(xy)[:, 0] < centre[0] - 0.3
+
+    lamps = find_lamps(painted, mask, calibration, CEILING_M, 0.18, inside=inside)
+    assert all(inside(np.array([lamp.position_m[:2]]))[0] for lamp in lamps)
+
+
+def test_the_room_ends_at_the_walls_in_view():
+    """A far wall along y = 3 m and a left one along x = -2 m, seen from (0, -1): points
+    past either (by more than 0.1 m) are out of the room; where no wall is seen, in."""
+    walls = np.array([[[-2.0, 3.0], [2.0, 3.0]], [[-2.0, -2.0], [-2.0, 3.0]]])
+    inside = _in_room(walls, (0.0, -1.0))
+    points = np.array([[0.0, 2.95], [0.0, 3.05], [0.0, 3.5], [1.0, 3.2], [3.0, 0.0], [-2.5, 0.0], [2.5, 3.5]])
+    assert inside(points).tolist() == [True, True, False, False, True, False, True]
 
 
 @pytest.mark.parametrize("slope", [0.0, 0.3])
