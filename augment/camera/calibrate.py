@@ -498,7 +498,12 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
                      "may be partly hidden).")
         tried = ("OpenCV's ChArUco detector" if board.kind == "charuco"
                  else "OpenCV's SB and classic detectors, on the whole photo and on crops")
-        raise CalibrationError(f"no {board.describe()} found in {where} (tried {tried}).{hint} "
+        small = ""
+        if max(size_px) < settings.small_photo_boards * settings.min_board_extent_px:
+            # A thumbnail or a messaging app's copy: the board is a few dozen pixels at most.
+            small = (f" The photo is only {width} x {height} px, too small to find a board in: "
+                     "use the camera's own full-size photo.")
+        raise CalibrationError(f"no {board.describe()} found in {where} (tried {tried}).{small}{hint} "
                                "It must lie flat and not be glared.")
     extent = detection.corners_px.max(axis=0) - detection.corners_px.min(axis=0)
     if extent.max() < settings.min_board_extent_px:

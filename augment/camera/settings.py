@@ -40,6 +40,7 @@ class CalibrateSettings:
     :mod:`augment.camera.calibration`)."""
 
     min_board_extent_px: int = 60  # smaller boards give too few pixels for a pose
+    small_photo_boards: int = 8  # a photo under this many boards' least extent (long side) is called too small
     max_rms_px: float = 2.0  # worse reprojection means a bent, moved or mis-sized board
     min_tilt_deg: float = 15.0  # single-view focal needs perspective: a face-on board says nothing of f
     max_tilt_deg: float = 85.0  # ... and a board seen nearly edge-on is a sliver

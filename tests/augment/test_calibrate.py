@@ -27,6 +27,7 @@ from augment.synth.camera import look_pose
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "opencv-chessboard"
 LEFT = sorted(DATA.glob("left*.jpg"))
+PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
 OPENCV = Board(9, 6, 25)
 
 
@@ -651,6 +652,18 @@ def test_hidden_checkerboard_is_refused_naming_charuco():
         sample = render_sample([99, 4], renderer, size_px=(640, 480), board_hidden=0.4)
     with pytest.raises(CalibrationError, match=r"no 7x5 checkerboard .*--board charuco:7x5, may be partly hidden"):
         calibrate_photo(sample.image, Board())
+
+
+def test_a_thumbnail_is_refused_as_too_small():
+    """room_4 shrunk to 160 x 120 px (a messaging app's preview): the board is 16 px
+    across and is not found; the refusal says the photo is too small, not only how to
+    count corners."""
+    image = read_photo(PHOTOS / "room_4.jpg")
+    thumb = cv2.resize(image, (160, 120), interpolation=cv2.INTER_AREA)
+    with pytest.raises(CalibrationError, match=r"no 7x5 checkerboard .* only 160 x 120 px, too small .*full-size"):
+        calibrate_photo(thumb, Board(), where="thumb.jpg")
+    # At the photo's own size the same board is found: the words are for small photos only.
+    assert calibrate_photo(image, Board()).rms_px < 1.0
 
 
 def test_both_tilts_of_a_projected_board_are_read_best_first(rng):
