@@ -822,7 +822,7 @@ def test_a_board_too_small_is_said_smaller_than_the_size_it_needs(monkeypatch):
     """room_4's board spans 130.8 px between its outer inner corners. Asked for 131 px, the
     refusal said "only 131 px across (at least 131 needed)": the size rounded up to the
     one it fails. It now says the whole pixels it has, 130."""
-    image = cv2.imread(str(Path(__file__).parents[2] / "samples/photos/room_4.jpg"))[..., ::-1].copy()
+    image = read_photo(PHOTOS / "room_4.jpg")
     corners = calibrate_photo(image, Board()).corners_px
     extent = float((corners.max(axis=0) - corners.min(axis=0)).max())
     assert 130.5 < extent < 131  # the case: rounding gives the size asked for
