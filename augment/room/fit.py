@@ -25,7 +25,7 @@ from layout.builder import LayoutBuilder
 from layout.camera import Camera, in_view_share, seats_at
 from layout.camera import faults as camera_faults
 from layout.errors import LayoutError
-from layout.geometry import polygon_area
+from layout.geometry import edge_distances, polygon_area
 from layout.spec import Opening
 from layout.presets import DEFAULT_ROOM, PRESETS, corner_sets
 
@@ -1071,6 +1071,33 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
         progress.grow(suggestions)
 
 
+def _window_on_wall(segment_m: np.ndarray, poly: np.ndarray, open_edges_: list[int]):
+    """A found window (the floor points (2, 2) under its sides) on the layout floor ``poly``:
+    its middle (2,) and width, meters, as found when its middle is near a wall; else the
+    part of it along one wall (a window running on past the photo's edge); None when no
+    ``ROOM.fit.window_on_wall_m`` of it runs along a wall."""
+    fit = ROOM.fit
+    middle = segment_m.mean(axis=0)
+    walls = [k for k in range(len(poly)) if k not in open_edges_]
+    if walls and edge_distances(middle[None], poly)[0][walls].min() <= fit.door_from_wall_m:
+        return middle, float(np.linalg.norm(segment_m[1] - segment_m[0]))
+    best = None
+    for k in walls:
+        a, b = poly[k], poly[(k + 1) % len(poly)]
+        length = float(np.linalg.norm(b - a))
+        u = (b - a) / max(length, 1e-12)
+        off = segment_m - a
+        if np.abs(off[:, 0] * u[1] - off[:, 1] * u[0]).max() > fit.door_from_wall_m:
+            continue  # not along this wall
+        t0, t1 = np.clip(np.sort(off @ u), 0.0, length)
+        if best is None or t1 - t0 > best[1] - best[0]:
+            best = (t0, t1, a, u)
+    if best is None or best[1] - best[0] < fit.window_on_wall_m:
+        return None
+    t0, t1, a, u = best
+    return a + u * 0.5 * (t0 + t1), float(t1 - t0)
+
+
 def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=None, found_doors=(),
                         found_windows=(), calibration=None, asset_kinds=(), warnings: list):
     """The furniture to lay out on a measured floor (the pipeline's ``furniture`` stage).
@@ -1092,7 +1119,8 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
         one that will not do as a door of the layout's floor is left out, not refused.
     found_windows : sequence of augment.room.openings.FoundWindow
         Windows found in the photo: furniture taller than a sill keeps
-        ``ROOM.fit.window_clearance_m`` from it; one wider than its wall is left out.
+        ``ROOM.fit.window_clearance_m`` from it; one running on past the floor in view keeps
+        its part along the wall (:func:`_window_on_wall`); one wider than its wall is left out.
     asset_kinds : iterable of str
         Kinds the user gave models of: a warning names those no item shows.
     warnings : list
@@ -1138,10 +1166,13 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
             break
     windows = []
     for w in found_windows:
-        width_m = float(np.linalg.norm(np.subtract(*w.segment_m)))
+        on_wall = _window_on_wall(np.asarray(w.segment_m, dtype=np.float64), poly, edges)
+        if on_wall is None:
+            continue  # it stands beyond the floor in view, or off its walls: a false find
+        middle_m, width_m = on_wall
         # The finder reads the glass; the frame and casing either side, often the wall's colour, go with it.
         for pad_m in (ROOM.fit.found_window_margin_m, 0.0):
-            window = Opening(tuple(float(v) for v in w.segment_m.mean(axis=0)), width_m + 2.0 * pad_m,
+            window = Opening(tuple(float(v) for v in middle_m), width_m + 2.0 * pad_m,
                              ROOM.fit.window_clearance_m, w.top_m - w.sill_m, w.sill_m, "found in the photo")
             try:
                 LayoutBuilder(poly, height_m, open_edges=edges).add_window(window.at_m, window.width_m, window.sill_m,

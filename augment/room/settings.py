@@ -73,6 +73,7 @@ class FitSettings:
     found_door_margin_m: float = 0.1  # a found door's zone reaches this far past its found sides and depth
     found_window_margin_m: float = 0.15  # a found window's zone reaches this far past its found sides
     window_clearance_m: float = 0.4  # furniture taller than a found window's sill keeps this far from it
+    window_on_wall_m: float = 0.3  # a found window past the floor in view: this much of it along a wall in view
 
 
 @dataclass

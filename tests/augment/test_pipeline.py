@@ -830,6 +830,32 @@ def test_open_edges_of_the_shrunk_floor_follow_the_measured_ones():
     assert len(vertical) == 2 and found == vertical
 
 
+def test_a_window_running_on_past_the_photos_edge_keeps_its_part_on_the_wall():
+    """A 4 x 3 m floor whose right side is the photo's edge; a window found on the front
+    wall (y = 0) from x = 3.5 m to 5.5 m, its middle 0.55 m past the floor in view. The
+    layouts keep the part on the wall of the floor shrunk by the 5 cm wall margin, x = 3.5
+    to 3.95 m, grown by the finder's margin either side; a window wholly past the edge is
+    left out. Both build; before, the first refused the photo ("put it on a wall")."""
+    from layout.spec import build
+
+    from augment.room.openings import FoundWindow
+
+    square = np.array([[0, 0], [4, 0], [4, 3], [0, 3]], float)
+    floor = FloorPolygon(square, ("boundary", "image", "boundary", "boundary"), 12.0, "")
+    margin = ROOM.fit.found_window_margin_m
+    for x0, kept in ((3.5, True), (4.2, False)):
+        window = FoundWindow(np.array([[x0, 0.0], [5.5, 0.0]]), 0.9, 2.1, np.zeros((4, 2)))
+        spec, _ = fit.furniture_for_floor("living_room", floor, 2.5, Path("room.jpg"), found_windows=[window],
+                                          warnings=[])
+        build(spec)
+        if not kept:
+            assert spec.windows == ()
+            continue
+        (w,) = spec.windows
+        assert w.at_m == pytest.approx((0.5 * (3.5 + 3.95), 0.05), abs=0.01)
+        assert w.zone_m[0] == pytest.approx(3.95 - 3.5 + 2 * margin, abs=0.01)
+
+
 def test_furniture_goes_against_walls_not_the_photos_edge(roomy):
     """room_4's floor meets the photo's edge on three sides: those are open edges in the
     layouts, and the TV stand (against a wall by default) is nearer a real wall than any
