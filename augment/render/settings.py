@@ -82,6 +82,9 @@ class StagedSettings:
     window_softness_rad: float = 0.5
     sun_key_range: tuple[float, float] = (0.3, 0.9)  # the sun's share of the light in the sun, at least and most
     sun_softness_rad: float = 0.01  # the sun's shadows: its disc, and a window's edge blur
+    # The sun through a window in view, its patches' edges too soft to read: its share and disc
+    window_sun_key: float = 0.6
+    window_sun_softness_rad: float = 0.03
     # A window in view casts the patches when the line from it to them is this close to the
     # sun's axis (cosine); then the light travels from it.
     sun_window_alignment: float = 0.5
@@ -134,6 +137,10 @@ class SunSettings:
     colour_gap_m: float = 0.05  # the sun's colour: sunlit floor and shade this far from the edges ...
     colour_ring_m: float = 0.3  # ... the shade within this of the patches ...
     max_tint: float = 2.5  # ... each channel within this factor of the luminance (a few pixels are noisy)
+    # Sun with no edge read, a window in view giving its azimuth: floor this many times its median light ...
+    bright_ratio: float = 2.2
+    bright_share: float = 0.03  # ... on this share of the floor seen, at least
+    bright_smooth_m: float = 0.03  # the light smoothed this much first (grain, seams)
 
 
 @dataclass

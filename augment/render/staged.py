@@ -58,7 +58,7 @@ from .gl import Renderer, Scene, far_camera, gl_from_cv_pose, pyrender, pyrender
 from .lamps import find_lamps
 from .look import PhotoLook, apply_look, blur_like_photo, estimate_look
 from .settings import RENDER, StagedSettings
-from .sun import REC709, find_sun, linear_luminance, unit_colour, wall_angles_rad
+from .sun import REC709, bright_floor, find_sun, linear_luminance, unit_colour, wall_angles_rad
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 
@@ -90,7 +90,8 @@ class Lighting:
         ``"sun"`` (the sun, its direction from the sunlit patches on the floor),
         ``"window"`` (from the brightest window) or ``"default"``.
     sun : SunOnFloor or None
-        With the sun (:func:`augment.render.sun.find_sun`): where the floor is in the sun.
+        With the sun (:func:`augment.render.sun.find_sun`, or through a window in view
+        :func:`augment.render.sun.bright_floor`): where the floor is in the sun.
         Then the key light reaches only what stands in its beam (where the light through
         a point lands on sunlit floor), and ``key_fraction`` is its share of the light in
         the sun.
@@ -236,8 +237,9 @@ def _nearer_edge_upstream(center_m, axis_xy, walls, floor_polygon) -> float:
     return 1.0 if out_m[0] < out_m[1] else -1.0
 
 
-def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon):
-    """:func:`augment.render.sun.find_sun` on this photo (the board's sheet left out), or None."""
+def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon, toward_xy=None):
+    """:func:`augment.render.sun.find_sun` on this photo (the board's sheet left out), or with
+    the sun's way ``toward_xy`` (2,) known, :func:`augment.render.sun.bright_floor`; or None."""
     mask = np.asarray(floor_mask, dtype=bool)
     if mask.shape != image.shape[:2]:
         mask = cv2.resize(mask.astype(np.uint8), image.shape[1::-1], interpolation=cv2.INTER_NEAREST) > 0
@@ -247,7 +249,10 @@ def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon):
         walls_rad = wall_angles_rad(poly, getattr(floor_polygon, "edge_kind", None))
     sheet = np.asarray(calibration.board.outline_m(), dtype=np.float64)[:, :2]
     grown = sheet + np.sign(sheet - sheet.mean(axis=0)) * RENDER.sun.board_margin_m
-    return find_sun(image, mask, np.linalg.inv(calibration.image_from_floor), cam_xy, walls_rad, grown)
+    floor_from_image = np.linalg.inv(calibration.image_from_floor)
+    if toward_xy is not None:
+        return bright_floor(image, mask, floor_from_image, cam_xy, toward_xy, grown)
+    return find_sun(image, mask, floor_from_image, cam_xy, walls_rad, grown)
 
 
 def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | None = None,
@@ -359,21 +364,20 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                 sign = -sign
         elev = math.radians(settings.sun_elevation_deg)
         direction = np.append(sign * axis * math.cos(elev), -math.sin(elev))
-        key = float(np.clip(1.0 - 1.0 / patches.contrast, *settings.sun_key_range))
         soft, source = settings.sun_softness_rad, "sun"
-        # The sun's colour against the shade's: on the paper in the sun, the two mixed
-        # (the sheet itself is left out of the sunlit floor: the floor around it tells).
-        ratio = np.asarray(patches.ratio_rgb, dtype=np.float64)
-        if np.median(patches.sunlit(around_m)) > 0.5:
-            irradiance = irradiance * np.asarray(unit_colour(1.0 / ratio))
-        key_rgb = unit_colour(ratio - 1.0)
     elif found is not None:
-        # Sunlit floor (a bright patch well above the floor's median) means direct sun.
+        # Sunlit floor (a bright patch well above the floor's median) means direct sun: its
+        # edges too soft to read, the window in view gives its azimuth, and only the floor
+        # that bright loses it under the furniture.
         floor_l = floor_lin @ [0.299, 0.587, 0.114]
-        sunny = floor_l.size > 0 and np.mean(floor_l > 2.2 * np.median(floor_l)) > 0.03
+        sunny = floor_l.size > 0 and np.mean(floor_l > RENDER.sun.bright_ratio * np.median(floor_l)) > (
+            RENDER.sun.bright_share)
+        patches = None if not (sunny and settings.sun_from_floor) else _sun_patches(
+            image, region_small if floor_mask is None else floor_mask, calibration, cam_xy, floor_polygon, -toward)
         elev = math.radians(settings.sun_elevation_deg if sunny else settings.window_elevation_deg)
         direction = np.append(-toward * math.cos(elev), -math.sin(elev))
-        key, soft = (0.6, 0.03) if sunny else (settings.window_key, settings.window_softness_rad)
+        key, soft = ((settings.window_sun_key, settings.window_sun_softness_rad) if sunny
+                     else (settings.window_key, settings.window_softness_rad))
         source = "window"
     else:
         elev = math.radians(65.0)
@@ -381,7 +385,16 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         # Nothing in the photo says where the light comes from: a weak, very soft key, so
         # no shadow is thrown far in a direction that is only a guess.
         key, soft, source = 0.15, 0.5, "default"
-    sun = patches if source == "sun" else None
+    sun = patches
+    if sun is not None:
+        if source == "sun":
+            key = float(np.clip(1.0 - 1.0 / sun.contrast, *settings.sun_key_range))
+        # The sun's colour against the shade's: on the paper in the sun, the two mixed
+        # (the sheet itself is left out of the sunlit floor: the floor around it tells).
+        ratio = np.asarray(sun.ratio_rgb, dtype=np.float64)
+        if np.median(sun.sunlit(around_m)) > 0.5:
+            irradiance = irradiance * np.asarray(unit_colour(1.0 / ratio))
+        key_rgb = unit_colour(ratio - 1.0)
     lamps = ()
     if floor_mask is not None:
         lamps = find_lamps(image, np.asarray(floor_mask, dtype=bool), calibration,

@@ -196,6 +196,54 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     SunOnFloor or None
     """
     settings = RENDER.sun if settings is None else settings
+    view = _top_view(image, floor_mask, floor_from_image, camera_xy_m, exclude_m, settings)
+    if view is None:
+        return None
+    top_rgb, top, valid, standing, lo, cell = view
+    for sigma_m, min_contrast in settings.edge_scales:  # sharp edges first, then soft ones (a blurred photo)
+        found = _patches_at(top, valid, standing, lo, cell, sigma_m, min_contrast, walls_rad, settings)
+        if found is not None:
+            return dataclasses.replace(found, ratio_rgb=_ratio_rgb(top_rgb, found, settings))
+    return None
+
+
+
+def bright_floor(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.ndarray, camera_xy_m, axis_xy,
+                 exclude_m=None, settings: SunSettings | None = None) -> SunOnFloor | None:
+    """Sunlit floor whose edges :func:`find_sun` does not read (soft, or blurred by the
+    photo), the sun's azimuth known from elsewhere (a window in view): the floor over
+    ``settings.bright_ratio`` times its median light, when that is at least
+    ``settings.bright_share`` of the floor seen. So only that floor loses the sun under
+    the furniture, not all of it.
+
+    Parameters are :func:`find_sun`'s, and ``axis_xy`` (2,): the way the light travels on
+    the floor. Returns a :class:`SunOnFloor` (its ``downstream`` 0, no edges), or None.
+    """
+    settings = RENDER.sun if settings is None else settings
+    view = _top_view(image, floor_mask, floor_from_image, camera_xy_m, exclude_m, settings)
+    if view is None:
+        return None
+    top_rgb, top, valid, _, lo, cell = view
+    log = cv2.GaussianBlur(np.log(np.maximum(top, 1e-4)), (0, 0), max(1.0, settings.bright_smooth_m / cell))
+    shade = float(np.median(log[valid]))
+    lit = valid & (log > shade + math.log(settings.bright_ratio))
+    lit = cv2.morphologyEx(lit.astype(np.uint8), cv2.MORPH_OPEN, np.ones((5, 5), np.uint8)) > 0
+    if lit.sum() < settings.bright_share * valid.sum():
+        return None
+    rc = np.argwhere(lit).mean(axis=0)
+    axis = np.asarray(axis_xy, dtype=np.float64)[:2]
+    found = SunOnFloor((tuple(float(v) for v in axis / np.linalg.norm(axis)),), False, 0.0,
+                       float(math.exp(np.median(log[lit]) - np.median(log[valid & ~lit]))),
+                       (float(lo[0] + rc[1] * cell), float(lo[1] + rc[0] * cell)), 0, float(lit.sum() / valid.sum()),
+                       (float(lo[0]), float(lo[1])), float(cell), lit, valid, float(settings.bright_smooth_m))
+    return dataclasses.replace(found, ratio_rgb=_ratio_rgb(top_rgb, found, settings))
+
+
+def _top_view(image, floor_mask, floor_from_image, camera_xy_m, exclude_m, settings: SunSettings):
+    """The floor in view from above, within ``settings.reach_m`` of the camera's foot:
+    its colour (rows, cols, 3) uint8 and linear light, the floor seen (bool), the walls and
+    things standing in view (bool), the view's corner (2,) and cell, meters; None when
+    too little floor shows."""
     h, w = floor_mask.shape
     image_from_floor = np.linalg.inv(floor_from_image)
     # The floor in view, from above: its box from a coarse sample of the mask's pixels.
@@ -231,11 +279,7 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     if exclude_m is not None:  # the board: its paper's edges are the sharpest steps on the floor
         corners = (np.asarray(exclude_m, dtype=np.float64) - lo) / cell
         cv2.fillConvexPoly(valid.view(np.uint8), np.round(corners).astype(np.int32), 0)
-    for sigma_m, min_contrast in settings.edge_scales:  # sharp edges first, then soft ones (a blurred photo)
-        found = _patches_at(top, valid, standing, lo, cell, sigma_m, min_contrast, walls_rad, settings)
-        if found is not None:
-            return dataclasses.replace(found, ratio_rgb=_ratio_rgb(top_rgb, found, settings))
-    return None
+    return top_rgb, top, valid, standing, lo, cell
 
 
 def unit_colour(ratio, limit: float | None = None) -> tuple:

@@ -202,6 +202,40 @@ def test_a_soft_edged_patch_is_read_at_the_coarser_scale(rng):
     assert abs(axis - 30.0) < 2.0
 
 
+def test_a_patch_too_soft_for_its_edges_is_bounded_by_its_light(rng):
+    """A sun patch 2.9 times as bright as the shade ((130 / 80) ** 2.2), its light
+    blurred by 15 cm: find_sun reads no edge at either scale. Given the sun's azimuth (a
+    window in view), bright_floor keeps the patch's core (the floor over 2.2 times the
+    median): all but 5 % of the true patch more than 10 cm inside its edges, nothing beyond
+    10 cm outside them, 60-100 % of its area; and reads its contrast within 15 %."""
+    import cv2
+
+    from augment.render.sun import bright_floor
+
+    image, mask = _sunny_floor(rng)
+    patch = (image[..., 0] > 120) & mask
+    level = np.where(patch, 130.0, 80.0)
+    soft = cv2.GaussianBlur(level, (0, 0), 0.15 / MM) + rng.normal(0, 2.0, level.shape)
+    soft = np.repeat(np.clip(soft, 0, 255)[..., None], 3, axis=2).astype(np.uint8)
+    soft[~mask] = 200
+    walls = np.radians([0.0, 90.0])
+    assert find_sun(soft, mask, FLOOR_FROM_IMAGE, (0.0, 0.0), walls) is None
+    axis = (math.cos(math.radians(30.0)), math.sin(math.radians(30.0)))
+    sun = bright_floor(soft, mask, FLOOR_FROM_IMAGE, (0.0, 0.0), axis)
+    x, y = _floor_points()
+    lit = sun.sunlit(np.stack([x, y], axis=-1)) > 0.5
+    reach = round(0.1 / MM)
+    inner = cv2.erode(patch.astype(np.uint8), np.ones((2 * reach + 1,) * 2, np.uint8)) > 0
+    outer = cv2.dilate(patch.astype(np.uint8), np.ones((2 * reach + 1,) * 2, np.uint8)) > 0
+    assert (lit & inner).sum() >= 0.95 * inner.sum()
+    assert not (lit & ~outer & mask).any()
+    assert 0.6 * patch.sum() <= lit.sum() <= patch.sum()
+    assert sun.axes_xy[0] == pytest.approx(axis) and sun.downstream == 0
+    assert sun.contrast == pytest.approx((130 / 80) ** 2.2, rel=0.15)
+    flat = np.full_like(soft, 80)
+    assert bright_floor(flat, mask, FLOOR_FROM_IMAGE, (0.0, 0.0), axis) is None
+
+
 @pytest.mark.parametrize("kind", ["planks", "plain"])
 def test_no_sun_on_planks_or_a_plain_floor(rng, kind):
     x, y = _floor_points()
@@ -214,22 +248,30 @@ def test_no_sun_on_planks_or_a_plain_floor(rng, kind):
     assert find_sun(image, np.ones((H, W), bool), FLOOR_FROM_IMAGE, (0.0, 0.0), walls) is None
 
 
-def _sun_error_deg(sample, settings=None):
-    """The key light estimated from a synthetic photo (the room's walls from its true
-    outline), and its angle on the floor to the photographer's sun, degrees."""
+def _estimated(sample, settings=None):
+    """The light estimated from a synthetic photo (the room's walls from its true
+    outline), and ``world_from_floor`` (4, 4): its floor frame in the photographer's world."""
     truth = sample.truth
-    sun = next(lt for lt in truth["render"]["lights"] if lt["kind"] == "sun")
     cal = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(truth["K"][0][0], truth["size_px"]))
     world_from_board = np.asarray(truth["board"]["world_from_board"])
     # The calibration's floor frame is the board's, up to its half-turn symmetry.
     M = np.linalg.inv(world_from_board) @ np.linalg.inv(np.asarray(truth["camera_from_world"])) @ cal.camera_from_floor
     turn = round(math.atan2(M[1, 0], M[0, 0]) / math.pi) * math.pi
-    world_from_floor = world_from_board[:3, :3] @ np.array(
+    world_from_floor = world_from_board.copy()
+    world_from_floor[:3, :3] = world_from_board[:3, :3] @ np.array(
         [[math.cos(turn), -math.sin(turn), 0], [math.sin(turn), math.cos(turn), 0], [0, 0, 1]])
     room = np.asarray(truth["room"]["polygon_m"])
-    outline = ((np.column_stack([room, np.zeros(len(room))]) - world_from_board[:3, 3]) @ world_from_floor)[:, :2]
-    lighting = estimate_lighting(sample.image, cal, sample.floor_mask, settings, floor_polygon=outline)
-    true_xy = (world_from_floor.T @ np.asarray(sun["direction"]))[:2]
+    outline = ((np.column_stack([room, np.zeros(len(room))]) - world_from_board[:3, 3]) @ world_from_floor[:3, :3])
+    lighting = estimate_lighting(sample.image, cal, sample.floor_mask, settings, floor_polygon=outline[:, :2])
+    return lighting, world_from_floor
+
+
+def _sun_error_deg(sample, settings=None):
+    """The key light estimated from a synthetic photo, and its angle on the floor to the
+    photographer's sun, degrees."""
+    sun = next(lt for lt in sample.truth["render"]["lights"] if lt["kind"] == "sun")
+    lighting, world_from_floor = _estimated(sample, settings)
+    true_xy = (world_from_floor[:3, :3].T @ np.asarray(sun["direction"]))[:2]
     got_xy = np.asarray(lighting.direction[:2])
     cos = true_xy @ got_xy / np.linalg.norm(true_xy) / np.linalg.norm(got_xy)
     return lighting, math.degrees(math.acos(np.clip(cos, -1, 1)))
@@ -260,6 +302,29 @@ def test_sun_through_the_window_in_view(renderer):
     sample = render_sample([9601, 28], renderer, size_px=(1600, 1200), clutter=False)
     lighting, angle = _sun_error_deg(sample)
     assert lighting.source == "sun" and angle < 5.0
+
+
+def test_a_soft_sun_patch_below_a_window_in_view_bounds_the_sun(renderer):
+    """Render [9800, 38]: the sun through the window in view onto the floor, its patch too
+    soft for find_sun's edges. The key light is the window's, and the floor it takes as
+    sunlit (:func:`bright_floor`) is in the photographer's sun: 90 % of it at least, by the
+    room's geometry (the ray to the sun leaves through a window)."""
+    from augment.synth import render_sample
+    from augment.synth.truth import sun_exit
+
+    sample = render_sample([9800, 38], renderer, size_px=(1280, 960), clutter=False)
+    lighting, world_from_floor = _estimated(sample)
+    assert lighting.source == "window" and lighting.sun is not None
+    sun = lighting.sun
+    rows, cols = np.nonzero(sun.lit)
+    xy = np.column_stack([sun.lo_m[0] + (cols + 0.5) * sun.cell_m, sun.lo_m[1] + (rows + 0.5) * sun.cell_m])
+    world = np.column_stack([xy, np.zeros(len(xy)), np.ones(len(xy))]) @ world_from_floor.T
+    truth = sample.truth
+    light = next(lt for lt in truth["render"]["lights"] if lt["kind"] == "sun")
+    windows = [(np.asarray(w["segment_m"]), w["bottom_m"], w["top_m"]) for w in truth["room"]["windows"]]
+    lit = sun_exit(world[:, :3], light["direction"], np.asarray(truth["room"]["polygon_m"]), truth["room"]["height_m"],
+                   windows) > 0
+    assert len(xy) > 500 and lit.mean() >= 0.9
 
 
 def _sun_over(lit_where, share=0.5):
