@@ -43,6 +43,7 @@ class StagedSettings:
     window_clipped: float = 245.0  # luminance (0-255, at 320 px) a blown-out window reaches
     window_edge_ratio: float = 0.9  # a window's outline: the light 2 px outside at most this x 2 px inside
     # (windows 0.3-0.7, 0.87 in a cream frame on bright walls; a lamp's glow on a wall 0.97-0.99, at 320 px)
+    window_min_sill_m: float = 0.45  # a bright blob on a wall reaching lower is sun on the wall or a door
     ao_strength: float = 1.0  # share of the ambient light occlusion removes at most
     ao_directions: int = 96  # sky directions sampled for the floor's occlusion (cosine-weighted) ...
     ao_blur_rel: float = 0.5  # ... their shadows' copies blurred by this x their spacing at a typical height

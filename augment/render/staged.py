@@ -169,9 +169,11 @@ def _floor_region(shape, K, pose, max_m=8.0):
     return (down & (reach < max_m)).reshape(h, w)
 
 
-def _window(lum, candidates, settings: StagedSettings):
+def _window(lum, candidates, settings: StagedSettings, height_m=None):
     """The brightest window-like blob of a small photo's luminance (h, w): its centroid
-    (x, y) in pixels, or None."""
+    (x, y) in pixels, or None. ``height_m(x, y)``, when given, says how high on its wall a
+    pixel lies (meters, NaN where no wall in view): a blob whose foot lies lower than
+    ``settings.window_min_sill_m`` is sun climbing the wall or a lit door, not a window."""
     if candidates.sum() < 0.01 * lum.size:
         return None
     # A window is the brightest thing in view and clearly brighter than the walls around,
@@ -197,9 +199,23 @@ def _window(lum, candidates, settings: StagedSettings):
             continue
         outside = (cv2.dilate(blob, ring) > 0) & (blob == 0)
         inside = (blob > 0) & (cv2.erode(blob, ring) == 0)
-        if outside.any() and np.median(lum[outside]) <= settings.window_edge_ratio * np.median(lum[inside]):
-            return centroids[k]
+        if not (outside.any() and np.median(lum[outside]) <= settings.window_edge_ratio * np.median(lum[inside])):
+            continue
+        foot_y = np.percentile(ys, 95)
+        if height_m is not None and height_m(float(np.median(xs[ys >= foot_y])), foot_y) < settings.window_min_sill_m:
+            continue
+        return centroids[k]
     return None
+
+
+def _height_on_wall_m(x_px: float, y_px: float, K, pose, walls) -> float:
+    """How high above the floor the ray through pixel (x, y) meets the first wall segment
+    (k, 2, 2) ahead, meters (lens distortion ignored); NaN when it meets none."""
+    R = pose[:3, :3]
+    eye = -R.T @ pose[:3, 3]
+    ray = R.T @ np.linalg.solve(K, [x_px, y_px, 1.0])
+    t_m, which = _first_wall(walls, ray[None], eye[:2])
+    return math.nan if which[0] < 0 else float(eye[2] + ray[2] * t_m[0] / max(float(np.hypot(*ray[:2])), 1e-9))
 
 
 def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, lum, wall_lum, small_scale) -> bool:
@@ -330,9 +346,10 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     forward = R.T @ np.array([0, 0, 1.0])
     lum_small = small @ np.array([0.299, 0.587, 0.114])
     wall_lum = float(np.median(lum_small[~region_small])) if (~region_small).any() else None
-    found = _window(lum_small, ~region_small, settings)
     horiz = forward[:2] / max(np.linalg.norm(forward[:2]), 1e-9)
     walls = None if floor_polygon is None else wall_segments(floor_polygon)
+    found = _window(lum_small, ~region_small, settings, None if walls is None or len(walls) == 0 else (
+        lambda x, y: _height_on_wall_m(x / small_scale, y / small_scale, K, pose, walls)))
     window_xy = None
     if found is not None:
         cx, cy = found

@@ -3,6 +3,7 @@ shadows, occlusion, the furniture's sizes, and the renderer's hygiene."""
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -20,9 +21,9 @@ from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furnitur
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
-from augment.render.staged import (Lighting, _Caster, _floor_gain, _nearer_edge_upstream, _plain_wall_upstream,
-                                   _render_scale, _roll_off, _walls_run_on, _window, estimate_lighting, render_staged,
-                                   wall_segments, write_jpeg)
+from augment.render.staged import (Lighting, _Caster, _floor_gain, _height_on_wall_m, _nearer_edge_upstream,
+                                   _plain_wall_upstream, _render_scale, _roll_off, _walls_run_on, _window,
+                                   estimate_lighting, render_staged, wall_segments, write_jpeg)
 from layout.catalog import CATALOG
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -561,6 +562,31 @@ def test_a_blown_out_window_on_bright_walls_is_a_window():
     lum[100:130, 200:240] = 252.0
     found = _window(lum, candidates, settings)
     assert found is not None and tuple(found) == pytest.approx((219.5, 114.5), abs=0.01)
+
+
+def test_a_bright_blob_reaching_down_the_wall_to_the_floor_is_no_window():
+    """A level camera 1.4 m up looking along +y at a wall 4 m away (f = 250 px, 320 x 240):
+    a pixel's row y meets the wall 1.4 - 4 (y - 120) / 250 m up (row 151 at 0.9 m, row
+    207.5 at the floor). A bright pane from 0.9 to 2.0 m up is the window; the same
+    brightness from the floor to 1.2 m up is sun on the wall (or a lit door), not one."""
+    K = np.array([[250.0, 0, 160], [0, 250.0, 120], [0, 0, 1]])
+    pose = np.eye(4)
+    pose[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
+    pose[:3, 3] = [0.0, 1.4, 0.0]
+    walls = np.array([[[-5.0, 4.0], [5.0, 4.0]]])
+    assert _height_on_wall_m(160.0, 151.25, K, pose, walls) == pytest.approx(0.9)
+    assert _height_on_wall_m(10.0, 207.5, K, pose, walls) == pytest.approx(0.0, abs=1e-9)
+    assert math.isnan(_height_on_wall_m(160.0, 100.0, K, pose, walls[:, ::-1] - [0.0, 8.0]))  # wall behind
+    settings = RENDER.staged
+    candidates = np.ones((240, 320), bool)
+    height = lambda x, y: _height_on_wall_m(x, y, K, pose, walls)  # noqa: E731
+    lum = np.full((240, 320), 120.0)
+    lum[83:151, 200:240] = 230.0  # 2.0 to 0.9 m up
+    assert tuple(_window(lum, candidates, settings, height)) == pytest.approx((219.5, 116.5), abs=0.01)
+    lum = np.full((240, 320), 120.0)
+    lum[158:208, 200:240] = 230.0  # 0.8 m to the floor
+    assert _window(lum, candidates, settings) is not None
+    assert _window(lum, candidates, settings, height) is None
 
 
 def test_a_plain_wall_in_view_where_the_suns_window_would_be():

@@ -304,6 +304,18 @@ def test_sun_through_the_window_in_view(renderer):
     assert lighting.source == "sun" and angle < 5.0
 
 
+def test_a_lit_door_is_no_window(renderer):
+    """Render [9801, 33]: the brightest thing on its walls is a cream door at the photo's
+    edge, lit by the sun; it reaches the floor, so the key light is not taken from it as
+    from a window (it was, 160 degrees off the sun, before the sill test)."""
+    from augment.synth import render_sample
+
+    sample = render_sample([9801, 33], renderer, size_px=(1280, 960), clutter=False)
+    assert _sun_error_deg(sample)[0].source != "window"
+    no_sill = replace(RENDER.staged, window_min_sill_m=0.0)
+    assert _sun_error_deg(sample, no_sill)[0].source == "window"
+
+
 def test_a_soft_sun_patch_below_a_window_in_view_bounds_the_sun(renderer):
     """Render [9800, 38]: the sun through the window in view onto the floor, its patch too
     soft for find_sun's edges. The key light is the window's, and the floor it takes as
