@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 import tempfile
 import time
@@ -273,6 +274,21 @@ def _rendered_visible(lay, calibration, renderer, style: str, judged) -> dict:
     return out
 
 
+def _said_to_repeat(notes) -> set:
+    """The suggestions (0-based) that ``notes`` say repeat an earlier one, said of one
+    ("suggestion 3 repeats an earlier one: ...") or of several ("suggestions 2, 3 and 4
+    repeat an earlier one: ...")."""
+    said = set()
+    for note in notes:
+        one = re.match(r"suggestion (\d+) repeats an earlier one", note)
+        several = re.match(r"suggestions ([\d, ]+) and (\d+) repeat an earlier one", note)
+        if one:
+            said.add(int(one.group(1)) - 1)
+        elif several:
+            said.update(int(k) - 1 for k in several.group(1).split(", ") + [several.group(2)])
+    return said
+
+
 def _forced_repeats(spec, corners, layouts, notes) -> set:
     """The suggestions (0-based) that say in ``notes`` that they repeat an earlier one and
     could not do otherwise: no clean try of the furniture ``spec``, of it without one of its
@@ -284,8 +300,7 @@ def _forced_repeats(spec, corners, layouts, notes) -> set:
     from augment.room.settings import ROOM
     from layout.spec import build
 
-    repeats = [k for k in range(len(layouts))
-               if any(n.startswith(f"suggestion {k + 1} repeats an earlier one") for n in notes)]
+    repeats = sorted(_said_to_repeat(notes) & set(range(len(layouts))))
     variants = [] if not repeats else (
         [spec] + [fit._drop(spec, [i.id for i in u])[0] for u in fit._units(spec)[:0:-1]] + list(corners))
     built = [build(v) for v in variants]
