@@ -140,13 +140,13 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     cols, rows = (int(np.ceil(v * small.ppm)) for v in extent)
     small_rgb, small_valid = small.sample(image, floor_mask, (0, 0, cols, rows), shrink=True)
     lab = cv2.cvtColor(small_rgb, cv2.COLOR_RGB2LAB).astype(np.float32)
-    printed, on = _printed(small, (rows, cols), board, lab[..., 0], small_valid)
+    printed, on, squares = _printed(small, (rows, cols), board, lab[..., 0], small_valid)
     colours = _print_colours(lab, small_valid, printed, on)
     sheet = _grow_to_paper(small, lab, small_valid, sheet, board, colours)
     short_m = float(np.min(sheet[1] - sheet[0]))
     hole = small.rectangle(sheet, (0, 0, cols, rows))
     # What stands on the sheet stays, and is no floor to copy from.
-    foreign = _foreign(lab, small_valid, hole, printed, on, board.square_m * small.ppm, colours)
+    foreign = _foreign(lab, small_valid, hole, printed, squares, board.square_m * small.ppm, colours)
     covered = float(foreign.sum()) / max(1, int(hole.sum()))
     small_valid = small_valid & ~foreign
     hole &= ~foreign
@@ -347,9 +347,11 @@ def _photo_density(view: _TopDown, shape) -> np.ndarray:
     return cv2.resize(det, (gx.shape[1] * 8, gy.shape[0] * 8), interpolation=cv2.INTER_LINEAR)[:rows, :cols]
 
 
-def _printed(view: _TopDown, shape, board, lightness, valid) -> tuple[np.ndarray, np.ndarray]:
+def _printed(view: _TopDown, shape, board, lightness, valid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The print as :meth:`Board.image` lays it on the floor, in the view: (rows, cols)
-    float32 grey levels, and where the sheet is (bool).
+    float32 grey levels, where the sheet is and where its squares are (bool each).
+    A print without the margin (or on smaller paper) shows floor where the margin would
+    be: only the squares are sure to be printed.
 
     A chessboard's pose is known up to a half turn, and a chessboard seen from above is
     its print mirrored; either can swap its squares' colours but never the white margin.
@@ -376,7 +378,7 @@ def _printed(view: _TopDown, shape, board, lightness, valid) -> tuple[np.ndarray
     seen = squares & valid
     if seen.sum() > 20 and np.corrcoef(lightness[seen], printed[seen])[0, 1] < 0:
         printed = np.where(squares, 255.0 - printed, printed).astype(np.float32)
-    return printed, on
+    return printed, on, squares
 
 
 def _print_colours(lab, valid, printed, on):
@@ -396,24 +398,30 @@ def _print_colours(lab, valid, printed, on):
     return paper, ink, max(12.0, 3.0 * 1.4826 * spread)
 
 
-def _foreign(lab, valid, hole, printed, on, square_px, colours) -> np.ndarray:
+def _foreign(lab, valid, hole, printed, squares, square_px, colours) -> np.ndarray:
     """(rows, cols) bool: what stands on the sheet (a carton over part of a ChArUco
-    board). Where the print's squares are, the photo follows their pattern (shade
+    board). Where the print's ``squares`` are, the photo follows their pattern (shade
     darkens black and white alike) and a thing on them does not: the local correlation
-    of the lightness with the print, over a square, is low. Such a patch, a quarter
-    square across or more, then takes in the sheet's pixels of its colour joined to it
-    (the thing over the margin)."""
-    if not on.any():
+    of the lightness with the print, over a square wholly on the squares (past them a
+    print without its margin shows floor), is low. Such a patch, a quarter square across
+    or more, then takes in the sheet's pixels of its colour joined to it (the thing over
+    the margin)."""
+    if not squares.any():
         return np.zeros(hole.shape, bool)
     window = (max(3, int(round(square_px)) | 1),) * 2
     box = lambda im: cv2.boxFilter(im, cv2.CV_32F, window)  # noqa: E731
+    # Means over each window's pixels on the squares only.
+    w = squares.astype(np.float32)
+    share = box(w)
+    mean = lambda im: box(im * w) / np.maximum(share, 1e-6)  # noqa: E731
     light = lab[..., 0]
-    mo, mp = box(light), box(printed)
-    cov = box(light * printed) - mo * mp
-    var_o = np.maximum(box(light * light) - mo * mo, 0)
-    var_p = np.maximum(box(printed * printed) - mp * mp, 0)
-    # Only windows the photo shows (a board cut off at the photo's edge).
-    patterned = (var_p > 0.5 * float(np.percentile(var_p[on], 90))) & (box(valid.astype(np.float32)) > 0.9)
+    mo, mp = mean(light), mean(printed)
+    cov = mean(light * printed) - mo * mp
+    var_o = np.maximum(mean(light * light) - mo * mo, 0)
+    var_p = np.maximum(mean(printed * printed) - mp * mp, 0)
+    # Only windows the photo shows (a board cut off at the photo's edge), half on the squares.
+    patterned = (var_p > 0.5 * float(np.percentile(var_p[squares], 90))) & (box(valid.astype(np.float32)) > 0.9) \
+        & (share > 0.25)
     ncc = cov / np.sqrt(var_o * var_p + 1e-6)
     core = (ncc < 0.3) & patterned & hole & valid
     size = max(3, int(round(square_px / 4)) | 1)
