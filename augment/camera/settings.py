@@ -20,6 +20,8 @@ class DetectSettings:
 
     max_side_px: int = 1280  # a checkerboard is looked for in a copy no larger than this
     min_charuco_corners: int = 6  # a partly hidden ChArUco board needs this many corners, not in a line
+    charuco_zoom: float = 2.0  # markers not read at full size are looked for again this much enlarged ...
+    charuco_zoom_max_px: int = 4096  # ... when the enlarged photo's long side stays within this
     saddle_window: dict[str, float] = field(
         default_factory=lambda: {"chessboard": 0.4, "charuco": 0.15})  # x spacing: in a corner's squares, off markers
     max_saddle_radius_px: int = 24  # the saddle window's radius at most: the fit's cost grows with its area

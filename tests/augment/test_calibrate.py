@@ -647,6 +647,27 @@ def test_partly_hidden_charuco_board_still_calibrates(charuco_renders):
     assert abs(alone.camera_height_m - height) / height < 2 * alone.intrinsics.focal_uncertainty
 
 
+@pytest.mark.parametrize("seed", [[9320, 1], [9320, 33]])
+def test_a_charuco_print_whose_markers_show_only_enlarged(seed):
+    """Prints of the ChArUco board with their margin, blurred over about a pixel and
+    saved as JPEG: at full size OpenCV's detector reads too few corners (calibration
+    failed), enlarged twice it reads most. Its sheet's corners then land within 2 px of where
+    the print lies in the photo."""
+    from augment.synth.prints import pasted_board
+
+    case = pasted_board(np.random.default_rng(seed), (1280, 960), pattern="charuco")
+    assert case.case["margin"] == "sheet"
+    gray = cv2.cvtColor(case.photo, cv2.COLOR_RGB2GRAY)
+    ids = detect._charuco_detector(case.board).detectBoard(gray)[1]
+    assert ids is None or len(ids) < CAMERA.detect.min_charuco_corners
+    cal = calibrate_photo(case.photo, case.board, intrinsics=exif_intrinsics(case.K[0, 0], (1280, 960)))
+    half = np.array(case.board.sheet_mm) / 2000.0
+    sheet = np.array([[-half[0], -half[1]], [half[0], -half[1]], [half[0], half[1]], [-half[0], half[1]]])
+    px = cal.pixels_from_floor(sheet)
+    # The sheet's corners in either order round (the board's frame may turn).
+    assert np.linalg.norm(px[:, None] - np.asarray(case.sheet_px)[None], axis=2).min(axis=1).max() < 2.0
+
+
 def test_hidden_checkerboard_is_refused_naming_charuco():
     with Renderer() as renderer:
         sample = render_sample([99, 4], renderer, size_px=(640, 480), board_hidden=0.4)
