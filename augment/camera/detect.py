@@ -424,14 +424,15 @@ def _charuco_detector(board: Board):
 def _detect_charuco(gray: np.ndarray, board: Board) -> BoardDetection | None:
     # Full resolution: marker bits are small, and reading them is cheap.
     settings = CAMERA.detect
-    corners, charuco_ids, _, _ = _charuco_detector(board).detectBoard(gray)
+    detector = _charuco_detector(board)
+    corners, charuco_ids, _, _ = detector.detectBoard(gray)
     zoom = settings.charuco_zoom
     if (charuco_ids is None or len(charuco_ids) < settings.min_charuco_corners) \
             and max(gray.shape) * zoom <= settings.charuco_zoom_max_px:
         # A far or blurred board's marker bits are a pixel or two: enlarged, their outlines
         # are found. Pixel centers map back as x = (x_big + 0.5) / zoom - 0.5.
         big = cv2.resize(gray, None, fx=zoom, fy=zoom, interpolation=cv2.INTER_CUBIC)
-        corners, charuco_ids, _, _ = _charuco_detector(board).detectBoard(big)
+        corners, charuco_ids, _, _ = detector.detectBoard(big)
         if corners is not None:
             corners = (corners + 0.5) / zoom - 0.5
     if charuco_ids is None or len(charuco_ids) < settings.min_charuco_corners:

@@ -402,8 +402,8 @@ def _foreign(lab, valid, hole, printed, squares, square_px, colours) -> np.ndarr
     """(rows, cols) bool: what stands on the sheet (a carton over part of a ChArUco
     board). Where the print's ``squares`` are, the photo follows their pattern (shade
     darkens black and white alike) and a thing on them does not: the local correlation
-    of the lightness with the print, over a square wholly on the squares (past them a
-    print without its margin shows floor), is low. Such a patch, a quarter square across
+    of the lightness with the print, over a square's window and its pixels on the squares
+    only (past them a print without its margin shows floor), is low. Such a patch, a quarter square across
     or more, then takes in the sheet's pixels of its colour joined to it (the thing over
     the margin)."""
     if not squares.any():
@@ -419,7 +419,7 @@ def _foreign(lab, valid, hole, printed, squares, square_px, colours) -> np.ndarr
     cov = mean(light * printed) - mo * mp
     var_o = np.maximum(mean(light * light) - mo * mo, 0)
     var_p = np.maximum(mean(printed * printed) - mp * mp, 0)
-    # Only windows the photo shows (a board cut off at the photo's edge), half on the squares.
+    # Only windows the photo shows (a board cut off at the photo's edge), a quarter on the squares.
     patterned = (var_p > 0.5 * float(np.percentile(var_p[squares], 90))) & (box(valid.astype(np.float32)) > 0.9) \
         & (share > 0.25)
     ncc = cov / np.sqrt(var_o * var_p + 1e-6)

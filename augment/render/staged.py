@@ -208,14 +208,16 @@ def _window(lum, candidates, settings: StagedSettings, height_m=None):
     return None
 
 
-def _height_on_wall_m(x_px: float, y_px: float, K, pose, walls) -> float:
-    """How high above the floor the ray through pixel (x, y) meets the first wall segment
-    (k, 2, 2) ahead, meters (lens distortion ignored); NaN when it meets none."""
+def _on_wall_m(x_px: float, y_px: float, K, pose, walls) -> np.ndarray:
+    """Where the ray through pixel (x, y) meets the first wall segment (k, 2, 2) ahead:
+    (3,) floor-frame meters, z its height (lens distortion ignored); NaN when it meets none."""
     R = pose[:3, :3]
     eye = -R.T @ pose[:3, 3]
     ray = R.T @ np.linalg.solve(K, [x_px, y_px, 1.0])
     t_m, which = _first_wall(walls, ray[None], eye[:2])
-    return math.nan if which[0] < 0 else float(eye[2] + ray[2] * t_m[0] / max(float(np.hypot(*ray[:2])), 1e-9))
+    if which[0] < 0:
+        return np.full(3, np.nan)
+    return eye + ray * (t_m[0] / max(float(np.hypot(*ray[:2])), 1e-9))
 
 
 def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, lum, wall_lum, small_scale) -> bool:
@@ -349,15 +351,15 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     horiz = forward[:2] / max(np.linalg.norm(forward[:2]), 1e-9)
     walls = None if floor_polygon is None else wall_segments(floor_polygon)
     found = _window(lum_small, ~region_small, settings, None if walls is None or len(walls) == 0 else (
-        lambda x, y: _height_on_wall_m(x / small_scale, y / small_scale, K, pose, walls)))
+        lambda x, y: _on_wall_m(x / small_scale, y / small_scale, K, pose, walls)[2]))
     window_xy = None
     if found is not None:
         cx, cy = found
         ray = R.T @ np.linalg.solve(K, [cx / small_scale, cy / small_scale, 1.0])
         toward = ray[:2] / max(np.linalg.norm(ray[:2]), 1e-9)
         if walls is not None:  # the window's wall: the first one the ray meets
-            t_m, which = _first_wall(walls, toward[None], cam_xy)
-            window_xy = None if which[0] < 0 else cam_xy + t_m[0] * toward
+            at = _on_wall_m(cx / small_scale, cy / small_scale, K, pose, walls)
+            window_xy = None if np.isnan(at[0]) else at[:2]
     patches = None if not settings.sun_from_floor else _sun_patches(
         image, region_small if floor_mask is None else floor_mask, calibration, cam_xy, floor_polygon)
     key_rgb = (1.0, 1.0, 1.0)

@@ -3,7 +3,6 @@ shadows, occlusion, the furniture's sizes, and the renderer's hygiene."""
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -21,7 +20,7 @@ from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furnitur
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
-from augment.render.staged import (Lighting, _Caster, _floor_gain, _height_on_wall_m, _nearer_edge_upstream,
+from augment.render.staged import (Lighting, _Caster, _floor_gain, _nearer_edge_upstream, _on_wall_m,
                                    _plain_wall_upstream, _render_scale, _roll_off, _walls_run_on, _window,
                                    estimate_lighting, render_staged, wall_segments, write_jpeg)
 from layout.catalog import CATALOG
@@ -574,12 +573,12 @@ def test_a_bright_blob_reaching_down_the_wall_to_the_floor_is_no_window():
     pose[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
     pose[:3, 3] = [0.0, 1.4, 0.0]
     walls = np.array([[[-5.0, 4.0], [5.0, 4.0]]])
-    assert _height_on_wall_m(160.0, 151.25, K, pose, walls) == pytest.approx(0.9)
-    assert _height_on_wall_m(10.0, 207.5, K, pose, walls) == pytest.approx(0.0, abs=1e-9)
-    assert math.isnan(_height_on_wall_m(160.0, 100.0, K, pose, walls[:, ::-1] - [0.0, 8.0]))  # wall behind
+    assert _on_wall_m(160.0, 151.25, K, pose, walls) == pytest.approx([0.0, 4.0, 0.9])
+    assert _on_wall_m(10.0, 207.5, K, pose, walls)[2] == pytest.approx(0.0, abs=1e-9)
+    assert np.isnan(_on_wall_m(160.0, 100.0, K, pose, walls[:, ::-1] - [0.0, 8.0])).all()  # wall behind
     settings = RENDER.staged
     candidates = np.ones((240, 320), bool)
-    height = lambda x, y: _height_on_wall_m(x, y, K, pose, walls)  # noqa: E731
+    height = lambda x, y: _on_wall_m(x, y, K, pose, walls)[2]  # noqa: E731
     lum = np.full((240, 320), 120.0)
     lum[83:151, 200:240] = 230.0  # 2.0 to 0.9 m up
     assert tuple(_window(lum, candidates, settings, height)) == pytest.approx((219.5, 116.5), abs=0.01)
