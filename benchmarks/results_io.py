@@ -7,17 +7,30 @@ import json
 import os
 import platform
 import time
+from importlib import metadata
 from pathlib import Path
 
 from layout.fileio import write_atomic
 
 RESULTS = Path(__file__).resolve().parent / "results"
+# The numbers move with these (a new OpenCV reads boards differently), so each result names them.
+PACKAGES = ("numpy", "numba", "opencv-contrib-python-headless", "onnxruntime", "scikit-image", "trimesh", "pyrender2")
+
+
+def _versions() -> dict[str, str]:
+    found = {}
+    for name in PACKAGES:
+        try:
+            found[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            found[name] = "not installed"
+    return found
 
 
 def machine(**extra) -> dict:
-    """Where and when the numbers were taken, plus ``extra`` (compile time, seeds...)."""
+    """Where and when the numbers were taken, with which packages, plus ``extra`` (compile time, seeds...)."""
     return dict(machine=platform.platform(), cpu_count=os.cpu_count(), python=platform.python_version(),
-                date=time.strftime("%Y-%m-%d"), **extra)
+                packages=_versions(), date=time.strftime("%Y-%m-%d"), **extra)
 
 
 def write(stem: str, data: dict, md_lines: list[str]) -> tuple[Path, Path]:
