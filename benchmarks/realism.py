@@ -6,9 +6,9 @@ Run by hand: ``python benchmarks/realism.py [--count 40] [--seed 9700] [--old d0
 ``realism_<fill>_fill.*`` for another ``--fill``. The photographer's bounce light (its
 ambient light and its fill light from the ceiling's middle) in the truth:
 
-* ``occluded`` (default): the furniture hides it from the floor as from a real one, a
-  cosine-weighted share of a uniform sky (:func:`augment.synth.bounce.floor_bounce_visibility`):
-  the soft darkening under and around furniture;
+* ``occluded`` (default): the furniture hides it from the floor and the walls as in a real
+  room, a cosine-weighted share of a uniform sky (:func:`augment.synth.bounce.bounce_visibility`):
+  the soft darkening under, around and behind furniture;
 * ``through``: it lights the floor through the furniture (pyrender's own lights);
 * ``shadowed``: the fill is a wide spot that casts shadows, in the empty photo and in the
   truth alike, as a real lamp there would; the ambient light passes through.
@@ -32,6 +32,8 @@ off the floor: ``RENDER.staged.sun_from_floor = False``):
   smoothed by a Gaussian of 1 px per 1280) in the truth (furnished / empty) and in the
   staged photo (staged / board erased), over the floor that shows in both, off the
   board's sheet; cases with neither shadow are left out.
+* ``wall_shadow_iou``: the same over the walls (no target): what the furniture's shadows and
+  occlusion darken on the walls beside and above it.
 * ``light_error_deg`` (rooms with sun): the angle on the floor plane between the sun's
   direction and the key light the renderer estimated.
 
@@ -95,7 +97,7 @@ def linear_luminance(rgb: np.ndarray) -> np.ndarray:
     return ((x ** 2.2) @ np.array([0.2126, 0.7152, 0.0722], np.float32)).astype(np.float32)
 
 
-def scores(truth_f, truth_e, staged, erased, staged_alpha, sheet, floor_f, sun_world, est_world) -> dict:
+def scores(truth_f, truth_e, staged, erased, staged_alpha, sheet, floor_f, wall_f, sun_world, est_world) -> dict:
     """The three scores of one case (see the module docstring); NaN where undefined."""
     from skimage.color import deltaE_ciede2000, rgb2lab
 
@@ -120,10 +122,11 @@ def scores(truth_f, truth_e, staged, erased, staged_alpha, sheet, floor_f, sun_w
     grow = np.ones((2 * r + 1, 2 * r + 1), np.uint8)
     near = cv2.dilate((furniture | (staged_alpha > 0.5)).astype(np.uint8), grow) > 0
     region = floor_f & ~near & ~(cv2.dilate(sheet.astype(np.uint8), grow) > 0)
-    t, s = darkened(truth_f.image, truth_e.image) & region, darkened(staged, erased) & region
-    union = int((t | s).sum())
-    out["shadow_truth_px"], out["shadow_staged_px"] = int(t.sum()), int(s.sum())
-    out["shadow_iou"] = float((t & s).sum() / union) if union >= 0.0005 * h * w else math.nan
+    for key, where in (("shadow", region), ("wall_shadow", wall_f & ~near)):
+        t, s = darkened(truth_f.image, truth_e.image) & where, darkened(staged, erased) & where
+        union = int((t | s).sum())
+        out[f"{key}_truth_px"], out[f"{key}_staged_px"] = int(t.sum()), int(s.sum())
+        out[f"{key}_iou"] = float((t & s).sum() / union) if union >= 0.0005 * h * w else math.nan
     out["light_error_deg"] = math.nan
     if sun_world is not None:
         a, b = np.asarray(sun_world[:2]), np.asarray(est_world[:2])
@@ -172,7 +175,7 @@ def main(argv=None) -> int:
     from augment.render.look import estimate_look
     from augment.render.settings import RENDER
     from augment.render.staged import estimate_lighting, render_staged
-    from augment.synth import FLOOR, render_sample
+    from augment.synth import FLOOR, WALL, render_sample
     from augment.synth.photo import save_as_phone
     from augment.synth.truth import floor_in_world
     from layout.fileio import write_atomic
@@ -223,11 +226,11 @@ def main(argv=None) -> int:
             sun = next((np.asarray(lt["direction"]) for lt in truth["render"]["lights"] if lt["kind"] == "sun"), None)
             est = world_from_floor[:3, :3] @ np.asarray(lighting.direction)
             sheet = result.erased.full_alpha() > 0.01
-            floor_f = truth_f.labels == FLOOR
+            floor_f, wall_f = truth_f.labels == FLOOR, truth_f.labels == WALL
             sun_share = next((lt["floor_in_view"] for lt in truth["render"]["lights"] if lt["kind"] == "sun"), 0.0)
             row.update(items=len(items), style=style, sun=sun is not None, sun_in_view=sun_share,
                        light_source=lighting.source, lamps=len(lighting.lamps), truth_s=t_truth)
-            row["new"] = scores(truth_f, empty, new.image, base, new.alpha, sheet, floor_f, sun, est)
+            row["new"] = scores(truth_f, empty, new.image, base, new.alpha, sheet, floor_f, wall_f, sun, est)
             # The same renderer with the key light from windows only (no sun read off the floor).
             windows_only = replace(RENDER.staged, sun_from_floor=False)
             lit_w = estimate_lighting(result.image, cal, mask, windows_only, floor_polygon=result.floor,
@@ -235,14 +238,14 @@ def main(argv=None) -> int:
             plain = render_staged(base, cal, lay, renderer, floor_mask=mask, floor_polygon=result.floor,
                                   lighting=lit_w, look=estimate_look(result.image, cal), seed=lay_seed, style=style,
                                   windows_px=panes, settings=windows_only)
-            row["no_sun"] = scores(truth_f, empty, plain.image, base, plain.alpha, sheet, floor_f, sun,
+            row["no_sun"] = scores(truth_f, empty, plain.image, base, plain.alpha, sheet, floor_f, wall_f, sun,
                                    world_from_floor[:3, :3] @ np.asarray(lit_w.direction))
             case = {"image": base, "calibration": cal, "mask": mask, "floor": result.floor,
                     "items": [{"kind": it.kind, "position_m": list(it.position_m), "yaw_rad": it.yaw_rad,
                                "size_m": list(it.size_m), "id": it.id} for it in items], "seed": lay_seed}
             (work / f"case_{i:02d}.pkl").write_bytes(pickle.dumps(case))
             cal_poses[i] = cal.camera_from_floor
-            kept[i] = (truth_f, empty, new.image, base, sheet, floor_f, sun)
+            kept[i] = (truth_f, empty, new.image, base, sheet, floor_f, wall_f, sun)
             print(f"case {i:2d} {row['size']:>9} {room:<12} {style:<12} new dE {row['new']['delta_e']:5.2f} "
                   f"shadow IoU {row['new']['shadow_iou']:.2f} light {row['new']['light_error_deg']:6.1f}", flush=True)
             rows.append(row)
@@ -257,10 +260,10 @@ def main(argv=None) -> int:
             if i not in kept:
                 continue
             old = np.load(work / f"case_{i:02d}.old.npz")
-            truth_f, empty, new_image, base, sheet, floor_f, sun = kept[i]
+            truth_f, empty, new_image, base, sheet, floor_f, wall_f, sun = kept[i]
             world_from_floor = floor_in_world(empty.truth, cal_poses[i])
             est = world_from_floor[:3, :3] @ old["direction"]
-            row["old"] = scores(truth_f, empty, old["image"], base, old["alpha"], sheet, floor_f, sun, est)
+            row["old"] = scores(truth_f, empty, old["image"], base, old["alpha"], sheet, floor_f, wall_f, sun, est)
             row["old_render_s"] = float(old["seconds"])
             pictures.append((row["new"]["delta_e"], i, _crop([truth_f.image, new_image, old["image"]],
                                                              truth_f.depth_m < np.where(empty.depth_m > 0,
@@ -273,7 +276,7 @@ def main(argv=None) -> int:
     for which in ("new", "no_sun", "old"):
         done = [r[which] for r in rows if which in r]
         summary[which] = {}
-        for key in ("delta_e", "shadow_iou", "light_error_deg"):
+        for key in ("delta_e", "shadow_iou", "wall_shadow_iou", "light_error_deg"):
             med, n = _median(done, key)
             summary[which][f"{key}_median"] = med
             summary[which][f"{key}_cases"] = n
@@ -297,16 +300,19 @@ def main(argv=None) -> int:
         short = key.replace("_median", "")
         md.append(f"| {key} | {op} {v:g} | {summary['new'][key]:.3g} | {summary['no_sun'][key]:.3g} | "
                   f"{summary['old'][key]:.3g} | {summary['new'][short + '_cases']} |")
+    md.append("| wall_shadow_iou_median | | " + " | ".join(f"{summary[w]['wall_shadow_iou_median']:.3g}"
+                                                         for w in ("new", "no_sun", "old"))
+              + f" | {summary['new']['wall_shadow_iou_cases']} |")
     md.append(f"| light_error_deg_median, sun on the floor in view (>= {SUN_IN_VIEW:.0%} of it) | <= 15 | "
               + " | ".join(f"{summary[w]['light_error_deg_sun_in_view_median']:.3g}" for w in ("new", "no_sun", "old"))
               + f" | {summary['new']['light_error_deg_sun_in_view_cases']} |")
     md += ["", "| case | size | room | style | sun (share of the floor in view) | key light from | "
            "dE new / no sun / old | "
-           "shadow IoU new / no sun / old | light error new / no sun / old ° |",
-           "|---|---|---|---|---|---|---|---|---|"]
+           "shadow IoU new / no sun / old | wall shadow IoU new / old | light error new / no sun / old ° |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if "refused" in r:
-            md.append(f"| {r['case']} | {r['size']} | {r['room']} | refused: {r['refused'][:80]} | | | | | |")
+            md.append(f"| {r['case']} | {r['size']} | {r['room']} | refused: {r['refused'][:80]} | | | | | | |")
             continue
         n, w, o = r["new"], r["no_sun"], r.get("old", {})
         sun = format(r["sun_in_view"], ".0%") if r["sun"] else ""
@@ -315,10 +321,12 @@ def main(argv=None) -> int:
         md.append(f"| {r['case']} | {r['size']} | {r['room']} | {r['style']} | {sun} | "
                   f"{source} | {n['delta_e']:.1f} / {w['delta_e']:.1f} / {o.get('delta_e', math.nan):.1f} | "
                   f"{n['shadow_iou']:.2f} / {w['shadow_iou']:.2f} / {o.get('shadow_iou', math.nan):.2f} | "
+                  f"{n['wall_shadow_iou']:.2f} / {o.get('wall_shadow_iou', math.nan):.2f} | "
                   f"{n['light_error_deg']:.0f} / {w['light_error_deg']:.0f} / "
                   f"{o.get('light_error_deg', math.nan):.0f} |")
-    fill = {"occluded": "its bounce light (ambient and fill) reaches the floor as far as the furniture leaves a "
-                        "uniform sky open above each point; the furniture's own surfaces take it unoccluded",
+    fill = {"occluded": "its bounce light (ambient and fill) reaches the floor and the walls as far as the furniture "
+                        "leaves a uniform sky open in front of each point; the furniture's own surfaces take it "
+                        "unoccluded",
             "through": "its ambient light and its fill light from the ceiling's middle light through the furniture: "
                        "its floor darkens only under the sun and the ceiling lamps, and the renderer's occlusion "
                        "under furniture, which real rooms show, counts against it in shadow IoU",

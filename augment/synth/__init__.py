@@ -21,10 +21,10 @@ from layout.fileio import write_atomic
 
 from ..camera.board import CHARUCO_DICTIONARY, Board
 from ..render.gl import Renderer, pyrender
-from .bounce import floor_bounce_visibility
+from .bounce import bounce_visibility
 from .camera import Shot, place_board, random_handling, random_shot, random_size
 from .photo import degrade
-from .rooms import BASEBOARD_M, Clutter, Room, add_clutter, add_furniture, random_room
+from .rooms import BASEBOARD_M, Clutter, Room, add_clutter, add_furniture, inward_normal, random_room
 from .scene import SEG_CEILING, SEG_FLOOR, SEG_WALL, build_scene
 from .truth import sun_exit
 
@@ -151,8 +151,9 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
         realism benchmark's truth. Off by default: the training renders stay as they were.
     occluded_bounce : bool
         The furniture (``pieces``) hides the bounce light (ambient and fill) from the floor
-        as it would from a real one (:func:`_hide_bounce`): the truth of the soft
-        darkening under and around furniture. Off by default; not with ``shadowed_fill``.
+        and the walls as it would in a real room (:func:`_hide_bounce`): the truth of the
+        soft darkening under, around and behind furniture. Off by default; not with
+        ``shadowed_fill``.
     """
     if occluded_bounce and shadowed_fill:
         raise ValueError("occluded_bounce and shadowed_fill are two models of the fill light: choose one")
@@ -193,7 +194,7 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     color, depth_m = renderer.render(built.scene, width, height, flags=flags, shadow_map_px=shadow_px)
     labels = render_labels(renderer, built.scene, built.seg_node_map, depth_m)
     if occluded_bounce and len(pieces):
-        color = _hide_bounce(renderer, built.scene, color, labels == FLOOR, depth_m, shot, pieces)
+        color = _hide_bounce(renderer, built.scene, color, labels, depth_m, shot, room, pieces)
     for light in built.info["lights"]:
         if light["kind"] == "sun" and outside:
             light["floor_in_view"] = round(_sunlit_share(labels == FLOOR, depth_m, shot, room, light["direction"]), 4)
@@ -214,24 +215,39 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     return Sample(image, labels == FLOOR, labels, depth_m, truth)
 
 
-def _hide_bounce(renderer: Renderer, scene, color, floor, depth_m, shot: Shot, pieces) -> np.ndarray:
-    """``color`` with the floor's bounce light dimmed by the share of the sky the furniture
-    hides from it (:func:`.bounce.floor_bounce_visibility`, on a grid about 640 points wide:
-    the occlusion is smooth). The bounce light is the render with the ambient and the fill
-    light alone; pyrender's output is linear light to the power 1/2.2. Removes the scene's
-    other lights."""
+def _hide_bounce(renderer: Renderer, scene, color, labels, depth_m, shot: Shot, room: Room, pieces) -> np.ndarray:
+    """``color`` with the bounce light of the floor and the walls dimmed by the share of the
+    sky the furniture hides from them (:func:`.bounce.bounce_visibility`, each wall about
+    its own normal, on a grid about 640 points wide: the occlusion is smooth). The bounce
+    light is the render with the ambient and the fill light alone; pyrender's output is
+    linear light to the power 1/2.2. Removes the scene's other lights."""
     h, w = depth_m.shape
     step = max(1, round(w / 640))
-    grid = floor[::step, ::step] & (depth_m[::step, ::step] > 0)
+    coarse = labels[::step, ::step]
+    grid = ((coarse == FLOOR) | (coarse == WALL)) & (depth_m[::step, ::step] > 0)
     v, u = np.nonzero(grid)
     points = shot.unproject(u * step, v * step, depth_m[::step, ::step][v, u])
+    # Each wall point faces the room from the wall it lies nearest to.
+    plane = np.full(len(points), -1)
+    walls = np.flatnonzero(coarse[v, u] == WALL)
+    if len(walls):
+        poly = room.polygon_m
+        a, b = poly, np.roll(poly, -1, axis=0)
+        e = b - a
+        xy = points[walls, :2]
+        t = np.clip(np.einsum("nkj,kj->nk", xy[:, None] - a, e) / (e * e).sum(axis=1), 0.0, 1.0)
+        plane[walls] = np.argmin(np.linalg.norm(xy[:, None] - (a + t[..., None] * e), axis=2), axis=1)
     hidden = np.zeros(grid.shape, np.float32)
-    hidden[v, u] = 1.0 - floor_bounce_visibility(renderer, pieces, points)
-    # Back to every pixel: the floor's grid points only, averaged (a normalized interpolation).
+    for k in np.unique(plane):
+        mine = plane == k
+        normal = (0.0, 0.0, 1.0) if k < 0 else (*inward_normal(room.polygon_m, int(k)), 0.0)
+        hidden[v[mine], u[mine]] = 1.0 - bounce_visibility(renderer, pieces, points[mine], normal)
+    # Back to every pixel: the grid points only, averaged (a normalized interpolation).
     map_x, map_y = np.meshgrid(np.arange(w, dtype=np.float32) / step, np.arange(h, dtype=np.float32) / step)
     total = cv2.remap(hidden, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     weight = cv2.remap(grid.astype(np.float32), map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    hidden = np.where(floor & (weight > 1e-3), total / np.maximum(weight, 1e-3), 0.0).astype(np.float32)
+    lit = (labels == FLOOR) | (labels == WALL)
+    hidden = np.where(lit & (weight > 1e-3), total / np.maximum(weight, 1e-3), 0.0).astype(np.float32)
     for node in list(scene.light_nodes):
         if not node.name.startswith("light2"):  # the sun (light0) and the ceiling lamps (light1)
             scene.remove_node(node)

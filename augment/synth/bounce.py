@@ -1,11 +1,12 @@
-"""The room's bounce light as the furniture hides it from the floor: the soft darkening a
-real floor shows under and around furniture, for the truth of a staged photo.
+"""The room's bounce light as the furniture hides it from the floor and the walls: the soft
+darkening a real room shows under, around and behind furniture, for the truth of a staged
+photo.
 
 The photographer's ambient and fill lights stand for light bounced off the walls, the
-ceiling and the floor, and pyrender draws both through the furniture. A real floor point
-gets that light from its whole upper hemisphere, cosine-weighted; the furniture hides part
-of it. :func:`floor_bounce_visibility` measures that share with depth maps of the furniture
-seen from many directions of the hemisphere.
+ceiling and the floor, and pyrender draws both through the furniture. A real floor or wall
+point gets that light from the whole hemisphere it faces, cosine-weighted; the furniture
+hides part of it. :func:`bounce_visibility` measures that share with depth maps of the
+furniture seen from many directions of the hemisphere.
 """
 from __future__ import annotations
 
@@ -21,9 +22,9 @@ from ..render.staged import hemisphere_directions
 _DISTANCE_M = 60.0
 
 
-def floor_bounce_visibility(renderer: Renderer, pieces, points_m: np.ndarray, n_directions: int = 48,
-                            texel_m: float = 0.01, bias_m: float = 0.02) -> np.ndarray:
-    """The share of the sky each floor point sees past the furniture, cosine-weighted.
+def bounce_visibility(renderer: Renderer, pieces, points_m: np.ndarray, normal=(0.0, 0.0, 1.0),
+                      n_directions: int = 48, texel_m: float = 0.01, bias_m: float = 0.02) -> np.ndarray:
+    """The share of a uniform sky each point of a plane sees past the furniture, cosine-weighted.
 
     Parameters
     ----------
@@ -31,7 +32,9 @@ def floor_bounce_visibility(renderer: Renderer, pieces, points_m: np.ndarray, n_
     pieces : sequence of (Furniture, (4, 4) array)
         The furniture and its poses in the world (z up, meters).
     points_m : (n, 3) float
-        Points on the floor, world frame.
+        Points on one plane (the floor, a wall), world frame.
+    normal : (3,) float
+        The plane's normal, toward the room (up for the floor).
     n_directions : int
         Directions sampled over the hemisphere.
     texel_m : float
@@ -61,7 +64,11 @@ def floor_bounce_visibility(renderer: Renderer, pieces, points_m: np.ndarray, n_
     # Every direction's camera has the same intrinsics: one node, moved.
     camera_node = scene.add(far_camera(center, radius, (0.0, 0.0, -1.0), size, _DISTANCE_M)[2], name="camera")
     seen = np.zeros(len(points), np.float32)
-    for d in hemisphere_directions(n_directions):
+    n = np.asarray(normal, dtype=np.float64) / np.linalg.norm(normal)
+    t = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    t /= np.linalg.norm(t)
+    about_n = np.stack([t, np.cross(n, t), n])  # rows: the hemisphere's frame, z along the normal
+    for d in hemisphere_directions(n_directions) @ about_n:
         camera_from_world, K, _ = far_camera(center, radius, -d, size, _DISTANCE_M)
         scene.set_pose(camera_node, gl_from_cv_pose(np.linalg.inv(camera_from_world)))
         depth = renderer.render(scene, size, size, flags=pyrender.RenderFlags.DEPTH_ONLY)

@@ -12,7 +12,7 @@ from skimage.measure import points_in_poly
 from augment.camera.board import Board
 from augment.render.furniture import PlacedItem, furniture_for, world_from_item
 from augment.render.gl import Renderer, Scene, gl_from_cv_pose, pyrender, pyrender_camera
-from augment.synth import CEILING, FLOOR, render_labels, render_sample, write_sample
+from augment.synth import CEILING, FLOOR, WALL, render_labels, render_sample, write_sample
 from augment.synth.__main__ import main as synth_main
 from augment.synth.camera import (CAMERA_HEIGHT_M, HFOV_DEG, PITCH_DOWN_DEG, Shot, look_pose, random_handling,
                                   random_shot)
@@ -546,7 +546,7 @@ def test_bounce_visibility_under_a_plate_is_the_view_factor(renderer):
     element below a corner of a parallel rectangle); far away, all of it."""
     from augment.render.furniture import Furniture
     from augment.render.staged import hemisphere_directions
-    from augment.synth.bounce import floor_bounce_visibility
+    from augment.synth.bounce import bounce_visibility
 
     d = hemisphere_directions(48)
     assert np.allclose(np.linalg.norm(d, axis=1), 1.0) and (d[:, 2] > 0).all()
@@ -554,16 +554,26 @@ def test_bounce_visibility_under_a_plate_is_the_view_factor(renderer):
     assert abs(d[:, 2].mean() - 2 / 3) < 0.01
     half, z = 0.5, 0.7
     plate = Furniture("plate", "test", (2 * half, 2 * half, z), (_plate_part(half, z),))
-    seen = floor_bounce_visibility(renderer, [(plate, np.eye(4))], np.array([[0.0, 0.0, 0.0], [20.0, 0.0, 0.0]]))
+    seen = bounce_visibility(renderer, [(plate, np.eye(4))], np.array([[0.0, 0.0, 0.0], [20.0, 0.0, 0.0]]))
     a = b = half / z
     corner = (a / np.hypot(1, a) * np.arctan(b / np.hypot(1, a)) + b / np.hypot(1, b) * np.arctan(a / np.hypot(1, b)))
     view_factor = 4 * corner / (2 * np.pi)
     assert 0.3 < view_factor < 0.5  # the case is a telling one
     assert abs(seen[0] - (1 - view_factor)) < 0.05
     assert seen[1] == 1.0
+    # A wall point facing +x, the plate standing 0.7 m in front of it, parallel: the same
+    # view factor about the wall's normal. Facing +y, the plate 2-3 m to that side hides
+    # about 1 % (its solid angle times its cosine over pi).
+    upright = np.array([[0, 0, 1, 0], [0, 1, 0, 0], [-1, 0, 0, 1.5], [0, 0, 0, 1.0]])  # item z -> world x
+    wall = np.array([[0.0, 0.0, 1.5]])
+    facing = bounce_visibility(renderer, [(plate, upright)], wall, (1.0, 0.0, 0.0))
+    assert abs(facing[0] - (1 - view_factor)) < 0.05
+    aside = upright + np.array([[0, 0, 0, 0], [0, 0, 0, 2.5], [0, 0, 0, 0], [0, 0, 0, 0]])
+    beside = bounce_visibility(renderer, [(plate, aside)], wall, (0.0, 1.0, 0.0))
+    assert 0.95 < beside[0] < 1.0
 
 
-def test_occluded_bounce_darkens_only_the_floor_near_furniture(renderer):
+def test_occluded_bounce_darkens_only_the_floor_and_walls_near_furniture(renderer):
     from augment.render.furniture import Furniture
 
     seed = 3
@@ -578,9 +588,17 @@ def test_occluded_bounce_darkens_only_the_floor_near_furniture(renderer):
     hidden = render_sample(seed, renderer, size_px=(320, 240), clutter=False, photographic=False,
                            board_drawn=False, pieces=pieces, occluded_bounce=True)
     floor = hidden.labels == FLOOR
-    assert np.array_equal(hidden.image[~floor], through.image[~floor])
+    lit = floor | (hidden.labels == WALL)
+    assert np.array_equal(hidden.image[~lit], through.image[~lit])
     darker = hidden.image.astype(int).sum(axis=2) < through.image.astype(int).sum(axis=2)
     assert (hidden.image.astype(int) <= through.image.astype(int)).all()
+    # The walls lose less the farther they are from the plate, and less than the floor under it.
+    loss = (through.image.astype(int) - hidden.image.astype(int)).max(axis=2)
+    wall = hidden.labels == WALL
+    away = np.linalg.norm(_unproject(hidden, wall)[:, :2] - board_xy, axis=1)
+    assert np.median(loss[wall][away < 1.0]) > np.median(loss[wall][away >= 1.0])
+    under = np.linalg.norm(_unproject(hidden, floor)[:, :2] - board_xy, axis=1) < 0.3
+    assert np.percentile(loss[wall], 99) < np.median(loss[floor & (hidden.depth_m > 0)][under])
     # The floor under the plate, seen between its edge and the floor: darker.
     rows, cols = np.nonzero(floor & darker)
     assert len(rows) > 50
