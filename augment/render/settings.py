@@ -59,9 +59,10 @@ class StagedSettings:
     floor_cell_max_px: int = 900  # floor raster: at most this many cells a side
     wall_samples: int = 150_000  # walls' shadows: worked out on at most this many pixels of the region
     wall_ambient_share: float = 0.6  # a wall's light but the key, relative to the floor's: half the sky, the bounce
-    wall_foot_m: float = 0.03  # a wall takes the occlusion of the floor this far in front of its foot ...
-    wall_ao_reach_m: float = 0.3  # ... up to the height of what stands this close to that point ...
-    wall_ao_fade_m: float = 0.06  # ... fading over this above it
+    wall_ao_directions: int = 48  # directions sampled for a wall's occlusion (cosine-weighted about its normal) ...
+    wall_ao_cell_m: float = 0.02  # ... on a raster in the wall's plane this fine, or coarser on a long wall ...
+    wall_ao_above: float = 0.5  # ... reaching this x the occlusion's reach above a piece (a few % is left there)
+    wall_ao_min: float = 0.015  # ... less is left out (under a level of 255 in the photo), twice it kept
     wall_run_on_m: float = 3.0  # a wall the floor in view leaves at the photo's edge goes on this far past it
     wall_smooth_px: float = 8.0  # walls' shadows smoothed by this (Gaussian sigma, photo pixels)
     floor_cell_min_m: float = 0.004  # ... and cells no finer than this

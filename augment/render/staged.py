@@ -1104,8 +1104,9 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Ligh
     light's shadow, by the key light's share of the wall's light (it depends on how
     squarely the light meets the wall): it is in shadow as far as the floor it would light
     past the wall, were the wall not there, is, since the furniture stands in front of the
-    wall. And the ambient occlusion of the floor at its foot, up to the height of what
-    stands there."""
+    wall. The rest of its light, but the lamps', is the room's, which the furniture
+    occludes (:func:`_wall_shading`); each lamp's, by its share, is shadowed from the lamp
+    or occluded, as on the floor."""
     x0, y0, x1, y1 = box
     bw, bh = x1 - x0, y1 - y0
     step = max(1, math.ceil(math.sqrt(bw * bh / settings.wall_samples)))  # the shadows are soft
@@ -1134,28 +1135,37 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Ligh
         normals = np.column_stack([-e[:, 1], e[:, 0]]) / np.maximum(np.hypot(e[:, 0], e[:, 1]), 1e-12)[:, None]
         normals *= np.where(np.einsum("ij,ij->i", cam[:2] - walls_m[:, 0], normals) < 0, -1.0, 1.0)[:, None]
         n = normals[np.maximum(which, 0)]
-        foot = p[:, :2] + settings.wall_foot_m * n
-        # What stands at the wall's foot, and how high: the occlusion fades above it.
-        top = np.zeros(grid.shape, np.float32)
-        for c in sorted(casters, key=lambda c: c.z_top):
-            hull = cv2.convexHull(grid.fixed_px(c.corners))
-            cv2.fillConvexPoly(top, hull, float(c.z_top), lineType=cv2.LINE_8, shift=_SUB)
-        r = max(1, round(settings.wall_ao_reach_m / grid.cell_m))
-        top = sample(cv2.dilate(top, np.ones((2 * r + 1, 2 * r + 1), np.uint8)), foot, 0.0)
-        above = np.maximum(p[:, 2] - top, 0.0) / settings.wall_ao_fade_m
-        ao = sample(shading.ao, foot, 0.0) * np.exp(-0.5 * above * above)
+        foot = p[:, :2] + 0.01 * n  # just in front of the wall: which floor is in the sun there
+        ao = np.zeros(len(p))
+        lamp_shadow = np.zeros((len(lighting.lamps), len(p)))
+        for k, found in enumerate(_wall_shading(casters, walls_m, normals, lighting.lamps, settings)):
+            mine = which == k
+            if found is not None and mine.any():
+                uz = np.column_stack([(p[mine, :2] - walls_m[k, 0]) @ _unit(walls_m[k, 1] - walls_m[k, 0]), p[mine, 2]])
+                ao[mine] = found.at(found.hidden, uz)
+                for i, shade in enumerate(found.lamp_shadows):
+                    lamp_shadow[i, mine] = found.at(shade, uz)
         d = np.asarray(lighting.direction, dtype=np.float64)
         d = d / np.linalg.norm(d)
-        f_key = np.zeros(len(p))
         key = np.zeros(len(p))
-        if d[2] < -0.05 and lighting.key_fraction > 0:
+        lit = np.zeros(len(p))  # the key light on the wall, over the floor at large's
+        f = lighting.key_fraction
+        if d[2] < -0.05 and f > 0:
             key = sample(shading.key_shadow, p[:, :2] + (p[:, 2] / -d[2])[:, None] * d[:2], 0.0)
             square = np.maximum(0.0, -(n @ d[:2])) / -d[2]  # the key light on the wall over that on the floor
-            f = lighting.key_fraction if lighting.sun is None else lighting.key_fraction * lighting.sun.sunlit(foot)
+            f = f if lighting.sun is None else f * lighting.sun.sunlit(foot)
             lit = f * square
-            f_key = lit / np.maximum(lit + (1.0 - f) * settings.wall_ambient_share, 1e-9)
-        ratio = np.power(np.clip(1.0 - f_key * key - (1.0 - f_key) * settings.ao_strength * ao, 0.02, 1.0),
-                         1.0 / GAMMA).reshape(shape).astype(np.float32)
+        rest = np.maximum(lit + (1.0 - f) * settings.wall_ambient_share, 1e-9)
+        occluded = 1.0 - settings.ao_strength * ao
+        ratio = 1.0 - (lit * key + (rest - lit) * settings.ao_strength * ao) / rest
+        if lighting.lamps:  # as on the floor: each lamp's share, shadowed from it or occluded
+            normals3 = np.column_stack([n, np.zeros(len(n))])
+            on = [lamp.on(p, normals3) for lamp in lighting.lamps]
+            total = rest + sum(on)
+            direct = 1.0 - settings.lamp_diffuse_share
+            ratio = ratio * rest / total + sum(light / total * (direct * (1.0 - shade) + (1.0 - direct) * occluded)
+                                               for light, shade in zip(on, lamp_shadow))
+        ratio = np.power(np.clip(ratio, 0.02, 1.0), 1.0 / GAMMA).reshape(shape).astype(np.float32)
         # Smoothed over the walls alone (the outline's short steps would show as seams).
         wall = on_wall.reshape(shape).astype(np.float32)
         sigma = settings.wall_smooth_px / step
@@ -1168,6 +1178,109 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Ligh
     up = np.array([[1.0 / step, 0, 0], [0, 1.0 / step, 0]])
     return tuple(cv2.warpAffine(a, up, (bw, bh), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                                 borderMode=cv2.BORDER_REPLICATE) for a in (gain, floor))
+
+
+def _unit(v) -> np.ndarray:
+    return np.asarray(v, dtype=np.float64) / max(float(np.linalg.norm(v)), 1e-12)
+
+
+def _in_front(local):
+    """Points in a wall's frame (along, height, distance) kept in front of it: what reaches
+    through it (a piece touching the wall, the wall measured a little off) stands on it."""
+    return np.concatenate([local[..., :2], np.maximum(local[..., 2:], 1e-3)], axis=-1)
+
+
+@dataclass(frozen=True)
+class _WallShading:
+    """What the furniture takes of one wall's light, over a raster in the wall's own plane
+    (grid x: meters along the wall from its first end; y: height above the floor)."""
+
+    grid: _FloorGrid
+    hidden: np.ndarray         # share of the room's light (sky, ceiling, floor) hidden, cosine-weighted
+    lamp_shadows: tuple        # per lamp of the lighting: the share of its light the furniture stops
+
+    def at(self, raster, uz) -> np.ndarray:
+        """``raster`` at wall points (n, 2) (along, height), bilinear; 0 off the raster."""
+        m = (self.grid.to_px(uz) - 0.5).astype(np.float32)
+        width = 4096  # cv2.remap takes at most 32767 a side: the points as rows of this
+        m = np.concatenate([m, np.full((-len(m) % width, 2), -1.0, np.float32)]).reshape(-1, width, 2)
+        return cv2.remap(raster, m[..., 0], m[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                         borderValue=0.0).ravel()[:len(uz)]
+
+
+def _wall_shading(casters, walls_m, normals, lamps, settings: StagedSettings) -> list:
+    """Per wall of ``walls_m`` (k, 2, 2) facing the room along ``normals`` (k, 2): its
+    :class:`_WallShading`, or None where nothing stands near it. The occlusion is the
+    floor's sampling turned onto the wall: it falls off with distance and height, not the
+    outline of what stands there. A lamp's shadow falls from its shade's points through
+    what stands between it and the wall."""
+    out = []
+    radius, n_shade = RENDER.lamps.shade_radius_m, settings.shadow_samples
+    for (a, b), n in zip(np.asarray(walls_m, dtype=np.float64), np.asarray(normals, dtype=np.float64)):
+        e = _unit(b - a)
+        length = float(np.linalg.norm(b - a))
+
+        def local(q):  # (along the wall, height, distance in front of it)
+            return np.stack([(q[..., :2] - a) @ e, q[..., 2], (q[..., :2] - a) @ n], axis=-1)
+        near, reach = [], 0.0
+        for c in casters:
+            at = local(c.corners)
+            r = _ao_reach_m(c.z_top, settings)
+            if at[:, 2].min() > r or at[:, 2].max() <= 0 or at[:, 0].max() < -r or at[:, 0].min() > length + r:
+                continue
+            near.append(_Caster(_in_front(local(c.points)), None if c.triangles is None else
+                                _in_front(local(c.triangles)), 0.0, 0.0))
+            reach = max(reach, r)
+        if not near:
+            out.append(None)
+            continue
+        pts = np.concatenate([c.corners for c in near])
+        lo = np.array([pts[:, 0].min() - reach, 0.0])
+        above = settings.wall_ao_above * reach
+        hi = np.array([pts[:, 0].max() + reach, pts[:, 1].max() + above])
+        size = hi - lo
+        cell = max(settings.wall_ao_cell_m, float(size.max()) / settings.floor_cell_max_px)
+        grid = _FloorGrid(lo, cell, (int(math.ceil(size[1] / cell)) + 1, int(math.ceil(size[0] / cell)) + 1))
+        footprints = _Footprints(near)
+        n_dirs = settings.wall_ao_directions
+        hidden = np.zeros(grid.shape, np.float32)
+        raster = np.zeros(grid.shape, np.uint8)
+        for up in hemisphere_directions(n_dirs):  # about the wall's normal, in (along, height, out)
+            raster[:] = 0
+            footprints.fill(raster, grid, -up)
+            hidden += raster
+        # The copies lie about their distance from the wall x the directions' spacing apart.
+        gap = float(np.median([c.corners[:, 2].max() for c in near]))
+        hidden = _blur(hidden / n_dirs, settings.ao_blur_rel * gap * math.sqrt(math.pi / n_dirs) / cell)
+        # Faded out toward the reach's sides and top (over its last quarter), where the
+        # samples thin out and what is left is faint.
+        u = grid.origin_m[0] + (np.arange(grid.shape[1]) + 0.5) * cell
+        z = (np.arange(grid.shape[0]) + 0.5) * cell
+        side = np.minimum(u - (pts[:, 0].min() - reach), pts[:, 0].max() + reach - u) / (0.25 * reach)
+        top = (pts[:, 1].max() + above - z) / (0.25 * above)
+        fade = np.clip(np.minimum(top[:, None], side[None, :]), 0.0, 1.0).astype(np.float32)
+        hidden *= fade
+        # Less than a level of 255 left out: the shading (and a layer's alpha) ends somewhere.
+        least = settings.wall_ao_min
+        hidden = (hidden * np.clip(hidden / least - 1.0, 0.0, 1.0)).astype(np.float32)  # 0 up to it, as is from 2x
+        # A lamp in front of the wall shades it with what stands nearer the wall than it,
+        # as far as the occlusion reaches (the region worked out ends there).
+        shadows = []
+        for lamp in lamps:
+            source = local(np.asarray(lamp.position_m, dtype=np.float64))
+            between = [c for c in near if c.corners[:, 2].max() < source[2] - 0.05]
+            shade = np.zeros(grid.shape, np.float32)
+            if source[2] > 0 and between:
+                lamp_footprints = _Footprints(between)
+                for share, angle in _spiral(n_shade):
+                    offset = radius * share * np.array([math.cos(angle), math.sin(angle)])  # on the shade's disk
+                    raster[:] = 0
+                    lamp_footprints.fill(raster, grid, source=source + [offset @ e, 0.0, offset @ n])
+                    shade += raster
+                shade = _blur(shade / n_shade, max(0.5, 0.5 * radius / math.sqrt(n_shade) / cell)) * fade
+            shadows.append(shade)
+        out.append(_WallShading(grid, hidden, tuple(shadows)))
+    return out
 
 
 def _panes(windows_px, K, dist, box) -> np.ndarray:
@@ -1414,16 +1527,17 @@ def _check_image(image) -> np.ndarray:
 
 def _reach_points(placed, lighting: Lighting, settings: StagedSettings):
     """Floor-frame points whose projection bounds what the furniture and its shadows can
-    touch: each box's corners grown by 0.35 m (contact darkening) and raised by the fade of
-    the walls' occlusion, and the shadows of its upper corners along the key light's
-    extreme directions and from the lamps."""
+    touch: each box's corners grown by its occlusion's reach, sideways and up (the walls'),
+    and the shadows of its upper corners along the key light's extreme directions and from
+    the lamps."""
     out = []
     dirs = [v for v in _shadow_directions(lighting.direction, lighting.softness_rad, 8) if v[2] < -0.05]
     for item, _ in placed:
-        world = _item_corners(item, _ao_reach_m(item.size_m[2], settings))
+        reach = _ao_reach_m(item.size_m[2], settings)
+        world = _item_corners(item, reach)
         out.append(world)
         top = world[1::2]
-        out.append(top + [0.0, 0.0, 3.0 * settings.wall_ao_fade_m])  # the walls' occlusion above it
+        out.append(top + [0.0, 0.0, settings.wall_ao_above * reach])  # the walls' occlusion above it
         for v in dirs:
             out.append(top - np.outer(top[:, 2] / v[2], v))
         for lamp in lighting.lamps:

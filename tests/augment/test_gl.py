@@ -16,10 +16,10 @@ def test_a_render_into_a_larger_framebuffer_is_the_render_of_a_fresh_context():
     (it reuses them); what it returns is pixel for pixel what a fresh context draws."""
     image, _, calibration = _truth_calibration("room_1", 0.5)
     with Renderer() as fresh:
-        alone = _render_box(fresh, image, calibration, (0.5, 1.0), (0.45, 0.45, 0.7), supersample=1.0)
+        alone = _render_box(fresh, image, calibration, (0.5, 1.0), (0.3, 0.3, 0.45), supersample=1.0)
     with Renderer() as used:
-        larger = _render_box(used, image, calibration, (0.5, 1.0), (0.5, 0.5, 0.9), supersample=1.0)
-        again = _render_box(used, image, calibration, (0.5, 1.0), (0.45, 0.45, 0.7), supersample=1.0)
+        larger = _render_box(used, image, calibration, (0.5, 1.0), (0.35, 0.35, 0.6), supersample=1.0)
+        again = _render_box(used, image, calibration, (0.5, 1.0), (0.3, 0.3, 0.45), supersample=1.0)
     (x0, y0, x1, y1), (a0, b0, a1, b1) = alone.roi_px, larger.roi_px
     assert a1 - a0 > x1 - x0 and b1 - b0 > y1 - y0, "the first view must be the larger one"
     assert again.roi_px == alone.roi_px
