@@ -65,9 +65,11 @@ def bounce_visibility(renderer: Renderer, pieces, points_m: np.ndarray, normal=(
     camera_node = scene.add(far_camera(center, radius, (0.0, 0.0, -1.0), size, _DISTANCE_M)[2], name="camera")
     seen = np.zeros(len(points), np.float32)
     n = np.asarray(normal, dtype=np.float64) / np.linalg.norm(normal)
-    t = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    # The hemisphere's frame (rows), z along the normal; the world's own for the floor, so
+    # its samples (and their noise) stay those the floor's truth always had.
+    t = np.cross([0.0, 1.0, 0.0] if abs(n[1]) < 0.9 else [0.0, 0.0, 1.0], n)
     t /= np.linalg.norm(t)
-    about_n = np.stack([t, np.cross(n, t), n])  # rows: the hemisphere's frame, z along the normal
+    about_n = np.stack([t, np.cross(n, t), n])
     for d in hemisphere_directions(n_directions) @ about_n:
         camera_from_world, K, _ = far_camera(center, radius, -d, size, _DISTANCE_M)
         scene.set_pose(camera_node, gl_from_cv_pose(np.linalg.inv(camera_from_world)))

@@ -570,7 +570,7 @@ def test_bounce_visibility_under_a_plate_is_the_view_factor(renderer):
     assert abs(facing[0] - (1 - view_factor)) < 0.05
     aside = upright + np.array([[0, 0, 0, 0], [0, 0, 0, 2.5], [0, 0, 0, 0], [0, 0, 0, 0]])
     beside = bounce_visibility(renderer, [(plate, aside)], wall, (0.0, 1.0, 0.0))
-    assert 0.95 < beside[0] < 1.0
+    assert beside[0] >= 0.95  # 1 % is under one of 48 directions
 
 
 def test_occluded_bounce_darkens_only_the_floor_and_walls_near_furniture(renderer):
