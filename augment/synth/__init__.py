@@ -215,6 +215,11 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     return Sample(image, labels == FLOOR, labels, depth_m, truth)
 
 
+# The truth's hemisphere samples: at 48 their streaks alone moved a room's shadow IoU at
+# the 10 % threshold by up to 0.05 (the same directions turned 90 degrees).
+_BOUNCE_DIRECTIONS = 144
+
+
 def _hide_bounce(renderer: Renderer, scene, color, labels, depth_m, shot: Shot, room: Room, pieces) -> np.ndarray:
     """``color`` with the bounce light of the floor and the walls dimmed by the share of the
     sky the furniture hides from them (:func:`.bounce.bounce_visibility`, each wall about
@@ -241,7 +246,7 @@ def _hide_bounce(renderer: Renderer, scene, color, labels, depth_m, shot: Shot, 
     for k in np.unique(plane):
         mine = plane == k
         normal = (0.0, 0.0, 1.0) if k < 0 else (*inward_normal(room.polygon_m, int(k)), 0.0)
-        hidden[v[mine], u[mine]] = 1.0 - bounce_visibility(renderer, pieces, points[mine], normal)
+        hidden[v[mine], u[mine]] = 1.0 - bounce_visibility(renderer, pieces, points[mine], normal, _BOUNCE_DIRECTIONS)
     # Back to every pixel: the grid points only, averaged (a normalized interpolation).
     map_x, map_y = np.meshgrid(np.arange(w, dtype=np.float32) / step, np.arange(h, dtype=np.float32) / step)
     total = cv2.remap(hidden, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
