@@ -98,7 +98,7 @@ def linear_luminance(rgb: np.ndarray) -> np.ndarray:
 
 
 def scores(truth_f, truth_e, staged, erased, staged_alpha, sheet, floor_f, wall_f, sun_world, est_world) -> dict:
-    """The three scores of one case (see the module docstring); NaN where undefined."""
+    """The scores of one case (see the module docstring); NaN where undefined."""
     from skimage.color import deltaE_ciede2000, rgb2lab
 
     h, w = staged.shape[:2]

@@ -1123,8 +1123,8 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Ligh
     on_wall = np.isfinite(t_wall) & (t_wall <= t_floor)
     grid = shading.grid
 
-    def sample(raster, xy, outside):
-        m = (grid.to_px(xy) - 0.5).astype(np.float32).reshape(shape + (2,))
+    def sample(raster, xy, outside, on=grid):  # a raster over ``on`` at the samples' points
+        m = (on.to_px(xy) - 0.5).astype(np.float32).reshape(shape + (2,))
         return cv2.remap(raster, m[..., 0], m[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                          borderValue=outside).ravel()
 
@@ -1141,10 +1141,10 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Ligh
         for k, found in enumerate(_wall_shading(casters, walls_m, normals, lighting.lamps, settings)):
             mine = which == k
             if found is not None and mine.any():
-                uz = np.column_stack([(p[mine, :2] - walls_m[k, 0]) @ _unit(walls_m[k, 1] - walls_m[k, 0]), p[mine, 2]])
-                ao[mine] = found.at(found.hidden, uz)
+                uz = np.column_stack([(p[:, :2] - walls_m[k, 0]) @ _unit(walls_m[k, 1] - walls_m[k, 0]), p[:, 2]])
+                ao[mine] = sample(found.hidden, uz, 0.0, found.grid)[mine]
                 for i, shade in enumerate(found.lamp_shadows):
-                    lamp_shadow[i, mine] = found.at(shade, uz)
+                    lamp_shadow[i, mine] = sample(shade, uz, 0.0, found.grid)[mine]
         d = np.asarray(lighting.direction, dtype=np.float64)
         d = d / np.linalg.norm(d)
         key = np.zeros(len(p))
@@ -1198,14 +1198,6 @@ class _WallShading:
     grid: _FloorGrid
     hidden: np.ndarray         # share of the room's light (sky, ceiling, floor) hidden, cosine-weighted
     lamp_shadows: tuple        # per lamp of the lighting: the share of its light the furniture stops
-
-    def at(self, raster, uz) -> np.ndarray:
-        """``raster`` at wall points (n, 2) (along, height), bilinear; 0 off the raster."""
-        m = (self.grid.to_px(uz) - 0.5).astype(np.float32)
-        width = 4096  # cv2.remap takes at most 32767 a side: the points as rows of this
-        m = np.concatenate([m, np.full((-len(m) % width, 2), -1.0, np.float32)]).reshape(-1, width, 2)
-        return cv2.remap(raster, m[..., 0], m[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                         borderValue=0.0).ravel()[:len(uz)]
 
 
 def _wall_shading(casters, walls_m, normals, lamps, settings: StagedSettings) -> list:

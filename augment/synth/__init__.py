@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 
 from layout.fileio import write_atomic
+from layout.geometry import edge_distances
 
 from ..camera.board import CHARUCO_DICTIONARY, Board
 from ..render.gl import Renderer, pyrender
@@ -236,12 +237,7 @@ def _hide_bounce(renderer: Renderer, scene, color, labels, depth_m, shot: Shot, 
     plane = np.full(len(points), -1)
     walls = np.flatnonzero(coarse[v, u] == WALL)
     if len(walls):
-        poly = room.polygon_m
-        a, b = poly, np.roll(poly, -1, axis=0)
-        e = b - a
-        xy = points[walls, :2]
-        t = np.clip(np.einsum("nkj,kj->nk", xy[:, None] - a, e) / (e * e).sum(axis=1), 0.0, 1.0)
-        plane[walls] = np.argmin(np.linalg.norm(xy[:, None] - (a + t[..., None] * e), axis=2), axis=1)
+        plane[walls] = np.argmin(edge_distances(points[walls, :2], room.polygon_m), axis=1)
     hidden = np.zeros(grid.shape, np.float32)
     for k in np.unique(plane):
         mine = plane == k

@@ -245,6 +245,12 @@ def test_floor_under_a_table_darkens_and_far_floor_is_untouched(renderer):
     assert np.array_equal(staged.image[fy, fx], image[fy, fx])
 
 
+def _cell(grid, raster, u, z):
+    """A wall raster's cell at (u, z) meters in the wall's frame; 0 off the raster."""
+    col, row = np.floor(grid.to_px(np.array([u, z]))).astype(int)
+    return float(raster[row, col]) if 0 <= row < raster.shape[0] and 0 <= col < raster.shape[1] else 0.0
+
+
 def test_a_walls_occlusion_behind_a_plate_standing_before_it_is_the_view_factor():
     """A plate 1 m square standing 0.7 m before a wall, parallel to it: the wall point
     behind its centre loses the plate's view factor of the light from the room (the
@@ -265,8 +271,7 @@ def test_a_walls_occlusion_behind_a_plate_standing_before_it_is_the_view_factor(
     assert 0.3 < view_factor < 0.5
 
     def at(u, z):
-        col, row = np.floor(grid.to_px(np.array([u, z]))).astype(int)
-        return hidden[row, col] if 0 <= row < hidden.shape[0] and 0 <= col < hidden.shape[1] else 0.0
+        return _cell(grid, hidden, u, z)
     assert abs(at(5.0, 1.5) - view_factor) < 0.04
     assert at(5.0 + 1.0, 1.5) < at(5.0 + 0.6, 1.5) < at(5.0, 1.5)
     assert at(2.0, 1.5) == 0.0 and at(8.0, 1.5) == 0.0
@@ -291,7 +296,7 @@ def test_a_lamps_shadow_on_a_wall_is_the_plate_moved_onto_the_wall_from_the_lamp
     shading = _wall_shading([plate(0.29)], wall, normal, (lamp,), RENDER.staged)[0]
     (shade,) = shading.lamp_shadows
     def at(u, z):
-        return float(shading.at(shade, np.array([[5.0 + u, z]]))[0])
+        return _cell(shading.grid, shade, 5.0 + u, z)
     inside = [(0.0, 1.1), (0.6, 0.5), (-0.6, 1.7), (0.0, 0.5), (0.0, 1.75)]
     outside = [(0.0, 1.95), (0.0, 0.3), (0.85, 1.1), (-0.85, 1.1), (0.0, 2.3)]
     assert all(at(u, z) > 0.9 for u, z in inside), [at(u, z) for u, z in inside]
