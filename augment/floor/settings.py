@@ -87,6 +87,8 @@ class SkirtingSettings:
     gap_p: float = 0.5  # a column whose gap probability reaches this sees the floor line above the mask's edge
     gap_agreeing: float = 0.7  # a wall where this share of columns sees it has its mask edge moved up to the floor line
     gap_smooth_columns: int = 9  # that reach is smoothed over this many columns: a lone column's is a spike
+    above_min_m: float = 0.05  # a strip this tall or more above the mask's edge, ending at a step, is a board ...
+    above_agreeing: float = 0.5  # ... on the floor line: a wall where this share of columns shows one is not cut
     corner_px: float = 3.0  # the mask's top edge bending by more than this is a corner between walls
     min_wall_columns: int = 24  # a wall judged on its own needs this many columns
 

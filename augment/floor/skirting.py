@@ -54,6 +54,11 @@ clicked as not floor (a board darker than the floor and of its hue looks like sh
 both the rules and the model), at the depth model's height where the rules see no strip
 on them (a board of the floor's colour).
 
+A strip of a second floor along a wall (concrete or tiles past a threshold) ends in a
+sharp step toward the camera just like a board; where most of a wall's columns show a
+board standing on the mask's edge (:func:`_board_above`), the edge is the floor line and
+the strip is left.
+
 A board of the floor's colour that the board model leans to without being sure of is
 left; :func:`trim_skirting` then says where it may be (``doubt_px``, on the wall left
 uncut with the highest mean probability, from ``FLOOR.skirting.doubt_p``), so that the
@@ -459,11 +464,30 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
     sk = FLOOR.skirting
     top = max(0, int(np.floor((rows + sk.profile_from_m * px_per_m).min())) - 2)
     bottom = min(size[1], int(np.ceil((rows + max(sk.search_m, sk.profile_to_m) * px_per_m).max())) + 12)
-    band = image[int(top / scale):min(rows_px, int(np.ceil(bottom / scale)) + 1)]
+    small_image = _band(image, scale, size, top, bottom)
+    return scale, small_image, small_mask, small_cal, cols, rows, px_per_m
+
+
+def _band(image: np.ndarray, scale: float, size: tuple[int, int], top: int, bottom: int) -> np.ndarray:
+    """The photo at the working size ``size`` (width, height), filled (and blurred) in its
+    rows ``top`` to ``bottom`` only, black elsewhere."""
+    band = image[int(top / scale):min(image.shape[0], int(np.ceil(bottom / scale)) + 1)]
     small_image = np.zeros((size[1], size[0], 3), np.uint8)
     small_image[top:bottom] = shrink_area(band, (size[0], bottom - top), least=2)  # blurred next
-    small_image = cv2.GaussianBlur(small_image, (3, 3), 0)
-    return scale, small_image, small_mask, small_cal, cols, rows, px_per_m
+    return cv2.GaussianBlur(small_image, (3, 3), 0)
+
+
+def _board_above(image: np.ndarray, view) -> np.ndarray:
+    """(k,) bool: the view's columns whose mask edge has a board standing on it: above the
+    edge a strip of one colour, ``FLOOR.skirting.above_min_m`` tall or more (a board's lit
+    top edge is thinner), ends at a sharp step. The rules' test for a board below the
+    edge, on the photo turned upside down."""
+    scale, small_image, _, _, cols, rows, px_per_m = view
+    h, w = small_image.shape[:2]
+    reach = np.ceil(FLOOR.skirting.search_m * px_per_m).max() + 12  # the search and the rows past its step
+    above = _band(image, scale, (w, h), max(0, int(np.floor((rows - reach).min()))), min(h, int(rows.max()) + 2))
+    up, _, _ = _board_rows(above[::-1], np.ones((h, w), bool), cols, h - rows, px_per_m)
+    return up >= FLOOR.skirting.above_min_m * px_per_m
 
 
 def _strip_of_one_height(known, shown, height_m) -> bool:
@@ -609,6 +633,13 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     # click says the board is there, and the depth model says how tall.
     sure |= clicked
     depth_px = _cut_depth_px(view, walls, rules_px, (rules_px > 0) | sure, profiles)
+    # A strip along a wall with a board standing above it is floor (a second floor's
+    # strip past a threshold reads like a board): that wall keeps it, unless clicked.
+    above = _board_above(image, view)
+    for wall in walls:
+        if (len(wall) >= FLOOR.skirting.min_wall_columns and not clicked[wall].any()
+                and np.mean(above[wall]) >= FLOOR.skirting.above_agreeing):
+            depth_px[wall] = 0
     doubt_px = _board_doubt_px(view, walls, p_board, whole, depth_px, profiles)
     if doubt_px is not None:
         doubt_px = (min(doubt_px[0], cols_px - 1), min(doubt_px[1], rows_px - 1))

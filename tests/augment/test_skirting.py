@@ -191,6 +191,27 @@ def test_mask_already_at_the_floor_line_is_left_alone(depth_m, factor):
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
 
 
+@pytest.mark.parametrize("depth_m, rgb", [(0.3, (128, 120, 112)), (0.5, (90, 90, 95)), (0.5, (170, 160, 150))])
+def test_a_second_floors_strip_below_a_board_is_not_cut(monkeypatch, depth_m, rgb):
+    """Concrete or tiles along the wall past a threshold, the mask at the floor line under
+    a white 10 cm board: the strip ends in a sharp step toward the camera like a board,
+    10-18 cm tall as seen, and without the board above it was cut (most of the strip);
+    with a board standing on its edge it is floor, left whole."""
+    image, truth, _, calibration = _room(0.10)
+    w, h = SIZE
+    u, v = np.meshgrid(np.arange(w), np.arange(h))
+    foot = calibration.floor_from_pixels(np.column_stack([u.ravel(), v.ravel()]).astype(float))
+    strip = truth & (WALL_Y_M - foot[:, 1].reshape(h, w) < depth_m)
+    noise = np.random.default_rng(1).normal(0, 3, (strip.sum(), 3))
+    image[strip] = np.clip(np.array(rgb) + noise, 0, 255).astype(np.uint8)
+    trimmed, height_m, _ = trim_skirting(image, truth, calibration)
+    assert height_m is None
+    np.testing.assert_array_equal(trimmed, truth)
+    monkeypatch.setattr(FLOOR.skirting, "above_agreeing", 1.01)  # the board above not looked for
+    trimmed, height_m, _ = trim_skirting(image, truth, calibration)
+    assert height_m is not None and (strip & ~trimmed).sum() > 0.7 * strip.sum()
+
+
 def test_board_profiles_measure_in_meters_against_the_floor():
     """The board model's input, checked by hand: the mask's edge at the board's top, a
     12 cm board 200 px per meter tall, the floor below."""
@@ -380,7 +401,8 @@ def test_a_wall_whose_mask_stops_at_the_floor_line_is_not_cut_where_another_show
     cut every wall, took the far wall's strip of floor for a board. The board model gives
     that wall's columns 0.00-0.10: they are left, and the right wall's board is still
     cut. The polygon against the true mask's: -0.4 % (-5.9 % cutting every wall) when
-    written. A "not floor" click on the far wall's strip still trims it."""
+    written. A "not floor" click on the far wall's strip still trims it. The board standing
+    above that strip says it is floor too (:func:`skirting._board_above`)."""
     from augment.floor.model import DEFAULT_MODEL, FloorModel
     from augment.floor.polygon import floor_polygon
     from augment.floor.segment import segment_floor
@@ -396,7 +418,10 @@ def test_a_wall_whose_mask_stops_at_the_floor_line_is_not_cut_where_another_show
     top = {x: int(np.flatnonzero(seg.mask[:, x])[0]) for x in (200, 330)}
     clicked = segment_floor(sample.image, model, calibration, clicks=[(330, top[330] + 3, 0)])
     assert all(np.flatnonzero(clicked.mask[:, x])[0] - top[x] >= 5 for x in top)
-    monkeypatch.setattr(FLOOR.skirting, "no_wall_board_p", 0.0)  # every wall cut
+    monkeypatch.setattr(FLOOR.skirting, "no_wall_board_p", 0.0)  # every wall cut but where a board stands above
+    seg = segment_floor(sample.image, model, calibration)
+    assert abs(floor_polygon(seg.mask, calibration).area_m2 / true_m2 - 1) < 0.02
+    monkeypatch.setattr(FLOOR.skirting, "above_agreeing", 1.01)  # every wall cut
     seg = segment_floor(sample.image, model, calibration)
     assert floor_polygon(seg.mask, calibration).area_m2 / true_m2 - 1 < -0.04
 
