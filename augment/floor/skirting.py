@@ -459,34 +459,31 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
     cols, rows, px_per_m = _wall_columns(small_mask, small_cal)
     if len(cols) == 0:
         return None
-    # Only the band of rows the search and the profiles look at is needed at the working
+    # Only the band of rows the searches and the profiles look at is needed at the working
     # size; a profile cut short reads black there, which the models would take for shade.
     sk = FLOOR.skirting
     top = max(0, int(np.floor((rows + sk.profile_from_m * px_per_m).min())) - 2)
     bottom = min(size[1], int(np.ceil((rows + max(sk.search_m, sk.profile_to_m) * px_per_m).max())) + 12)
-    small_image = _band(image, scale, size, top, bottom)
+    # The search for a board above the edge (:func:`_board_above`) reads higher: those rows
+    # are shrunk on their own, so that the band's pixels stay what the models were trained on.
+    above = max(0, int(np.floor((rows - np.ceil(sk.search_m * px_per_m)).min())) - 12)
+    small_image = np.zeros((size[1], size[0], 3), np.uint8)
+    for y0, y1 in ((above, top), (top, bottom)):
+        if y1 > y0:
+            band = image[int(y0 / scale):min(rows_px, int(np.ceil(y1 / scale)) + 1)]
+            small_image[y0:y1] = shrink_area(band, (size[0], y1 - y0), least=2)  # blurred next
+    small_image = cv2.GaussianBlur(small_image, (3, 3), 0)
     return scale, small_image, small_mask, small_cal, cols, rows, px_per_m
 
 
-def _band(image: np.ndarray, scale: float, size: tuple[int, int], top: int, bottom: int) -> np.ndarray:
-    """The photo at the working size ``size`` (width, height), filled (and blurred) in its
-    rows ``top`` to ``bottom`` only, black elsewhere."""
-    band = image[int(top / scale):min(image.shape[0], int(np.ceil(bottom / scale)) + 1)]
-    small_image = np.zeros((size[1], size[0], 3), np.uint8)
-    small_image[top:bottom] = shrink_area(band, (size[0], bottom - top), least=2)  # blurred next
-    return cv2.GaussianBlur(small_image, (3, 3), 0)
-
-
-def _board_above(image: np.ndarray, view) -> np.ndarray:
+def _board_above(view) -> np.ndarray:
     """(k,) bool: the view's columns whose mask edge has a board standing on it: above the
     edge a strip of one colour, ``FLOOR.skirting.above_min_m`` tall or more (a board's lit
     top edge is thinner), ends at a sharp step. The rules' test for a board below the
     edge, on the photo turned upside down."""
-    scale, small_image, _, _, cols, rows, px_per_m = view
-    h, w = small_image.shape[:2]
-    reach = np.ceil(FLOOR.skirting.search_m * px_per_m).max() + 12  # the search and the rows past its step
-    above = _band(image, scale, (w, h), max(0, int(np.floor((rows - reach).min()))), min(h, int(rows.max()) + 2))
-    up, _, _ = _board_rows(above[::-1], np.ones((h, w), bool), cols, h - rows, px_per_m)
+    _, small_image, _, _, cols, rows, px_per_m = view
+    h = small_image.shape[0]
+    up, _, _ = _board_rows(small_image[::-1], np.ones(small_image.shape[:2], bool), cols, h - rows, px_per_m)
     return up >= FLOOR.skirting.above_min_m * px_per_m
 
 
@@ -635,7 +632,7 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     depth_px = _cut_depth_px(view, walls, rules_px, (rules_px > 0) | sure, profiles)
     # A strip along a wall with a board standing above it is floor (a second floor's
     # strip past a threshold reads like a board): that wall keeps it, unless clicked.
-    above = _board_above(image, view)
+    above = _board_above(view)
     for wall in walls:
         if (len(wall) >= FLOOR.skirting.min_wall_columns and not clicked[wall].any()
                 and np.mean(above[wall]) >= FLOOR.skirting.above_agreeing):

@@ -235,8 +235,9 @@ def test_board_profiles_measure_in_meters_against_the_floor():
 
 def test_the_working_view_holds_every_row_the_profiles_read():
     """A wall seen square-on: every column's edge is on one row, so the rows 10 cm above
-    it (the profiles' top) and 30 cm below it (their floor reference) must come from the
-    photo, not the black the rest of the view is left as."""
+    it (the profiles' top), 30 cm below it (their floor reference) and the board's search
+    above it (25 cm, and the rows past it its step reads) must come from the photo, not the
+    black the rest of the view is left as."""
     from augment.floor.skirting import working_view
 
     from_m, to_m = FLOOR.skirting.profile_from_m, FLOOR.skirting.profile_to_m
@@ -244,11 +245,12 @@ def test_the_working_view_holds_every_row_the_profiles_read():
     image, truth, _, calibration = _room(0.0)
     _, small_image, small_mask, _, cols, rows, px_per_m = working_view(image, truth, calibration)
     assert np.ptp(rows) <= 1  # square-on: the edge is level
-    for offset_m in (from_m, to_m):
-        y = np.round(rows + offset_m * px_per_m).astype(int)
+    above_px = np.ceil(FLOOR.skirting.search_m * px_per_m) + 8
+    for y in (rows + from_m * px_per_m, rows + to_m * px_per_m, rows - above_px):
+        y = np.round(y).astype(int)
         seen = small_image[y, cols].astype(float)
         np.testing.assert_allclose(seen, image[y, cols], atol=20)  # the wall above, the floor below
-    assert not small_image[: int((rows + from_m * px_per_m).min()) - 3].any()  # the rest is not filled
+    assert not small_image[: int((rows - above_px).min()) - 5].any()  # the rest is not filled
 
 
 def _render_untrimmed(seed: int, index: int, outside: bool = True):
