@@ -340,7 +340,8 @@ def _window_spans(strip: np.ndarray, inside: np.ndarray, wall: np.ndarray, in_do
     glass = shows & ~in_door & (_column_share(differs, band) >= settings.min_share) & (
         _column_share(differs, floor_band) < settings.window_floor_share)
     middle = int(np.searchsorted(z, 0.5 * (lo + hi)))
-    sill_m, top_m, sill_step = _window_edges(strip, differs | ~inside, inside, z, middle)
+    sill_m, top_m, sill_step = _window_edges(strip, differs | ~inside, inside, z, middle,
+                                             round(settings.window_mullion_m / step) + 1)
     # A sill is a line across the wall, light on a wall brightens it gradually: a column
     # whose wall below shows keeps its place in a window only with a step there (half the
     # run's, which one shadowed column or a radiator's top may lack).
@@ -364,12 +365,14 @@ def _window_spans(strip: np.ndarray, inside: np.ndarray, wall: np.ndarray, in_do
     return out
 
 
-def _window_edges(strip: np.ndarray, other: np.ndarray, inside: np.ndarray, z: np.ndarray, middle: int):
+def _window_edges(strip: np.ndarray, other: np.ndarray, inside: np.ndarray, z: np.ndarray, middle: int,
+                  bar: int):
     """Per column of a wall strip (Lab), where the run of samples ``other`` than the wall
     through row ``middle`` ends below (the sill, m; NaN where no wall shows below it) and
     above (the top, m, or the highest sample in view), and the step in colour (CIELAB
     distance) across the sill over 8 cm (NaN with no sill): a sill board may be as light
-    as the wall. Three (columns,) float arrays."""
+    as the wall. Above, fewer than ``bar`` samples like the wall with glass over them are
+    a transom's bar the wall's colour, not the top. Three (columns,) float arrays."""
     cols = other.shape[1]
     # The wall below a sill: three samples in a row like the wall (a lone one in a sill's shadow is noise).
     wall = ~other
@@ -378,8 +381,11 @@ def _window_edges(strip: np.ndarray, other: np.ndarray, inside: np.ndarray, z: n
     sill, top, edge = np.full(cols, np.nan), np.full(cols, np.nan), np.full(cols, np.nan)
     for c in range(cols):
         below = np.flatnonzero(wall[:middle, c])
-        above = np.flatnonzero(~other[middle:, c])
         seen = np.flatnonzero(inside[:, c])
+        like_wall = ~other[middle:, c]
+        # The head: the first run of wall that is no transom's bar (``bar`` samples, or up to the last in view).
+        above = [i for i in np.flatnonzero(like_wall)
+                 if like_wall[i:i + bar].all() and (i + bar <= len(like_wall) or not other[middle + i:, c].any())]
         if len(seen):
             top[c] = z[middle + above[0]] - 0.5 * step if len(above) else z[seen[-1]] + 0.5 * step
         if len(below) and 0 < below[-1] < middle - 3:

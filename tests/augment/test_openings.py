@@ -98,3 +98,22 @@ def test_panes_split_by_a_mullion_are_one_window_and_light_beside_it_is_not_part
     assert (np.linalg.norm(strip - WALL, axis=-1)[60, 40:50] > ROOM.doors.min_difference).all()  # it differs
     ((i0, i1, _, _),) = _window_spans(strip, inside, WALL, none, ROOM.doors)
     assert abs(i0 - 50) <= 2 and abs(i1 - 110) <= 1
+
+
+def test_a_transom_bar_the_walls_colour_is_not_the_windows_top():
+    """Panes 0.9-1.7 m and, over an 8 cm bar the wall's colour, a transom 1.78-2.1 m up, 1.0
+    to 2.2 m along: one window whose top is the transom's, 2.1 m (it stopped at the bar, 1.7
+    m, and the transom's glass took the walls' shadows). A bar of 20 cm is wall between
+    two windows: the top stays at 1.7 m."""
+    def panes(bar_m):
+        def paint(strip, Z, S):
+            glass = (S >= 1.0) & (S < 2.2) & (((Z >= 0.9) & (Z < 1.7)) | ((Z >= 1.7 + bar_m) & (Z < 2.1)))
+            strip[glass] = [95.0, -2.0, -8.0]
+        return paint
+
+    none = np.zeros(150, bool)
+    for bar_m, top_m in ((0.08, 2.1), (0.2, 1.7)):
+        strip, inside = _strip(panes(bar_m))
+        ((i0, i1, sill, top),) = _window_spans(strip, inside, WALL, none, ROOM.doors)
+        assert abs(i0 - 50) <= 1 and abs(i1 - 110) <= 1
+        assert abs(sill - 0.9) <= STEP and abs(top - top_m) <= STEP, (bar_m, top)
