@@ -379,13 +379,17 @@ def _window_edges(strip: np.ndarray, other: np.ndarray, inside: np.ndarray, z: n
     wall[2:] &= wall[1:-1] & wall[:-2]
     step = z[1] - z[0]
     sill, top, edge = np.full(cols, np.nan), np.full(cols, np.nan), np.full(cols, np.nan)
+    # The head: the first sample above the band starting a run like the wall ``bar`` long, or
+    # reaching the strip's top (shorter, it is a transom's bar with glass over it).
+    like_wall = ~other[middle:]
+    n = len(like_wall)
+    counts = np.vstack([np.zeros((1, cols), int), np.cumsum(like_wall, axis=0)])
+    ends = np.minimum(np.arange(n) + bar, n)
+    head = like_wall & (counts[ends] - counts[:n] == (ends - np.arange(n))[:, None])
     for c in range(cols):
         below = np.flatnonzero(wall[:middle, c])
         seen = np.flatnonzero(inside[:, c])
-        like_wall = ~other[middle:, c]
-        # The head: the first run of wall that is no transom's bar (``bar`` samples, or up to the last in view).
-        above = [i for i in np.flatnonzero(like_wall)
-                 if like_wall[i:i + bar].all() and (i + bar <= len(like_wall) or not other[middle + i:, c].any())]
+        above = np.flatnonzero(head[:, c])
         if len(seen):
             top[c] = z[middle + above[0]] - 0.5 * step if len(above) else z[seen[-1]] + 0.5 * step
         if len(below) and 0 < below[-1] < middle - 3:
