@@ -632,8 +632,8 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     depth_px = _cut_depth_px(view, walls, rules_px, (rules_px > 0) | sure, profiles)
     # A strip along a wall with a board standing above it is floor (a second floor's
     # strip past a threshold reads like a board): that wall keeps it, unless clicked.
-    above = _board_above(view)
-    for wall in walls:
+    above = _board_above(view) if (depth_px > 0).any() else None
+    for wall in walls if above is not None else ():
         if (len(wall) >= FLOOR.skirting.min_wall_columns and not clicked[wall].any()
                 and np.mean(above[wall]) >= FLOOR.skirting.above_agreeing):
             depth_px[wall] = 0
