@@ -92,7 +92,7 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
                   board_hidden: float = 0.0, furnished: float = 0.0, baseboard_m=BASEBOARD_M,
                   trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True,
                   pieces=(), low_sun: float = 0.0, two_floors: float = 0.0, outside: bool = True,
-                  shadowed_fill: bool = False, occluded_bounce: bool = False) -> Sample:
+                  shadowed_fill: bool = False, occluded_bounce: bool = False, far_floor: float = 0.0) -> Sample:
     """Render one synthetic room photo with its ground truth.
 
     Parameters
@@ -141,6 +141,10 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
     two_floors : float
         Chance that part of the floor, past a straight or stepped threshold away from the
         board, is of a second material (0: never, and the random stream is the same).
+    far_floor : float
+        Of those rooms, the chance that the second floor is a strip 0.25-1.2 m deep along
+        a wall, mostly the one the camera faces: a few pixels tall, the threshold case the
+        floor model misses most (0: never, and the random stream is the same).
     outside : bool
         Draw the building's outside, so that the walls and the ceiling keep the sun out
         (:func:`augment.synth.scene._outside`). Without it the sun lights the whole room
@@ -187,7 +191,7 @@ def render_sample(seed, renderer: Renderer, size_px: tuple[int, int] | None = No
 
     built = build_scene(rng, room, shot, board, world_from_board, _texture_px(size_px), baseboard_m,
                         trim_like_floor, trim_dark, board_drawn, pieces, low_sun, two_floors, outside,
-                        shadowed_fill)
+                        shadowed_fill, far_floor)
     width, height = size_px
     flags = pyrender.RenderFlags.SHADOWS_DIRECTIONAL | pyrender.RenderFlags.SHADOWS_SPOT
     # Small frames cannot show a 2048-texel shadow map's detail; it would cost half the time.

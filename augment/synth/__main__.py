@@ -66,6 +66,8 @@ def main(argv=None) -> int:
     parser.add_argument("--two-floors", type=float, default=0.0, metavar="P",
                         help="chance that part of the floor is of a second material, past a straight or "
                              "stepped threshold (default 0)")
+    parser.add_argument("--far-floor", type=float, default=0.0, metavar="P",
+                        help="of those, the chance that the second floor is a strip along the far wall (default 0)")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="render processes (default: one per core)")
     parser.add_argument("--sheet", type=Path, default=None,
@@ -82,7 +84,7 @@ def main(argv=None) -> int:
     if not 0.0 <= args.trim_like_floor <= 1.0:
         parser.error(f"--trim-like-floor {args.trim_like_floor}: must be a chance between 0 and 1, e.g. 0.5")
     for flag, value in (("--trim-dark", args.trim_dark), ("--low-sun", args.low_sun),
-                        ("--two-floors", args.two_floors)):
+                        ("--two-floors", args.two_floors), ("--far-floor", args.far_floor)):
         if not 0.0 <= value <= 1.0:
             parser.error(f"{flag} {value}: must be a chance between 0 and 1, e.g. 0.5")
     low, high = args.baseboard_m
@@ -101,6 +103,7 @@ def main(argv=None) -> int:
     options = dict(seed=args.seed, size=args.size, out=args.out, clutter=args.clutter, furnished=args.furnished,
                    baseboard_m=(low, high), trim_like_floor=args.trim_like_floor,
                    trim_dark=args.trim_dark, low_sun=args.low_sun, two_floors=args.two_floors,
+                   far_floor=args.far_floor,
                    board=Board(args.board.cols, args.board.rows, args.square, kind=args.board.kind))
     workers = max(1, min(args.workers, args.count))
     start = time.perf_counter()

@@ -32,7 +32,7 @@ def render_one(index: int) -> tuple[int, dict]:
                            clutter=o["clutter"], furnished=o.get("furnished", 0.0),
                            baseboard_m=o["baseboard_m"], trim_like_floor=o.get("trim_like_floor", 0.0),
                            trim_dark=o.get("trim_dark", 0.0), low_sun=o.get("low_sun", 0.0),
-                           two_floors=o.get("two_floors", 0.0))
+                           two_floors=o.get("two_floors", 0.0), far_floor=o.get("far_floor", 0.0))
     paths = write_sample(sample, o["out"], f"{index:05d}")
     return index, {k: str(v) for k, v in paths.items()}
 

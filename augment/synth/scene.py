@@ -384,21 +384,26 @@ def _light_pose(direction, position=(0.0, 0.0, 0.0)):
     return pose
 
 
-def _second_floor(rng, room: Room, shot: Shot, board_center_m, board_radius_m):
+def _second_floor(rng, room: Room, shot: Shot, board_center_m, board_radius_m, far: bool = False):
     """Where a second floor material lies: a half of the room beyond a straight or stepped
     threshold across the view or beside the board (walls are axis-aligned, thresholds run
-    along them), never under the board. Returns a test ``(k, 2) points -> (k,) bool`` and
-    the threshold's coordinates, which the floor's cells must split at, and whether it is
-    stepped."""
+    along them), never under the board; with ``far``, a strip 0.25-1.2 m deep along a
+    wall, mostly the one the camera faces (a few pixels tall in the photo: the hardest to
+    see). Returns a
+    test ``(k, 2) points -> (k,) bool`` and the threshold's coordinates, which the floor's
+    cells must split at, and whether it is stepped."""
     forward = shot.world_from_camera[:2, 2]
-    across = rng.random() < 0.6
+    across = rng.random() < (0.7 if far else 0.6)
     axis = int(np.argmax(np.abs(forward))) if across else int(np.argmin(np.abs(forward)))
     sign = float(np.sign(forward[axis])) if across else float(rng.choice([-1.0, 1.0]))
     # Between the board and the wall it faces, leaving half a meter of the second floor at
     # least; with less room than that there (the region is then empty), the caller redraws.
     room_m = sign * (room.polygon_m[:, axis].max() if sign > 0 else room.polygon_m[:, axis].min())
     room_m -= sign * board_center_m[axis] + board_radius_m
-    reach = rng.uniform(0.15, 0.85) * (room_m - 0.5) if room_m > 0.8 else room_m + 1.0
+    if far:
+        reach = max(room_m - rng.uniform(0.25, 1.2), 0.1 * room_m)
+    else:
+        reach = rng.uniform(0.15, 0.85) * (room_m - 0.5) if room_m > 0.8 else room_m + 1.0
     line = board_center_m[axis] + sign * (board_radius_m + reach)
     # A stepped threshold (a doorway's recess, an alcove): past ``step`` along the line
     # it moves farther from the board.
@@ -485,7 +490,7 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
                 world_from_board: np.ndarray, texture_px: int = 512, baseboard_m=BASEBOARD_M,
                 trim_like_floor: float = 0.0, trim_dark: float = 0.0, board_drawn: bool = True,
                 pieces=(), low_sun: float = 0.0, two_floors: float = 0.0, outside: bool = True,
-                shadowed_fill: bool = False) -> Scene:
+                shadowed_fill: bool = False, far_floor: float = 0.0) -> Scene:
     """Sample materials and lights and assemble the scene seen by ``shot`` (baseboards
     drawn ``baseboard_m`` (low, high) tall; the trim painted the floor's colour, 0.5-1.3
     of its brightness, with the chance ``trim_like_floor``, else a dark colour with the
@@ -494,8 +499,9 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     ``pieces`` (Furniture, (4, 4) world pose) stand in the room besides, drawing nothing
     from ``rng``. With the chance ``low_sun`` a low, strong sun shines through a window
     onto the floor in view (:func:`_low_sun`); with the chance ``two_floors`` part of the
-    floor is of a second material past a threshold (:func:`_second_floor`). Either at 0
-    draws nothing, so the random stream stays as it was. ``outside`` draws the building's
+    floor is of a second material past a threshold (:func:`_second_floor`), of those with
+    the chance ``far_floor`` a strip along the far wall. Each at 0 draws nothing, so the
+    random stream stays as it was. ``outside`` draws the building's
     outside (:func:`_outside`), which keeps the sun out but through the windows.
     ``shadowed_fill`` makes the fill light from the ceiling's middle a wide spot that casts
     shadows (the same light below the horizontal), as any real lamp does."""
@@ -527,13 +533,14 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
         grid = np.stack(np.meshgrid(np.arange(lo[0], hi[0], 0.1), np.arange(lo[1], hi[1], 0.1)), -1).reshape(-1, 2)
         grid = grid[contains(poly, grid)]
         seen = grid[shot.in_view(np.column_stack([grid, np.zeros(len(grid))]))]
+        far = far_floor > 0 and rng.random() < far_floor
         best = -1.0
         for _ in range(10):
-            drawn = _second_floor(rng, room, shot, world_from_board[:2, 3], sheet_m)
+            drawn = _second_floor(rng, room, shot, world_from_board[:2, 3], sheet_m, far)
             share = drawn[0](seen).mean() if len(seen) else 0.0
             if share > best:
                 best, (inside, cuts, stepped) = share, drawn
-            if share >= 0.1:
+            if share >= (0.01 if far else 0.1):
                 break
         cells = _floor_cells(poly, cuts)
         second = inside(cells.mean(axis=1))

@@ -442,6 +442,32 @@ def test_two_floors_keep_one_floor_mask_and_leave_the_board_on_the_first(rendere
         assert not inside(ring).any()
 
 
+def test_a_far_second_floor_is_a_strip_along_a_wall():
+    """``far``: the threshold runs 0.25-1.2 m before a wall (where the room leaves that
+    much room past the board), mostly the wall the camera faces, never under the board."""
+    from augment.synth.scene import _second_floor
+
+    rng = np.random.default_rng(1)
+    checked, faced = 0, 0
+    for _ in range(40):
+        room = random_room(rng)
+        shot = random_shot(rng, room, random_handling(rng, (640, 480)))
+        center = room.polygon_m.mean(axis=0)
+        inside, cuts, _ = _second_floor(rng, room, shot, center, 0.4, far=True)
+        ring = center + 0.4 * np.column_stack([np.cos(np.linspace(0, 6.3, 16)), np.sin(np.linspace(0, 6.3, 16))])
+        assert not inside(ring).any()
+        axis = 0 if len(cuts[0]) == 2 else 1
+        line = cuts[axis][0]
+        sign = np.sign(line - center[axis])
+        wall = room.polygon_m[:, axis].max() if sign > 0 else room.polygon_m[:, axis].min()
+        forward = shot.world_from_camera[:2, 2]
+        faced += axis == int(np.argmax(np.abs(forward))) and sign == np.sign(forward[axis])
+        if sign * (wall - center[axis]) - 0.4 > 1.4:
+            checked += 1
+            assert 0.25 <= sign * (wall - line) <= 1.2
+    assert checked >= 20 and faced >= 20
+
+
 def iou_of(a, b):
     return (a & b).sum() / (a | b).sum()
 
