@@ -67,7 +67,8 @@ def main(argv=None) -> int:
                         help="chance that part of the floor is of a second material, past a straight or "
                              "stepped threshold (default 0)")
     parser.add_argument("--far-floor", type=float, default=0.0, metavar="P",
-                        help="of those, the chance that the second floor is a strip along the far wall (default 0)")
+                        help="of those, the chance that the second floor is a strip along a wall, mostly the "
+                             "one the camera faces (default 0)")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="render processes (default: one per core)")
     parser.add_argument("--sheet", type=Path, default=None,

@@ -389,9 +389,8 @@ def _second_floor(rng, room: Room, shot: Shot, board_center_m, board_radius_m, f
     threshold across the view or beside the board (walls are axis-aligned, thresholds run
     along them), never under the board; with ``far``, a strip 0.25-1.2 m deep along a
     wall, mostly the one the camera faces (a few pixels tall in the photo: the hardest to
-    see). Returns a
-    test ``(k, 2) points -> (k,) bool`` and the threshold's coordinates, which the floor's
-    cells must split at, and whether it is stepped."""
+    see). Returns a test ``(k, 2) points -> (k,) bool`` and the threshold's coordinates,
+    which the floor's cells must split at, and whether it is stepped."""
     forward = shot.world_from_camera[:2, 2]
     across = rng.random() < (0.7 if far else 0.6)
     axis = int(np.argmax(np.abs(forward))) if across else int(np.argmin(np.abs(forward)))
@@ -500,8 +499,8 @@ def build_scene(rng: np.random.Generator, room: Room, shot: Shot, board: Board,
     from ``rng``. With the chance ``low_sun`` a low, strong sun shines through a window
     onto the floor in view (:func:`_low_sun`); with the chance ``two_floors`` part of the
     floor is of a second material past a threshold (:func:`_second_floor`), of those with
-    the chance ``far_floor`` a strip along the far wall. Each at 0 draws nothing, so the
-    random stream stays as it was. ``outside`` draws the building's
+    the chance ``far_floor`` a strip along a wall, mostly the one the camera faces. Each at
+    0 draws nothing, so the random stream stays as it was. ``outside`` draws the building's
     outside (:func:`_outside`), which keeps the sun out but through the windows.
     ``shadowed_fill`` makes the fill light from the ceiling's middle a wide spot that casts
     shadows (the same light below the horizontal), as any real lamp does."""
