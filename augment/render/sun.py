@@ -338,21 +338,34 @@ def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, wa
     weight = step[edges]
     edge_deg = (np.degrees(np.arctan2(dy[edges], dx[edges])) + 90.0) % 180.0
     hist = np.bincount(edge_deg.astype(int) % 180, weights=weight, minlength=180)
-    peaks = _peaks(_circular_smooth(hist, 2.0), settings.min_peak_share, 20)
+    smooth = _circular_smooth(hist, 2.0)
+    peaks = _peaks(smooth, settings.min_peak_share, 20)
     if len(peaks) == 0:
         return None
-    rc = np.argwhere(edges).mean(axis=0)
-    center = (float(lo[0] + rc[1] * cell), float(lo[1] + rc[0] * cell))
     walls = np.zeros(0) if walls_rad is None else np.asarray(walls_rad, dtype=np.float64)
 
-    def on_wall(a_deg):
-        return any(_axis_gap_deg(math.radians(a_deg), wr) <= settings.wall_tol_deg for wr in walls)
+    def on_wall(a_deg, tol_deg=settings.wall_tol_deg):
+        return any(_axis_gap_deg(math.radians(a_deg), wr) <= tol_deg for wr in walls)
 
     two = list(peaks[:2])
     free = [a for a in two if not on_wall(a)]
-    if len(walls) and not free:  # steps along the walls only: planks, tiles, a wall's shade
-        return None
+    if len(walls) and not free:
+        # The strongest steps run along the walls (planks, tiles, a wall's shade); the sun's
+        # edges may still show off the walls, fainter: then they alone are read.
+        peaks = [a for a in _peaks(smooth, 0.0, 2 * settings.family_deg)
+                 if not on_wall(a, settings.wall_tol_deg + settings.family_deg)]
+        if not peaks:
+            return None
+        gap = np.abs((edge_deg - peaks[0] + 90.0) % 180.0 - 90.0)
+        family = gap <= settings.family_deg
+        length_m = float(family.sum()) * cell / (2.5 * sigma)
+        if length_m < settings.min_edge_m:
+            return None
+        edges[edges] = family
+        two = [peaks[0]]
     along_wall = len(two) == 2 and len(free) == 1
+    rc = np.argwhere(edges).mean(axis=0)
+    center = (float(lo[0] + rc[1] * cell), float(lo[1] + rc[0] * cell))
     if along_wall:
         two = free + [a for a in two if a != free[0]]
     axes = tuple((math.cos(math.radians(a)), math.sin(math.radians(a))) for a in two)

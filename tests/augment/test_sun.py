@@ -236,6 +236,35 @@ def test_a_patch_too_soft_for_its_edges_is_bounded_by_its_light(rng):
     assert bright_floor(flat, mask, FLOOR_FROM_IMAGE, (0.0, 0.0), axis) is None
 
 
+@pytest.mark.parametrize("sunny", [True, False])
+def test_a_sun_patch_on_contrasty_planks_is_read_off_its_edges_that_leave_the_walls(rng, sunny):
+    """Planks 15 cm wide along a wall, alternately 1.35 and 0.75 times the floor's level,
+    ends every 1.2 m: about 80 m of steps along the walls. The sun patch of
+    :func:`_sunny_floor` (sides along 30 degrees, 2.1 times the shade) adds about 5 m of
+    steps, under a tenth of the planks' weight: its azimuth is read from the edges that
+    leave the walls' directions alone. Without the sun, the planks give none."""
+    x, y = _floor_points()
+    row = np.floor(y / 0.15)
+    plank = np.where(row % 2 == 0, 1.35, 0.75) * np.where(np.floor(x / 1.2 + 0.5 * row) % 2 == 0, 1.0, 0.9)
+    patch, mask = _sunny_floor(rng)
+    lit = (patch[..., 0] > 120) & mask if sunny else np.zeros_like(mask)
+    level = 80.0 * plank * np.where(lit, 170.0 / 80.0, 1.0) + rng.normal(0, 2.0, x.shape)
+    image = np.repeat(np.clip(level, 0, 255)[..., None], 3, axis=2).astype(np.uint8)
+    image[~mask] = 200
+    walls = np.radians([0.0, 90.0])
+    sun = find_sun(image, mask, FLOOR_FROM_IMAGE, (0.0, 0.0), walls)
+    if not sunny:
+        assert sun is None
+        return
+    axis = math.degrees(math.atan2(sun.axes_xy[0][1], sun.axes_xy[0][0])) % 180
+    assert abs(axis - 30.0) < 2.0
+    assert sun.downstream * sun.axes_xy[0][0] > 0  # the patch runs into the wall at x = 1.5 m
+    found = sun.sunlit(np.stack([x, y], axis=-1)[mask]) > 0.5
+    # The sunlit dark planks are hardly brighter than the shaded light ones: some are lost.
+    assert (found & lit[mask]).sum() / (found | lit[mask]).sum() > 0.7
+    assert not (found & ~lit[mask]).sum() > 0.02 * found.sum()
+
+
 @pytest.mark.parametrize("kind", ["planks", "plain"])
 def test_no_sun_on_planks_or_a_plain_floor(rng, kind):
     x, y = _floor_points()
