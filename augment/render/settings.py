@@ -136,6 +136,7 @@ class SunSettings:
     board_margin_m: float = 0.08  # the board's sheet, grown by this, is left out (its edges are steps too)
     min_peak_share: float = 0.12  # an edge family this strong against the strongest
     wall_tol_deg: float = 4.0  # edges this close to a wall's direction run along it
+    min_touch_cells: int = 20  # a patch in the sun: its edges along the sun touch it on this many cells
     family_deg: float = 5.0  # the sun's edges past the planks: this near their peak, this much farther off a wall
     colour_gap_m: float = 0.05  # the sun's colour: sunlit floor and shade this far from the edges ...
     colour_ring_m: float = 0.3  # ... the shade within this of the patches ...

@@ -385,12 +385,16 @@ def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, wa
         return None
     contrast = float(math.exp(sun_log - shade_log))
     # In the sun: floor nearly as bright as the sunny side of the edges, in patches that
-    # the edges bound (a bright stretch of floor without a sharp edge is lamplight).
+    # edges along the sun bound (a bright stretch of floor without a sharp edge is
+    # lamplight; a light plank's edges run along the walls).
     lit = valid & (log > shade_log + settings.lit_level * (sun_log - shade_log))
     lit = cv2.morphologyEx(lit.astype(np.uint8), cv2.MORPH_OPEN, np.ones((5, 5), np.uint8))
-    _, labels = cv2.connectedComponents(lit, connectivity=8)
-    bounded = np.unique(labels[cv2.dilate(edges.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0])
-    lit = np.isin(labels, bounded[bounded > 0])
+    n_labels, labels = cv2.connectedComponents(lit, connectivity=8)
+    gap = np.abs((np.degrees(np.arctan2(dy, dx)) + 90.0 - two[0] + 90.0) % 180.0 - 90.0)
+    along_sun = cv2.dilate((edges & (gap <= settings.family_deg)).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    touch = np.bincount(labels[along_sun], minlength=n_labels)
+    touch[0] = 0
+    lit = (touch >= settings.min_touch_cells)[labels]
     if lit.sum() < 100:
         return None
     downstream = _downstream(lit, standing, axes[0], margin)

@@ -160,6 +160,21 @@ def test_a_patch_that_ends_on_the_floor_gives_no_sign(rng):
     assert sun is not None and sun.downstream == 0
 
 
+def test_light_planks_at_a_wall_are_not_the_suns_far_end(rng):
+    """The patch of :func:`_sunny_floor` ending on the floor, and two light planks (level
+    150 over the floor's 80, edges along the walls) running into the wall at x = 1.5 m past
+    its far end: as bright as the sun's threshold, but no edge along the sun bounds them,
+    so they are not in the sun and do not say which way the light goes."""
+    image, mask = _sunny_floor(rng, reach_wall=False)
+    x, y = _floor_points()
+    planks = (x > 0.3) & (np.abs(y - 0.75) < 0.07) | (x > 0.6) & (np.abs(y - 1.05) < 0.07)
+    image[planks & mask] = 150
+    sun = find_sun(image, mask, FLOOR_FROM_IMAGE, (0.0, 0.0), np.radians([0.0, 90.0]))
+    assert abs(math.degrees(math.atan2(sun.axes_xy[0][1], sun.axes_xy[0][0])) % 180 - 30.0) < 2.0
+    assert sun.downstream == 0
+    assert np.all(sun.sunlit(np.stack([x, y], axis=-1)[planks & mask & (x < 1.4)]) < 0.5)
+
+
 def test_a_small_patch_counts_only_when_its_far_end_runs_into_a_wall(rng):
     """A patch 12 cm wide along 30 degrees, 0.86 m of edges in all (under the 1 m that
     makes a patch the sun): running into the wall at x = 1.5 m it is found, the light
