@@ -343,6 +343,8 @@ def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, wa
     if len(peaks) == 0:
         return None
     walls = np.zeros(0) if walls_rad is None else np.asarray(walls_rad, dtype=np.float64)
+    if len(walls) == 1:  # one wall in view: rooms have square corners, the others run across it
+        walls = np.append(walls, (walls[0] + math.pi / 2) % math.pi)
 
     def on_wall(a_deg, tol_deg=settings.wall_tol_deg):
         return any(_axis_gap_deg(math.radians(a_deg), wr) <= tol_deg for wr in walls)
