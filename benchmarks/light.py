@@ -31,15 +31,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
-SIZES = ((1280, 960), (1600, 1200), (2016, 1512), (4032, 3024))
-SUN_IN_VIEW = 0.02  # as realism.py
-
-
-def azimuth_error_deg(a, b) -> float:
-    """Angle between the floor-plane parts of two directions (3,), degrees in [0, 180]."""
-    a, b = np.asarray(a, dtype=np.float64)[:2], np.asarray(b, dtype=np.float64)[:2]
-    cos = float(a @ b / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-12))
-    return math.degrees(math.acos(np.clip(cos, -1.0, 1.0)))
+from realism import SIZES, SUN_IN_VIEW, azimuth_error_deg  # the same cases and scores
 
 
 def one_case(seed: int, i: int, renderer, folder: Path) -> dict:

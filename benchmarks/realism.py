@@ -127,12 +127,15 @@ def scores(truth_f, truth_e, staged, erased, staged_alpha, sheet, floor_f, wall_
         union = int((t | s).sum())
         out[f"{key}_truth_px"], out[f"{key}_staged_px"] = int(t.sum()), int(s.sum())
         out[f"{key}_iou"] = float((t & s).sum() / union) if union >= 0.0005 * h * w else math.nan
-    out["light_error_deg"] = math.nan
-    if sun_world is not None:
-        a, b = np.asarray(sun_world[:2]), np.asarray(est_world[:2])
-        cos = float(a @ b / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-12))
-        out["light_error_deg"] = math.degrees(math.acos(np.clip(cos, -1, 1)))
+    out["light_error_deg"] = math.nan if sun_world is None else azimuth_error_deg(sun_world, est_world)
     return out
+
+
+def azimuth_error_deg(a, b) -> float:
+    """Angle between the floor-plane parts of two directions (3,), degrees in [0, 180]."""
+    a, b = np.asarray(a, dtype=np.float64)[:2], np.asarray(b, dtype=np.float64)[:2]
+    cos = float(a @ b / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-12))
+    return math.degrees(math.acos(np.clip(cos, -1.0, 1.0)))
 
 
 def _crop(images, mask, height=260):

@@ -162,10 +162,9 @@ def _peaks(hist: np.ndarray, min_share: float, min_apart_deg: float) -> np.ndarr
     return np.array(out)
 
 
-def _axis_gap_deg(a_rad: float, b_rad: float) -> float:
-    """Angle between two undirected directions, degrees in [0, 90]."""
-    d = abs(math.degrees(a_rad - b_rad)) % 180.0
-    return min(d, 180.0 - d)
+def _axis_gap_deg(a_deg, b_deg):
+    """Angle between undirected directions (degrees, arrays broadcast), degrees in [0, 90]."""
+    return np.abs((np.asarray(a_deg) - b_deg + 90.0) % 180.0 - 90.0)
 
 
 def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.ndarray, camera_xy_m,
@@ -200,6 +199,9 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     if view is None:
         return None
     top_rgb, top, valid, standing, lo, cell = view
+    walls_rad = np.zeros(0) if walls_rad is None else np.asarray(walls_rad, dtype=np.float64)
+    if len(walls_rad) == 1:  # one wall in view: rooms have square corners, the others run across it
+        walls_rad = np.append(walls_rad, (walls_rad[0] + math.pi / 2) % math.pi)
     for sigma_m, min_contrast in settings.edge_scales:  # sharp edges first, then soft ones (a blurred photo)
         found = _patches_at(top, valid, standing, lo, cell, sigma_m, min_contrast, walls_rad, settings)
         if found is not None:
@@ -342,28 +344,26 @@ def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, wa
     peaks = _peaks(smooth, settings.min_peak_share, 20)
     if len(peaks) == 0:
         return None
-    walls = np.zeros(0) if walls_rad is None else np.asarray(walls_rad, dtype=np.float64)
-    if len(walls) == 1:  # one wall in view: rooms have square corners, the others run across it
-        walls = np.append(walls, (walls[0] + math.pi / 2) % math.pi)
+    walls_deg = np.degrees(walls_rad)
 
     def on_wall(a_deg, tol_deg=settings.wall_tol_deg):
-        return any(_axis_gap_deg(math.radians(a_deg), wr) <= tol_deg for wr in walls)
+        return bool(np.any(_axis_gap_deg(a_deg, walls_deg) <= tol_deg))
 
     two = list(peaks[:2])
     free = [a for a in two if not on_wall(a)]
-    if len(walls) and not free:
+    if len(walls_deg) and not free:
         # The strongest steps run along the walls (planks, tiles, a wall's shade); the sun's
         # edges may still show off the walls, fainter: then they alone are read.
         peaks = [a for a in _peaks(smooth, 0.0, 2 * settings.family_deg)
                  if not on_wall(a, settings.wall_tol_deg + settings.family_deg)]
         if not peaks:
             return None
-        gap = np.abs((edge_deg - peaks[0] + 90.0) % 180.0 - 90.0)
-        family = gap <= settings.family_deg
+        family = _axis_gap_deg(edge_deg, peaks[0]) <= settings.family_deg
         length_m = float(family.sum()) * cell / (2.5 * sigma)
         if length_m < settings.min_edge_m:
             return None
         edges[edges] = family
+        edge_deg = edge_deg[family]
         two = [peaks[0]]
     along_wall = len(two) == 2 and len(free) == 1
     rc = np.argwhere(edges).mean(axis=0)
@@ -392,8 +392,9 @@ def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, wa
     lit = valid & (log > shade_log + settings.lit_level * (sun_log - shade_log))
     lit = cv2.morphologyEx(lit.astype(np.uint8), cv2.MORPH_OPEN, np.ones((5, 5), np.uint8))
     n_labels, labels = cv2.connectedComponents(lit, connectivity=8)
-    gap = np.abs((np.degrees(np.arctan2(dy, dx)) + 90.0 - two[0] + 90.0) % 180.0 - 90.0)
-    along_sun = cv2.dilate((edges & (gap <= settings.family_deg)).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    sun_edges = np.zeros(edges.shape, np.uint8)
+    sun_edges[edges] = _axis_gap_deg(edge_deg, two[0]) <= settings.family_deg
+    along_sun = cv2.dilate(sun_edges, np.ones((5, 5), np.uint8)) > 0
     touch = np.bincount(labels[along_sun], minlength=n_labels)
     touch[0] = 0
     lit = (touch >= settings.min_touch_cells)[labels]
