@@ -50,7 +50,7 @@ class StagedSettings:
     ao_reach_rel: float = 1.75  # the occlusion beside a thing is worked out this x its height away ...
     ao_reach_max_m: float = 1.75  # ... at most (a wall of height h hides 7 % of the sky 1.75 h away)
     ao_cell_m: float = 0.02  # the occlusion's raster: about this fine (a whole number of the floor's cells)
-    lamp_diffuse_share: float = 0.5  # share of a ceiling lamp's light reaching the floor off its shade,
+    lamp_diffuse_share: float = 0.35  # share of a ceiling lamp's light reaching the floor off its shade,
     # the ceiling and the walls near it: occluded like the sky's, the rest shadowed from the lamp
     contact_height_m: float = 0.015  # parts whose underside is this close to the floor stand on it
     contact_band_m: float = 0.02  # their foot: the part of them this close to their underside

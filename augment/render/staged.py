@@ -385,14 +385,13 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         direction = np.append(sign * axis * math.cos(elev), -math.sin(elev))
         soft, source = settings.sun_softness_rad, "sun"
     elif found is not None:
-        # Sunlit floor (a bright patch well above the floor's median) means direct sun: its
-        # edges too soft to read, the window in view gives its azimuth, and only the floor
-        # that bright loses it under the furniture.
-        floor_l = floor_lin @ [0.299, 0.587, 0.114]
-        sunny = floor_l.size > 0 and np.mean(floor_l > RENDER.sun.bright_ratio * np.median(floor_l)) > (
-            RENDER.sun.bright_share)
-        patches = None if not (sunny and settings.sun_from_floor) else _sun_patches(
-            image, region_small if floor_mask is None else floor_mask, calibration, cam_xy, floor_polygon, -toward)
+        # Sunlit floor (a bright patch well above the floor's median, the board's white
+        # paper left out) means direct sun: its edges too soft to read, the window in view
+        # gives its azimuth, and only the floor that bright loses it under the furniture.
+        bright = _sun_patches(image, region_small if floor_mask is None else floor_mask, calibration, cam_xy,
+                              floor_polygon, -toward)
+        sunny = bright is not None
+        patches = bright if settings.sun_from_floor else None
         elev = math.radians(settings.sun_elevation_deg if sunny else settings.window_elevation_deg)
         direction = np.append(-toward * math.cos(elev), -math.sin(elev))
         key, soft = ((settings.window_sun_key, settings.window_sun_softness_rad) if sunny

@@ -387,6 +387,22 @@ def test_a_soft_sun_patch_below_a_window_in_view_bounds_the_sun(renderer):
     assert len(xy) > 500 and lit.mean() >= 0.9
 
 
+def test_the_boards_paper_is_no_sunlit_floor(renderer):
+    """Render [9801, 44]: a dark floor, a window in view, the sun out of view (none of
+    the floor in view sunlit). The board's white paper is the only floor far brighter than
+    the rest: it is no sun patch, so the window gives a soft, modest key and no floor is
+    taken as sunlit (before, the paper made the window's light a hard sun)."""
+    from augment.synth import render_sample
+
+    sample = render_sample([9801, 44], renderer, size_px=(1280, 960), clutter=False)
+    sun = next(lt for lt in sample.truth["render"]["lights"] if lt["kind"] == "sun")
+    assert sun["floor_in_view"] == 0.0
+    lighting, _ = _estimated(sample)
+    assert lighting.source == "window" and lighting.sun is None
+    assert lighting.key_fraction == pytest.approx(RENDER.staged.window_key)
+    assert lighting.softness_rad == pytest.approx(RENDER.staged.window_softness_rad)
+
+
 def _sun_over(lit_where, share=0.5):
     """A SunOnFloor over the square (-2, -2)-(2, 2) m, 1 cm cells, lit where
     ``lit_where(x, y)``; all of it seen."""
