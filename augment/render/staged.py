@@ -467,7 +467,11 @@ def _vertex_light(v, n, albedo, roughness, metal, emissive, ao, lighting: Lighti
     front = np.append(-forward_xy, 0.35)
     front /= np.linalg.norm(front)
     sky = settings.sky_share
-    around = rest * sky * (0.5 + 0.5 * nz) + rest * (1.0 - sky) + settings.front_fill * np.maximum(n @ front, 0)
+    # With the sun in the room the caller's light map is the shade's, over which the sky's
+    # share rises with the sun's contrast; the room's own light (behind the camera, off the
+    # floor) is the shade's as it is.
+    c = _sun_contrast(lighting) if lighting.sun is not None else 1.0
+    around = c * rest * (sky * (0.5 + 0.5 * nz) + 1.0 - sky) + settings.front_fill * np.maximum(n @ front, 0)
     fill = (around[:, None] * E + settings.bounce * floor * (0.5 - 0.5 * nz)[:, None]) * diffuse
     fill += (settings.metal_env * metal * (0.6 + 0.4 * np.maximum(nz, 0.0)))[:, None] * albedo * E
     ndl = np.maximum(n @ l, 0.0)
@@ -613,11 +617,12 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
         gain = np.ones((len(v), 1)) if light_map is None else light_map.at(v)[:, None]
         if lighting.sun is not None:
             # The light map is the shade's: with the sun's share f of the light in the sun,
-            # shade = (1 - f) x sun, so both terms scale by 1 / (1 - f) = contrast.
+            # shade = (1 - f) x sun, so the key scales by 1 / (1 - f) = contrast (the
+            # sky's share of the fill did in _vertex_light).
             c = _sun_contrast(lighting)
             if light_map is None:  # the floor at large: a share in the sun
                 gain = gain / (1.0 + (c - 1.0) * lighting.sun.lit_share)
-            fill, key = fill * gain * c, key * gain * c * _in_beam(v, lighting)[:, None]
+            fill, key = fill * gain, key * gain * c * _in_beam(v, lighting)[:, None]
         else:
             fill, key = fill * gain, key * gain
         if lighting.lamps:

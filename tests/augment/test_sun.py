@@ -101,6 +101,34 @@ def test_the_key_light_shines_in_its_own_colour():
     np.testing.assert_allclose(key[0] / key[0, 1], [1.2, 1.0, 0.7], rtol=1e-9)
 
 
+def test_in_a_sunny_room_only_the_skys_share_of_the_fill_rises_with_the_sun():
+    """With the sun in the room the furniture's light map is the shade's, so the sky's
+    share of the fill rises by the sun's contrast c = 1 / (1 - f): a face turned up in the
+    shade is lit as the shade's floor. The light from behind the camera and off the floor
+    is the shade's own, not c times it (it was: on the tuning renders with sun, shaded
+    fronts came out up to twice the truth's, 9601/1's sofa among them)."""
+    f, sky = 0.6, RENDER.staged.sky_share
+    c = 1.0 / (1.0 - f)
+    shade = Lighting((0.5, 0.4, 0.3), (0.0, 0.8, -0.6), f, 0.01, (0.2, 0.15, 0.1), "sun")
+    sunny = replace(shade, sun=_sun_over(lambda x, y: x > 1.0))
+    normals = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
+    k = len(normals)
+    args = (np.zeros((k, 3)), normals, np.full((k, 3), 0.6), np.ones(k), np.zeros(k), np.zeros((k, 3)), np.ones(k))
+    view = (np.array([0.0, -3.0, 1.5]), np.array([0.0, 1.0]), RENDER.staged)
+    fill_shade, key_shade = _vertex_light(*args, shade, *view)
+    fill_sunny, key_sunny = _vertex_light(*args, sunny, *view)
+    sky_part = (1.0 - f) * (sky * (0.5 + 0.5 * normals[:, 2]) + 1.0 - sky)
+    expected = (c - 1.0) * sky_part[:, None] * np.array([0.5, 0.4, 0.3]) * 0.6
+    np.testing.assert_allclose(fill_sunny - fill_shade, expected, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(key_sunny, key_shade, rtol=1e-12)
+    # Turned up: the shade's floor (albedo x irradiance) and the front fill's share of it.
+    front = np.array([0.0, -1.0, 0.35]) / np.linalg.norm([0.0, -1.0, 0.35])
+    np.testing.assert_allclose(fill_sunny[0], (1.0 + RENDER.staged.front_fill * front[2]) * 0.6
+                               * np.array([0.5, 0.4, 0.3]), rtol=1e-9)
+    # Toward the camera: less than c times the sunless fill (what the old code gave).
+    assert np.all(fill_sunny[1] < c * fill_shade[1] * 0.9)
+
+
 def _photo_of_a_sunny_floor(rng, band_centre_m, shade, sun):
     """A brown floor (albedo 0.55, 0.45, 0.35) with the board's sheet (paper, 0.85) at the
     origin, under ``shade`` (3,) light and ``sun`` (3,) more in a band 1.6 m wide along
