@@ -360,8 +360,9 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         if walls is not None:  # the window's wall: the first one the ray meets
             at = _on_wall_m(cx / small_scale, cy / small_scale, K, pose, walls)
             window_xy = None if np.isnan(at[0]) else at[:2]
-    patches = None if not settings.sun_from_floor else _sun_patches(
-        image, region_small if floor_mask is None else floor_mask, calibration, cam_xy, floor_polygon)
+    floor_seen = region_small if floor_mask is None else floor_mask  # where the sun's patches are read
+    patches = None if not settings.sun_from_floor else _sun_patches(image, floor_seen, calibration, cam_xy,
+                                                                     floor_polygon)
     key_rgb = (1.0, 1.0, 1.0)
     if patches is not None:
         axis = np.asarray(patches.axes_xy[0])
@@ -388,8 +389,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         # Sunlit floor (a bright patch well above the floor's median, the board's white
         # paper left out) means direct sun: its edges too soft to read, the window in view
         # gives its azimuth, and only the floor that bright loses it under the furniture.
-        bright = _sun_patches(image, region_small if floor_mask is None else floor_mask, calibration, cam_xy,
-                              floor_polygon, -toward)
+        bright = _sun_patches(image, floor_seen, calibration, cam_xy, floor_polygon, -toward)
         sunny = bright is not None
         patches = bright if settings.sun_from_floor else None
         elev = math.radians(settings.sun_elevation_deg if sunny else settings.window_elevation_deg)
