@@ -255,9 +255,10 @@ def _nearer_edge_upstream(center_m, axis_xy, walls, floor_polygon) -> float:
     return 1.0 if out_m[0] < out_m[1] else -1.0
 
 
-def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon, toward_xy=None):
-    """:func:`augment.render.sun.find_sun` on this photo (the board's sheet left out), or with
-    the sun's way ``toward_xy`` (2,) known, :func:`augment.render.sun.bright_floor`; or None."""
+def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon, toward_xy=None, colour=True):
+    """:func:`augment.render.sun.find_sun` on this photo (the board's sheet left out; ``colour``
+    its), or with the sun's way ``toward_xy`` (2,) known, :func:`augment.render.sun.bright_floor`;
+    or None."""
     mask = np.asarray(floor_mask, dtype=bool)
     if mask.shape != image.shape[:2]:
         mask = cv2.resize(mask.astype(np.uint8), image.shape[1::-1], interpolation=cv2.INTER_NEAREST) > 0
@@ -270,7 +271,7 @@ def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon, toward_x
     floor_from_image = np.linalg.inv(calibration.image_from_floor)
     if toward_xy is not None:
         return bright_floor(image, mask, floor_from_image, cam_xy, toward_xy, grown)
-    return find_sun(image, mask, floor_from_image, cam_xy, walls_rad, grown)
+    return find_sun(image, mask, floor_from_image, cam_xy, walls_rad, grown, colour=colour)
 
 
 def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | None = None,
@@ -361,8 +362,9 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
             at = _on_wall_m(cx / small_scale, cy / small_scale, K, pose, walls)
             window_xy = None if np.isnan(at[0]) else at[:2]
     floor_seen = region_small if floor_mask is None else floor_mask  # where the sun's patches are read
+    # A sun read in colour only, faint in light, is less sure than a window in view.
     patches = None if not settings.sun_from_floor else _sun_patches(image, floor_seen, calibration, cam_xy,
-                                                                     floor_polygon)
+                                                                     floor_polygon, colour=found is None)
     key_rgb = (1.0, 1.0, 1.0)
     if patches is not None:
         axis = np.asarray(patches.axes_xy[0])

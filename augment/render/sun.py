@@ -168,7 +168,8 @@ def _axis_gap_deg(a_deg, b_deg):
 
 
 def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.ndarray, camera_xy_m,
-             walls_rad=None, exclude_m=None, settings: SunSettings | None = None) -> SunOnFloor | None:
+             walls_rad=None, exclude_m=None, settings: SunSettings | None = None,
+             colour: bool = True) -> SunOnFloor | None:
     """Sunlit patches on the floor and the direction their edges give, or None when the
     floor shows none.
 
@@ -189,6 +190,8 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
         A convex region of the floor to leave out (the board's sheet), meters.
     settings : SunSettings, optional
         Default ``RENDER.sun``.
+    colour : bool
+        Where the light shows no sun's edges, read them in colour (:func:`_sun_in_colour`).
 
     Returns
     -------
@@ -206,6 +209,36 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
         found = _patches_at(top, valid, standing, lo, cell, sigma_m, min_contrast, walls_rad, settings)
         if found is not None:
             return dataclasses.replace(found, ratio_rgb=_ratio_rgb(top_rgb, found, settings))
+    return _sun_in_colour(top_rgb, top, valid, standing, lo, cell, walls_rad, settings) if colour else None
+
+
+def _sun_in_colour(top_rgb, top, valid, standing, lo, cell, walls_rad, settings: SunSettings) -> SunOnFloor | None:
+    """Sun and shade may differ more in colour than in light (a white sun in a room lit warm
+    by lamps, a low sun's orange beside the sky's blue): the sun's edges read in the channel
+    whose bright floor stands furthest above its median, when that is
+    ``settings.colour_spread`` times the luminance's, and kept only when the patch found is
+    tinted (channels' contrasts ``settings.min_tint`` apart: a lamp's pool or a lighter tile
+    is about grey); its contrast is the luminance's."""
+    linear = (top_rgb.astype(np.float32) / 255.0) ** 2.2
+    logs = np.log(np.maximum(np.column_stack([linear[valid], top[valid]]), 1e-4))
+    median, bright = np.percentile(logs, [50, 95], axis=0)
+    spread = bright - median
+    c = int(np.argmax(spread[:3]))
+    if not spread[c] >= settings.colour_spread * spread[3]:
+        return None
+    channel = np.ascontiguousarray(linear[..., c])
+    for sigma_m, min_contrast in settings.edge_scales:
+        found = _patches_at(channel, valid, standing, lo, cell, sigma_m, min_contrast, walls_rad, settings)
+        if found is None:
+            continue
+        sides = _sun_and_shade(top_rgb, found, settings)
+        if sides is None:
+            return None
+        ratio = sides[0] / np.maximum(sides[1], 1e-4)
+        contrast = float(sides[0] @ REC709) / max(float(sides[1] @ REC709), 1e-6)
+        if contrast <= 1.0 or ratio.max() < settings.min_tint * ratio.min():
+            return None
+        return dataclasses.replace(found, contrast=contrast, ratio_rgb=tuple(float(v) for v in ratio))
     return None
 
 
@@ -303,6 +336,16 @@ def _ratio_rgb(top_rgb, found: SunOnFloor, settings: SunSettings) -> tuple:
     within ``settings.colour_gap_m`` of a sun edge (the penumbra) is left out, the shade
     is read within ``settings.colour_ring_m`` of the patches, and clipped pixels not at
     all; grey (the contrast in each channel) when either side shows too little."""
+    sides = _sun_and_shade(top_rgb, found, settings)
+    if sides is None:
+        return (found.contrast,) * 3
+    ratio = sides[0] / np.maximum(sides[1], 1e-4)
+    return tuple(float(v) for v in ratio) if np.all(ratio > 1.0) else (found.contrast,) * 3
+
+
+def _sun_and_shade(top_rgb, found: SunOnFloor, settings: SunSettings):
+    """The linear light (3,) of the sunlit floor and of the shade beside it (medians, as
+    :func:`_ratio_rgb` reads them), or None when either side shows too little."""
     lit = found.lit.astype(np.uint8)
     gap = max(1, round(settings.colour_gap_m / found.cell_m))
     ring = max(gap + 1, round(settings.colour_ring_m / found.cell_m))
@@ -311,12 +354,9 @@ def _ratio_rgb(top_rgb, found: SunOnFloor, settings: SunSettings) -> tuple:
     sun = unclipped & (cv2.erode(lit, clear) > 0)
     near = cv2.dilate(lit, np.ones((2 * ring + 1,) * 2, np.uint8)) > 0
     shade = unclipped & near & ~(cv2.dilate(lit, clear) > 0)
-    grey = (found.contrast,) * 3
     if sun.sum() < 50 or shade.sum() < 50:
-        return grey
-    sun_rgb, shade_rgb = (np.median((top_rgb[side].astype(np.float32) / 255.0) ** 2.2, axis=0) for side in (sun, shade))
-    ratio = sun_rgb / np.maximum(shade_rgb, 1e-4)
-    return tuple(float(v) for v in ratio) if np.all(ratio > 1.0) else grey
+        return None
+    return tuple(np.median((top_rgb[side].astype(np.float32) / 255.0) ** 2.2, axis=0) for side in (sun, shade))
 
 
 def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, walls_rad,

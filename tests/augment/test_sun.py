@@ -88,6 +88,38 @@ def test_the_suns_colour_against_the_shade_is_read_off_its_patch(rng):
     assert unit_colour([1.0, -0.5, 1.0]) == (1.0, 1.0, 1.0)
 
 
+@pytest.mark.parametrize("tinted", [True, False])
+def test_a_sun_faint_in_light_is_read_off_its_colour(rng, tinted):
+    """A brown floor (albedo 0.6, 0.45, 0.3) lit warm by lamps, 0.3 x (1, 0.7, 0.35), and a
+    white sun adding 0.1: its patch is 1.44 times the shade in luminance (0.155 / 0.108),
+    too faint for the sun's edges (1.5), but 1 + 0.1 / shade = (1.33, 1.48, 1.95) per
+    channel: read in the blue, its contrast the luminance's. The same step in luminance
+    with the lamps' colour (tinted False) stays unread: colour reads no fainter light."""
+    x, y = _floor_points()
+    a = math.radians(30.0)
+    lit = (x > -0.8) & (np.abs(y - (x + 0.8) * math.tan(a) + 0.1) < 0.4)
+    albedo, shade = np.array([0.6, 0.45, 0.3]), 0.3 * np.array([1.0, 0.7, 0.35])
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    contrast = 1 + 0.1 * (albedo @ lum) / ((albedo * shade) @ lum)
+    assert contrast == pytest.approx(1.436, abs=0.001)
+    sun_light = 0.1 * np.ones(3) if tinted else (contrast - 1) * shade
+    light = np.where(lit[..., None], shade + sun_light, shade)
+    linear = albedo * light * rng.normal(1.0, 0.01, x.shape)[..., None]
+    image = np.round(255 * np.clip(linear, 0, 1) ** (1 / 2.2)).astype(np.uint8)
+    mask = x < 1.5
+    image[~mask] = 200
+    walls = np.radians([0.0, 90.0])
+    sun = find_sun(image, mask, FLOOR_FROM_IMAGE, (0.0, 0.0), walls)
+    if not tinted:
+        assert sun is None
+        return
+    axis = math.degrees(math.atan2(sun.axes_xy[0][1], sun.axes_xy[0][0])) % 180
+    assert abs(axis - 30.0) < 2.0
+    assert sun.contrast == pytest.approx(contrast, rel=0.05)
+    np.testing.assert_allclose(sun.ratio_rgb, 1 + sun_light / shade, rtol=0.05)
+    assert sun.downstream * sun.axes_xy[0][0] > 0  # it runs into the wall at x = 1.5 m
+
+
 def test_the_key_light_shines_in_its_own_colour():
     """A white face turned up to a key light straight overhead, all of the light: what
     it sends back is the irradiance times the key's colour, highlight included."""
