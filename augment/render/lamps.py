@@ -138,6 +138,10 @@ def find_lamps(image: np.ndarray, floor_mask: np.ndarray, calibration, ceiling_m
         found.append((centre, width))
     if not found:
         return ()
+    # A pool as wide as a bare bulb's carries the room's broad light with it (the bounce, a
+    # fill at the ceiling's middle): it places the lamp, which then lights as a narrower one.
+    found = [(centre, min(width, settings.max_width_share * height)) for centre, width in found]
+    columns = [base] + [_pool(xy, centre, width)[:, None] for centre, width in found]
     # All peaks at once: two pools share the floor between them.
     design = np.column_stack(columns)
     amplitudes = np.linalg.lstsq(design, light, rcond=None)[0][3:]

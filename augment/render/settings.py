@@ -162,6 +162,7 @@ class LampSettings:
     min_cells: int = 40  # fewer cells of floor in view than this: no lamp is looked for
     min_extent_m: float = 1.0  # ... nor when the floor in view spans less than this
     width_shares: tuple = (0.45, 0.6, 0.8, 1.0)  # pool widths tried, of the lamp's height (1: a bare bulb)
+    max_width_share: float = 0.8  # ... and the widest a lamp keeps (its peak fitted again)
     beyond_view_m: float = 0.8  # a pool's centre may lie this far past the floor in view
     max_lamps: int = 2
     search_cells: int = 600  # the search for a pool's centre reads about this many cells

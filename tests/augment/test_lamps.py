@@ -52,12 +52,15 @@ def _painted_floor(calibration, mask, light, rng):
     return image, xy
 
 
-def test_a_pool_painted_on_the_floor_is_found_where_it_is(rng):
+@pytest.mark.parametrize("share", [0.6, 1.0])
+def test_a_pool_painted_on_the_floor_is_found_where_it_is(rng, share):
+    """A pool 0.6 of the lamp's height wide is found as painted; a bare bulb's (1.0) where
+    it is, but lighting as one 0.8 wide: a little less under it, less than painted 1.2 m off."""
     image, mask, calibration = _truth_calibration("room_1", 0.5)
     rows, cols = np.nonzero(mask)
     seen = calibration.floor_from_pixels(np.column_stack([cols, rows]).astype(np.float64))
     centre = np.median(seen, axis=0)
-    width = 0.6 * HEIGHT_M
+    width = share * HEIGHT_M
 
     def light(xy):  # a window's gradient and a spot's pool, 1.5 times the floor's light under it
         return 1.0 + 0.15 * (xy[:, 0] - centre[0]) + 1.5 * (1 + ((xy - centre) ** 2).sum(1) / width ** 2) ** -1.5
@@ -70,8 +73,14 @@ def test_a_pool_painted_on_the_floor_is_found_where_it_is(rng):
     lamp = lamps[0]
     assert np.hypot(*(np.asarray(lamp.position_m[:2]) - centre)) < 0.1
     assert lamp.position_m[2] == pytest.approx(HEIGHT_M)
-    assert lamp.width_m == pytest.approx(width)
-    assert lamp.peak == pytest.approx(1.5, rel=0.15)
+    if share <= RENDER.lamps.max_width_share:
+        assert lamp.width_m == pytest.approx(width)
+        assert lamp.peak == pytest.approx(1.5, rel=0.15)
+        return
+    assert lamp.width_m == pytest.approx(RENDER.lamps.max_width_share * HEIGHT_M)
+    assert 0.8 < lamp.peak < 1.3  # the narrower pool under the painted one: about 1.0
+    off = centre + [1.2, 0.0]
+    assert lamp.on_floor([off])[0] < 0.8 * 1.5 * (1 + 1.44 / width ** 2) ** -1.5
 
 
 def test_no_lamp_is_hung_behind_a_wall(rng):
