@@ -256,9 +256,9 @@ def _nearer_edge_upstream(center_m, axis_xy, walls, floor_polygon) -> float:
 
 
 def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon, toward_xy=None, colour=True):
-    """:func:`augment.render.sun.find_sun` on this photo (the board's sheet left out; ``colour``
-    its), or with the sun's way ``toward_xy`` (2,) known, :func:`augment.render.sun.bright_floor`;
-    or None."""
+    """:func:`augment.render.sun.find_sun` on this photo (the board's sheet left out; read in
+    colour too where ``colour``), or with the sun's way ``toward_xy`` (2,) known,
+    :func:`augment.render.sun.bright_floor`; or None."""
     mask = np.asarray(floor_mask, dtype=bool)
     if mask.shape != image.shape[:2]:
         mask = cv2.resize(mask.astype(np.uint8), image.shape[1::-1], interpolation=cv2.INTER_NEAREST) > 0
