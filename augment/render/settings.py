@@ -93,7 +93,6 @@ class StagedSettings:
     light_cell_m: float = 0.04  # the floor's light map: cell size ...
     light_sigma_m: float = 0.3  # ... its blur (planks and tiles average out) ...
     light_gain_range: tuple[float, float] = (0.3, 2.5)  # ... and how far the light there may differ from the median
-    light_tint_max: float = 1.25  # ... and its colour, per channel (a second floor's colour is not the light's)
     render_edge_px: float = 0.55  # a render's edge spread (Gaussian sigma) at one rendered pixel per photo pixel
     highlight_knee: float = 0.8  # linear light above this rolls off toward white, as a camera's tone curve does
 

@@ -511,25 +511,15 @@ def _encode(linear):
 
 @dataclass(frozen=True)
 class _LightMap:
-    """How much light the floor gets around each point, relative to its median, and in what
-    colour: read off the photo's own floor (a top-down raster, blurred), so furniture by a
-    window is lit brighter, and bluer, than furniture in a dim corner by a warm lamp, as the
-    floor beside each is."""
+    """How much light the floor gets around each point, relative to its median: read off
+    the photo's own floor (a top-down raster, blurred), so furniture by a window is lit
+    brighter than furniture in a dim corner, as the floor beside each is."""
 
     grid: "_FloorGrid"
     gain: np.ndarray  # (rows, cols) float32
-    tint: np.ndarray  # (rows, cols, 3) float32: the light's colour over the median's (luminance 1 each)
 
     def at(self, xy) -> np.ndarray:
         """Gain (n,) at floor points (n, 2+), bilinear; the edge's value beyond it."""
-        return self._sample(self.gain, xy).reshape(-1)
-
-    def tint_at(self, xy) -> np.ndarray:
-        """The light's colour (n, 3) at floor points (n, 2+) against the floor at large's."""
-        return self._sample(self.tint, xy)
-
-    def _sample(self, raster, xy) -> np.ndarray:
-        """``raster`` at the points, bilinear: (n, channels)."""
         px = (self.grid.to_px(xy) - 0.5).astype(np.float32)
         n = len(px)
         # cv2.remap takes maps of under 32767 a side: the points in rows of 1024.
@@ -537,8 +527,8 @@ class _LightMap:
         maps = np.zeros((rows * 1024, 2), np.float32)
         maps[:n] = px
         maps = maps.reshape(rows, 1024, 2)
-        out = cv2.remap(raster, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        return out.reshape(rows * 1024, -1)[:n]
+        return cv2.remap(self.gain, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_REPLICATE).ravel()[:n]
 
 
 def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, hi_m,
@@ -575,20 +565,7 @@ def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, 
     # Far from any floor in view, the light of the floor at large (the median), less the lamps'.
     far = float(np.median(lum[ok])) / reference if lighting.lamps else 1.0
     gain = trust * local / reference + (1.0 - trust) * far
-    # The light's colour: the floor's own colour cancels against its median's where the floor
-    # is one material; sunlit floor is left out (the sun's colour is the key light's).
-    rgb = np.zeros((len(xy), 3), np.float32)
-    rgb[ok] = (image[ij[ok, 1], ij[ok, 0]].astype(np.float32) / 255.0) ** GAMMA
-    shade = ok if lighting.sun is None else ok & ~(lighting.sun.sunlit(xy) > 0.25)
-    den = cv2.GaussianBlur(shade.astype(np.float32).reshape(shape), (0, 0), sigma)
-    local_rgb = np.stack([cv2.GaussianBlur((rgb[:, c] * shade).reshape(shape), (0, 0), sigma) for c in range(3)],
-                         axis=-1) / np.maximum(den, 1e-3)[..., None]
-    floor = np.asarray(lighting.floor_rgb, dtype=np.float64)
-    tint = (local_rgb / np.maximum(local_rgb @ REC709, 1e-6)[..., None]) / (floor / max(float(floor @ REC709), 1e-6))
-    tint = np.clip(tint, 1.0 / settings.light_tint_max, settings.light_tint_max)
-    trust = np.clip(den / 0.2, 0.0, 1.0)[..., None]
-    tint = trust * tint + (1.0 - trust)
-    return _LightMap(grid, np.clip(gain, *settings.light_gain_range).astype(np.float32), tint.astype(np.float32))
+    return _LightMap(grid, np.clip(gain, *settings.light_gain_range).astype(np.float32))
 
 
 def _sun_contrast(lighting: Lighting) -> float:
@@ -640,7 +617,6 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
         ao = _vertex_occlusion(v[:, 2] - np.concatenate(hs), n, np.repeat([p[5] for p in per], sizes))
         fill, key = _vertex_light(v, n, albedo, rough, metal, emissive, ao, lighting, cam_pos, forward_xy, settings)
         gain = np.ones((len(v), 1)) if light_map is None else light_map.at(v)[:, None]
-        tint = np.ones((len(v), 3)) if light_map is None else light_map.tint_at(v)  # the room's light, not the key's
         if lighting.sun is not None:
             # The light map is the shade's: with the sun's share f of the light in the sun,
             # shade = (1 - f) x sun, so the key scales by 1 / (1 - f) = contrast (the
@@ -648,9 +624,9 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
             c = _sun_contrast(lighting)
             if light_map is None:  # the floor at large: a share in the sun
                 gain = gain / (1.0 + (c - 1.0) * lighting.sun.lit_share)
-            fill, key = fill * gain * tint, key * gain * c * _in_beam(v, lighting)[:, None]
+            fill, key = fill * gain, key * gain * c * _in_beam(v, lighting)[:, None]
         else:
-            fill, key = fill * gain * tint, key * gain
+            fill, key = fill * gain, key * gain
         if lighting.lamps:
             # Floor-level pieces (rugs) take the floor's shadows instead.
             raised = v[:, 2] >= settings.floor_level_m

@@ -146,17 +146,13 @@ def test_a_lamp_casts_its_shadow_away_from_it():
 
 def test_the_floors_light_map_reads_any_number_of_points():
     """The lamps' shares read the light map at every cell of a fine floor raster: far more
-    points than one OpenCV map may hold (32767); a ramp reads back exactly, in light and in
-    colour."""
+    points than one OpenCV map may hold (32767); a ramp reads back exactly."""
     grid = _FloorGrid(np.array([0.0, 0.0]), 0.04, (50, 100))
     cols = np.arange(100, dtype=np.float32)
-    ramp = np.tile(1.0 + 0.01 * cols, (50, 1)).astype(np.float32)
-    tint = np.stack([np.ones_like(ramp), np.ones_like(ramp), ramp], axis=-1)  # bluer along x
-    light = _LightMap(grid, ramp, tint)
+    light = _LightMap(grid, np.tile(1.0 + 0.01 * cols, (50, 1)).astype(np.float32))
     xy = np.column_stack([np.linspace(0.5, 3.5, 70001), np.full(70001, 1.0)])
     expected = 1.0 + 0.01 * (xy[:, 0] / 0.04 - 0.5)
     np.testing.assert_allclose(light.at(xy), expected, atol=1e-4)
-    np.testing.assert_allclose(light.tint_at(xy), np.column_stack([np.ones(70001), np.ones(70001), expected]), atol=1e-4)
 
 
 def test_what_stands_under_a_table_top_gets_none_of_the_lamps_light():
