@@ -114,10 +114,15 @@ def _sunlit_kernel(xy, x0, y0, cell, soft, seen, share, out):
 REC709 = np.array([0.2126, 0.7152, 0.0722])  # luminance of linear RGB (Rec. 709 primaries)
 
 
+def linear_rgb(rgb_uint8) -> np.ndarray:
+    """Linear light (..., 3) float32 of sRGB-ish pixels (..., 3) uint8 (the renderer's 2.2 power)."""
+    return (np.asarray(rgb_uint8, dtype=np.float32) / 255.0) ** 2.2
+
+
 def linear_luminance(rgb_uint8) -> np.ndarray:
-    """Luminance (...,) float32 in linear light of sRGB-ish pixels (..., 3) uint8 (the
-    renderer's 2.2 power, Rec. 709 weights)."""
-    return ((np.asarray(rgb_uint8, dtype=np.float32) / 255.0) ** 2.2) @ REC709.astype(np.float32)
+    """Luminance (...,) float32 in linear light of sRGB-ish pixels (..., 3) uint8 (Rec. 709
+    weights)."""
+    return linear_rgb(rgb_uint8) @ REC709.astype(np.float32)
 
 
 def wall_angles_rad(polygon_m: np.ndarray, edge_kinds=None) -> np.ndarray:
@@ -219,7 +224,7 @@ def _sun_in_colour(top_rgb, top, valid, standing, lo, cell, walls_rad, settings:
     ``settings.colour_spread`` times the luminance's, and kept only when the patch found is
     tinted (channels' contrasts ``settings.min_tint`` apart: a lamp's pool or a lighter tile
     is about grey); its contrast is the luminance's."""
-    linear = (top_rgb.astype(np.float32) / 255.0) ** 2.2
+    linear = linear_rgb(top_rgb)
     logs = np.log(np.maximum(np.column_stack([linear[valid], top[valid]]), 1e-4))
     median, bright = np.percentile(logs, [50, 95], axis=0)
     spread = bright - median
@@ -356,7 +361,7 @@ def _sun_and_shade(top_rgb, found: SunOnFloor, settings: SunSettings):
     shade = unclipped & near & ~(cv2.dilate(lit, clear) > 0)
     if sun.sum() < 50 or shade.sum() < 50:
         return None
-    return tuple(np.median((top_rgb[side].astype(np.float32) / 255.0) ** 2.2, axis=0) for side in (sun, shade))
+    return tuple(np.median(linear_rgb(top_rgb[side]), axis=0) for side in (sun, shade))
 
 
 def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, walls_rad,
