@@ -469,9 +469,9 @@ def _vertex_light(v, n, albedo, roughness, metal, emissive, ao, lighting: Lighti
     front = np.append(-forward_xy, 0.35)
     front /= np.linalg.norm(front)
     sky = settings.sky_share
-    # With the sun in the room the caller's light map is the shade's, over which the sky's
-    # share rises with the sun's contrast; the room's own light (behind the camera, off the
-    # floor) is the shade's as it is.
+    # With the sun in the room the caller's light map is the shade's, over which the sky
+    # and the ambient rise with the sun's contrast; the room's own light (behind the
+    # camera, off the floor) is the shade's as it is.
     c = _sun_contrast(lighting) if lighting.sun is not None else 1.0
     around = c * rest * (sky * (0.5 + 0.5 * nz) + 1.0 - sky) + settings.front_fill * np.maximum(n @ front, 0)
     fill = (around[:, None] * E + settings.bounce * floor * (0.5 - 0.5 * nz)[:, None]) * diffuse
@@ -620,7 +620,7 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
         if lighting.sun is not None:
             # The light map is the shade's: with the sun's share f of the light in the sun,
             # shade = (1 - f) x sun, so the key scales by 1 / (1 - f) = contrast (the
-            # sky's share of the fill did in _vertex_light).
+            # sky and the ambient did in _vertex_light).
             c = _sun_contrast(lighting)
             if light_map is None:  # the floor at large: a share in the sun
                 gain = gain / (1.0 + (c - 1.0) * lighting.sun.lit_share)

@@ -133,9 +133,9 @@ def test_the_key_light_shines_in_its_own_colour():
     np.testing.assert_allclose(key[0] / key[0, 1], [1.2, 1.0, 0.7], rtol=1e-9)
 
 
-def test_in_a_sunny_room_only_the_skys_share_of_the_fill_rises_with_the_sun():
-    """With the sun in the room the furniture's light map is the shade's, so the sky's
-    share of the fill rises by the sun's contrast c = 1 / (1 - f): a face turned up in the
+def test_in_a_sunny_room_only_the_sky_and_ambient_of_the_fill_rise_with_the_sun():
+    """With the sun in the room the furniture's light map is the shade's, so the sky and
+    the ambient of the fill rise by the sun's contrast c = 1 / (1 - f): a face turned up in the
     shade is lit as the shade's floor. The light from behind the camera and off the floor
     is the shade's own, not c times it (it was: on the tuning renders with sun, shaded
     fronts came out up to twice the truth's, 9601/1's sofa among them)."""
