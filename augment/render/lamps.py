@@ -144,7 +144,7 @@ def find_lamps(image: np.ndarray, floor_mask: np.ndarray, calibration, ceiling_m
     columns = [base] + [_pool(xy, centre, width)[:, None] for centre, width in found]
     # All peaks at once: two pools share the floor between them.
     design = np.column_stack(columns)
-    amplitudes = np.linalg.lstsq(design, light, rcond=None)[0][3:]
+    amplitudes = np.linalg.lstsq(design, light, rcond=None)[0][base.shape[1]:]
     lamps = [Lamp((float(c[0]), float(c[1]), float(height)), float(w), float(a))
              for (c, w), a in zip(found, amplitudes) if settings.min_peak <= a <= settings.max_peak]
     return tuple(sorted(lamps, key=lambda lamp: -lamp.peak))
