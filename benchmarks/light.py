@@ -12,7 +12,8 @@ Each case (seed ``[seed, i]``, the sizes 1280x960 to 4032x3024 in turn, as in
 
 * ``light_error_deg`` (rooms with sun): the angle on the floor between the sun's direction
   and the key light's; ``sun_in_view``: the share of the floor in view that the sun lights
-  (at least 2 %: the photo shows it).
+  (at least 2 %: the photo shows it). ``elevation_error_deg`` (the sun read off the floor):
+  the sun's height over the floor, estimated against true, degrees (signed).
 * ``false_sun``: rooms without sun where a sun was read off the floor.
 * ``lamp_error_m``: per lamp found, the distance on the floor to the nearest true light
   (ceiling lamps, and the photographer's fill light at the ceiling's middle: a real pool).
@@ -63,6 +64,8 @@ def one_case(seed: int, i: int, renderer, folder: Path) -> dict:
                sun_read=lighting.sun is not None and lighting.source == "sun")
     if sun is not None:
         row["light_error_deg"] = azimuth_error_deg(sun["direction"], world_from_floor[:3, :3] @ lighting.direction)
+        if row["sun_read"]:
+            row["elevation_error_deg"] = math.degrees(math.asin(-lighting.direction[2]) - math.asin(-sun["direction"][2]))
     room = truth["room"]
     poly = np.asarray(room["polygon_m"], dtype=np.float64)
     middle = (poly.min(axis=0) + poly.max(axis=0)) / 2
@@ -95,6 +98,7 @@ def main(argv=None) -> int:
     done = [r for r in rows if "refused" not in r]
     sunny = [r for r in done if r["sun"]]
     seen = [r for r in sunny if r["sun_in_view"] >= SUN_IN_VIEW]
+    read = [r for r in sunny if r["sun_read"]]
     lamps = [e for r in done for e in r["lamp_error_m"]]
 
     def med(values):
@@ -107,6 +111,8 @@ def main(argv=None) -> int:
         "sun_in_view_within_15_deg": sum(r["light_error_deg"] <= 15 for r in seen),
         "sun_in_view_reversed": sum(r["light_error_deg"] >= 150 for r in seen),
         "sun_in_view_read": sum(r["sun_read"] for r in seen),
+        "elevation_error_deg_median": med([abs(r["elevation_error_deg"]) for r in read]), "sun_read": len(read),
+        "elevation_within_10_deg": sum(abs(r["elevation_error_deg"]) <= 10 for r in read),
         "false_sun": sum(r["sun_read"] for r in done if not r["sun"]), "without_sun": len(done) - len(sunny),
         "lamps_found": len(lamps), "ceiling_lamps": sum(r["ceiling_lamps"] for r in done),
         "lamp_error_m_median": med(lamps), "lamps_within_0_5_m": sum(e <= 0.5 for e in lamps),
@@ -121,6 +127,8 @@ def main(argv=None) -> int:
           (f"| ... the {s['sun_in_view']} showing it on the floor (>= {SUN_IN_VIEW:.0%}) | "
            f"{s['light_error_deg_sun_in_view_median']:.1f}°: {s['sun_in_view_within_15_deg']} within 15°, "
            f"{s['sun_in_view_reversed']} reversed (150° or more); read off the floor in {s['sun_in_view_read']} |"),
+          (f"| the sun's height, error, median, {s['sun_read']} rooms whose sun was read | "
+           f"{s['elevation_error_deg_median']:.1f}°: {s['elevation_within_10_deg']} within 10° |"),
           f"| sun read in rooms without sun | {s['false_sun']} of {s['without_sun']} |",
           f"| lamps found / ceiling lamps | {s['lamps_found']} / {s['ceiling_lamps']} |",
           (f"| lamp to the nearest true light (the fill counted), median | {s['lamp_error_m_median']:.2f} m; "
@@ -135,7 +143,7 @@ def main(argv=None) -> int:
         md.append(f"| {r['case']} | {r['size']} | {r['source']}{' (sun read)' if r['sun_read'] else ''} | {view} | "
                   f"{error} | {', '.join(format(e, '.2f') for e in r['lamp_error_m'])} |")
     write("light", {"machine": machine(seeds=args.seeds, count=args.count), "summary": summary, "cases": rows}, md)
-    print("\n".join(md[:12]))
+    print("\n".join(md[:13]))
     return 0
 
 

@@ -76,7 +76,7 @@ class StagedSettings:
     render_blur_share: float = 0.7
     margin_px: int = 6  # around the region furniture and shadows can reach
     sun_from_floor: bool = True  # the key light from sunlit patches on the floor when they show (else a window's)
-    sun_elevation_deg: float = 35.0  # the sun's height when its patches give only its direction
+    sun_elevation_deg: float = 35.0  # the sun's height where its patches do not tell it (SunSettings.glass_m)
     # A window in view and no sun on the floor: daylight through it is a broad source, so its
     # key is soft, modest and high (its shadows fall short and blurred, away from the window).
     window_elevation_deg: float = 65.0
@@ -147,6 +147,11 @@ class SunSettings:
     bright_ratio: float = 2.2
     bright_share: float = 0.03  # ... on this share of the floor seen, at least
     bright_smooth_m: float = 0.03  # the light smoothed this much first (grain, seams)
+    # The sun's height: a window's glass this tall casts patches that run this over the
+    # sun's slope; an end this much on the rim of the floor seen is out of view.
+    glass_m: float = 1.2
+    max_cut_share: float = 0.2
+    elevation_deg: tuple = (12.0, 60.0)
 
 
 @dataclass

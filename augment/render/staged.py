@@ -58,7 +58,7 @@ from .gl import Renderer, Scene, far_camera, gl_from_cv_pose, pyrender, pyrender
 from .lamps import find_lamps
 from .look import PhotoLook, apply_look, blur_like_photo, estimate_look
 from .settings import RENDER, StagedSettings
-from .sun import REC709, bright_floor, find_sun, linear_luminance, unit_colour, wall_angles_rad
+from .sun import REC709, bright_floor, find_sun, linear_luminance, sun_elevation_rad, unit_colour, wall_angles_rad
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 
@@ -384,7 +384,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                                                                 wall_lum, small_scale) for s in (sign, -sign)]
             if plain[0] and not plain[1]:
                 sign = -sign
-        elev = math.radians(settings.sun_elevation_deg)
+        elev = sun_elevation_rad(patches, math.radians(settings.sun_elevation_deg))
         direction = np.append(sign * axis * math.cos(elev), -math.sin(elev))
         soft, source = settings.sun_softness_rad, "sun"
     elif found is not None:

@@ -81,6 +81,19 @@ class SunOnFloor:
         seen = cv2.GaussianBlur(self.seen.astype(np.float32), (0, 0), sigma)
         return cv2.GaussianBlur(lit, (0, 0), sigma) / np.maximum(seen, 1e-3)
 
+    def run_m(self) -> tuple[float, float]:
+        """How far the patches run along the sun, meters (their cells' 1st to 99th
+        percentile along ``axes_xy[0]``), and the larger share of an end's cells on the rim
+        of the floor seen (a wall, the photo's edge: the run goes on out of view)."""
+        rows, cols = np.nonzero(self.lit)
+        if len(rows) == 0:
+            return 0.0, 1.0
+        along = cols * self.axes_xy[0][0] + rows * self.axes_xy[0][1]
+        lo, hi = np.quantile(along, [0.01, 0.99])
+        rim = cv2.dilate((~self.seen).astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+        cut = max(rim[rows[along <= lo], cols[along <= lo]].mean(), rim[rows[along >= hi], cols[along >= hi]].mean())
+        return float((hi - lo) * self.cell_m), float(cut)
+
     def sunlit(self, xy) -> np.ndarray:
         """How much floor points (n, 2+) lie in the sun: 1.0 in it, 0.0 in shade, between
         over the width of the photo's sun edges, and the share in the sun where the photo
@@ -112,6 +125,21 @@ def _sunlit_kernel(xy, x0, y0, cell, soft, seen, share, out):
 
 
 REC709 = np.array([0.2126, 0.7152, 0.0722])  # luminance of linear RGB (Rec. 709 primaries)
+
+
+def sun_elevation_rad(found: SunOnFloor, default_rad: float, settings: SunSettings | None = None) -> float:
+    """The sun's height over the floor from its patches: a window's glass
+    (``settings.glass_m``, sill to head) casts a patch that long over the sun's slope.
+    Where an end of the patches is out of view their run is a lower bound, so the height
+    found is an upper bound on ``default_rad``; within ``settings.elevation_deg``."""
+    settings = RENDER.sun if settings is None else settings
+    run_m, cut = found.run_m()
+    if run_m <= 0:
+        return default_rad
+    elevation = math.atan(settings.glass_m / run_m)
+    if cut > settings.max_cut_share:
+        elevation = min(elevation, default_rad)
+    return float(np.clip(elevation, *np.radians(settings.elevation_deg)))
 
 
 def linear_rgb(rgb_uint8) -> np.ndarray:

@@ -14,7 +14,7 @@ from augment.camera.calibrate import calibrate_photo, exif_intrinsics
 from augment.render.gl import Renderer
 from augment.render.settings import RENDER
 from augment.render.staged import Lighting, _Caster, _floor_gain, _in_beam, _vertex_light, estimate_lighting
-from augment.render.sun import SunOnFloor, find_sun, unit_colour, wall_angles_rad
+from augment.render.sun import SunOnFloor, find_sun, sun_elevation_rad, unit_colour, wall_angles_rad
 
 # A camera 3 m above the floor looking straight down: 6 mm of floor a pixel, x right, y down.
 W, H, MM = 640, 480, 0.006
@@ -471,6 +471,22 @@ def _sun_over(lit_where, share=0.5):
     lit = lit_where(x, y)
     return SunOnFloor(((1.0, 0.0),), True, 2.0, 2.5, (0.0, 0.0), 1, share, (-2.0, -2.0), 0.01, lit,
                       np.ones_like(lit))
+
+
+@pytest.mark.parametrize("x_from, x_to, seen_to, expected_deg", [
+    (-1.0, 1.0, 2.0, math.degrees(math.atan(1.2 / (0.98 * 2.0)))),  # whole in view: the glass over the run
+    (-0.25, 0.25, 2.0, 60.0),  # a run this short would put the sun higher than it is let go
+    (-1.0, 0.5, 0.5, 35.0),  # into the photo's edge: 1.47 m or more, under the default's 35 deg anyway
+    (-1.9, 1.5, 1.5, math.degrees(math.atan(1.2 / (0.98 * 3.4)))),  # into it, but long enough to lower the sun
+])
+def test_the_suns_height_from_how_far_its_patch_runs(x_from, x_to, seen_to, expected_deg):
+    """Hand-computed: a window's glass 1.2 m tall casts a patch 1.2 m / tan(elevation)
+    long; where the patch runs out of view its run only caps the default height."""
+    sun = _sun_over(lambda x, y: (x >= x_from) & (x < x_to) & (np.abs(y) < 0.3))
+    x = (np.arange(sun.lit.shape[1]) + 0.5) * 0.01 - 2.0
+    sun = replace(sun, seen=np.broadcast_to(x < seen_to, sun.lit.shape).copy())
+    got = math.degrees(sun_elevation_rad(sun, math.radians(35.0)))
+    assert got == pytest.approx(expected_deg, abs=0.5)
 
 
 def test_only_what_stands_in_the_beam_gets_the_sun():
