@@ -583,11 +583,14 @@ def _in_beam(points_m, lighting: Lighting) -> np.ndarray:
 
 
 def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings: StagedSettings,
-                      light_map: _LightMap | None = None, renderer: Renderer | None = None):
+                      light_map: _LightMap | None = None, renderer: Renderer | None = None,
+                      beam_per_pixel: bool = False):
     """The furniture as pyrender meshes in the floor frame, lit: (all light, key light
     alone), one primitive per texture (all untextured parts share one). ``light_map``
     scales each vertex's light by the floor's light below it; with ``renderer``, what
-    stands between a lamp and a vertex keeps the lamp's light from it."""
+    stands between a lamp and a vertex keeps the lamp's light from it. With
+    ``beam_per_pixel`` the sun's key is left whole: the caller cuts it to the beam per
+    pixel (its edge crosses a face between vertices)."""
     lamp_views = [_lamp_view(renderer, placed, lamp) for lamp in lighting.lamps] if renderer is not None else []
     groups: dict = {}
     for item, furniture in placed:
@@ -624,17 +627,19 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
             c = _sun_contrast(lighting)
             if light_map is None:  # the floor at large: a share in the sun
                 gain = gain / (1.0 + (c - 1.0) * lighting.sun.lit_share)
-            fill, key = fill * gain, key * gain * c * _in_beam(v, lighting)[:, None]
+            fill, key = fill * gain, key * gain * c
+            beam = _in_beam(v, lighting)[:, None]
         else:
             fill, key = fill * gain, key * gain
+            beam = 1.0
         if lighting.lamps:
             # Floor-level pieces (rugs) take the floor's shadows instead.
             raised = v[:, 2] >= settings.floor_level_m
             lit = sum(lamp.on(v, n) * np.where(raised, lamp_views[k].visible(v, n), 1.0) if lamp_views
                       else lamp.on(v, n) for k, lamp in enumerate(lighting.lamps)) * ao
             fill = fill + lit[:, None] * np.asarray(lighting.irradiance_rgb) * albedo * (1.0 - 0.96 * metal)[:, None]
-        roll = _roll_off(fill + key, settings.highlight_knee)[:, None]
-        fill, key = fill * roll, key * roll
+        roll = _roll_off(fill + key * beam, settings.highlight_knee)[:, None]
+        fill, key = fill * roll, key * roll * (1.0 if beam_per_pixel else beam)
         positions, normals = v.astype(np.float32), n.astype(np.float32)
         indices = np.concatenate(fs).astype(np.uint32)
         uv = np.concatenate([m[3] for m in members]).astype(np.float32) if tex_key else None
@@ -1801,11 +1806,12 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     shadows = beside.submit(_shadows, placed, reach, lighting, light_map, floor_mask, floor_polygon, walls,
                             windows_px, K, dist, pose, box, undistort, settings)
     beside.shutdown(wait=False)  # its thread ends with the task
-    fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy, settings, light_map, renderer)
+    self_shadows = self_shadows and lighting.key_fraction > 0
+    fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy, settings, light_map, renderer,
+                                    beam_per_pixel=self_shadows)
     camera, camera_gl = pyrender_camera(Kr), gl_from_cv_pose(np.linalg.inv(pose))
     flags = pyrender.RenderFlags.RGBA | pyrender.RenderFlags.FLAT
     full, depth = renderer.render(_flat_scene(fulls, camera, camera_gl), rw, rh, flags=flags)
-    self_shadows = self_shadows and lighting.key_fraction > 0
     if self_shadows:
         key, _ = renderer.render(_flat_scene(keys, camera, camera_gl), rw, rh, flags=flags, depth=False)
     timings["render"] = time.perf_counter() - t
@@ -1837,12 +1843,17 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
         world_image = np.full((-(-rh // step), -(-rw // step), 3), np.nan, np.float32)
         world_image[ys[on_grid] // step, xs[on_grid] // step] = world[on_grid]
         lit = key[::step, ::step, :3].max(axis=2) > 0  # surfaces the key light reaches
+        beam = np.ones(lit.shape, np.float32)
+        if lighting.sun is not None:  # and only what stands in the sun's beam
+            beam[ys[on_grid] // step, xs[on_grid] // step] = _in_beam(world[on_grid].astype(np.float64), lighting)
+            lit &= beam > 0
         ly, lx, points, bias = _shadow_receivers(world_image, lit, cam_pos, lighting, view.texel_m, radius_px)
         visibility = np.ones(lit.shape, np.float32)
         visibility[ly, lx] = _key_visibility(points, bias, view.camera_from_floor[:3, :3],
                                              view.camera_from_floor[:3, 3], view.K, view.depth_m, radius_px)
         with np.errstate(invalid="ignore"):  # floor-level pieces (rugs) take the floor's shadows instead
             visibility[world_image[..., 2] < settings.floor_level_m] = 1.0
+        visibility *= beam
         if step > 1:
             visibility = cv2.resize(visibility, (rw, rh), interpolation=cv2.INTER_LINEAR)
         visibility = cv2.blur(visibility, (3, 3))

@@ -24,6 +24,7 @@ from augment.render.staged import (Lighting, _Caster, _floor_gain, _nearer_edge_
                                    _plain_wall_upstream, _render_scale, _roll_off, _wall_shading, _walls_run_on,
                                    _window,
                                    estimate_lighting, render_staged, wall_segments, write_jpeg)
+from augment.render.sun import SunOnFloor
 from layout.catalog import CATALOG
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -168,6 +169,28 @@ def test_unit_cube_at_the_board_origin_covers_exactly_its_hull(renderer, room_sm
     assert not (wrong & ~_band(expected)).any(), "pixels off the cube's outline differ"
     # On the outline the 4x multisampled coverage is the pixel's share of the cube.
     assert abs(staged.alpha.sum() - expected.sum()) < 0.005 * expected.sum()
+
+
+def test_the_suns_beam_edge_crosses_a_face_where_it_falls(renderer, room_small):
+    """A unit cube at the origin, the sun travelling along (0.3, 0.5, -0.81) (half the
+    light), the empty room's floor sunlit where x < 0.1. The light through the cube's top,
+    1 m up, lands 0.37 m further along x (0.3 / 0.81), so the top is in the sun where
+    x < -0.27: 5 cm either side of that line it shows the key light and not, each within
+    3 % of 15 cm further on (a step where the edge falls, not a ramp between the face's
+    corners)."""
+    image, _, calibration = room_small
+    x = (np.arange(500) + 0.5) * 0.01 - 2.5
+    lit = np.broadcast_to(x < 0.1, (500, 500)).copy()
+    sun = SunOnFloor(((1.0, 0.0),), True, 2.0, 2.0, (0.0, 0.0), 0, 0.5, (-2.5, -2.5), 0.01, lit, np.ones_like(lit))
+    item = PlacedItem("test_box", (0.0, 0.0, 0.5), 0.0, (1.0, 1.0, 1.0), "box")
+    staged = render_staged(image, calibration, [item], renderer, assets={"test_box": _box_parts()}, seed=0,
+                           lighting=replace(LIGHT, source="sun", sun=sun), look=CLEAN, supersample=1.0)
+    at = np.rint(_project(calibration, [(x, 0.0, 1.0) for x in (-0.47, -0.32, -0.22, -0.07)])).astype(int)
+    assert np.all(staged.alpha[at[:, 1], at[:, 0]] == 1.0)
+    light = ((staged.image[at[:, 1], at[:, 0]].astype(float) / 255) ** 2.2).mean(axis=1)
+    far_sun, sun_side, shade_side, far_shade = light
+    assert sun_side > 1.5 * shade_side
+    assert sun_side == pytest.approx(far_sun, rel=0.03) and shade_side == pytest.approx(far_shade, rel=0.03)
 
 
 def test_a_blurrier_photo_is_rendered_coarser_but_never_sharper_than_it_needs():
