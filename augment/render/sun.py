@@ -54,6 +54,8 @@ class SunOnFloor:
     ratio_rgb : (3,) float
         ``contrast`` per channel (linear RGB): the sun's colour against the shade's; all
         1 where not read (the key light is then white).
+    sheet : (rows, cols) bool or None
+        The board's sheet in the top-down view, left out of ``seen``: floor all the same.
     """
 
     axes_xy: tuple
@@ -69,17 +71,22 @@ class SunOnFloor:
     seen: np.ndarray = field(compare=False, repr=False)
     edge_sigma_m: float = 0.0
     ratio_rgb: tuple = (1.0, 1.0, 1.0)
+    sheet: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @functools.cached_property
-    def _soft(self) -> np.ndarray:
+    def _soft(self) -> tuple[np.ndarray, np.ndarray]:
         """``lit`` with the photo's own edge: blurred over the seen floor by the scale its
-        edges were found at (thresholded noisy light has a ragged edge)."""
+        edges were found at (thresholded noisy light has a ragged edge); and the floor
+        known: the floor seen and the board's sheet, whose light is the floor's either side
+        of it along the sun (a patch's side crossing the sheet goes on straight)."""
         lit = self.lit.astype(np.float32) * self.seen
-        if self.edge_sigma_m <= 0:
-            return lit
-        sigma = self.edge_sigma_m / self.cell_m
-        seen = cv2.GaussianBlur(self.seen.astype(np.float32), (0, 0), sigma)
-        return cv2.GaussianBlur(lit, (0, 0), sigma) / np.maximum(seen, 1e-3)
+        if self.edge_sigma_m > 0:
+            sigma = self.edge_sigma_m / self.cell_m
+            seen = cv2.GaussianBlur(self.seen.astype(np.float32), (0, 0), sigma)
+            lit = cv2.GaussianBlur(lit, (0, 0), sigma) / np.maximum(seen, 1e-3)
+        if self.sheet is None or not self.sheet.any():
+            return lit, self.seen
+        return _fill_along(lit, self.seen, self.sheet, self.axes_xy[0]), self.seen | self.sheet
 
     def run_m(self) -> tuple[float, float]:
         """How far the patches run along the sun, meters (their cells' 1st to 99th
@@ -101,7 +108,8 @@ class SunOnFloor:
         xy = np.asarray(xy, dtype=np.float64)
         flat = np.ascontiguousarray(xy.reshape(-1, xy.shape[-1])[:, :2])
         out = np.empty(len(flat))
-        _sunlit_kernel(flat, self.lo_m[0], self.lo_m[1], self.cell_m, self._soft, self.seen, self.lit_share, out)
+        soft, known = self._soft
+        _sunlit_kernel(flat, self.lo_m[0], self.lo_m[1], self.cell_m, soft, known, self.lit_share, out)
         return out.reshape(xy.shape[:-1])
 
 
@@ -122,6 +130,28 @@ def _sunlit_kernel(xy, x0, y0, cell, soft, seen, share, out):
                 u, v = fx - c, fy - r
                 out[i] = ((1 - v) * ((1 - u) * soft[r, c] + u * soft[r, c + 1])
                           + v * ((1 - u) * soft[r + 1, c] + u * soft[r + 1, c + 1]))
+
+
+def _fill_along(values, known, holes, axis_xy) -> np.ndarray:
+    """``values`` (rows, cols) with each ``holes`` cell the mean of the first ``known``
+    cells either way along ``axis_xy`` (the one met where only one is)."""
+    rows, cols = np.nonzero(holes)
+    h, w = holes.shape
+    found = np.zeros((2, len(rows)), np.float32)
+    have = np.zeros((2, len(rows)), bool)
+    for side, sign in enumerate((1.0, -1.0)):
+        for k in range(1, h + w):
+            r = np.rint(rows + sign * k * axis_xy[1]).astype(int)
+            c = np.rint(cols + sign * k * axis_xy[0]).astype(int)
+            inside = (r >= 0) & (r < h) & (c >= 0) & (c < w)
+            r, c = np.clip(r, 0, h - 1), np.clip(c, 0, w - 1)
+            hit = inside & ~have[side] & known[r, c]
+            found[side, hit], have[side, hit] = values[r[hit], c[hit]], True
+            if have[side].all() or not inside.any():
+                break
+    out = values.copy()
+    out[rows, cols] = np.where(have.all(axis=0), found.mean(axis=0), found.sum(axis=0))
+    return out
 
 
 REC709 = np.array([0.2126, 0.7152, 0.0722])  # luminance of linear RGB (Rec. 709 primaries)
@@ -234,15 +264,16 @@ def find_sun(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np.nda
     view = _top_view(image, floor_mask, floor_from_image, camera_xy_m, exclude_m, settings)
     if view is None:
         return None
-    top_rgb, top, valid, standing, lo, cell = view
+    top_rgb, top, valid, standing, lo, cell, sheet = view
     walls_rad = np.zeros(0) if walls_rad is None else np.asarray(walls_rad, dtype=np.float64)
     if len(walls_rad) == 1:  # one wall in view: rooms have square corners, the others run across it
         walls_rad = np.append(walls_rad, (walls_rad[0] + math.pi / 2) % math.pi)
     for sigma_m, min_contrast in settings.edge_scales:  # sharp edges first, then soft ones (a blurred photo)
         found = _patches_at(top, valid, standing, lo, cell, sigma_m, min_contrast, walls_rad, settings)
         if found is not None:
-            return dataclasses.replace(found, ratio_rgb=_ratio_rgb(top_rgb, found, settings))
-    return _sun_in_colour(top_rgb, top, valid, standing, lo, cell, walls_rad, settings) if colour else None
+            return dataclasses.replace(found, ratio_rgb=_ratio_rgb(top_rgb, found, settings), sheet=sheet)
+    found = _sun_in_colour(top_rgb, top, valid, standing, lo, cell, walls_rad, settings) if colour else None
+    return None if found is None else dataclasses.replace(found, sheet=sheet)
 
 
 def _sun_in_colour(top_rgb, top, valid, standing, lo, cell, walls_rad, settings: SunSettings) -> SunOnFloor | None:
@@ -291,7 +322,7 @@ def bright_floor(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np
     view = _top_view(image, floor_mask, floor_from_image, camera_xy_m, exclude_m, settings)
     if view is None:
         return None
-    top_rgb, top, valid, _, lo, cell = view
+    top_rgb, top, valid, _, lo, cell, sheet = view
     log = cv2.GaussianBlur(np.log(np.maximum(top, 1e-4)), (0, 0), max(1.0, settings.bright_smooth_m / cell))
     shade = float(np.median(log[valid]))
     lit = valid & (log > shade + math.log(settings.bright_ratio))
@@ -304,7 +335,7 @@ def bright_floor(image: np.ndarray, floor_mask: np.ndarray, floor_from_image: np
                        float(math.exp(np.median(log[lit]) - np.median(log[valid & ~lit]))),
                        (float(lo[0] + rc[1] * cell), float(lo[1] + rc[0] * cell)), 0, float(lit.sum() / valid.sum()),
                        (float(lo[0]), float(lo[1])), float(cell), lit, valid, float(settings.bright_smooth_m))
-    return dataclasses.replace(found, ratio_rgb=_ratio_rgb(top_rgb, found, settings))
+    return dataclasses.replace(found, ratio_rgb=_ratio_rgb(top_rgb, found, settings), sheet=sheet)
 
 
 def _top_view(image, floor_mask, floor_from_image, camera_xy_m, exclude_m, settings: SunSettings):
@@ -344,10 +375,14 @@ def _top_view(image, floor_mask, floor_from_image, camera_xy_m, exclude_m, setti
     standing = in_view & ~valid  # walls and things in view (not the photo's edge)
     if valid.sum() < 400:
         return None
+    sheet = None
     if exclude_m is not None:  # the board: its paper's edges are the sharpest steps on the floor
         corners = (np.asarray(exclude_m, dtype=np.float64) - lo) / cell
-        cv2.fillConvexPoly(valid.view(np.uint8), np.round(corners).astype(np.int32), 0)
-    return top_rgb, top, valid, standing, lo, cell
+        sheet = np.zeros(valid.shape, np.uint8)
+        cv2.fillConvexPoly(sheet, np.round(corners).astype(np.int32), 1)
+        sheet = (sheet > 0) & valid
+        valid &= ~sheet
+    return top_rgb, top, valid, standing, lo, cell, sheet
 
 
 def unit_colour(ratio, limit: float | None = None) -> tuple:

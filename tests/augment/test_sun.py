@@ -489,6 +489,19 @@ def test_the_suns_height_from_how_far_its_patch_runs(x_from, x_to, seen_to, expe
     assert got == pytest.approx(expected_deg, abs=0.5)
 
 
+def test_the_floor_under_the_boards_sheet_takes_the_sun_along_it():
+    """A band of sun |y| < 0.5 m along the sun's axis (x); the sheet, left out of the
+    floor seen, straddles its edge (x within 0.2 m, y 0.3-0.7 m). Under it the band goes
+    on straight: in the sun at y = 0.4, in shade at y = 0.6; without the sheet known, the
+    share in the sun (0.3) there."""
+    sun = _sun_over(lambda x, y: np.abs(y) < 0.5, share=0.3)
+    y, x = (np.mgrid[0:400, 0:400] + 0.5) * 0.01 - 2.0
+    sheet = (np.abs(x) < 0.2) & (y > 0.3) & (y < 0.7)
+    left_out = replace(sun, lit=sun.lit & ~sheet, seen=~sheet)
+    np.testing.assert_allclose(left_out.sunlit(np.array([[0.0, 0.4], [0.0, 0.6]])), [0.3, 0.3])
+    np.testing.assert_allclose(replace(left_out, sheet=sheet).sunlit(np.array([[0.0, 0.4], [0.0, 0.6]])), [1.0, 0.0])
+
+
 def test_only_what_stands_in_the_beam_gets_the_sun():
     """Light travelling +x, 45 degrees down; the floor sunlit for x < 0. A point 1 m up at
     x = -1.5 is in the beam (the light through it lands at x = -0.5, sunlit in the empty
