@@ -88,10 +88,10 @@ class SunOnFloor:
             return lit, self.seen
         return _fill_along(lit, self.seen, self.sheet, self.axes_xy[0]), self.seen | self.sheet
 
-    def run_m(self) -> tuple[float, float]:
-        """How far the patches run along the sun, meters (their cells' 1st to 99th
-        percentile along ``axes_xy[0]``), and the larger share of an end's cells on the rim
-        of the floor seen (a wall, the photo's edge: the run goes on out of view)."""
+    def run_along_sun(self) -> tuple[float, float]:
+        """(run_m, cut_share): how far the patches run along the sun (their cells' 1st to
+        99th percentile along ``axes_xy[0]``), and the larger share of an end's cells on the
+        rim of the floor seen (a wall, the photo's edge, the sheet: the run may go on there)."""
         rows, cols = np.nonzero(self.lit)
         if len(rows) == 0:
             return 0.0, 1.0
@@ -160,10 +160,10 @@ REC709 = np.array([0.2126, 0.7152, 0.0722])  # luminance of linear RGB (Rec. 709
 def sun_elevation_rad(found: SunOnFloor, default_rad: float, settings: SunSettings | None = None) -> float:
     """The sun's height over the floor from its patches: a window's glass
     (``settings.glass_m``, sill to head) casts a patch that long over the sun's slope.
-    Where an end of the patches is out of view their run is a lower bound, so the height
-    found is an upper bound on ``default_rad``; within ``settings.elevation_deg``."""
+    Where an end of the patches is out of view their run is a lower bound: the height it
+    gives can then only lower ``default_rad``. Within ``settings.elevation_deg``."""
     settings = RENDER.sun if settings is None else settings
-    run_m, cut = found.run_m()
+    run_m, cut = found.run_along_sun()
     if run_m <= 0:
         return default_rad
     elevation = math.atan(settings.glass_m / run_m)
