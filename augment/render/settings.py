@@ -87,8 +87,14 @@ class StagedSettings:
     # The sun through a window in view, its patches' edges too soft to read: its share and disc
     window_sun_key: float = 0.6
     window_sun_softness_rad: float = 0.03
-    # A window in view casts the patches when the line from it to them is this close to the
-    # sun's axis (cosine); then the light travels from it.
+    # A window in view casts the sun's patches when, slid down along the sun (at some height of
+    # it) onto the floor in view (this share of it, at least), it lands mostly in them, and the
+    # floor between them and its wall is this much less often in the sun (else they climb it).
+    cast_min_in_view: float = 0.3
+    cast_min_lit: float = 0.6
+    cast_min_margin: float = 0.3
+    # A window in view and the patches not cast by it: it casts them when the line from it to
+    # them is this close to the sun's axis (cosine).
     sun_window_alignment: float = 0.5
     light_cell_m: float = 0.04  # the floor's light map: cell size ...
     light_sigma_m: float = 0.3  # ... its blur (planks and tiles average out) ...

@@ -58,7 +58,8 @@ from .gl import Renderer, Scene, far_camera, gl_from_cv_pose, pyrender, pyrender
 from .lamps import find_lamps
 from .look import PhotoLook, apply_look, blur_like_photo, estimate_look
 from .settings import RENDER, StagedSettings
-from .sun import REC709, bright_floor, find_sun, linear_luminance, sun_elevation_rad, unit_colour, wall_angles_rad
+from .sun import (REC709, SunOnFloor, bright_floor, find_sun, linear_luminance, sun_elevation_rad, unit_colour,
+                  wall_angles_rad)
 
 GAMMA = 2.2                 # the renderer writes linear ** (1 / 2.2); photos are treated alike
 
@@ -171,9 +172,10 @@ def _floor_region(shape, K, pose, max_m=8.0):
 
 def _window(lum, candidates, settings: StagedSettings, height_m=None):
     """The brightest window-like blob of a small photo's luminance (h, w): its centroid
-    (x, y) in pixels, or None. ``height_m(x, y)``, when given, says how high on its wall a
-    pixel lies (meters, NaN where no wall in view): a blob whose foot lies lower than
-    ``settings.window_min_sill_m`` is sun climbing the wall or a lit door, not a window."""
+    (x, y) in pixels and its pixels (h, w) bool, or None. ``height_m(x, y)``, when given,
+    says how high on its wall a pixel lies (meters, NaN where no wall in view): a blob
+    whose foot lies lower than ``settings.window_min_sill_m`` is sun climbing the wall or a
+    lit door, not a window."""
     if candidates.sum() < 0.01 * lum.size:
         return None
     # A window is the brightest thing in view and clearly brighter than the walls around,
@@ -204,20 +206,83 @@ def _window(lum, candidates, settings: StagedSettings, height_m=None):
         foot_y = np.percentile(ys, 95)
         if height_m is not None and height_m(float(np.median(xs[ys >= foot_y])), foot_y) < settings.window_min_sill_m:
             continue
-        return centroids[k]
+        return centroids[k], blob > 0
     return None
 
 
-def _on_wall_m(x_px: float, y_px: float, K, pose, walls) -> np.ndarray:
+def _on_wall_m(x_px: float, y_px: float, K, pose, walls) -> tuple[np.ndarray, int]:
     """Where the ray through pixel (x, y) meets the first wall segment (k, 2, 2) ahead:
-    (3,) floor-frame meters, z its height (lens distortion ignored); NaN when it meets none."""
+    (3,) floor-frame meters, z its height (lens distortion ignored), and that wall's index;
+    NaN and -1 when it meets none."""
     R = pose[:3, :3]
     eye = -R.T @ pose[:3, 3]
     ray = R.T @ np.linalg.solve(K, [x_px, y_px, 1.0])
     t_m, which = _first_wall(walls, ray[None], eye[:2])
     if which[0] < 0:
-        return np.full(3, np.nan)
-    return eye + ray * (t_m[0] / max(float(np.hypot(*ray[:2])), 1e-9))
+        return np.full(3, np.nan), -1
+    return eye + ray * (t_m[0] / max(float(np.hypot(*ray[:2])), 1e-9)), int(which[0])
+
+
+def _window_casts(blob_small, wall_m, small_scale, K, pose, cam_xy, sun: SunOnFloor,
+                  settings: StagedSettings) -> float:
+    """Which way the sun's light travels along ``sun.axes_xy[0]`` (+1.0 or -1.0) when the
+    window in view casts its patches, else 0.0.
+
+    Light through a window travels into the room, and the window's outline slid down along
+    it lands on the floor as its patch, the wall below the sill as shade before it. So the
+    window (``blob_small``: its pixels (h, w) on the photo scaled by ``small_scale``, on the
+    wall segment ``wall_m`` (2, 2)) casts the patches when, at some height of the sun, its
+    outline lands mostly on them (``settings.cast_min_lit``) while its sill's shade lands on
+    floor less often lit (``settings.cast_min_margin``): where the patches run on to its wall,
+    the light climbs that wall, and a window there is not the one in the sun.
+    """
+    contours, _ = cv2.findContours(blob_small.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    if not contours:
+        return 0.0
+    outline = cv2.convexHull(np.vstack(contours)).reshape(-1, 2) / small_scale
+    # The outline on the wall's plane (a vertical plane through the segment), meters.
+    a, b = np.asarray(wall_m, dtype=np.float64)
+    along = (b - a) / max(float(np.linalg.norm(b - a)), 1e-9)
+    inward = np.array([-along[1], along[0]])
+    if (np.asarray(cam_xy) - a) @ inward < 0:
+        inward = -inward
+    R = pose[:3, :3]
+    eye = -R.T @ pose[:3, 3]
+    rays = (R.T @ np.linalg.solve(K, np.column_stack([outline, np.ones(len(outline))]).T)).T
+    toward = rays[:, :2] @ inward
+    if not np.all(toward < -1e-9):
+        return 0.0
+    window = eye + rays * (((a - eye[:2]) @ inward) / toward)[:, None]
+    sill = float(window[:, 2].min())
+    if sill <= 0.0:
+        return 0.0
+    axis = np.asarray(sun.axes_xy[0], dtype=np.float64)
+    into = 1.0 if axis @ inward > 0 else -1.0
+    lo, cell = np.asarray(sun.lo_m), sun.cell_m
+    rows, cols = sun.seen.shape
+
+    def on_floor(points_m):
+        """Of the convex region the floor points (n, 2) span: the share in view, and the
+        share of that in the sun (NaN when none is in view)."""
+        hull = cv2.convexHull(np.round((points_m - lo) / cell).astype(np.int32))
+        region = np.zeros((rows, cols), np.uint8)
+        cv2.fillConvexPoly(region, hull, 1)
+        region = region > 0
+        seen = int((region & sun.seen).sum())
+        share = seen / max(cv2.contourArea(hull.astype(np.float32)), 1.0)
+        return share, (float((region & sun.lit).sum()) / seen if seen else math.nan)
+
+    low, high = RENDER.sun.elevation_deg
+    for elev_deg in np.arange(low, high + 1e-6, 2.0):
+        run = into * axis / math.tan(math.radians(elev_deg))  # floor meters per meter of height
+        in_view, lit = on_floor(window[:, :2] + run * window[:, 2:])
+        if not (in_view >= settings.cast_min_in_view and lit >= settings.cast_min_lit):
+            continue
+        # The sill's shade, short of the patch's near edge (its blur).
+        shade_in_view, shade_lit = on_floor(np.vstack([window[:, :2], window[:, :2] + run * 0.8 * sill]))
+        if not (shade_in_view >= settings.cast_min_in_view and shade_lit > lit - settings.cast_min_margin):
+            return into
+    return 0.0
 
 
 def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, lum, wall_lum, small_scale) -> bool:
@@ -352,15 +417,16 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     horiz = forward[:2] / max(np.linalg.norm(forward[:2]), 1e-9)
     walls = None if floor_polygon is None else wall_segments(floor_polygon)
     found = _window(lum_small, ~region_small, settings, None if walls is None or len(walls) == 0 else (
-        lambda x, y: _on_wall_m(x / small_scale, y / small_scale, K, pose, walls)[2]))
-    window_xy = None
+        lambda x, y: _on_wall_m(x / small_scale, y / small_scale, K, pose, walls)[0][2]))
+    window_xy = window = None
     if found is not None:
-        cx, cy = found
+        (cx, cy), blob = found
         ray = R.T @ np.linalg.solve(K, [cx / small_scale, cy / small_scale, 1.0])
         toward = ray[:2] / max(np.linalg.norm(ray[:2]), 1e-9)
         if walls is not None:  # the window's wall: the first one the ray meets
-            at = _on_wall_m(cx / small_scale, cy / small_scale, K, pose, walls)
-            window_xy = None if np.isnan(at[0]) else at[:2]
+            at, k = _on_wall_m(cx / small_scale, cy / small_scale, K, pose, walls)
+            if k >= 0:
+                window_xy, window = at[:2], (blob, walls[k])
     floor_seen = region_small if floor_mask is None else floor_mask  # where the sun's patches are read
     # A sun read in colour only, faint in light, is less sure than a window in view.
     patches = None if not settings.sun_from_floor else _sun_patches(image, floor_seen, calibration, cam_xy,
@@ -370,7 +436,10 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         axis = np.asarray(patches.axes_xy[0])
         center = np.asarray(patches.center_m)
         from_window = None if window_xy is None else center - window_xy
-        if not patches.downstream and from_window is not None and abs(axis @ from_window) >= (
+        cast = 0.0 if window is None else _window_casts(*window, small_scale, K, pose, cam_xy, patches, settings)
+        if cast:
+            sign = cast
+        elif not patches.downstream and from_window is not None and abs(axis @ from_window) >= (
                 settings.sun_window_alignment * max(float(np.linalg.norm(from_window)), 1e-9)):
             sign = 1.0 if axis @ from_window >= 0 else -1.0  # the window in view casts them
         else:

@@ -22,7 +22,7 @@ from augment.render.look import CLEAN
 from augment.render.settings import RENDER
 from augment.render.staged import (Lighting, _Caster, _floor_gain, _nearer_edge_upstream, _on_wall_m,
                                    _plain_wall_upstream, _render_scale, _roll_off, _wall_shading, _walls_run_on,
-                                   _window,
+                                   _window, _window_casts,
                                    estimate_lighting, render_staged, wall_segments, write_jpeg)
 from augment.render.sun import SunOnFloor
 from layout.catalog import CATALOG
@@ -634,7 +634,9 @@ def test_a_window_is_a_compact_bright_quadrilateral_with_sharp_edges():
     lum = np.maximum(lum, 120.0 + 130.0 * np.exp(-((xx - 80.0) ** 2 + (yy - 90.0) ** 2) / (2 * 25.0 ** 2)))
     assert _window(lum, candidates, settings) is None
     lum[100:130, 200:240] = 230.0
-    assert tuple(_window(lum, candidates, settings)) == pytest.approx((219.5, 114.5), abs=0.01)
+    center, blob = _window(lum, candidates, settings)
+    assert tuple(center) == pytest.approx((219.5, 114.5), abs=0.01)
+    assert blob.sum() == 40 * 30 and blob[100:130, 200:240].all()
 
 
 def test_a_blown_out_window_on_bright_walls_is_a_window():
@@ -650,7 +652,7 @@ def test_a_blown_out_window_on_bright_walls_is_a_window():
     lum[97:133, 197:243] = 220.0
     lum[100:130, 200:240] = 252.0
     found = _window(lum, candidates, settings)
-    assert found is not None and tuple(found) == pytest.approx((219.5, 114.5), abs=0.01)
+    assert found is not None and tuple(found[0]) == pytest.approx((219.5, 114.5), abs=0.01)
 
 
 def test_a_bright_blob_reaching_down_the_wall_to_the_floor_is_no_window():
@@ -663,19 +665,47 @@ def test_a_bright_blob_reaching_down_the_wall_to_the_floor_is_no_window():
     pose[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
     pose[:3, 3] = [0.0, 1.4, 0.0]
     walls = np.array([[[-5.0, 4.0], [5.0, 4.0]]])
-    assert _on_wall_m(160.0, 151.25, K, pose, walls) == pytest.approx([0.0, 4.0, 0.9])
-    assert _on_wall_m(10.0, 207.5, K, pose, walls)[2] == pytest.approx(0.0, abs=1e-9)
-    assert np.isnan(_on_wall_m(160.0, 100.0, K, pose, walls[:, ::-1] - [0.0, 8.0])).all()  # wall behind
+    assert _on_wall_m(160.0, 151.25, K, pose, walls)[0] == pytest.approx([0.0, 4.0, 0.9])
+    assert _on_wall_m(10.0, 207.5, K, pose, walls)[0][2] == pytest.approx(0.0, abs=1e-9)
+    assert np.isnan(_on_wall_m(160.0, 100.0, K, pose, walls[:, ::-1] - [0.0, 8.0])[0]).all()  # wall behind
     settings = RENDER.staged
     candidates = np.ones((240, 320), bool)
-    height = lambda x, y: _on_wall_m(x, y, K, pose, walls)[2]  # noqa: E731
+    height = lambda x, y: _on_wall_m(x, y, K, pose, walls)[0][2]  # noqa: E731
     lum = np.full((240, 320), 120.0)
     lum[83:151, 200:240] = 230.0  # 2.0 to 0.9 m up
-    assert tuple(_window(lum, candidates, settings, height)) == pytest.approx((219.5, 116.5), abs=0.01)
+    assert tuple(_window(lum, candidates, settings, height)[0]) == pytest.approx((219.5, 116.5), abs=0.01)
     lum = np.full((240, 320), 120.0)
     lum[158:208, 200:240] = 230.0  # 0.8 m to the floor
     assert _window(lum, candidates, settings) is not None
     assert _window(lum, candidates, settings, height) is None
+
+
+def test_the_window_in_view_casts_the_patches_it_lands_on():
+    """A level camera 1.4 m up looking along +y at a wall 4 m away (f = 250 px, 320 x 240)
+    with a window 1 m wide from 0.92 to 1.99 m up (rows 83-150, columns 129-190). Sun 40 deg
+    up through it, travelling -y, lands 1.63-2.90 m from the camera: with a patch there, read
+    along +y, the window says the light travels the other way (-1). A patch running from that
+    wall's foot (the sun climbing it: the window's sill would shade the floor before it) or
+    one off to the side: the window does not cast it (0)."""
+    K = np.array([[250.0, 0, 160], [0, 250.0, 120], [0, 0, 1]])
+    pose = np.eye(4)
+    pose[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
+    pose[:3, 3] = [0.0, 1.4, 0.0]
+    wall = np.array([[-5.0, 4.0], [5.0, 4.0]])
+    blob = np.zeros((240, 320), bool)
+    blob[83:151, 129:191] = True
+    cell, lo = 0.02, (-3.0, 0.0)
+    ys, xs = np.mgrid[0:201, 0:301] * cell + np.array([lo[1], lo[0]])[:, None, None]
+    seen = ys <= 3.9
+
+    def casts(x_m, y_m):
+        lit = seen & (xs >= x_m[0]) & (xs <= x_m[1]) & (ys >= y_m[0]) & (ys <= y_m[1])
+        sun = SunOnFloor(((0.0, 1.0),), True, 2.0, 3.0, (0.0, 2.0), 0, float(lit.mean()), lo, cell, lit, seen)
+        return _window_casts(blob, wall, 1.0, K, pose, (0.0, 0.0), sun, RENDER.staged)
+
+    assert casts((-0.5, 0.48), (1.63, 2.90)) == -1.0
+    assert casts((-0.5, 0.48), (2.0, 3.9)) == 0.0
+    assert casts((1.5, 2.5), (1.63, 2.90)) == 0.0
 
 
 def test_a_plain_wall_in_view_where_the_suns_window_would_be():
