@@ -93,6 +93,9 @@ class StagedSettings:
     cast_min_in_view: float = 0.3
     cast_min_lit: float = 0.6
     cast_min_margin: float = 0.3
+    # The sun read off a bright floor with no edges, a window in view: the way and height at which
+    # the window's outline slid down covers it best, when that covers it this well (intersection over union).
+    window_sun_min_iou: float = 0.4
     # A window in view and the patches not cast by it: it casts them when the line from it to
     # them is this close to the sun's axis (cosine).
     sun_window_alignment: float = 0.5

@@ -39,6 +39,7 @@ integers (OpenCV). Colours are RGB uint8.
 """
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import time
@@ -223,24 +224,16 @@ def _on_wall_m(x_px: float, y_px: float, K, pose, walls) -> tuple[np.ndarray, in
     return eye + ray * (t_m[0] / max(float(np.hypot(*ray[:2])), 1e-9)), int(which[0])
 
 
-def _window_casts(blob_small, wall_m, small_scale, K, pose, cam_xy, sun: SunOnFloor,
-                  settings: StagedSettings) -> float:
-    """Which way the sun's light travels along ``sun.axes_xy[0]`` (+1.0 or -1.0) when the
-    window in view casts its patches, else 0.0.
-
-    Light through a window travels into the room, and the window's outline slid down along
-    it lands on the floor as its patch, the wall below the sill as shade before it. So the
-    window (``blob_small``: its pixels (h, w) on the photo scaled by ``small_scale``, on the
-    wall segment ``wall_m`` (2, 2)) casts the patches when, at some height of the sun, its
-    outline lands mostly on them (``settings.cast_min_lit``) while its sill's shade lands on
-    floor less often lit (``settings.cast_min_margin``): where the patches run on to its wall,
-    the light climbs that wall, and a window there is not the one in the sun.
-    """
+def _window_on_wall(blob_small, wall_m, small_scale, K, pose, cam_xy):
+    """The window in view on its wall: the outline of its pixels (``blob_small`` (h, w) on
+    the photo scaled by ``small_scale``) where their rays meet the vertical plane through
+    the wall segment ``wall_m`` (2, 2), (n, 3) floor-frame meters; and the wall's direction
+    and its normal into the room (toward ``cam_xy``), (2,) each. None when the outline
+    does not lie on the wall ahead, above the floor."""
     contours, _ = cv2.findContours(blob_small.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     if not contours:
-        return 0.0
+        return None
     outline = cv2.convexHull(np.vstack(contours)).reshape(-1, 2) / small_scale
-    # The outline on the wall's plane (a vertical plane through the segment), meters.
     a, b = np.asarray(wall_m, dtype=np.float64)
     along = (b - a) / max(float(np.linalg.norm(b - a)), 1e-9)
     inward = np.array([-along[1], along[0]])
@@ -251,38 +244,88 @@ def _window_casts(blob_small, wall_m, small_scale, K, pose, cam_xy, sun: SunOnFl
     rays = (R.T @ np.linalg.solve(K, np.column_stack([outline, np.ones(len(outline))]).T)).T
     toward = rays[:, :2] @ inward
     if not np.all(toward < -1e-9):
-        return 0.0
+        return None
     window = eye + rays * (((a - eye[:2]) @ inward) / toward)[:, None]
-    sill = float(window[:, 2].min())
-    if sill <= 0.0:
-        return 0.0
+    return (window, along, inward) if window[:, 2].min() > 0.0 else None
+
+
+def _on_floor(sun: SunOnFloor, points_m) -> tuple[float, float, float]:
+    """Of the convex region floor points (n, 2) span, on the top-down view of ``sun``: the
+    share of it in view, the share of that in the sun (NaN when none is in view), and the
+    share of the sun's patches it covers."""
+    lo, cell = np.asarray(sun.lo_m), sun.cell_m
+    hull = cv2.convexHull(np.round((np.asarray(points_m) - lo) / cell).astype(np.int32))
+    region = np.zeros(sun.seen.shape, np.uint8)
+    cv2.fillConvexPoly(region, hull, 1)
+    region = region > 0
+    seen = int((region & sun.seen).sum())
+    lit = int((region & sun.lit).sum())
+    return (seen / max(cv2.contourArea(hull.astype(np.float32)), 1.0), lit / seen if seen else math.nan,
+            lit / max(int(sun.lit.sum()), 1))
+
+
+def _window_casts(window, sun: SunOnFloor, settings: StagedSettings) -> float:
+    """Which way the sun's light travels along ``sun.axes_xy[0]`` (+1.0 or -1.0) when the
+    window in view (:func:`_window_on_wall`) casts its patches, else 0.0.
+
+    Light through a window travels into the room, and the window's outline slid down along
+    it lands on the floor as its patch, the wall below the sill as shade before it. So the
+    window casts the patches when, at some height of the sun, its outline lands mostly on
+    them (``settings.cast_min_lit``) while its sill's shade lands on floor less often lit
+    (``settings.cast_min_margin``): where the patches run on to its wall, the light climbs
+    that wall, and a window there is not the one in the sun.
+    """
+    outline, _, inward = window
     axis = np.asarray(sun.axes_xy[0], dtype=np.float64)
     into = 1.0 if axis @ inward > 0 else -1.0
-    lo, cell = np.asarray(sun.lo_m), sun.cell_m
-    rows, cols = sun.seen.shape
-
-    def on_floor(points_m):
-        """Of the convex region the floor points (n, 2) span: the share in view, and the
-        share of that in the sun (NaN when none is in view)."""
-        hull = cv2.convexHull(np.round((points_m - lo) / cell).astype(np.int32))
-        region = np.zeros((rows, cols), np.uint8)
-        cv2.fillConvexPoly(region, hull, 1)
-        region = region > 0
-        seen = int((region & sun.seen).sum())
-        share = seen / max(cv2.contourArea(hull.astype(np.float32)), 1.0)
-        return share, (float((region & sun.lit).sum()) / seen if seen else math.nan)
-
+    sill = float(outline[:, 2].min())
     low, high = RENDER.sun.elevation_deg
     for elev_deg in np.arange(low, high + 1e-6, 2.0):
         run = into * axis / math.tan(math.radians(elev_deg))  # floor meters per meter of height
-        in_view, lit = on_floor(window[:, :2] + run * window[:, 2:])
+        in_view, lit, _ = _on_floor(sun, outline[:, :2] + run * outline[:, 2:])
         if not (in_view >= settings.cast_min_in_view and lit >= settings.cast_min_lit):
             continue
         # The sill's shade, short of the patch's near edge (its blur).
-        shade_in_view, shade_lit = on_floor(np.vstack([window[:, :2], window[:, :2] + run * 0.8 * sill]))
+        shade_in_view, shade_lit, _ = _on_floor(sun, np.vstack([outline[:, :2], outline[:, :2] + run * 0.8 * sill]))
         if not (shade_in_view >= settings.cast_min_in_view and shade_lit > lit - settings.cast_min_margin):
             return into
     return 0.0
+
+
+def _window_sun(window, bright: SunOnFloor, settings: StagedSettings):
+    """The sun's direction (3,) through the window in view (:func:`_window_on_wall`) that
+    casts the bright floor ``bright`` (:func:`augment.render.sun.bright_floor`, edges too
+    soft to read): the way into the room and the height at which its outline, slid down
+    along the sun, best covers the bright floor (intersection over union at least
+    ``settings.window_sun_min_iou``; its sill's shade not as lit, as in
+    :func:`_window_casts`), or None."""
+    outline, along, inward = window
+    sill = float(outline[:, 2].min())
+    low, high = RENDER.sun.elevation_deg
+    # Searched on a view 4x coarser (4 cm cells): some 1300 ways and heights.
+    coarse = {k: cv2.resize(getattr(bright, k).astype(np.float32), None, fx=0.25, fy=0.25,
+                            interpolation=cv2.INTER_AREA) > 0.5 for k in ("lit", "seen")}
+    bright = dataclasses.replace(bright, **coarse, cell_m=4 * bright.cell_m,
+                                 lo_m=tuple(np.asarray(bright.lo_m) + 1.5 * bright.cell_m))
+    best, found = settings.window_sun_min_iou, None
+    for az in np.radians(np.arange(-75.0, 75.1, 3.0)):
+        way = inward * math.cos(az) + along * math.sin(az)
+        for elev_deg in np.arange(low, high + 1e-6, 2.0):
+            run = way / math.tan(math.radians(elev_deg))
+            in_view, lit, covered = _on_floor(bright, outline[:, :2] + run * outline[:, 2:])
+            if not in_view >= settings.cast_min_in_view:
+                continue
+            iou = 1.0 / (1.0 / max(lit, 1e-9) + 1.0 / max(covered, 1e-9) - 1.0)
+            if iou <= best:
+                continue
+            shade = np.vstack([outline[:, :2], outline[:, :2] + run * 0.8 * sill])
+            shade_in_view, shade_lit, _ = _on_floor(bright, shade)
+            if shade_in_view >= settings.cast_min_in_view and shade_lit > lit - settings.cast_min_margin:
+                continue
+            best, found = iou, (way, math.radians(elev_deg))
+    if found is None:
+        return None
+    return np.append(found[0] * math.cos(found[1]), -math.sin(found[1]))
 
 
 def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, lum, wall_lum, small_scale) -> bool:
@@ -426,7 +469,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         if walls is not None:  # the window's wall: the first one the ray meets
             at, k = _on_wall_m(cx / small_scale, cy / small_scale, K, pose, walls)
             if k >= 0:
-                window_xy, window = at[:2], (blob, walls[k])
+                window_xy, window = at[:2], _window_on_wall(blob, walls[k], small_scale, K, pose, cam_xy)
     floor_seen = region_small if floor_mask is None else floor_mask  # where the sun's patches are read
     # A sun read in colour only, faint in light, is less sure than a window in view.
     patches = None if not settings.sun_from_floor else _sun_patches(image, floor_seen, calibration, cam_xy,
@@ -436,7 +479,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         axis = np.asarray(patches.axes_xy[0])
         center = np.asarray(patches.center_m)
         from_window = None if window_xy is None else center - window_xy
-        cast = 0.0 if window is None else _window_casts(*window, small_scale, K, pose, cam_xy, patches, settings)
+        cast = 0.0 if window is None else _window_casts(window, patches, settings)
         if cast:
             sign = cast
         elif not patches.downstream and from_window is not None and abs(axis @ from_window) >= (
@@ -465,6 +508,11 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         patches = bright if settings.sun_from_floor else None
         elev = math.radians(settings.sun_elevation_deg if sunny else settings.window_elevation_deg)
         direction = np.append(-toward * math.cos(elev), -math.sin(elev))
+        aim = None if not sunny or window is None else _window_sun(window, bright, settings)
+        if aim is not None:  # the window's patch found on the bright floor: the sun's way and height
+            direction = aim
+            axis = aim[:2] / np.linalg.norm(aim[:2])
+            patches = None if patches is None else dataclasses.replace(patches, axes_xy=(tuple(axis),))
         key, soft = ((settings.window_sun_key, settings.window_sun_softness_rad) if sunny
                      else (settings.window_key, settings.window_softness_rad))
         source = "window"

@@ -3,6 +3,7 @@ shadows, occlusion, the furniture's sizes, and the renderer's hygiene."""
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,7 +23,7 @@ from augment.render.look import CLEAN
 from augment.render.settings import RENDER
 from augment.render.staged import (Lighting, _Caster, _floor_gain, _nearer_edge_upstream, _on_wall_m,
                                    _plain_wall_upstream, _render_scale, _roll_off, _wall_shading, _walls_run_on,
-                                   _window, _window_casts,
+                                   _window, _window_casts, _window_on_wall, _window_sun,
                                    estimate_lighting, render_staged, wall_segments, write_jpeg)
 from augment.render.sun import SunOnFloor
 from layout.catalog import CATALOG
@@ -680,32 +681,67 @@ def test_a_bright_blob_reaching_down_the_wall_to_the_floor_is_no_window():
     assert _window(lum, candidates, settings, height) is None
 
 
-def test_the_window_in_view_casts_the_patches_it_lands_on():
+def _window_before_camera():
     """A level camera 1.4 m up looking along +y at a wall 4 m away (f = 250 px, 320 x 240)
-    with a window 1 m wide from 0.92 to 1.99 m up (rows 83-150, columns 129-190). Sun 40 deg
-    up through it, travelling -y, lands 1.63-2.90 m from the camera: with a patch there, read
-    along +y, the window says the light travels the other way (-1). A patch running from that
-    wall's foot (the sun climbing it: the window's sill would shade the floor before it) or
-    one off to the side: the window does not cast it (0)."""
+    with a window 1 m wide from 0.92 to 1.99 m up (rows 83-150, columns 129-190); and a
+    top-down view of the floor in front of the wall (2 cm cells, x -3 to 3 m, y 0 to
+    3.9 m seen): the window on its wall, the view's cells' (x, y) and what it sees."""
     K = np.array([[250.0, 0, 160], [0, 250.0, 120], [0, 0, 1]])
     pose = np.eye(4)
     pose[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
     pose[:3, 3] = [0.0, 1.4, 0.0]
-    wall = np.array([[-5.0, 4.0], [5.0, 4.0]])
     blob = np.zeros((240, 320), bool)
     blob[83:151, 129:191] = True
-    cell, lo = 0.02, (-3.0, 0.0)
-    ys, xs = np.mgrid[0:201, 0:301] * cell + np.array([lo[1], lo[0]])[:, None, None]
-    seen = ys <= 3.9
+    window = _window_on_wall(blob, np.array([[-5.0, 4.0], [5.0, 4.0]]), 1.0, K, pose, (0.0, 0.0))
+    ys, xs = np.mgrid[0:201, 0:301] * 0.02 + np.array([0.0, -3.0])[:, None, None]
+    return window, xs, ys, ys <= 3.9
+
+
+def _sun_on(lit, seen, axis_xy=(0.0, 1.0)):
+    return SunOnFloor((axis_xy,), True, 2.0, 3.0, (0.0, 2.0), 0, float(lit.mean()), (-3.0, 0.0), 0.02, lit, seen)
+
+
+def test_the_window_in_view_casts_the_patches_it_lands_on():
+    """The window of :func:`_window_before_camera` lies on its wall where drawn. Sun 40 deg
+    up through it, travelling -y, lands 1.63-2.90 m from the camera: with a patch there, read
+    along +y, the window says the light travels the other way (-1). A patch running from
+    that wall's foot (the sun climbing it: the window's sill would shade the floor before
+    it) or one off to the side: the window does not cast it (0)."""
+    window, xs, ys, seen = _window_before_camera()
+    outline, along, inward = window
+    assert outline.min(axis=0) == pytest.approx([-0.496, 4.0, 0.92], abs=0.01)
+    assert outline.max(axis=0) == pytest.approx([0.48, 4.0, 1.992], abs=0.01)
+    assert abs(along[0]) == pytest.approx(1.0) and inward == pytest.approx([0.0, -1.0])
 
     def casts(x_m, y_m):
         lit = seen & (xs >= x_m[0]) & (xs <= x_m[1]) & (ys >= y_m[0]) & (ys <= y_m[1])
-        sun = SunOnFloor(((0.0, 1.0),), True, 2.0, 3.0, (0.0, 2.0), 0, float(lit.mean()), lo, cell, lit, seen)
-        return _window_casts(blob, wall, 1.0, K, pose, (0.0, 0.0), sun, RENDER.staged)
+        return _window_casts(window, _sun_on(lit, seen), RENDER.staged)
 
     assert casts((-0.5, 0.48), (1.63, 2.90)) == -1.0
     assert casts((-0.5, 0.48), (2.0, 3.9)) == 0.0
     assert casts((1.5, 2.5), (1.63, 2.90)) == 0.0
+
+
+def test_the_sun_through_the_window_in_view_is_where_its_light_lands():
+    """Bright floor with no edges read, where the window of :func:`_window_before_camera`
+    lands with the sun 40 deg up travelling 21 deg off straight into the room: that is the
+    sun's way and height (within the search's 3 and 2 deg steps). A small bright square
+    off to the side, or bright floor from the wall's foot on (the sun climbing that wall),
+    is no window's patch: None."""
+    window, xs, ys, seen = _window_before_camera()
+    outline = window[0]
+    way = np.array([math.sin(math.radians(21.0)), -math.cos(math.radians(21.0))])
+    corners = outline[:, :2] + way * outline[:, 2:] / math.tan(math.radians(40.0))
+    patch = np.zeros(seen.shape, np.uint8)
+    cv2.fillConvexPoly(patch, np.round((corners - [-3.0, 0.0]) / 0.02).astype(np.int32), 1)
+    direction = _window_sun(window, _sun_on(patch > 0, seen), RENDER.staged)
+    assert direction is not None
+    assert math.degrees(math.atan2(direction[0], -direction[1])) == pytest.approx(21.0, abs=3.0)
+    assert math.degrees(math.asin(-direction[2])) == pytest.approx(40.0, abs=2.0)
+    square = seen & (np.abs(xs - 2.5) <= 0.1) & (np.abs(ys - 1.0) <= 0.1)
+    assert _window_sun(window, _sun_on(square, seen), RENDER.staged) is None
+    from_wall = seen & (xs >= -0.5) & (xs <= 0.48) & (ys >= 1.6)
+    assert _window_sun(window, _sun_on(from_wall, seen), RENDER.staged) is None
 
 
 def test_a_plain_wall_in_view_where_the_suns_window_would_be():
