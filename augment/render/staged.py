@@ -502,17 +502,18 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     elif found is not None:
         # Sunlit floor (a bright patch well above the floor's median, the board's white
         # paper left out) means direct sun: its edges too soft to read, the window in view
-        # gives its azimuth, and only the floor that bright loses it under the furniture.
+        # gives its way (where its outline lands on that floor, else the camera's line to
+        # it), and only the floor that bright loses it under the furniture.
         bright = _sun_patches(image, floor_seen, calibration, cam_xy, floor_polygon, -toward)
         sunny = bright is not None
         patches = bright if settings.sun_from_floor else None
         elev = math.radians(settings.sun_elevation_deg if sunny else settings.window_elevation_deg)
         direction = np.append(-toward * math.cos(elev), -math.sin(elev))
-        aim = None if not sunny or window is None else _window_sun(window, bright, settings)
+        aim = None if patches is None or window is None else _window_sun(window, patches, settings)
         if aim is not None:  # the window's patch found on the bright floor: the sun's way and height
             direction = aim
             axis = aim[:2] / np.linalg.norm(aim[:2])
-            patches = None if patches is None else dataclasses.replace(patches, axes_xy=(tuple(axis),))
+            patches = dataclasses.replace(patches, axes_xy=(tuple(axis),))
         key, soft = ((settings.window_sun_key, settings.window_sun_softness_rad) if sunny
                      else (settings.window_key, settings.window_softness_rad))
         source = "window"
