@@ -264,6 +264,17 @@ def _on_floor(sun: SunOnFloor, points_m) -> tuple[float, float, float]:
             lit / max(int(sun.lit.sum()), 1))
 
 
+def _climbs(sun: SunOnFloor, outline, run, lit: float, settings: StagedSettings) -> bool:
+    """Whether the floor a window's sill would shade, from its wall's foot to short of its
+    patch (0.8 of the sill's slide ``run`` (2,) per meter of height: the edge's blur), is
+    about as often in the sun as the patch (``lit``, less ``settings.cast_min_margin``):
+    then the light climbs that wall, and the window (``outline`` (n, 3)) is not the one
+    in the sun."""
+    sill = float(outline[:, 2].min())
+    in_view, shade_lit, _ = _on_floor(sun, np.vstack([outline[:, :2], outline[:, :2] + run * 0.8 * sill]))
+    return in_view >= settings.cast_min_in_view and shade_lit > lit - settings.cast_min_margin
+
+
 def _window_casts(window, sun: SunOnFloor, settings: StagedSettings) -> float:
     """Which way the sun's light travels along ``sun.axes_xy[0]`` (+1.0 or -1.0) when the
     window in view (:func:`_window_on_wall`) casts its patches, else 0.0.
@@ -278,16 +289,12 @@ def _window_casts(window, sun: SunOnFloor, settings: StagedSettings) -> float:
     outline, _, inward = window
     axis = np.asarray(sun.axes_xy[0], dtype=np.float64)
     into = 1.0 if axis @ inward > 0 else -1.0
-    sill = float(outline[:, 2].min())
     low, high = RENDER.sun.elevation_deg
     for elev_deg in np.arange(low, high + 1e-6, 2.0):
         run = into * axis / math.tan(math.radians(elev_deg))  # floor meters per meter of height
         in_view, lit, _ = _on_floor(sun, outline[:, :2] + run * outline[:, 2:])
-        if not (in_view >= settings.cast_min_in_view and lit >= settings.cast_min_lit):
-            continue
-        # The sill's shade, short of the patch's near edge (its blur).
-        shade_in_view, shade_lit, _ = _on_floor(sun, np.vstack([outline[:, :2], outline[:, :2] + run * 0.8 * sill]))
-        if not (shade_in_view >= settings.cast_min_in_view and shade_lit > lit - settings.cast_min_margin):
+        if in_view >= settings.cast_min_in_view and lit >= settings.cast_min_lit and not _climbs(
+                sun, outline, run, lit, settings):
             return into
     return 0.0
 
@@ -300,7 +307,6 @@ def _window_sun(window, bright: SunOnFloor, settings: StagedSettings):
     ``settings.window_sun_min_iou``; its sill's shade not as lit, as in
     :func:`_window_casts`), or None."""
     outline, along, inward = window
-    sill = float(outline[:, 2].min())
     low, high = RENDER.sun.elevation_deg
     # Searched on a view 4x coarser (4 cm cells): some 1300 ways and heights.
     coarse = {k: cv2.resize(getattr(bright, k).astype(np.float32), None, fx=0.25, fy=0.25,
@@ -316,11 +322,7 @@ def _window_sun(window, bright: SunOnFloor, settings: StagedSettings):
             if not in_view >= settings.cast_min_in_view:
                 continue
             iou = 1.0 / (1.0 / max(lit, 1e-9) + 1.0 / max(covered, 1e-9) - 1.0)
-            if iou <= best:
-                continue
-            shade = np.vstack([outline[:, :2], outline[:, :2] + run * 0.8 * sill])
-            shade_in_view, shade_lit, _ = _on_floor(bright, shade)
-            if shade_in_view >= settings.cast_min_in_view and shade_lit > lit - settings.cast_min_margin:
+            if iou <= best or _climbs(bright, outline, run, lit, settings):
                 continue
             best, found = iou, (way, math.radians(elev_deg))
     if found is None:
