@@ -103,6 +103,15 @@ class Lighting:
     key_rgb : (3,) tuple of float
         The key light's colour over ``irradiance_rgb`` (luminance 1): the sun's, read off
         its patches against the shade beside them.
+    way : str
+        What told the key light's way. The sun: ``"window_casts"`` (the window in view
+        lands on its patches), ``"far_end_at_wall"`` (its patches run into a wall),
+        ``"window_in_line"`` (the window in view lies back along its edges),
+        ``"nearer_photo_edge"`` (its window is out of view past the nearer edge),
+        ``"camera_side"`` (out of view behind the camera's side) or
+        ``"plain_wall_upstream"`` (a plain wall in view rules the other way out). A window
+        in view: ``"window_patch"`` (its outline lands on the bright floor) or
+        ``"line_to_window"``. Else ``"behind_camera"``.
     """
 
     irradiance_rgb: tuple
@@ -114,9 +123,10 @@ class Lighting:
     sun: object = field(default=None, compare=False, repr=False)
     lamps: tuple = ()
     key_rgb: tuple = (1.0, 1.0, 1.0)
+    way: str = ""
 
     def to_json(self) -> dict:
-        return {"source": self.source, "direction": [round(float(v), 4) for v in self.direction],
+        return {"source": self.source, "way": self.way, "direction": [round(float(v), 4) for v in self.direction],
                 "key_fraction": round(float(self.key_fraction), 3), "softness_rad": round(float(self.softness_rad), 3),
                 "irradiance_rgb": [round(float(v), 4) for v in self.irradiance_rgb],
                 "key_rgb": [round(float(v), 3) for v in self.key_rgb],
@@ -483,21 +493,25 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         from_window = None if window_xy is None else center - window_xy
         cast = 0.0 if window is None else _window_casts(window, patches, settings)
         if cast:
-            sign = cast
+            sign, way = cast, "window_casts"
         elif not patches.downstream and from_window is not None and abs(axis @ from_window) >= (
                 settings.sun_window_alignment * max(float(np.linalg.norm(from_window)), 1e-9)):
-            sign = 1.0 if axis @ from_window >= 0 else -1.0  # the window in view casts them
+            sign, way = (1.0 if axis @ from_window >= 0 else -1.0), "window_in_line"
         else:
             # The patches run into the wall they climb; else their window is out of view:
             # past the nearer photo edge where no wall in view stands behind them either
             # way, else on the camera's side. Unless a plain wall in view stands where it would be.
-            sign = float(patches.downstream) or (1.0 if axis @ (center - cam_xy) >= 0 else -1.0)
-            if not patches.downstream and walls is not None:
-                sign = _nearer_edge_upstream(center, axis, walls, floor_polygon) or sign
+            if patches.downstream:
+                sign, way = float(patches.downstream), "far_end_at_wall"
+            else:
+                sign, way = (1.0 if axis @ (center - cam_xy) >= 0 else -1.0), "camera_side"
+                edge = 0.0 if walls is None else _nearer_edge_upstream(center, axis, walls, floor_polygon)
+                if edge:
+                    sign, way = edge, "nearer_photo_edge"
             plain = [walls is not None and _plain_wall_upstream(center, -s * axis, walls, K, dist, pose, lum_small,
                                                                 wall_lum, small_scale) for s in (sign, -sign)]
             if plain[0] and not plain[1]:
-                sign = -sign
+                sign, way = -sign, "plain_wall_upstream"
         elev = sun_elevation_rad(patches, math.radians(settings.sun_elevation_deg))
         direction = np.append(sign * axis * math.cos(elev), -math.sin(elev))
         soft, source = settings.sun_softness_rad, "sun"
@@ -510,10 +524,10 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         sunny = bright is not None
         patches = bright if settings.sun_from_floor else None
         elev = math.radians(settings.sun_elevation_deg if sunny else settings.window_elevation_deg)
-        direction = np.append(-toward * math.cos(elev), -math.sin(elev))
+        direction, way = np.append(-toward * math.cos(elev), -math.sin(elev)), "line_to_window"
         aim = None if patches is None or window is None else _window_sun(window, patches, settings)
         if aim is not None:  # the window's patch found on the bright floor: the sun's way and height
-            direction = aim
+            direction, way = aim, "window_patch"
             axis = aim[:2] / np.linalg.norm(aim[:2])
             patches = dataclasses.replace(patches, axes_xy=(tuple(axis),))
         key, soft = ((settings.window_sun_key, settings.window_sun_softness_rad) if sunny
@@ -524,7 +538,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         direction = np.append(horiz * math.cos(elev), -math.sin(elev))
         # Nothing in the photo says where the light comes from: a weak, very soft key, so
         # no shadow is thrown far in a direction that is only a guess.
-        key, soft, source = 0.15, 0.5, "default"
+        key, soft, source, way = 0.15, 0.5, "default", "behind_camera"
     sun = patches
     if sun is not None:
         if source == "sun":
@@ -543,7 +557,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                            None if sun is None else (lambda xy: sun.sunlit(xy) > 0.25),
                            inside=None if walls is None or len(walls) == 0 else _in_room(walls, cam_xy))
     return Lighting(tuple(float(v) for v in irradiance), tuple(float(v) for v in direction), key, soft,
-                    tuple(float(v) for v in floor_rgb), source, sun, lamps, tuple(float(v) for v in key_rgb))
+                    tuple(float(v) for v in floor_rgb), source, sun, lamps, tuple(float(v) for v in key_rgb), way)
 
 
 # --------------------------------------------------------------------------------------

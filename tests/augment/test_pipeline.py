@@ -202,7 +202,7 @@ def test_the_light_is_read_off_the_board_as_photographed(roomy):
     white = np.median((rgb[rgb.sum(axis=1) > np.median(rgb.sum(axis=1))] / 255.0) ** 2.2, axis=0)
     light = np.array(result.report["light"]["irradiance_rgb"])
     np.testing.assert_allclose(light / light[1], white / white[1], rtol=0.03)
-    assert result.report["light"]["source"] in ("sun", "window", "default")
+    assert result.report["light"]["source"] in ("sun", "window", "default") and result.report["light"]["way"]
 
 
 def test_each_suggestion_has_its_own_style_unless_one_is_asked(roomy, tmp_path, capsys):

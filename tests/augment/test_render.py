@@ -609,7 +609,7 @@ def test_key_light_comes_from_the_window():
     what casts it is tall)."""
     image, mask, calibration = _truth_calibration("room_1", 0.5)
     lighting = estimate_lighting(image, calibration, mask)
-    assert lighting.source == "window"
+    assert lighting.source == "window" and lighting.way == "line_to_window"
     truth = json.loads((PHOTOS / "room_1.json").read_text())
     board_from_world = np.linalg.inv(np.array(truth["board"]["world_from_board"]))
     window = np.mean(truth["room"]["windows"][0]["segment_m"], axis=0)

@@ -403,13 +403,13 @@ def test_sun_direction_in_a_synthetic_room(renderer):
 
 
 def test_sun_through_the_window_in_view(renderer):
-    """A window in view whose line to the sun's patch on the floor runs along the sun's
-    edges casts it: the light travels from that window (here toward the camera)."""
+    """The window in view, slid down along the sun's edges, lands on its patch on the
+    floor: it casts it, and the light travels from that window (here toward the camera)."""
     from augment.synth import render_sample
 
     sample = render_sample([9601, 28], renderer, size_px=(1600, 1200), clutter=False)
     lighting, angle = _sun_error_deg(sample)
-    assert lighting.source == "sun" and angle < 5.0
+    assert lighting.source == "sun" and lighting.way == "window_casts" and angle < 5.0
 
 
 def test_a_lit_door_is_no_window(renderer):
@@ -426,15 +426,24 @@ def test_a_lit_door_is_no_window(renderer):
 
 def test_a_soft_sun_patch_below_a_window_in_view_bounds_the_sun(renderer):
     """Render [9800, 38]: the sun through the window in view onto the floor, its patch too
-    soft for find_sun's edges. The key light is the window's, and the floor it takes as
-    sunlit (:func:`bright_floor`) is in the photographer's sun: 90 % of it at least, by the
-    room's geometry (the ray to the sun leaves through a window)."""
+    soft for find_sun's edges. The key light is the window's, its way and height where the
+    window's outline, slid down along the sun, lands on that floor (within 6 and 4 deg of
+    the photographer's sun), and the floor it takes as sunlit (:func:`bright_floor`) is in
+    the photographer's sun: 90 % of it at least, by the room's geometry (the ray to the
+    sun leaves through a window)."""
     from augment.synth import render_sample
     from augment.synth.truth import sun_exit
 
     sample = render_sample([9800, 38], renderer, size_px=(1280, 960), clutter=False)
     lighting, world_from_floor = _estimated(sample)
     assert lighting.source == "window" and lighting.sun is not None
+    # Its way and height: where the window's outline, slid down along the sun, lands on it.
+    light = next(lt for lt in sample.truth["render"]["lights"] if lt["kind"] == "sun")
+    true_floor = world_from_floor[:3, :3].T @ np.asarray(light["direction"])
+    got = np.asarray(lighting.direction)
+    cos = true_floor[:2] @ got[:2] / np.linalg.norm(true_floor[:2]) / np.linalg.norm(got[:2])
+    assert lighting.way == "window_patch" and math.degrees(math.acos(min(cos, 1.0))) < 6.0
+    assert math.degrees(math.asin(-got[2])) == pytest.approx(math.degrees(math.asin(-true_floor[2])), abs=4.0)
     sun = lighting.sun
     rows, cols = np.nonzero(sun.lit)
     xy = np.column_stack([sun.lo_m[0] + (cols + 0.5) * sun.cell_m, sun.lo_m[1] + (rows + 0.5) * sun.cell_m])
