@@ -77,6 +77,8 @@ INPUT_LONG_PX = 256
 # rooms that finds floor the training size misses (dark corners, under tables), and far
 # strips of floor past a threshold are a few pixels tall at the training size.
 RUN_LONG_PX = (INPUT_LONG_PX, 320, 448)
+# The larger read that tells where the floor found is in doubt (ModelSpec.fine_long_px).
+FINE_LONG_PX = (448, 576)
 TRAIN_SHAPES = {"landscape": (192, 256), "portrait": (256, 192)}  # (rows, cols)
 LITE0_FROZEN_BLOCKS = 3  # --arch lite0 trains from its fourth block on
 # Parameter names of FloorLiteNet's encoder (the pretrained part), as in the ImageNet file.
@@ -585,7 +587,7 @@ def export(model, out: Path, log, args, n_params, seconds) -> None:
     # The torch weights too (not shipped): to fine-tune or inspect later.
     torch.save(model.state_dict(), out.with_suffix(".pt"))
     sidecar = {
-        "input_long_px": list(RUN_LONG_PX), "multiple_px": 32, "channel_order": "RGB",
+        "input_long_px": list(RUN_LONG_PX), "fine_long_px": list(FINE_LONG_PX), "multiple_px": 32, "channel_order": "RGB",
         "mean": list(MEAN_RGB), "std": list(STD_RGB), "scale": 1 / 255, "floor_class": 1,
         "output": "logits",
         "training": {"arch": args.arch, "data": [str(p) for p in args.data], "epochs_done": len(log),

@@ -57,6 +57,12 @@ class ModelSpec:
         With several long sides the model runs at each and the floor probabilities are
         averaged (the shipped model: its training size and one a little larger, which
         finds more of the floor in dark corners and under tables of real rooms).
+    fine_long_px : tuple of int
+        Long sides for a second read, the mean of which, where higher than the averaged
+        one, tells where the floor found is in doubt (:meth:`FloorModel.floor_probabilities`):
+        a far strip of a second floor past a threshold, a few input pixels tall at the
+        smaller sizes, reads 0.2-0.4 there and 0.9 at these. Not the floor itself: at
+        these sizes a dark skirting board reads as floor too. Empty: none.
     channel_order : "RGB" or "BGR"
     scale, mean, std : float, (3,), (3,)
         Input = (pixel * scale - mean) / std, per channel in ``channel_order``.
@@ -72,6 +78,7 @@ class ModelSpec:
 
     input_size: tuple[int, int] | None = None
     input_long_px: int | tuple[int, ...] = 256
+    fine_long_px: tuple[int, ...] = ()
     multiple_px: int = 32
     channel_order: str = "RGB"
     scale: float = 1 / 255
@@ -96,6 +103,10 @@ class ModelSpec:
         wholes("multiple_px", 1, 1024, 1)
         object.__setattr__(self, "multiple_px", self.multiple_px[0])
         wholes("input_long_px", self.multiple_px, MAX_INPUT_PX, example=", e.g. 256 or [256, 320]")
+        if isinstance(self.fine_long_px, (list, tuple)) and len(self.fine_long_px) == 0:
+            object.__setattr__(self, "fine_long_px", ())
+        else:
+            wholes("fine_long_px", self.multiple_px, MAX_INPUT_PX, example=", e.g. [448, 576], or [] for none")
         if self.input_size is not None:
             wholes("input_size", 16, MAX_INPUT_PX, 2, example=" (rows, cols)")
         wholes("floor_class", 0, 100_000, example=", the output channels that are floor, e.g. [1] or [3, 28]")
@@ -188,30 +199,50 @@ class FloorModel:
                                         f"{shape}), not the {self.spec.input_size[1]}x{self.spec.input_size[0]} "
                                         f"asked for; give --input-size {spatial[1]}x{spatial[0]} or leave it out")
 
-    def input_shapes(self, rows: int, cols: int) -> list[tuple[int, int]]:
+    def input_shapes(self, rows: int, cols: int, longs=None) -> list[tuple[int, int]]:
         """The (rows, cols) the model is fed for a photo of ``rows`` x ``cols``, one per
-        input size of the spec."""
+        input size of the spec (or per long side of ``longs``)."""
         s = self.spec
         if s.input_size is not None:
             return [tuple(s.input_size)]
         m = s.multiple_px
         return [(max(m, round(rows * long / max(rows, cols) / m) * m),
-                 max(m, round(cols * long / max(rows, cols) / m) * m)) for long in s.input_long_px]
+                 max(m, round(cols * long / max(rows, cols) / m) * m))
+                for long in (s.input_long_px if longs is None else longs)]
 
     def floor_probability(self, image: np.ndarray, size_px: tuple[int, int] | None = None) -> np.ndarray:
         """Floor probability float32 in [0, 1], ``(rows, cols)`` of the image or of
         ``size_px = (width, height)`` when given (cheaper than resizing twice); the mean
         over the spec's input sizes. The model learned rooms upright: give it the photo
         turned so (:mod:`augment.floor.upright`)."""
+        return self._read(image, size_px, fine=False)[0]
+
+    def floor_probabilities(self, image: np.ndarray, size_px: tuple[int, int] | None = None):
+        """:meth:`floor_probability`, and the fine read: the larger of it and the mean over
+        the spec's fine sizes (None when it has none), which tells where the floor found
+        is in doubt. A size in both runs once."""
+        return self._read(image, size_px, fine=True)
+
+    def _read(self, image, size_px, fine: bool):
         image = check_image(image)
         rows, cols = image.shape[:2]
         if size_px is not None:
             cols, rows = int(size_px[0]), int(size_px[1])
-        shapes = self.input_shapes(rows, cols)
         # Shrunk once, before the smaller working sizes are made from it.
         image = shrink_to(image, FLOOR.model.preshrink_long_px)
-        p = sum(self._probability(image, shape, (cols, rows)) for shape in shapes)
-        return np.ascontiguousarray(np.clip(p / len(shapes), 0, 1))
+        runs = {}
+
+        def mean(longs):
+            shapes = self.input_shapes(rows, cols, longs)
+            for shape in shapes:
+                if shape not in runs:
+                    runs[shape] = self._probability(image, shape, (cols, rows))
+            return np.clip(sum(runs[shape] for shape in shapes) / len(shapes), 0, 1)
+
+        p = np.ascontiguousarray(mean(None))
+        if not (fine and self.spec.fine_long_px and self.spec.input_size is None):
+            return p, None
+        return p, np.ascontiguousarray(np.maximum(p, mean(self.spec.fine_long_px)))
 
     def _probability(self, image: np.ndarray, in_shape: tuple[int, int], size_px: tuple[int, int]) -> np.ndarray:
         s = self.spec
