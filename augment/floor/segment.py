@@ -503,7 +503,12 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
     size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
     work = shrink_to(image, FLOOR.model.preshrink_long_px)
     small = _hide_board(shrink_area(work, size_small), calibration, scale)
-    probability, fine = model.floor_probabilities(work, size_small) if method == "onnx" else (None, None)
+    probability = fine = None
+    if method == "onnx" and calibration is None:
+        # Without the floor's scale there is no dispute to read: the fine read would go unused.
+        probability = model.floor_probability(work, size_small)
+    elif method == "onnx":
+        probability, fine = model.floor_probabilities(work, size_small)
 
     def found(wand):
         return _refined(small, scale, probability, calibration, method, refine, wand)
