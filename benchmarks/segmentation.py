@@ -194,7 +194,7 @@ def main(argv=None) -> int:
         sample = render_sample([901, 1000], renderer, size_px=(1008, 756))
     big = cv2.resize(sample.image, (4032, 3024), interpolation=cv2.INTER_CUBIC)
     cal_big = calibrate_photo(big, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0] * 4, (4032, 3024)))
-    inputs = "+".join(f"{c}x{r}" for r, c in model.input_shapes(*sample.image.shape[:2]))
+    inputs = model.inputs_label(*sample.image.shape[:2])
     # A "not floor" click in the middle of the floor found: the dearest correction, a first
     # pass to tell a click on a skirting board from one on a thing standing on the floor.
     ys, xs = np.nonzero(segment_floor(big, model, cal_big).mask)

@@ -64,7 +64,7 @@ def main(argv=None) -> int:
             start = time.perf_counter()
             segment_floor(big, model, cal)
             times[name]["step"].append(time.perf_counter() - start)
-    rows = {name: {"inputs": "+".join(f"{c}x{r}" for r, c in models[name].input_shapes(756, 1008)),
+    rows = {name: {"inputs": models[name].inputs_label(756, 1008),
                    "model_ms": 1000 * float(np.median(t["model"])), "step_12mp_s": float(np.median(t["step"]))}
             for name, t in times.items()}
     lines = ["# Floor step speed", "", f"medians of {args.repeats}, models alternating; 2-core machine", "",

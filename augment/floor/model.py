@@ -210,6 +210,15 @@ class FloorModel:
                  max(m, round(cols * long / max(rows, cols) / m) * m))
                 for long in (s.input_long_px if longs is None else longs)]
 
+    def inputs_label(self, rows: int, cols: int) -> str:
+        """The input shapes for a photo of ``rows`` x ``cols``, as a benchmark names them:
+        "256x192+320x256+448x320", then the fine sizes' "448x320+576x416 where higher"."""
+        label = "+".join(f"{c}x{r}" for r, c in self.input_shapes(rows, cols))
+        if self.spec.fine_long_px and self.spec.input_size is None:
+            fine = "+".join(f"{c}x{r}" for r, c in self.input_shapes(rows, cols, self.spec.fine_long_px))
+            label += f", {fine} where higher"
+        return label
+
     def floor_probability(self, image: np.ndarray, size_px: tuple[int, int] | None = None) -> np.ndarray:
         """Floor probability float32 in [0, 1], ``(rows, cols)`` of the image or of
         ``size_px = (width, height)`` when given (cheaper than resizing twice): the mean

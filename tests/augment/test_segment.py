@@ -268,6 +268,29 @@ def test_several_input_sizes_average_the_floor_probability(held_out, model):
             ModelSpec(input_long_px=bad)
 
 
+def test_the_fine_sizes_read_the_floor_where_they_see_more(held_out, model):
+    """A spec's fine sizes give a second read, taken wherever it is higher than the
+    averaged sizes' (a size in both runs once)."""
+    sample, _ = held_out[0]
+    at = {long: FloorModel(model.path, spec=dataclasses.replace(model.spec, input_long_px=long, fine_long_px=()))
+          .floor_probability(sample.image) for long in (256, 320, 448, 576)}
+    base, fine = (at[256] + at[320] + at[448]) / 3, (at[448] + at[576]) / 2
+    assert (fine > base + 0.1).any() and (fine < base - 0.1).any()  # each sees floor the other doubts
+    both = FloorModel(model.path, spec=dataclasses.replace(model.spec, input_long_px=[256, 320, 448],
+                                                           fine_long_px=[448, 576]))
+    np.testing.assert_allclose(both.floor_probability(sample.image), np.maximum(base, fine), atol=1e-5)
+    assert model.spec.fine_long_px == (448, 576)  # the shipped model's sidecar
+    none = FloorModel(model.path, spec=dataclasses.replace(model.spec, fine_long_px=[]))
+    assert none.spec.fine_long_px == ()
+    np.testing.assert_allclose(none.floor_probability(sample.image), base, atol=1e-5)
+    # As the benchmarks name them, for a 1008x756 photo (576 * 756 / 1008 = 432: 448 rows).
+    assert model.inputs_label(756, 1008) == "256x192+320x256+448x320, 448x320+576x448 where higher"
+    assert none.inputs_label(756, 1008) == "256x192+320x256+448x320"
+    for bad in (16, [448, "big"], 448.5):
+        with pytest.raises(SegmentationError, match="fine_long_px"):
+            ModelSpec(fine_long_px=bad)
+
+
 @pytest.mark.parametrize("seed", [[985, 22], [986, 17]])
 def test_a_far_strip_of_a_second_floor_is_floor(model, seed):
     """Threshold renders (tuning sets 985, 986) whose second floor is a strip along the far
