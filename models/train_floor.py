@@ -618,7 +618,8 @@ def export(model, out: Path, log, args, n_params, seconds) -> None:
     # The torch weights too (not shipped): to fine-tune or inspect later.
     torch.save(model.state_dict(), out.with_suffix(".pt"))
     sidecar = {
-        "input_long_px": list(RUN_LONG_PX), "fine_long_px": list(FINE_LONG_PX), "multiple_px": 32, "channel_order": "RGB",
+        "input_long_px": list(RUN_LONG_PX), "fine_long_px": list(FINE_LONG_PX), "multiple_px": 32,
+        "channel_order": "RGB",
         "mean": list(MEAN_RGB), "std": list(STD_RGB), "scale": 1 / 255, "floor_class": 1,
         "output": "logits",
         "training": {"arch": args.arch, "data": [str(p) for p in args.data], "epochs_done": len(log),

@@ -210,12 +210,16 @@ class FloorModel:
                  max(m, round(cols * long / max(rows, cols) / m) * m))
                 for long in (s.input_long_px if longs is None else longs)]
 
+    def _fine_longs(self) -> tuple[int, ...]:
+        """The fine sizes read: none for a model of one fixed input size."""
+        return self.spec.fine_long_px if self.spec.input_size is None else ()
+
     def inputs_label(self, rows: int, cols: int) -> str:
         """The input shapes for a photo of ``rows`` x ``cols``, as a benchmark names them:
         "256x192+320x256+448x320", then the fine sizes' "448x320+576x416 where higher"."""
         label = "+".join(f"{c}x{r}" for r, c in self.input_shapes(rows, cols))
-        if self.spec.fine_long_px and self.spec.input_size is None:
-            fine = "+".join(f"{c}x{r}" for r, c in self.input_shapes(rows, cols, self.spec.fine_long_px))
+        if self._fine_longs():
+            fine = "+".join(f"{c}x{r}" for r, c in self.input_shapes(rows, cols, self._fine_longs()))
             label += f", {fine} where higher"
         return label
 
@@ -241,8 +245,8 @@ class FloorModel:
             return np.clip(sum(runs[shape] for shape in shapes) / len(shapes), 0, 1)
 
         p = mean(None)
-        if self.spec.fine_long_px and self.spec.input_size is None:
-            p = np.maximum(p, mean(self.spec.fine_long_px))
+        if self._fine_longs():
+            p = np.maximum(p, mean(self._fine_longs()))
         return np.ascontiguousarray(p)
 
     def _probability(self, image: np.ndarray, in_shape: tuple[int, int], size_px: tuple[int, int]) -> np.ndarray:
