@@ -99,6 +99,9 @@ class StagedSettings:
     # A window in view and the patches not cast by it: it casts them when the line from it to
     # them is this close to the sun's axis (cosine).
     sun_window_alignment: float = 0.5
+    # Heights every window's glass covers (sills up to 1.0 m, heads from 1.4 m): a wall in view
+    # that is plain over them has no window there, whatever the photo cuts off above.
+    window_band_m: tuple[float, float] = (1.0, 1.4)
     light_cell_m: float = 0.04  # the floor's light map: cell size ...
     light_sigma_m: float = 0.3  # ... its blur (planks and tiles average out) ...
     light_gain_range: tuple[float, float] = (0.3, 2.5)  # ... and how far the light there may differ from the median

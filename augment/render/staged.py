@@ -309,6 +309,19 @@ def _window_casts(window, sun: SunOnFloor, settings: StagedSettings) -> float:
     return 0.0
 
 
+def _window_casts_either(window, sun: SunOnFloor, settings: StagedSettings) -> tuple[SunOnFloor, float]:
+    """:func:`_window_casts`, trying both edge families where neither runs along a wall
+    (``sun.along_wall`` false: either may be the sun's): ``sun``, its families swapped
+    when the window casts the patches along the second only, and which way the light
+    travels along its first (0.0: the window does not cast them)."""
+    cast = _window_casts(window, sun, settings)
+    if cast or len(sun.axes_xy) < 2 or sun.along_wall:
+        return sun, cast
+    swapped = dataclasses.replace(sun, axes_xy=sun.axes_xy[::-1])
+    cast = _window_casts(window, swapped, settings)
+    return (swapped, cast) if cast else (sun, 0.0)
+
+
 def _window_sun(window, bright: SunOnFloor, settings: StagedSettings):
     """The sun's direction (3,) through the window in view (:func:`_window_on_wall`) that
     casts the bright floor ``bright`` (:func:`augment.render.sun.bright_floor`, edges too
@@ -340,16 +353,19 @@ def _window_sun(window, bright: SunOnFloor, settings: StagedSettings):
     return np.append(found[0] * math.cos(found[1]), -math.sin(found[1]))
 
 
-def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, lum, wall_lum, small_scale) -> bool:
+def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, lum, wall_lum, small_scale,
+                         band_m=None) -> bool:
     """Whether the photo shows a plain wall where the window casting sun patches at
     ``center_m`` would have to be, were the light coming from ``up_xy``: the first wall
-    that way, between 0.9 and 2 m up, mostly in view and hardly brighter than the walls
-    (``wall_lum``, on the small photo's luminance ``lum``)."""
+    that way, over the heights ``band_m`` (m) every window covers, mostly in view and
+    hardly brighter than the walls (``wall_lum``, on the small photo's luminance ``lum``);
+    ``band_m`` defaults to ``RENDER.staged.window_band_m``."""
     t_m, which = _first_wall(walls, np.array([[up_xy[0], up_xy[1], 0.0]]), center_m)
     if which[0] < 0:
         return False
     foot = np.asarray(center_m) + np.asarray(up_xy) * t_m[0]
-    column = np.column_stack([np.repeat(foot[None], 12, axis=0), np.linspace(0.9, 2.0, 12)])
+    band_m = RENDER.staged.window_band_m if band_m is None else band_m
+    column = np.column_stack([np.repeat(foot[None], 12, axis=0), np.linspace(*band_m, 12)])
     px = np.rint(_project(column, K, pose, dist)[0] * small_scale).astype(int)
     h, w = lum.shape
     inside = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
@@ -488,10 +504,10 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                                                                      floor_polygon, colour=found is None)
     key_rgb = (1.0, 1.0, 1.0)
     if patches is not None:
+        patches, cast = (patches, 0.0) if window is None else _window_casts_either(window, patches, settings)
         axis = np.asarray(patches.axes_xy[0])
         center = np.asarray(patches.center_m)
         from_window = None if window_xy is None else center - window_xy
-        cast = 0.0 if window is None else _window_casts(window, patches, settings)
         if cast:
             sign, way = cast, "window_casts"
         elif not patches.downstream and from_window is not None and abs(axis @ from_window) >= (
@@ -509,7 +525,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                 if edge:
                     sign, way = edge, "nearer_photo_edge"
             plain = [walls is not None and _plain_wall_upstream(center, -s * axis, walls, K, dist, pose, lum_small,
-                                                                wall_lum, small_scale) for s in (sign, -sign)]
+                                                                wall_lum, small_scale, settings.window_band_m)
+                     for s in (sign, -sign)]
             if plain[0] and not plain[1]:
                 sign, way = -sign, "plain_wall_upstream"
         elev = sun_elevation_rad(patches, math.radians(settings.sun_elevation_deg))

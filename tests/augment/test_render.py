@@ -23,7 +23,7 @@ from augment.render.look import CLEAN
 from augment.render.settings import RENDER
 from augment.render.staged import (Lighting, _Caster, _floor_gain, _nearer_edge_upstream, _on_wall_m,
                                    _plain_wall_upstream, _render_scale, _roll_off, _wall_shading, _walls_run_on,
-                                   _window, _window_casts, _window_on_wall, _window_sun,
+                                   _window, _window_casts, _window_casts_either, _window_on_wall, _window_sun,
                                    estimate_lighting, render_staged, wall_segments, write_jpeg)
 from augment.render.sun import SunOnFloor
 from layout.catalog import CATALOG
@@ -722,6 +722,22 @@ def test_the_window_in_view_casts_the_patches_it_lands_on():
     assert casts((1.5, 2.5), (1.63, 2.90)) == 0.0
 
 
+def test_the_window_in_view_tells_which_edge_family_is_the_suns():
+    """The patch the window of :func:`_window_before_camera` casts with the sun 40 deg up
+    straight into the room (x -0.5 to 0.48 m, y 1.63 to 2.90 m), read with two edge
+    families neither along a wall, the strongest across the sun (along x): the window
+    casts it along the second, which becomes the sun's, the light travelling -y. Where the
+    second runs along a wall it is the window's sill, not the sun's: nothing swapped."""
+    window, xs, ys, seen = _window_before_camera()
+    lit = seen & (xs >= -0.5) & (xs <= 0.48) & (ys >= 1.63) & (ys <= 2.90)
+    sun = replace(_sun_on(lit, seen), axes_xy=((1.0, 0.0), (0.0, 1.0)), along_wall=False)
+    assert _window_casts(window, sun, RENDER.staged) == 0.0
+    found, cast = _window_casts_either(window, sun, RENDER.staged)
+    assert found.axes_xy == ((0.0, 1.0), (1.0, 0.0)) and cast == -1.0
+    walled = replace(sun, along_wall=True)
+    assert _window_casts_either(window, walled, RENDER.staged) == (walled, 0.0)
+
+
 def test_the_sun_through_the_window_in_view_is_where_its_light_lands():
     """Bright floor with no edges read, where the window of :func:`_window_before_camera`
     lands with the sun 40 deg up travelling 21 deg off straight into the room: that is the
@@ -760,6 +776,24 @@ def test_a_plain_wall_in_view_where_the_suns_window_would_be():
     assert not _plain_wall_upstream(center, np.array([0.0, -1.0]), walls, K, None, pose, lum, walls_lum, 1.0)
     lum[70:160, 140:180] = 230.0
     assert not _plain_wall_upstream(center, np.array([0.0, 1.0]), walls, K, None, pose, lum, walls_lum, 1.0)
+
+
+def test_a_plain_wall_tells_where_the_photo_cuts_it_off_above_window_height():
+    """The wall of the test above with the principal point on the top row: only what is
+    below the camera's 1.4 m shows (1.0 m up at row 25), so the wall from 1.4 to 2 m is cut
+    off. Every window covers 1.0-1.4 m, so the plain wall there still rules the window out;
+    a pane over that band keeps it."""
+    K = np.array([[250.0, 0, 160], [0, 250.0, 0], [0, 0, 1]])
+    pose = np.eye(4)
+    pose[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
+    pose[:3, 3] = [0.0, 1.4, 0.0]
+    walls = np.array([[[-5.0, 4.0], [5.0, 4.0]]])
+    lum, walls_lum = np.full((240, 320), 120.0), 120.0
+    center, up = np.array([0.0, 2.0]), np.array([0.0, 1.0])
+    assert _plain_wall_upstream(center, up, walls, K, None, pose, lum, walls_lum, 1.0)
+    assert not _plain_wall_upstream(center, up, walls, K, None, pose, lum, walls_lum, 1.0, band_m=(0.9, 2.0))
+    lum[0:40, 140:180] = 230.0
+    assert not _plain_wall_upstream(center, up, walls, K, None, pose, lum, walls_lum, 1.0)
 
 
 def test_a_sun_whose_window_is_out_of_view_comes_from_the_nearer_photo_edge():
