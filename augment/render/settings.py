@@ -107,6 +107,12 @@ class StagedSettings:
     light_gain_range: tuple[float, float] = (0.3, 2.5)  # ... and how far the light there may differ from the median
     render_edge_px: float = 0.55  # a render's edge spread (Gaussian sigma) at one rendered pixel per photo pixel
     highlight_knee: float = 0.8  # linear light above this rolls off toward white, as a camera's tone curve does
+    # The floor mask is right to about a working pixel of its segmentation (400 px a side):
+    # the floor's shadows meet what stands on it along the photo's own edges, found by a
+    # guided filter of the mask this share of the photo's long side wide (colour, eps in 8-bit units squared).
+    matte_radius_share: float = 0.005
+    matte_eps: float = 50.0
+    matte_long_px: int = 1600  # ... worked out at this long side at most (12 MP: 0.4 s a photo at full size)
 
 
 @dataclass

@@ -1337,6 +1337,13 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Ligh
     hit = cam[:2] + rays[floor, :2] * (t_floor[floor] / reach[floor])[:, None]
     floor[floor] = skimage.measure.points_in_poly(hit, floor_m)
     floor = floor.reshape(shape).astype(np.float32)
+    if on_wall.any():
+        # Where neither (what stands in front of a wall and past the outline: a carton), the
+        # wall's gain runs on over a sample or two, fading; and the floor's share is blurred
+        # as much: hard switches would step along the sample grid across the carton.
+        near = cv2.GaussianBlur(wall, (0, 0), 1.0)
+        gain = np.where((wall == 0) & (floor == 0), near * smooth + (1.0 - near), gain).astype(np.float32)
+        floor = cv2.GaussianBlur(floor, (0, 0), 1.0)
     up = np.array([[1.0 / step, 0, 0], [0, 1.0 / step, 0]])
     return tuple(cv2.warpAffine(a, up, (bw, bh), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                                 borderMode=cv2.BORDER_REPLICATE) for a in (gain, floor))
@@ -1550,6 +1557,7 @@ class _Bounded(dict):
 # Per photo: the same mask and camera for every suggestion. Furniture: per item and style,
 # enough for one photo's suggestions; more only grows a batch worker (photos share no piece).
 _OCCLUDERS = _Bounded(4)
+_MATTES = _Bounded(2)
 _FURNITURE = _Bounded(64)
 
 
@@ -1559,6 +1567,20 @@ def _mask_occluders_cached(floor_mask, K, pose, settings):
     if key not in _OCCLUDERS:
         _OCCLUDERS[key] = _mask_occluders(floor_mask, K, pose, settings)
     return _OCCLUDERS[key]
+
+
+def _floor_matte_cached(image, floor_mask, settings):
+    """:func:`floor_matte` of the whole photo, once for all its suggestions: known by its
+    mask and every fourth pixel of it each way (hashing all of a 12 MP photo per render
+    costs 30 ms)."""
+    h, w = floor_mask.shape
+    key = (hashlib.sha1(np.packbits(floor_mask)).hexdigest(),
+           hashlib.sha1(np.ascontiguousarray(image[::4, ::4])).hexdigest(), floor_mask.shape,
+           settings.matte_radius_share, settings.matte_eps, settings.matte_long_px)
+    if key not in _MATTES:
+        _MATTES[key] = floor_matte(image, floor_mask, max(h, w) * settings.matte_radius_share, settings.matte_eps,
+                                   min(1.0, settings.matte_long_px / max(h, w)))
+    return _MATTES[key]
 
 
 def _first_wall(walls_m, rays_floor, cam_xy):
@@ -2067,7 +2089,8 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     t = time.perf_counter()
     full_alpha = np.zeros((h, w), np.float32)
     full_gain = np.ones((h, w), np.float32)
-    floor_roi = floor_mask[y0:y1, x0:x1] if floor_mask is not None else np.ones((1, 1), bool)
+    floor_roi = (_floor_matte_cached(image, floor_mask, settings)[y0:y1, x0:x1] if floor_mask is not None
+                 else np.full((1, 1), 255, np.uint8))
     _composite(image[y0:y1, x0:x1], rgba, low, gain, wall_gain, floor_share, floor_roi, floor_mask is not None,
                out[y0:y1, x0:x1], full_alpha[y0:y1, x0:x1], full_gain[y0:y1, x0:x1])
     lay = _layer(out, full_alpha, full_gain, image) if layer else None
@@ -2109,17 +2132,18 @@ def _composite(photo, rgba, low, gain, wall, share, floor, use_floor, out, alpha
     """One pass over the region: the photo times its shadow gain under what shows of it,
     the premultiplied furniture over it; floor-level furniture (``low``, 0-255) takes the
     shadows too. With ``use_floor``, the floor's gain on floor pixels; on the rest the walls'
-    ``wall``, or the floor's where their ray meets the floor first (its ``share`` of them).
+    ``wall``, or the floor's where their ray meets the floor first (its ``share`` of them);
+    mixed by ``floor``, each pixel's share of floor (:func:`floor_matte`, 0-255).
 
-    photo, out : (h, w, 3) uint8; rgba : (h, w, 4) uint8 premultiplied; low : (h, w)
-    uint8; gain, wall, share : (h, w) float32; floor : (h, w) bool; alpha_out, gain_out : (h, w)
-    float32, written."""
+    photo, out : (h, w, 3) uint8; rgba : (h, w, 4) uint8 premultiplied; low, floor : (h, w)
+    uint8; gain, wall, share : (h, w) float32; alpha_out, gain_out : (h, w) float32, written."""
     h, w = photo.shape[0], photo.shape[1]
     for i in prange(h):
         for j in range(w):
             g = gain[i, j]
-            if use_floor and not floor[i, j]:
-                g = share[i, j] * g + (1.0 - share[i, j]) * wall[i, j]
+            if use_floor:
+                f = floor[i, j] * (1.0 / 255.0)
+                g = f * g + (1.0 - f) * (share[i, j] * g + (1.0 - share[i, j]) * wall[i, j])
             a = rgba[i, j, 3] * (1.0 / 255.0)
             k = g * (1.0 - a)
             fg = 1.0 - low[i, j] * (1.0 / 255.0) * (1.0 - g)
@@ -2128,6 +2152,33 @@ def _composite(photo, rgba, low, gain, wall, share, floor, use_floor, out, alpha
                 out[i, j, ch] = 255 if v >= 255.0 else np.uint8(v)
             alpha_out[i, j] = a
             gain_out[i, j] = g
+
+
+def floor_matte(photo: np.ndarray, floor_mask: np.ndarray, radius_px: float, eps: float,
+                scale: float = 1.0) -> np.ndarray:
+    """Each pixel's share of floor, (h, w) uint8, 0-255: ``floor_mask`` (h, w) bool moved
+    onto the edges of ``photo`` (h, w, 3) uint8 by a guided filter (He et al.)
+    ``radius_px`` wide. A mask segmented at a few hundred pixels a side and enlarged runs a
+    pixel or two off a carton's edge in steps; the floor's shadow would stop along those
+    steps.
+
+    ``eps`` (8-bit units squared): steps of colour well above its square root are edges
+    the matte keeps. With ``scale`` below 1 the filter runs on the photo shrunk by it and
+    its result is enlarged back (a large photo's edges span a few pixels anyway)."""
+    mask = np.asarray(floor_mask, dtype=bool).view(np.uint8)
+    h, w = mask.shape
+    if mask.size == 0:
+        return mask.copy()
+    size = (max(1, round(w * scale)), max(1, round(h * scale)))
+    small = size != (w, h)
+    guide = cv2.resize(photo, size, interpolation=cv2.INTER_AREA) if small else np.ascontiguousarray(photo)
+    # Shrunk as 0-255 bytes: a float copy of a large photo's mask would cost four bytes a pixel.
+    src = (cv2.resize(mask * np.uint8(255), size, interpolation=cv2.INTER_AREA) if small else mask * np.uint8(255))
+    src = src.astype(np.float32) * np.float32(1 / 255)
+    radius = max(1, int(math.ceil(radius_px * size[0] / w)))
+    matte = np.rint(np.clip(cv2.ximgproc.guidedFilter(guide, src, radius, float(eps)), 0.0, 1.0) * 255.0)
+    matte = matte.astype(np.uint8)
+    return cv2.resize(matte, (w, h), interpolation=cv2.INTER_LINEAR) if small else matte
 
 
 def _layer(staged, alpha, gain, photo) -> np.ndarray:

@@ -21,10 +21,10 @@ from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furnitur
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
-from augment.render.staged import (Lighting, _Caster, _floor_gain, _nearer_edge_upstream, _on_wall_m,
+from augment.render.staged import (Lighting, _Caster, _composite, _floor_gain, _nearer_edge_upstream, _on_wall_m,
                                    _plain_wall_upstream, _render_scale, _roll_off, _wall_shading, _walls_run_on,
                                    _window, _window_casts, _window_casts_either, _window_on_wall, _window_sun,
-                                   estimate_lighting, render_staged, wall_segments, write_jpeg)
+                                   estimate_lighting, floor_matte, render_staged, wall_segments, write_jpeg)
 from augment.render.sun import SunOnFloor
 from layout.catalog import CATALOG
 
@@ -449,7 +449,11 @@ def test_a_box_by_a_wall_casts_its_shadow_on_the_wall_where_the_light_would_put_
     away, clear_away = results["away"]
     both = shadowed & clear_away
     assert both.sum() >= 10 and np.all(away[both] > 0.8) and np.all(away[both] < 0.99)
-    assert np.allclose(gain[both], expected * away[both], atol=0.015)
+    # The row at the wall's foot (2 cm up) is a pixel the floor's and the wall's gains share
+    # (the floor matte and the sampled walls blend over a pixel or two): looser there.
+    foot = pts[:, 2] < 0.05
+    assert np.allclose(gain[both & ~foot], expected * away[both & ~foot], atol=0.015)
+    assert np.allclose(gain[both & foot], expected * away[both & foot], atol=0.03)
     lit = clear & clear_away & (inside < -0.3) & (pts[:, 2] > size[2] + 0.3)
     assert lit.sum() >= 10
     # There the occlusion takes its share of the light but the key's.
@@ -473,7 +477,8 @@ def test_a_box_by_a_wall_casts_its_shadow_on_the_wall_where_the_light_would_put_
     light = Lighting((0.8, 0.78, 0.75), tuple(d), 0.5, 0.02, (0.3, 0.25, 0.2), "test")
     staged = render_staged(image, calibration, [item], renderer, assets={"test_box": _box_parts()}, lighting=light,
                            seed=0, floor_mask=mask, floor_polygon=open_far)
-    assert sum(far) == 1 and np.all(staged.gain[px[shadowed, 1], px[shadowed, 0]] == 1.0)
+    past = staged.gain[px[:, 1], px[:, 0]]
+    assert sum(far) == 1 and np.all(past[shadowed & ~foot] == 1.0) and np.all(past[shadowed & foot] > 0.9)
     # A window in the shadow's middle: its pane shows the outside and keeps its light; the
     # wall beside it is shadowed as before.
     across = (pts[:, :2] - wall) @ side
@@ -940,3 +945,56 @@ def test_an_overexposed_table_keeps_its_shading_and_hue(renderer):
     assert np.percentile(bright[:, 0], 90) - np.percentile(bright[:, 0], 10) > 10
     assert np.median(bright[:, 0]) > np.median(levels[1.0][:, 0]) + 80
     assert np.median(bright[:, 0] - bright[:, 2]) > 40
+
+
+def _carton_edge(shape=(240, 320), slope=0.6):
+    """A grey floor (128) below the line y = 40 + slope x and a yellow carton above it,
+    anti-aliased over a pixel; and the floor as a segmentation at a quarter of the size,
+    enlarged (linear, cut at one half), gives it: in steps."""
+    ys, xs = np.mgrid[0:shape[0], 0:shape[1]].astype(np.float64) + 0.5
+    floor = np.clip(ys - (40.0 + slope * xs) + 0.5, 0.0, 1.0)
+    photo = (floor[..., None] * np.array([128.0, 128.0, 128.0]) + (1 - floor[..., None]) * np.array([200.0, 180.0, 60.0]))
+    small = cv2.resize(floor, (shape[1] // 4, shape[0] // 4), interpolation=cv2.INTER_AREA) > 0.5
+    coarse = cv2.resize(small.astype(np.float32), shape[::-1], interpolation=cv2.INTER_LINEAR) > 0.5
+    return np.rint(photo).astype(np.uint8), floor, coarse
+
+
+def test_the_floor_matte_follows_the_photos_edge_not_the_masks_steps():
+    """The mask of :func:`_carton_edge` strays from the carton's edge in steps, 2 px and
+    more; the matte (radius 8 px: two of the segmentation's pixels, as the renderer's
+    settings make it) lies on the edge, its half-way line within 0.25 px of the true one
+    in every column away from the borders; the inputs untouched. Worked out at half the
+    size and enlarged, within 0.5 px."""
+    photo, floor, coarse = _carton_edge()
+    before = (photo.copy(), coarse.copy())
+    matte = floor_matte(photo, coarse, 8.0, 50.0)
+    assert np.array_equal(photo, before[0]) and np.array_equal(coarse, before[1])
+    assert matte.dtype == np.uint8 and matte.shape == coarse.shape and matte.min() == 0 and matte.max() == 255
+
+    def edge_rows(share):  # per column, where the share of floor (0-1, or 0-255) crosses one half, going down
+        rows = np.arange(share.shape[0], dtype=np.float64)
+        share = share / 255.0 if share.dtype == np.uint8 else share
+        return np.array([np.interp(0.5, share[:, c], rows) for c in range(share.shape[1])])
+
+    true = edge_rows(floor)
+    inner = slice(16, 300)
+    assert np.abs(edge_rows(coarse.astype(np.float32)) - true)[inner].max() >= 2.0
+    assert np.abs(edge_rows(matte) - true)[inner].max() <= 0.25
+    half = floor_matte(photo, coarse, 8.0, 50.0, scale=0.5)
+    assert half.shape == coarse.shape
+    assert np.abs(edge_rows(half) - true)[inner].max() <= 0.5
+
+
+def test_the_composite_mixes_the_floors_shadow_and_the_walls_by_the_share_of_floor():
+    """One pixel of photo 200 under no furniture: the floor's gain 0.5, the wall's 0.8,
+    its ray meeting the floor first for a quarter of it; 40 % of it floor (102 of 255).
+    Its gain is 0.4 x 0.5 + 0.6 x (0.25 x 0.5 + 0.75 x 0.8) = 0.635, the photo
+    200 x 0.635 = 127; with no floor mask, the floor's 0.5."""
+    one = lambda v, dtype=np.float32: np.full((1, 1), v, dtype)  # noqa: E731
+    photo = np.full((1, 1, 3), 200, np.uint8)
+    for use_floor, gain in ((True, 0.635), (False, 0.5)):
+        out, alpha, g = np.zeros((1, 1, 3), np.uint8), one(0.0), one(0.0)
+        _composite(photo, np.zeros((1, 1, 4), np.uint8), one(0, np.uint8), one(0.5), one(0.8), one(0.25),
+                   one(102, np.uint8), use_floor, out, alpha, g)
+        assert g[0, 0] == pytest.approx(gain, abs=1e-6)
+        assert out[0, 0].tolist() == [round(200 * gain)] * 3
