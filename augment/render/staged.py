@@ -2175,7 +2175,7 @@ def floor_matte(photo: np.ndarray, floor_mask: np.ndarray, radius_px: float, eps
     # Shrunk as 0-255 bytes: a float copy of a large photo's mask would cost four bytes a pixel.
     src = (cv2.resize(mask * np.uint8(255), size, interpolation=cv2.INTER_AREA) if small else mask * np.uint8(255))
     src = src.astype(np.float32) * np.float32(1 / 255)
-    radius = max(1, int(math.ceil(radius_px * size[0] / w)))
+    radius = max(1, math.ceil(radius_px * size[0] / w))
     matte = np.rint(np.clip(cv2.ximgproc.guidedFilter(guide, src, radius, float(eps)), 0.0, 1.0) * 255.0)
     matte = matte.astype(np.uint8)
     return cv2.resize(matte, (w, h), interpolation=cv2.INTER_LINEAR) if small else matte

@@ -765,17 +765,22 @@ def test_the_sun_through_the_window_in_view_is_where_its_light_lands():
     assert _window_sun(window, _sun_on(from_wall, seen), RENDER.staged) is None
 
 
-def test_a_plain_wall_in_view_where_the_suns_window_would_be():
-    """A level camera 1.4 m up looking along +y at a wall 4 m away (f = 250 px, 320 x 240):
-    patches at (0, 2) lit from +y would need a window on that wall at x = 0, which the
-    photo shows as plain grey wall; once a bright pane is painted there, not; from -y
-    there is no wall to tell."""
-    K = np.array([[250.0, 0, 160], [0, 250.0, 120], [0, 0, 1]])
+def _level_camera_before_a_wall(cy_px=120.0):
+    """A level camera 1.4 m up looking along +y at a plain grey wall 4 m away (f = 250 px,
+    320 x 240, the principal point's row ``cy_px``): K, camera_from_floor, the wall, the
+    photo's luminance and the walls' median light."""
+    K = np.array([[250.0, 0, 160], [0, 250.0, cy_px], [0, 0, 1]])
     pose = np.eye(4)
     pose[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
     pose[:3, 3] = [0.0, 1.4, 0.0]
-    walls = np.array([[[-5.0, 4.0], [5.0, 4.0]]])
-    lum, walls_lum = np.full((240, 320), 120.0), 120.0
+    return K, pose, np.array([[[-5.0, 4.0], [5.0, 4.0]]]), np.full((240, 320), 120.0), 120.0
+
+
+def test_a_plain_wall_in_view_where_the_suns_window_would_be():
+    """The wall of :func:`_level_camera_before_a_wall`: patches at (0, 2) lit from +y would
+    need a window on that wall at x = 0, which the photo shows as plain grey wall; once a
+    bright pane is painted there, not; from -y there is no wall to tell."""
+    K, pose, walls, lum, walls_lum = _level_camera_before_a_wall()
     center = np.array([0.0, 2.0])
     assert _plain_wall_upstream(center, np.array([0.0, 1.0]), walls, K, None, pose, lum, walls_lum, 1.0)
     assert not _plain_wall_upstream(center, np.array([0.0, -1.0]), walls, K, None, pose, lum, walls_lum, 1.0)
@@ -784,16 +789,11 @@ def test_a_plain_wall_in_view_where_the_suns_window_would_be():
 
 
 def test_a_plain_wall_tells_where_the_photo_cuts_it_off_above_window_height():
-    """The wall of the test above with the principal point on the top row: only what is
-    below the camera's 1.4 m shows (1.0 m up at row 25), so the wall from 1.4 to 2 m is cut
-    off. Every window covers 1.0-1.4 m, so the plain wall there still rules the window out;
-    a pane over that band keeps it."""
-    K = np.array([[250.0, 0, 160], [0, 250.0, 0], [0, 0, 1]])
-    pose = np.eye(4)
-    pose[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
-    pose[:3, 3] = [0.0, 1.4, 0.0]
-    walls = np.array([[[-5.0, 4.0], [5.0, 4.0]]])
-    lum, walls_lum = np.full((240, 320), 120.0), 120.0
+    """The wall of :func:`_level_camera_before_a_wall` with the principal point on the top
+    row: only what is below the camera's 1.4 m shows (1.0 m up at row 25), so the wall from
+    1.4 to 2 m is cut off. Every window covers 1.0-1.4 m, so the plain wall there still
+    rules the window out; a pane over that band keeps it."""
+    K, pose, walls, lum, walls_lum = _level_camera_before_a_wall(cy_px=0.0)
     center, up = np.array([0.0, 2.0]), np.array([0.0, 1.0])
     assert _plain_wall_upstream(center, up, walls, K, None, pose, lum, walls_lum, 1.0)
     assert not _plain_wall_upstream(center, up, walls, K, None, pose, lum, walls_lum, 1.0, band_m=(0.9, 2.0))
@@ -990,7 +990,9 @@ def test_the_composite_mixes_the_floors_shadow_and_the_walls_by_the_share_of_flo
     its ray meeting the floor first for a quarter of it; 40 % of it floor (102 of 255).
     Its gain is 0.4 x 0.5 + 0.6 x (0.25 x 0.5 + 0.75 x 0.8) = 0.635, the photo
     200 x 0.635 = 127; with no floor mask, the floor's 0.5."""
-    one = lambda v, dtype=np.float32: np.full((1, 1), v, dtype)  # noqa: E731
+    def one(v, dtype=np.float32):
+        return np.full((1, 1), v, dtype)
+
     photo = np.full((1, 1, 3), 200, np.uint8)
     for use_floor, gain in ((True, 0.635), (False, 0.5)):
         out, alpha, g = np.zeros((1, 1, 3), np.uint8), one(0.0), one(0.0)
