@@ -1290,6 +1290,10 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Ligh
         return cv2.remap(raster, m[..., 0], m[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                          borderValue=outside).ravel()
 
+    floor = t_floor < t_wall
+    hit = cam[:2] + rays[floor, :2] * (t_floor[floor] / reach[floor])[:, None]
+    floor[floor] = skimage.measure.points_in_poly(hit, floor_m)
+    floor = floor.reshape(shape).astype(np.float32)
     gain = np.ones(shape, np.float32)
     if on_wall.any():
         p = cam + rays * (np.where(on_wall, t_wall, 0.0) / reach)[:, None]
@@ -1332,17 +1336,12 @@ def _wall_gain(shading: _FloorShading, casters, walls_m, floor_m, lighting: Ligh
         wall = on_wall.reshape(shape).astype(np.float32)
         sigma = settings.wall_smooth_px / step
         smooth = cv2.GaussianBlur(ratio * wall, (0, 0), sigma) / np.maximum(cv2.GaussianBlur(wall, (0, 0), sigma), 1e-6)
-        gain = np.where(wall > 0, smooth, 1.0).astype(np.float32)
-    floor = t_floor < t_wall
-    hit = cam[:2] + rays[floor, :2] * (t_floor[floor] / reach[floor])[:, None]
-    floor[floor] = skimage.measure.points_in_poly(hit, floor_m)
-    floor = floor.reshape(shape).astype(np.float32)
-    if on_wall.any():
-        # Where neither (what stands in front of a wall and past the outline: a carton), the
-        # wall's gain runs on over a sample or two, fading; and the floor's share is blurred
-        # as much: hard switches would step along the sample grid across the carton.
+        # Where neither wall nor floor inside the outline (what stands in front of a wall: a
+        # carton), the wall's gain runs on over a sample or two, fading, and the floor's share
+        # is blurred as much: hard switches would step along the sample grid across the carton.
         near = cv2.GaussianBlur(wall, (0, 0), 1.0)
-        gain = np.where((wall == 0) & (floor == 0), near * smooth + (1.0 - near), gain).astype(np.float32)
+        neither = near * smooth + (1.0 - near)
+        gain = np.where(wall > 0, smooth, np.where(floor > 0, 1.0, neither)).astype(np.float32)
         floor = cv2.GaussianBlur(floor, (0, 0), 1.0)
     up = np.array([[1.0 / step, 0, 0], [0, 1.0 / step, 0]])
     return tuple(cv2.warpAffine(a, up, (bw, bh), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
