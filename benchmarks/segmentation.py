@@ -10,7 +10,8 @@ photos' licence allows measuring, not copying them).
 
 ``--stress`` renders one of the hard cases of real empty rooms on purpose (:data:`STRESS`):
 a low, strong sun through a window onto the floor in view; a second floor material past a
-threshold; tall light or dark baseboards. Its results go to
+threshold (``far_strip``: that floor a strip along a wall, mostly the far one); tall light
+or dark baseboards. Its results go to
 ``segmentation_STRESS_seedN.{json,md}`` and ``segmentation_STRESS_seedN_worst.png``.
 
 Held-out renders use seed 901 (training used 100-103, validation 900), random phone
@@ -57,6 +58,7 @@ OUT = ROOT / "benchmarks" / "results"
 STRESS = {
     "sun": dict(low_sun=1.0),
     "threshold": dict(two_floors=1.0),
+    "far_strip": dict(two_floors=1.0, far_floor=1.0),
     "baseboards": dict(baseboard_m=(0.06, 0.2), trim_dark=0.5),
 }
 

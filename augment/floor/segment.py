@@ -27,6 +27,7 @@ from .model import FloorModel, check_image, shrink_area, shrink_to, working_scal
 from .settings import FLOOR
 from .skirting import board_clicks, trim_skirting
 from .upright import Upright
+from .wall_foot import reach_wall_foot
 
 # ----------------------------------------------------------------------------- geometry seeds
 
@@ -540,7 +541,8 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
         for x, y in clicks[clicks[:, 2] > 0, :2]:
             cv2.circle(reach, (round(x), round(y)), round(FLOOR.segment.click_reach * max(rows, cols)), 1, -1)
         board_cut = _cut_clicked(mask & ~trimmed, board_marks)
-        mask = trimmed | (mask & (reach > 0))
+        # A far strip dropped whole (a second floor, a band of sun) goes on to the wall's foot.
+        mask = reach_wall_foot(image, trimmed, calibration) | (mask & (reach > 0))
         if board_doubt is not None and reach[board_doubt[1], board_doubt[0]]:
             board_doubt = None
     # After the trim: taken out before, they would leave a skirting board's strip in

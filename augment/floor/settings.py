@@ -1,5 +1,5 @@
 """The floor stage's tuning: one section per module (the floor model, segmentation, the
-skirting trim, the polygon), each setting with its reason.
+skirting trim, the wall's foot, the polygon), each setting with its reason.
 
 Code reads the values at call time (``FLOOR.segment.grabcut_long_px``), so a caller, or a
 test with ``monkeypatch.setattr(FLOOR.segment, "sure_other", 0.03)``, can change one.
@@ -94,6 +94,30 @@ class SkirtingSettings:
 
 
 @dataclass
+class WallFootSettings:
+    """Far strips given back up to the wall's foot (:mod:`augment.floor.wall_foot`); pixels at
+    the skirting trim's working size."""
+
+    reach_m: float = 1.5  # the wall's foot is looked for this far beyond the mask's edge on the floor at most
+    floor_step: float = 15.0  # the floor line: a step of this much colour (RGB distance, 3 rows' means) or more
+    board_step: float = 8.0  # the board's top: this much (a white board on a pale wall differs little)
+    board_m: tuple[float, float] = (0.045, 0.22)  # a board's height upright; a lit bevel on its top is thinner
+    board_spread: float = 0.3  # a board's height differs by this share at most from one end of a wall to the other
+    wall_m: float = 0.15  # the wall is plain this far above the board
+    plain: float = 7.0  # a band is plain when its colour spread (RGB standard deviation) is below this
+    sharpness: float = 0.6  # the board's top step holds this share of the change from board to wall ...
+    noise_factor: float = 3.0  # ... and is this many times the wall's median step: not the wall's noise or shading
+    line_px: float = 1.5  # a column's floor line within this of a line is on it
+    line_trials: int = 400  # RANSAC's tries per line
+    most_lines: int = 8  # lines looked for: a wall each, and the threshold's edges
+    lined_up: float = 0.6  # this share of a line's columns have their boards' tops on one line too
+    min_width_share: float = 0.1  # a strip is given back along this share of the photo's width or more
+    gap_px: int = 48  # columns that saw a line, this far apart or nearer, are one stretch of wall
+    strip_m: tuple[float, float] = (0.05, 0.35)  # the strip as tall as this upright (taller: a thing before the wall)
+    clash_px: float = 4.0  # a foot or board beside the strip farther off its line than this: a thing stands there
+
+
+@dataclass
 class PolygonSettings:
     """The floor polygon (:mod:`augment.floor.polygon`)."""
 
@@ -114,6 +138,7 @@ class FloorSettings:
     model: ModelSettings = field(default_factory=ModelSettings)
     segment: SegmentSettings = field(default_factory=SegmentSettings)
     skirting: SkirtingSettings = field(default_factory=SkirtingSettings)
+    wall_foot: WallFootSettings = field(default_factory=WallFootSettings)
     polygon: PolygonSettings = field(default_factory=PolygonSettings)
 
 

@@ -82,7 +82,7 @@ GAP_MODEL = MODELS_DIR / "skirting_gap.onnx"
 DEPTH_MODEL = MODELS_DIR / "skirting_depth.onnx"
 
 
-def _wall_columns(mask: np.ndarray, calibration):
+def wall_columns(mask: np.ndarray, calibration):
     """Columns whose top floor pixel meets something above it (not the image's top
     edge), that pixel's row, and how many pixels one meter upright there spans; only
     columns where the board's search (``FLOOR.skirting.search_m`` upright) fits in the
@@ -92,7 +92,7 @@ def _wall_columns(mask: np.ndarray, calibration):
     rows = top[cols]
     if len(cols) == 0:
         return cols, rows, np.zeros(0)
-    px_per_m = _px_per_m(calibration, cols, rows)
+    px_per_m = px_per_m_upright(calibration, cols, rows)
     # Where the floor's pose puts an upright meter beyond the photo's height (or nowhere:
     # a pixel on the horizon, or a "floor" that is a board held up at the camera), no
     # board shows; each column's search would take a slice of that many rows.
@@ -100,7 +100,7 @@ def _wall_columns(mask: np.ndarray, calibration):
     return cols[fits], rows[fits], px_per_m[fits]
 
 
-def _px_per_m(calibration, cols, rows) -> np.ndarray:
+def px_per_m_upright(calibration, cols, rows) -> np.ndarray:
     """How many pixels one meter upright spans, standing on the floor at each pixel."""
     foot = calibration.floor_from_pixels(np.column_stack([cols, rows]).astype(np.float64))
     head = calibration.pixels_from_floor(np.column_stack([foot, np.full(len(foot), FLOOR.skirting.search_m)]))
@@ -275,7 +275,7 @@ def board_profiles(image: np.ndarray, mask: np.ndarray, cols, rows, px_per_m):
         The floor mask at that size.
     cols, rows, px_per_m : (k,) arrays
         The wall columns, their mask-edge rows and pixels per upright meter (from
-        ``_wall_columns``).
+        ``wall_columns``).
 
     Returns
     -------
@@ -456,7 +456,7 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
     size = (round(cols_px * scale), round(rows_px * scale))
     small_mask = cv2.resize(mask.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 if scale < 1 else mask
     small_cal = calibration.scaled(scale)
-    cols, rows, px_per_m = _wall_columns(small_mask, small_cal)
+    cols, rows, px_per_m = wall_columns(small_mask, small_cal)
     if len(cols) == 0:
         return None
     # Only the band of rows the searches and the profiles look at is needed at the working
@@ -653,7 +653,7 @@ def trim_skirting(image: np.ndarray, mask: np.ndarray, calibration,
     # The height to report is measured where the board stands: the mask's top is the
     # board's top, which lies on the floor beyond the wall, where a meter looks shorter.
     cut_cols = depth_px > 0
-    at_foot = _px_per_m(small_cal, cols[cut_cols], rows[cut_cols] + depth_px[cut_cols])
+    at_foot = px_per_m_upright(small_cal, cols[cut_cols], rows[cut_cols] + depth_px[cut_cols])
     return mask & (cut == 0), float(np.median(depth_px[cut_cols] / at_foot)), doubt_px
 
 

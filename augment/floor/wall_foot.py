@@ -1,0 +1,341 @@
+"""The floor reaches the wall's foot: a far strip the mask dropped, given back.
+
+A second floor past a threshold near the far wall (a strip of carpet beyond planks), or a
+band of sun along it, is often dropped whole by the floor model and GrabCut: the mask's
+edge is the threshold, and the wall seems to stand there. The photo says otherwise where
+a skirting board stands on the wall: the floor ends at the board's lower edge. A board
+shows in a column as a step from the floor to a band of one colour 4.5-22 cm tall
+(upright, through the calibration), ending in a sharp step to a plain wall.
+
+:func:`reach_wall_foot` looks up each column from the mask's edge for the lowest such
+floor line. Where it is the mask's edge itself, the floor already ends at the wall, and
+that column tells where the wall's foot runs. Higher up, a single column can be fooled
+(a carton's lid looks like a board), so a strip is only given back along a straight line
+that many columns agree on, whose boards' tops line up as well, over a tenth of the
+photo's width at least, where the strip is at most a third of a meter tall as seen
+upright (taller is a thing standing in front of the wall), and where the wall's foot
+and board seen beside it, at the mask's edge, run on along the same lines.
+
+The thresholds and sizes are :data:`augment.floor.settings.FLOOR`'s ``wall_foot`` section.
+"""
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from skimage.measure import LineModelND, ransac
+
+from .model import shrink_area
+from .settings import FLOOR
+from .skirting import px_per_m_upright, wall_columns
+
+CANDIDATES = 4  # floor lines kept per column, lowest first
+K_STEP_PX = 4  # pixels per upright meter are worked out every this many rows and held between
+
+
+class _Sums:
+    """Running sums down each wall column of the band, (k, rows + 1, 3): any run of rows'
+    mean colour and colour spread in a few operations, for many runs at once."""
+
+    def __init__(self, profiles: np.ndarray):
+        pad = np.zeros((profiles.shape[0], 1, 3), profiles.dtype)
+        self.sums = np.concatenate([pad, np.cumsum(profiles, axis=1)], axis=1)
+        self.squares = np.concatenate([pad, np.cumsum(profiles * profiles, axis=1)], axis=1)
+
+    def mean(self, j, a, b) -> np.ndarray:
+        """(..., 3) mean colour of rows ``a`` to ``b`` (exclusive) of columns ``j``."""
+        return (self.sums[j, b] - self.sums[j, a]) / np.maximum(b - a, 1)[..., None]
+
+    def spread(self, j, a, b) -> np.ndarray:
+        """(...) colour spread (norm of the channels' standard deviations) of those rows."""
+        n = np.maximum(b - a, 1)[..., None]
+        m = (self.sums[j, b] - self.sums[j, a]) / n
+        return np.sqrt(np.maximum((self.squares[j, b] - self.squares[j, a]) / n - m * m, 0).sum(axis=-1))
+
+
+def _floor_lines(band: np.ndarray, y0: int, cols, rows, reach, px_per_m) -> tuple[np.ndarray, np.ndarray]:
+    """Per column ``cols[j]``, from ``rows[j] + 3`` up to ``rows[j] - reach[j]``, the rows
+    (lowest first, ``CANDIDATES`` at most) where the floor ends at a board, and the board's
+    top row each, (k, CANDIDATES), -1 past the last. A line within three rows of the mask's
+    edge is the only one kept (the floor ends there). ``band``: the photo's rows from ``y0``,
+    (n, width, 3) float; ``px_per_m[j, i]``: pixels per upright meter ``K_STEP_PX * i`` rows
+    above the edge."""
+    fw = FLOOR.wall_foot
+    k, n = len(cols), band.shape[0]
+    # float32 sums: a column's squares run to about 4e7, each off by a few units, which
+    # moves a spread of 7 over 20 rows by a few hundredths.
+    profiles = np.ascontiguousarray(band[:, cols].transpose(1, 0, 2), np.float32)
+    sums = _Sums(profiles)
+    # step[j, y]: between the three rows' mean colours from y down and the three above.
+    step = np.zeros((k, n))
+    if n >= 6:
+        below = (sums.sums[:, 6:n] - sums.sums[:, 3:n - 3]) / 3
+        above = (sums.sums[:, 3:n - 3] - sums.sums[:, :n - 6]) / 3
+        step[:, 3:n - 3] = np.linalg.norm(below - above, axis=-1)
+    steps = np.concatenate([np.zeros((k, 1)), np.cumsum(step, axis=1)], axis=1)
+    padded = np.pad(step, ((0, 0), (2, 2)))
+    peak2 = np.all([step >= padded[:, i:i + n] for i in (0, 1, 3, 4)], axis=0)
+    peak1 = (step >= padded[:, 1:n + 1]) & (step >= padded[:, 3:n + 3])
+    edge = (rows - y0).astype(np.int64)
+
+    # The floor line: a step of floor_step or more, the strongest two rows either side.
+    y = np.arange(n)[None]
+    up = edge[:, None] - y
+    j, r = np.nonzero((step >= fw.floor_step) & peak2 & (up >= -3) & (up <= reach[:, None]) & (y >= 5) & (y + 5 <= n))
+    up = edge[j] - r
+    p = px_per_m[j, np.maximum(up, 0) // K_STEP_PX]
+    lo = np.maximum(5, (fw.board_m[0] * p).astype(np.int64))
+    hi = (fw.board_m[1] * p).astype(np.int64) + 1
+    wall = np.maximum(6, (fw.wall_m * p).astype(np.int64))
+    fits = r - hi - wall - 3 >= 0
+    j, r, up, lo, hi, wall = j[fits], r[fits], up[fits], lo[fits], hi[fits], wall[fits]
+
+    # The board's top: the highest sharp step below a plain wall, out of the wall's noise.
+    t = (r - hi)[:, None] + np.arange(max(int((hi - lo).max(initial=0)) + 1, 1))[None]
+    jt, wt = j[:, None], wall[:, None]
+    e = step[jt, t]
+    good = (t <= (r - lo)[:, None]) & (e >= fw.board_step) & peak1[jt, t]
+    good &= e >= fw.noise_factor * (steps[jt, t - 3] - steps[jt, t - wt]) / (wt - 3)
+    a, b = np.nonzero(good)  # the dearest test, on what passed the others
+    good[a, b] = sums.spread(j[a], t[a, b] - wall[a], t[a, b] - 1) <= fw.plain
+    found = good.any(axis=1)
+    top = t[np.arange(len(t)), np.argmax(good, axis=1)]
+    j, r, up, wall, top = j[found], r[found], up[found], wall[found], top[found]
+
+    # A plain board, of another colour than the wall above it, whose top step is sharp; a
+    # board at the mask's edge may be shaded along its height (a moulded one).
+    at_edge = up <= 3
+    keep = sums.spread(j, top + 1, r - 1) <= np.where(at_edge, 1.5 * fw.plain, fw.plain)
+    board, wall_colour = sums.mean(j, top + 1, r - 1), sums.mean(j, top - wall, top - 1)
+    contrast = np.linalg.norm(board - wall_colour, axis=-1)
+    keep &= (contrast >= fw.board_step) & (step[j, top] >= fw.sharpness * contrast)
+    # The strip given back is not more of the wall above the board.
+    strip = edge[j] - 1 - (r + 2) >= 3
+    keep &= ~strip | (np.linalg.norm(sums.mean(j, r + 2, edge[j] - 1) - wall_colour, axis=-1) >= fw.floor_step)
+    j, r, up, top, at_edge = j[keep], r[keep], up[keep], top[keep], at_edge[keep]
+
+    # Lowest first per column; a line at the edge ends the column's search.
+    order = np.lexsort((up, j))
+    j, r, up, top, at_edge = j[order], r[order], up[order], top[order], at_edge[order]
+    first = np.searchsorted(j, j)
+    rank = np.arange(len(j)) - first
+    keep = (rank < CANDIDATES) & ~at_edge[first] | (rank == 0)
+    lines = np.full((k, CANDIDATES), -1, np.int64)
+    tops = np.full_like(lines, -1)
+    lines[j[keep], rank[keep]] = r[keep] + y0
+    tops[j[keep], rank[keep]] = top[keep] + y0
+    return lines, tops
+
+
+def _straight_lines(x: np.ndarray, y: np.ndarray, least: int) -> list[tuple[float, float, np.ndarray]]:
+    """Lines ``y = slope * x + intercept`` through ``least`` or more of the points, one
+    after another (RANSAC): (slope, intercept, indices of its points)."""
+    fw = FLOOR.wall_foot
+    left = np.arange(len(x))
+    found = []
+    rng = np.random.default_rng(0)
+    while len(left) >= least and len(found) < fw.most_lines:
+        points = np.column_stack([x[left], y[left]])
+        if np.ptp(points[:, 0]) == 0:
+            break
+        _, inliers = ransac(points, LineModelND, min_samples=2, residual_threshold=fw.line_px,
+                            max_trials=fw.line_trials, rng=rng)
+        if inliers is None or inliers.sum() < least or np.ptp(points[inliers, 0]) == 0:
+            break
+        slope, intercept = np.polyfit(points[inliers, 0], points[inliers, 1], 1)
+        on = np.abs(points[:, 1] - (slope * points[:, 0] + intercept)) <= fw.line_px
+        found.append((float(slope), float(intercept), left[on]))
+        left = left[~on]
+    return found
+
+
+def _runs(index: np.ndarray, cols: np.ndarray, least: int) -> list[np.ndarray]:
+    """``index`` (into ``cols``, ascending) in runs whose gaps are at most
+    ``FLOOR.wall_foot.gap_px`` columns, of ``least`` columns or more."""
+    if len(index) == 0:
+        return []
+    breaks = np.flatnonzero(np.diff(cols[index]) > FLOOR.wall_foot.gap_px) + 1
+    return [run for run in np.split(index, breaks) if len(run) >= least]
+
+
+def _lined_up(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """(n,) bool: the points on the line most of them are on."""
+    slope, intercept = np.polyfit(x, y, 1)
+    on = np.abs(y - (slope * x + intercept)) <= FLOOR.wall_foot.line_px
+    if on.mean() < FLOOR.wall_foot.lined_up and on.sum() > 2:
+        slope, intercept = np.polyfit(x[on], y[on], 1)
+        on = np.abs(y - (slope * x + intercept)) <= FLOOR.wall_foot.line_px
+    return on
+
+
+def _at(line: tuple[float, float], x) -> np.ndarray:
+    return line[0] * np.asarray(x, np.float64) + line[1]
+
+
+def reach_wall_foot(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndarray:
+    """Give the floor mask back its far strips, up to the wall's foot where a board marks it.
+
+    Parameters
+    ----------
+    image : (rows, cols, 3) uint8
+        The photo. Not modified.
+    mask : (rows, cols) bool
+        Floor mask at the photo's size, its boards already trimmed. Not modified.
+    calibration : Calibration
+        The photo's calibration.
+
+    Returns
+    -------
+    mask : (rows, cols) bool
+        The mask with the strips between its edge and the wall's foot added, or the same
+        values where the photo shows none.
+    """
+    fw = FLOOR.wall_foot
+    rows_px, cols_px = mask.shape
+    scale = min(1.0, FLOOR.skirting.work_long_px / max(rows_px, cols_px))
+    size = (round(cols_px * scale), round(rows_px * scale))
+    small_mask = cv2.resize(np.ascontiguousarray(mask).view(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 if scale < 1 else mask
+    small_cal = calibration.scaled(scale)
+    cols, rows, _ = wall_columns(small_mask, small_cal)
+    least = max(FLOOR.skirting.min_wall_columns, int(fw.min_width_share * size[0]))
+    if len(cols) < least:
+        return mask.copy()
+    reach, px_per_m = _search_window(small_cal, cols, rows)
+    band, y0 = _band_at(image, size, scale, cols, rows, reach, px_per_m)
+    lines, tops = _floor_lines(band, y0, cols, rows, reach, px_per_m)
+
+    at_edge = (lines >= 0) & (rows[:, None] - lines <= 3)
+    if ((lines >= 0) & ~at_edge).any(axis=1).sum() < least:
+        return mask.copy()  # no stretch of wall shows its foot above the mask's edge
+    seen = _feet_seen(small_cal, cols, rows, at_edge, tops)
+    lines[at_edge] = -1
+    top_row = _foot_rows(small_cal, cols, rows, lines, tops, px_per_m, seen, least)
+    add = np.zeros(small_mask.shape, np.uint8)
+    for col, row, top in zip(cols, rows, top_row):
+        if np.isfinite(top) and top < row:
+            add[max(0, round(float(top))):row, col] = 1
+    if not add.any():
+        return mask.copy()
+    if scale < 1.0:
+        add = cv2.resize(add, (cols_px, rows_px), interpolation=cv2.INTER_NEAREST)
+    return mask | (add > 0)
+
+
+def _feet_seen(calibration, cols, rows, at_edge, tops) -> list:
+    """The walls' feet where the floor already ends at a board (``at_edge`` (k, n) bool:
+    the columns' floor lines at the mask's edge): (foot line, board top line, first and
+    last column) per stretch of wall whose boards' tops run along the foot."""
+    fw = FLOOR.wall_foot
+    least = FLOOR.skirting.min_wall_columns
+    seen = []
+    edge_cols = np.flatnonzero(at_edge.any(axis=1))
+    edge_tops = np.where(at_edge, tops, -1).max(axis=1).astype(np.float64)
+    for slope, intercept, on in _straight_lines(cols[edge_cols].astype(np.float64),
+                                                rows[edge_cols].astype(np.float64), least):
+        for run in _runs(edge_cols[on], cols, least):
+            x = cols[run].astype(np.float64)
+            lined = _lined_up(x, edge_tops[run])
+            if lined.mean() < fw.lined_up:
+                continue  # tops all over: no board
+            board = tuple(np.polyfit(x[lined], edge_tops[run][lined], 1))
+            if _a_board(calibration, (slope, intercept), board, x[[0, -1]]):
+                seen.append(((slope, intercept), board, cols[run[0]], cols[run[-1]]))
+    return seen
+
+
+def _foot_rows(calibration, cols, rows, lines, tops, px_per_m, seen, least) -> np.ndarray:
+    """(k,) the row the floor reaches in each column (inf: its edge stays): along straight
+    feet that ``least`` columns or more found above the mask's edge (``lines``, ``tops``:
+    from :func:`_floor_lines`), with their boards' tops on a line too, a board's height
+    above, a strip of a strip's height below (``FLOOR.wall_foot.strip_m``), and no foot or
+    board ``seen`` beside them running elsewhere (:func:`_clashes`)."""
+    fw = FLOOR.wall_foot
+    j, n = np.nonzero(lines >= 0)
+    x, y, board_y = cols[j].astype(np.float64), lines[j, n].astype(np.float64), tops[j, n].astype(np.float64)
+    top_row = np.full(len(cols), np.inf)
+    for slope, intercept, on in _straight_lines(x, y, least):
+        lined = _lined_up(x[on], board_y[on])
+        if lined.mean() < fw.lined_up:
+            continue
+        foot = (slope, intercept)
+        board = tuple(np.polyfit(x[on][lined], board_y[on][lined], 1))
+        for run in _runs(np.unique(j[on[lined]]), cols, least):
+            strip_m = np.median((rows[run] - _at(foot, cols[run])) / px_per_m[run, 0])
+            if (not fw.strip_m[0] <= strip_m <= fw.strip_m[1]
+                    or not _a_board(calibration, foot, board, cols[run[[0, -1]]].astype(np.float64))
+                    or _clashes(foot, board, cols[run[0]], cols[run[-1]], seen)):
+                continue
+            span = np.flatnonzero((cols >= cols[run[0]]) & (cols <= cols[run[-1]]))
+            line = _at(foot, cols[span])
+            # Between the columns that saw it too, where the strip is no taller than one may be.
+            keep = rows[span] - line <= fw.strip_m[1] * px_per_m[span, 0]
+            top_row[span[keep]] = np.minimum(top_row[span[keep]], line[keep])
+    return top_row
+
+
+def _a_board(calibration, foot, board, x: np.ndarray) -> bool:
+    """Whether the line ``board`` stands over the line ``foot`` as a board's top does, at
+    columns ``x``: one board's height (``FLOOR.wall_foot.board_m``) above it at each,
+    upright through ``calibration``. A top line at another slope is another wall's board."""
+    foot_y = _at(foot, x)
+    tall_m = (foot_y - _at(board, x)) / px_per_m_upright(calibration, x, foot_y)
+    lo, hi = FLOOR.wall_foot.board_m
+    return bool(np.all((tall_m >= 0.8 * lo) & (tall_m <= 1.2 * hi))
+                and np.ptp(tall_m) <= FLOOR.wall_foot.board_spread * np.max(tall_m))
+
+
+def _clashes(foot, board, lo: int, hi: int, seen) -> bool:
+    """Whether a wall's foot or board seen at the mask's edge near columns ``lo``-``hi``
+    runs elsewhere than ``foot`` and ``board``, where the two meet: something stands before
+    the wall there (a carton), or the line is another wall's."""
+    near, off = FLOOR.wall_foot.gap_px, FLOOR.wall_foot.clash_px
+    for seen_foot, seen_board, a, b in seen:
+        if b < lo - near or a > hi + near:
+            continue
+        ends = np.array([np.clip(a, lo, hi), np.clip(b, lo, hi), np.clip(lo, a, b), np.clip(hi, a, b)], np.float64)
+        if np.abs(_at(seen_board, ends) - _at(foot, ends)).max() <= off:
+            continue  # what stood on the mask's edge there like a board is the strip itself, up to this foot
+        if np.abs(_at(seen_foot, ends) - _at(foot, ends)).max() > off or np.abs(
+                _at(seen_board, ends) - _at(board, ends)).max() > off:
+            return True
+    return False
+
+
+def _band_at(image: np.ndarray, size: tuple[int, int], scale: float, cols, rows, reach,
+             px_per_m) -> tuple[np.ndarray, int]:
+    """The rows of the photo the search reads, at the working ``size`` as float32, each
+    pixel the mean of five along its row (a wall's foot is nearly level: the column reads
+    through the noise), and the first row's index (a 12 MP photo is shrunk a band, not
+    whole)."""
+    fw = FLOOR.wall_foot
+    reads_px = np.ceil((fw.board_m[1] + fw.wall_m) * px_per_m.max(axis=1)).astype(int)
+    y0 = max(0, int((rows - reach - reads_px).min()) - 12)
+    y1 = min(size[1], int(rows.max()) + 12)
+    if scale < 1:
+        band = shrink_area(image[int(y0 / scale):min(image.shape[0], int(np.ceil(y1 / scale)) + 1)], (size[0], y1 - y0))
+    else:
+        band = image[y0:y1]
+    return cv2.blur(band.astype(np.float32), (5, 1)), y0
+
+
+def _search_window(calibration, cols: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per column, how many rows above the mask's edge the floor is looked for (below the
+    horizon, where the lens model reaches, ``FLOOR.wall_foot.reach_m`` beyond the edge on
+    the floor at most), and pixels per upright meter every ``K_STEP_PX`` rows up from the
+    edge, (k, m)."""
+    steps = np.arange(0, int(rows.max()) + K_STEP_PX, K_STEP_PX)
+    r = rows[:, None] - steps[None]
+    c = np.broadcast_to(cols[:, None], r.shape)
+    a, b, h = calibration.horizon
+    inside = (r >= 0) & (a * c + b * r + h > 2.0)
+    inside[inside] = calibration.lens_maps(np.column_stack([c[inside], r[inside]]))
+    points = np.column_stack([c[inside], r[inside]]).astype(np.float64)
+    camera = np.linalg.inv(calibration.camera_from_floor)[:2, 3]
+    distance = np.full(r.shape, np.inf)
+    distance[inside] = np.hypot(*(calibration.floor_from_pixels(points) - camera).T)
+    within = inside & (distance - distance[:, :1] <= FLOOR.wall_foot.reach_m)
+    # The search stops at the first row out of reach.
+    last = np.where(within.all(axis=1), within.shape[1], np.argmin(within, axis=1)) - 1
+    reach = np.maximum(last, 0) * K_STEP_PX
+    px_per_m = np.ones(r.shape)
+    px_per_m[within] = px_per_m_upright(calibration, c[within], r[within])
+    return reach.astype(np.int64), px_per_m
