@@ -192,19 +192,27 @@ def test_mask_already_at_the_floor_line_is_left_alone(depth_m, factor):
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
 
 
-@pytest.mark.parametrize("depth_m, rgb", [(0.3, (128, 120, 112)), (0.5, (90, 90, 95)), (0.5, (170, 160, 150))])
-def test_a_second_floors_strip_below_a_board_is_not_cut(monkeypatch, depth_m, rgb):
-    """Concrete or tiles along the wall past a threshold, the mask at the floor line under
-    a white 10 cm board: the strip ends in a sharp step toward the camera like a board,
-    10-18 cm tall as seen, and without the board above it was cut (most of the strip);
-    with a board standing on its edge it is floor, left whole."""
-    image, truth, _, calibration = _room(0.10)
+def _second_floor_strip(depth_m: float, rgb, board_m: float = 0.10, yaw_deg: float = 0.0):
+    """:func:`_room` with the floor's last ``depth_m`` before the wall a second floor of
+    colour ``rgb`` (concrete or carpet past a threshold). Returns the photo, the true
+    floor, the strip and the calibration."""
+    image, truth, _, calibration = _room(board_m, yaw_deg=yaw_deg)
     w, h = SIZE
     u, v = np.meshgrid(np.arange(w), np.arange(h))
     foot = calibration.floor_from_pixels(np.column_stack([u.ravel(), v.ravel()]).astype(float))
     strip = truth & (WALL_Y_M - foot[:, 1].reshape(h, w) < depth_m)
     noise = np.random.default_rng(1).normal(0, 3, (strip.sum(), 3))
     image[strip] = np.clip(np.array(rgb) + noise, 0, 255).astype(np.uint8)
+    return image, truth, strip, calibration
+
+
+@pytest.mark.parametrize("depth_m, rgb", [(0.3, (128, 120, 112)), (0.5, (90, 90, 95)), (0.5, (170, 160, 150))])
+def test_a_second_floors_strip_below_a_board_is_not_cut(monkeypatch, depth_m, rgb):
+    """Concrete or tiles along the wall past a threshold, the mask at the floor line under
+    a white 10 cm board: the strip ends in a sharp step toward the camera like a board,
+    10-18 cm tall as seen, and without the board above it was cut (most of the strip);
+    with a board standing on its edge it is floor, left whole."""
+    image, truth, strip, calibration = _second_floor_strip(depth_m, rgb)
     trimmed, height_m, _ = trim_skirting(image, truth, calibration)
     assert height_m is None
     np.testing.assert_array_equal(trimmed, truth)

@@ -6,21 +6,14 @@ import pytest
 
 from augment.floor.settings import FLOOR
 from augment.floor.wall_foot import _clashes, reach_wall_foot
-from tests.augment.test_skirting import SIZE, WALL_Y_M, _room
+from tests.augment.test_skirting import _room, _second_floor_strip
 
 
 def _far_strip(depth_m: float, rgb, board_m: float = 0.10, yaw_deg: float = 0.0):
-    """The room of the skirting tests with the floor's last ``depth_m`` before the wall a
-    second floor of colour ``rgb`` (carpet past a threshold); the mask stops at the
-    threshold, as the floor model and GrabCut leave it. Returns the photo, the true floor,
-    the mask, the strip and the calibration."""
-    image, truth, _, calibration = _room(board_m, yaw_deg=yaw_deg)
-    w, h = SIZE
-    u, v = np.meshgrid(np.arange(w), np.arange(h))
-    foot = calibration.floor_from_pixels(np.column_stack([u.ravel(), v.ravel()]).astype(float))
-    strip = truth & (WALL_Y_M - foot[:, 1].reshape(h, w) < depth_m)
-    noise = np.random.default_rng(1).normal(0, 3, (strip.sum(), 3))
-    image[strip] = np.clip(np.array(rgb) + noise, 0, 255).astype(np.uint8)
+    """A second floor's strip before the wall (:func:`_second_floor_strip`), the mask
+    stopping at the threshold, as the floor model and GrabCut leave it. Returns the photo,
+    the true floor, the mask, the strip and the calibration."""
+    image, truth, strip, calibration = _second_floor_strip(depth_m, rgb, board_m, yaw_deg)
     return image, truth, truth & ~strip, strip, calibration
 
 
