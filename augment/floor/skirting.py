@@ -444,6 +444,18 @@ def _extended(mask: np.ndarray, view, profiles) -> np.ndarray:
     return mask | (add > 0)
 
 
+def working_mask(mask: np.ndarray, calibration):
+    """The mask and calibration at the trim's working size (``FLOOR.skirting.work_long_px``
+    long at most), with the wall columns: (scale, mask, calibration, cols, rows, px_per_m)
+    (:func:`wall_columns`)."""
+    rows_px, cols_px = mask.shape
+    scale = min(1.0, FLOOR.skirting.work_long_px / max(rows_px, cols_px))
+    size = (round(cols_px * scale), round(rows_px * scale))
+    small_mask = cv2.resize(mask.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 if scale < 1 else mask
+    small_cal = calibration.scaled(scale)
+    return (scale, small_mask, small_cal, *wall_columns(small_mask, small_cal))
+
+
 def working_view(image: np.ndarray, mask: np.ndarray, calibration):
     """The photo, mask and calibration at the trim's working size, with the wall columns.
 
@@ -451,14 +463,11 @@ def working_view(image: np.ndarray, mask: np.ndarray, calibration):
     filled only in the band of rows the search looks at), mask, calibration, cols, rows,
     px_per_m).
     """
-    rows_px, cols_px = mask.shape
-    scale = min(1.0, FLOOR.skirting.work_long_px / max(rows_px, cols_px))
-    size = (round(cols_px * scale), round(rows_px * scale))
-    small_mask = cv2.resize(mask.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 if scale < 1 else mask
-    small_cal = calibration.scaled(scale)
-    cols, rows, px_per_m = wall_columns(small_mask, small_cal)
+    rows_px = mask.shape[0]
+    scale, small_mask, small_cal, cols, rows, px_per_m = working_mask(mask, calibration)
     if len(cols) == 0:
         return None
+    size = small_mask.shape[::-1]
     # Only the band of rows the searches and the profiles look at is needed at the working
     # size; a profile cut short reads black there, which the models would take for shade.
     sk = FLOOR.skirting

@@ -26,7 +26,7 @@ from skimage.measure import LineModelND, ransac
 
 from .model import shrink_area
 from .settings import FLOOR
-from .skirting import px_per_m_upright, wall_columns
+from .skirting import px_per_m_upright, working_mask
 
 CANDIDATES = 4  # floor lines kept per column, lowest first
 K_STEP_PX = 4  # pixels per upright meter are worked out every this many rows and held between
@@ -191,11 +191,8 @@ def reach_wall_foot(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndar
     """
     fw = FLOOR.wall_foot
     rows_px, cols_px = mask.shape
-    scale = min(1.0, FLOOR.skirting.work_long_px / max(rows_px, cols_px))
-    size = (round(cols_px * scale), round(rows_px * scale))
-    small_mask = cv2.resize(np.ascontiguousarray(mask).view(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0 if scale < 1 else mask
-    small_cal = calibration.scaled(scale)
-    cols, rows, _ = wall_columns(small_mask, small_cal)
+    scale, small_mask, small_cal, cols, rows, _ = working_mask(mask, calibration)
+    size = small_mask.shape[::-1]
     least = max(FLOOR.skirting.min_wall_columns, int(fw.min_width_share * size[0]))
     if len(cols) < least:
         return mask.copy()
