@@ -201,20 +201,21 @@ def reach_wall_foot(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndar
     lines, tops = _floor_lines(band, y0, cols, rows, reach, px_per_m)
 
     at_edge = (lines >= 0) & (rows[:, None] - lines <= 3)
-    if ((lines >= 0) & ~at_edge).any(axis=1).sum() < least:
-        return mask.copy()  # no stretch of wall shows its foot above the mask's edge
     seen = _feet_seen(small_cal, cols, rows, at_edge, tops)
+    change = np.zeros(small_mask.shape, np.int8)  # 1: floor given back, -1: taken out
     lines[at_edge] = -1
-    top_row = _foot_rows(small_cal, cols, rows, lines, tops, px_per_m, seen, least)
-    add = np.zeros(small_mask.shape, np.uint8)
-    for col, row, top in zip(cols, rows, top_row):
-        if np.isfinite(top) and top < row:
-            add[max(0, round(float(top))):row, col] = 1
-    if not add.any():
+    if (lines >= 0).any(axis=1).sum() >= least:  # a stretch of wall shows its foot above the mask's edge
+        top_row = _foot_rows(small_cal, cols, rows, lines, tops, px_per_m, seen, least)
+        for col, row, top in zip(cols, rows, top_row):
+            if np.isfinite(top) and top < row:
+                change[max(0, round(float(top))):row, col] = 1
+    for col, foot in zip(*_things_on_the_foot(small_cal, cols, rows, size[0], at_edge.any(axis=1), seen)):
+        change[:max(0, round(float(foot))), col] = -1
+    if not change.any():
         return mask.copy()
     if scale < 1.0:
-        add = cv2.resize(add, (cols_px, rows_px), interpolation=cv2.INTER_NEAREST)
-    return mask | (add > 0)
+        change = cv2.resize(change, (cols_px, rows_px), interpolation=cv2.INTER_NEAREST)
+    return (mask | (change > 0)) & (change >= 0)
 
 
 def _feet_seen(calibration, cols, rows, at_edge, tops) -> list:
@@ -237,6 +238,47 @@ def _feet_seen(calibration, cols, rows, at_edge, tops) -> list:
             if _a_board(calibration, (slope, intercept), board, x[[0, -1]]):
                 seen.append(((slope, intercept), board, cols[run[0]], cols[run[-1]]))
     return seen
+
+
+def _things_on_the_foot(calibration, cols, rows, width, at_edge, seen) -> tuple[np.ndarray, np.ndarray]:
+    """The columns where the mask rises past a wall's foot seen beside them, and the foot's
+    row there: (columns, rows). Next to a stretch of wall whose floor ends at its board, a
+    mask edge higher than the foot (by ``FLOOR.wall_foot.rise_m`` upright), with no board
+    on it, that comes back down to the foot (or runs out of the photo) within
+    ``FLOOR.wall_foot.thing_m`` is a thing standing against the wall that GrabCut took
+    for floor: on the floor plane a carton's lid lies beyond the wall. Floor past a
+    corner of the room goes on farther, and ends at a board; a mask edge that runs along
+    the board's top says the "board" was a far strip of floor, which the mask reached. ``at_edge`` (k,) bool: the
+    columns whose own floor line is the mask's edge; ``width``: the mask's; ``calibration`` at
+    its size."""
+    fw = FLOOR.wall_foot
+    cut = np.full(len(cols), np.nan)
+    for foot, board, first, last in seen:
+        line = _at(foot, cols)
+        rise = line - rows
+        above = (rise > 3.0) & ~at_edge
+        px_per_m = np.zeros(len(cols))
+        px_per_m[above] = px_per_m_upright(calibration, cols[above], line[above])
+        above &= rise > fw.rise_m * px_per_m
+        on_foot = np.abs(rise) <= 3.0
+        for j, step in ((np.searchsorted(cols, first) - 1, -1), (np.searchsorted(cols, last, "right"), 1)):
+            while 0 <= j < len(cols) and on_foot[j] and abs(int(cols[j]) - int(cols[j - step])) <= 2:
+                j += step
+            run = []
+            while (0 <= j < len(cols) and above[j] and (not run or abs(int(cols[j]) - int(cols[run[-1]])) <= 2
+                                                         and abs(int(cols[j]) - int(cols[run[0]])) <= fw.thing_m * px_per_m[j])):
+                run.append(j)
+                j += step
+            if not run:
+                continue
+            out_of_photo = (j < 0 or j >= len(cols)) and cols[run[-1]] in (0, width - 1)
+            back = 0 <= j < len(cols) and abs(int(cols[j]) - int(cols[run[-1]])) <= 2 and on_foot[j]
+            # A mask edge along the board's top: the "board" beside it was a far strip of floor.
+            strip = np.mean(np.abs(rows[run] - _at(board, cols[run])) <= 3.0) >= 0.5
+            if (out_of_photo or back) and not strip:
+                cut[run] = line[run]
+    keep = np.isfinite(cut)
+    return cols[keep], cut[keep]
 
 
 def _foot_rows(calibration, cols, rows, lines, tops, px_per_m, seen, least) -> np.ndarray:

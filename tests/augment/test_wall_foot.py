@@ -1,12 +1,13 @@
 """Far strips of floor given back up to the wall's foot, on ray-cast rooms with known answers."""
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
 from augment.floor.settings import FLOOR
 from augment.floor.wall_foot import _clashes, reach_wall_foot
-from tests.augment.test_skirting import _room, _second_floor_strip
+from tests.augment.test_skirting import WALL_Y_M, _room, _second_floor_strip
 
 
 def _far_strip(depth_m: float, rgb, board_m: float = 0.10, yaw_deg: float = 0.0):
@@ -66,6 +67,55 @@ def test_a_strip_taller_than_a_third_of_a_meter_upright_stays_out(monkeypatch):
     np.testing.assert_array_equal(reach_wall_foot(image, mask, calibration), mask)
     monkeypatch.setattr(FLOOR.wall_foot, "strip_m", (0.05, 0.5))
     assert (strip & ~reach_wall_foot(image, mask, calibration)).sum() < 0.03 * strip.sum()
+
+
+def _carton_taken_for_floor(width_m: float, height_m: float = 0.35, depth_m: float = 0.4):
+    """:func:`_room` (a 10 cm white board on the wall) with a carton ``width_m`` wide standing
+    against the wall straight ahead, in the mask: GrabCut took it for floor. Returns the
+    photo, the mask, the carton's pixels and, per column, the wall's foot (the true floor's
+    top row)."""
+    image, truth, _, calibration = _room(0.10)
+    x, y, z = np.meshgrid([-width_m / 2, width_m / 2], [WALL_Y_M - depth_m, WALL_Y_M], [0.0, height_m])
+    corners = calibration.pixels_from_floor(np.column_stack([x.ravel(), y.ravel(), z.ravel()]))
+    carton = np.zeros(truth.shape, np.uint8)
+    cv2.fillConvexPoly(carton, cv2.convexHull(np.round(corners).astype(np.int32)), 1)
+    carton = carton > 0
+    image[carton] = (185, 150, 105)
+    return image, truth | carton, carton, np.argmax(truth, axis=0), calibration
+
+
+def test_a_carton_against_the_wall_is_cut_at_the_walls_foot():
+    """The mask runs up the carton's face and lid, past the wall's foot, between two
+    stretches of the board: on the floor plane that lid lies beyond the wall. It is cut
+    along the foot, which the board either side says where it runs; the rest of the mask
+    (the carton's face below the foot, the floor) is kept."""
+    image, mask, carton, foot_row, calibration = _carton_taken_for_floor(0.6)
+    rows = np.arange(mask.shape[0])[:, None]
+    past = carton & (rows < foot_row[None] - 1)
+    assert past.sum() > 5000  # the carton's lid reaches 0.35 m up, 60 rows above the foot
+    reached = reach_wall_foot(image, mask, calibration)
+    assert (reached & past).sum() < 0.02 * past.sum()
+    assert not (mask & ~reached & (rows >= foot_row[None] + 1)).any()
+    np.testing.assert_array_equal(reached[:, ~carton.any(axis=0)], mask[:, ~carton.any(axis=0)])
+
+
+def test_what_rises_past_the_foot_for_more_than_a_meter_is_left_alone(monkeypatch):
+    """Floor past the wall's line that goes on for more than ``thing_m`` along it is the room
+    going on (a recess, another wall's floor), not a thing against the wall."""
+    image, mask, _, _, calibration = _carton_taken_for_floor(1.6)
+    np.testing.assert_array_equal(reach_wall_foot(image, mask, calibration), mask)
+    monkeypatch.setattr(FLOOR.wall_foot, "thing_m", 2.0)
+    assert (reach_wall_foot(image, mask, calibration) != mask).any()
+
+
+def test_a_far_strip_the_mask_reached_in_part_is_not_cut():
+    """Without a board, a far strip of a second floor looks like one beside the columns
+    where the mask stops at the threshold; where the mask reached the wall it rises past
+    that "foot" to the "board's" top, like a carton's lid. The mask is left as it is."""
+    image, truth, strip, calibration = _second_floor_strip(0.3, (170, 90, 60), board_m=0.0)
+    mask = truth & ~strip
+    mask[:, 400:480] = truth[:, 400:480]
+    np.testing.assert_array_equal(reach_wall_foot(image, mask, calibration), mask)
 
 
 def test_a_foot_seen_beside_the_strip_must_run_on_along_it():
