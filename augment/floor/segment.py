@@ -530,6 +530,7 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
     mask = _full_size(mask_small, (cols, rows))
     skirting_m = board_doubt = None
     board_cut = np.zeros((rows, cols), bool)
+    vetoed = _full_size(vetoed, (cols, rows)) if vetoed.any() else None
     if trims and mask.any():
         # The refined mask's top edge sits on the skirting boards; the floor ends below.
         # Where it holds none, its edge may instead stop short of the floor line.
@@ -541,14 +542,16 @@ def _find(image, model, calibration, method, refine, skirting, clicks) -> _Found
         for x, y in clicks[clicks[:, 2] > 0, :2]:
             cv2.circle(reach, (round(x), round(y)), round(FLOOR.segment.click_reach * max(rows, cols)), 1, -1)
         board_cut = _cut_clicked(mask & ~trimmed, board_marks)
-        # A far strip dropped whole (a second floor, a band of sun) goes on to the wall's foot.
-        mask = reach_wall_foot(image, trimmed, calibration) | (mask & (reach > 0))
+        # A far strip dropped whole (a second floor, a band of sun) goes on to the wall's foot,
+        # and a thing against the wall stops there: what the model vetoes is no edge of either.
+        mask = reach_wall_foot(image, trimmed if vetoed is None else trimmed & ~vetoed, calibration) | (
+            mask & (reach > 0))
         if board_doubt is not None and reach[board_doubt[1], board_doubt[0]]:
             board_doubt = None
     # After the trim: taken out before, they would leave a skirting board's strip in
     # pieces, which the trim no longer knows for a board.
-    if vetoed.any():
-        mask &= ~_full_size(vetoed, (cols, rows))
+    if vetoed is not None:
+        mask &= ~vetoed
     if len(wand):
         other = cv2.resize(clicked_other.astype(np.float32), (cols, rows), interpolation=cv2.INTER_LINEAR) > 0.5
         mask &= ~other
