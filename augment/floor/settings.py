@@ -116,7 +116,7 @@ class WallFootSettings:
     strip_m: tuple[float, float] = (0.05, 0.35)  # the strip as tall as this upright (taller: a thing before the wall)
     clash_px: float = 4.0  # a foot or board beside the strip farther off its line than this: a thing stands there
     rise_m: float = 0.03  # a mask edge this far above a wall's foot seen beside it (upright) is a thing on it ...
-    thing_m: float = 1.0  # ... when it comes back to the foot within this (upright meters' pixels, along the wall)
+    thing_m: float = 1.0  # ... when it comes back to the foot within this many meters along the wall
 
 
 @dataclass

@@ -1,4 +1,5 @@
-"""The floor reaches the wall's foot: a far strip the mask dropped, given back.
+"""The floor reaches the wall's foot and stops there: a far strip the mask dropped, given
+back; a thing against the wall the mask took in, cut off.
 
 A second floor past a threshold near the far wall (a strip of carpet beyond planks), or a
 band of sun along it, is often dropped whole by the floor model and GrabCut: the mask's
@@ -15,6 +16,10 @@ that many columns agree on, whose boards' tops line up as well, over a tenth of 
 photo's width at least, where the strip is at most a third of a meter tall as seen
 upright (taller is a thing standing in front of the wall), and where the wall's foot
 and board seen beside it, at the mask's edge, run on along the same lines.
+
+The other way round, where the mask's edge rises past a foot seen beside it and comes
+back down to it within a meter, a carton or a radiator against the wall was taken for
+floor, and the mask is cut along the foot (:func:`_things_on_the_foot`).
 
 The thresholds and sizes are :data:`augment.floor.settings.FLOOR`'s ``wall_foot`` section.
 """
@@ -172,7 +177,8 @@ def _at(line: tuple[float, float], x) -> np.ndarray:
 
 
 def reach_wall_foot(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndarray:
-    """Give the floor mask back its far strips, up to the wall's foot where a board marks it.
+    """Give the floor mask back its far strips, up to the wall's foot where a board marks it,
+    and cut it along that foot where a thing against the wall rose past it.
 
     Parameters
     ----------
@@ -186,8 +192,8 @@ def reach_wall_foot(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndar
     Returns
     -------
     mask : (rows, cols) bool
-        The mask with the strips between its edge and the wall's foot added, or the same
-        values where the photo shows none.
+        The mask with the strips between its edge and the wall's foot added and what rose
+        past the foot taken out, or the same values where the photo shows neither.
     """
     fw = FLOOR.wall_foot
     rows_px, cols_px = mask.shape
@@ -248,9 +254,10 @@ def _things_on_the_foot(calibration, cols, rows, width, at_edge, seen) -> tuple[
     ``FLOOR.wall_foot.thing_m`` is a thing standing against the wall that GrabCut took
     for floor: on the floor plane a carton's lid lies beyond the wall. Floor past a
     corner of the room goes on farther, and ends at a board; a mask edge that runs along
-    the board's top says the "board" was a far strip of floor, which the mask reached. ``at_edge`` (k,) bool: the
-    columns whose own floor line is the mask's edge; ``width``: the mask's; ``calibration`` at
-    its size."""
+    the board's top says the "board" was a far strip of floor, which the mask reached.
+    ``at_edge`` (k,) bool: the columns whose own floor line is the mask's edge (within the
+    3 rows that :func:`_floor_lines` allows, the tolerance here too); ``width``: the
+    mask's; ``calibration`` at its size."""
     fw = FLOOR.wall_foot
     cut = np.full(len(cols), np.nan)
     for foot, board, first, last in seen:
