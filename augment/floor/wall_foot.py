@@ -35,6 +35,7 @@ from .skirting import px_per_m_upright, working_mask
 
 CANDIDATES = 4  # floor lines kept per column, lowest first
 K_STEP_PX = 4  # pixels per upright meter are worked out every this many rows and held between
+EDGE_PX = 3  # a floor line this near the mask's edge (or a line) is at it
 
 
 class _Sums:
@@ -58,9 +59,9 @@ class _Sums:
 
 
 def _floor_lines(band: np.ndarray, y0: int, cols, rows, reach, px_per_m) -> tuple[np.ndarray, np.ndarray]:
-    """Per column ``cols[j]``, from ``rows[j] + 3`` up to ``rows[j] - reach[j]``, the rows
+    """Per column ``cols[j]``, from ``rows[j] + EDGE_PX`` up to ``rows[j] - reach[j]``, the rows
     (lowest first, ``CANDIDATES`` at most) where the floor ends at a board, and the board's
-    top row each, (k, CANDIDATES), -1 past the last. A line within three rows of the mask's
+    top row each, (k, CANDIDATES), -1 past the last. A line within ``EDGE_PX`` of the mask's
     edge is the only one kept (the floor ends there). ``band``: the photo's rows from ``y0``,
     (n, width, 3) float; ``px_per_m[j, i]``: pixels per upright meter ``K_STEP_PX * i`` rows
     above the edge."""
@@ -85,7 +86,7 @@ def _floor_lines(band: np.ndarray, y0: int, cols, rows, reach, px_per_m) -> tupl
     # The floor line: a step of floor_step or more, the strongest two rows either side.
     y = np.arange(n)[None]
     up = edge[:, None] - y
-    j, r = np.nonzero((step >= fw.floor_step) & peak2 & (up >= -3) & (up <= reach[:, None]) & (y >= 5) & (y + 5 <= n))
+    j, r = np.nonzero((step >= fw.floor_step) & peak2 & (up >= -EDGE_PX) & (up <= reach[:, None]) & (y >= 5) & (y + 5 <= n))
     up = edge[j] - r
     p = px_per_m[j, np.maximum(up, 0) // K_STEP_PX]
     lo = np.maximum(5, (fw.board_m[0] * p).astype(np.int64))
@@ -108,7 +109,7 @@ def _floor_lines(band: np.ndarray, y0: int, cols, rows, reach, px_per_m) -> tupl
 
     # A plain board, of another colour than the wall above it, whose top step is sharp; a
     # board at the mask's edge may be shaded along its height (a moulded one).
-    at_edge = up <= 3
+    at_edge = up <= EDGE_PX
     keep = sums.spread(j, top + 1, r - 1) <= np.where(at_edge, 1.5 * fw.plain, fw.plain)
     board, wall_colour = sums.mean(j, top + 1, r - 1), sums.mean(j, top - wall, top - 1)
     contrast = np.linalg.norm(board - wall_colour, axis=-1)
@@ -206,7 +207,7 @@ def reach_wall_foot(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndar
     band, y0 = _band_at(image, size, scale, cols, rows, reach, px_per_m)
     lines, tops = _floor_lines(band, y0, cols, rows, reach, px_per_m)
 
-    at_edge = (lines >= 0) & (rows[:, None] - lines <= 3)
+    at_edge = (lines >= 0) & (rows[:, None] - lines <= EDGE_PX)
     seen = _feet_seen(small_cal, cols, rows, at_edge, tops)
     change = np.zeros(small_mask.shape, np.int8)  # 1: floor given back, -1: taken out
     lines[at_edge] = -1
@@ -255,19 +256,18 @@ def _things_on_the_foot(calibration, cols, rows, width, at_edge, seen) -> tuple[
     for floor: on the floor plane a carton's lid lies beyond the wall. Floor past a
     corner of the room goes on farther, and ends at a board; a mask edge that runs along
     the board's top says the "board" was a far strip of floor, which the mask reached.
-    ``at_edge`` (k,) bool: the columns whose own floor line is the mask's edge (within the
-    3 rows that :func:`_floor_lines` allows, the tolerance here too); ``width``: the
-    mask's; ``calibration`` at its size."""
+    ``at_edge`` (k,) bool: the columns whose own floor line is the mask's edge (within
+    ``EDGE_PX``, the tolerance here too); ``width``: the mask's; ``calibration`` at its size."""
     fw = FLOOR.wall_foot
     cut = np.full(len(cols), np.nan)
     for foot, board, first, last in seen:
         line = _at(foot, cols)
         rise = line - rows
-        above = (rise > 3.0) & ~at_edge
+        above = (rise > EDGE_PX) & ~at_edge
         px_per_m = np.zeros(len(cols))
         px_per_m[above] = px_per_m_upright(calibration, cols[above], line[above])
         above &= rise > fw.rise_m * px_per_m
-        on_foot = np.abs(rise) <= 3.0
+        on_foot = np.abs(rise) <= EDGE_PX
         for j, step in ((np.searchsorted(cols, first) - 1, -1), (np.searchsorted(cols, last, "right"), 1)):
             while 0 <= j < len(cols) and on_foot[j] and abs(int(cols[j]) - int(cols[j - step])) <= 2:
                 j += step
@@ -281,7 +281,7 @@ def _things_on_the_foot(calibration, cols, rows, width, at_edge, seen) -> tuple[
             out_of_photo = (j < 0 or j >= len(cols)) and cols[run[-1]] in (0, width - 1)
             back = 0 <= j < len(cols) and abs(int(cols[j]) - int(cols[run[-1]])) <= 2 and on_foot[j]
             # A mask edge along the board's top: the "board" beside it was a far strip of floor.
-            strip = np.mean(np.abs(rows[run] - _at(board, cols[run])) <= 3.0) >= 0.5
+            strip = np.mean(np.abs(rows[run] - _at(board, cols[run])) <= EDGE_PX) >= 0.5
             if (out_of_photo or back) and not strip:
                 cut[run] = line[run]
     keep = np.isfinite(cut)
