@@ -21,6 +21,10 @@ The other way round, where the mask's edge rises past a foot seen beside it and 
 back down to it within a meter, a carton or a radiator against the wall was taken for
 floor, and the mask is cut along the foot (:func:`_things_on_the_foot`).
 
+A sun patch ending a hand's width before the wall stops the mask at its edge, and the shaded
+strip above reads with the board as one taller board: under one board's top, the higher of
+two feet seen is the wall's (:func:`_one_board_two_feet`).
+
 The thresholds and sizes are :data:`augment.floor.settings.FLOOR`'s ``wall_foot`` section.
 """
 from __future__ import annotations
@@ -209,13 +213,14 @@ def reach_wall_foot(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndar
 
     at_edge = (lines >= 0) & (rows[:, None] - lines <= EDGE_PX)
     seen = _feet_seen(small_cal, cols, rows, at_edge, tops)
+    seen, top_row = _one_board_two_feet(band, y0, cols, rows, px_per_m[:, 0], seen)
     change = np.zeros(small_mask.shape, np.int8)  # 1: floor given back, -1: taken out
     lines[at_edge] = -1
     if (lines >= 0).any(axis=1).sum() >= least:  # a stretch of wall shows its foot above the mask's edge
-        top_row = _foot_rows(small_cal, cols, rows, lines, tops, px_per_m, seen, least)
-        for col, row, top in zip(cols, rows, top_row):
-            if np.isfinite(top) and top < row:
-                change[max(0, round(float(top))):row, col] = 1
+        top_row = np.minimum(top_row, _foot_rows(small_cal, cols, rows, lines, tops, px_per_m, seen, least))
+    for col, row, top in zip(cols, rows, top_row):
+        if np.isfinite(top) and top < row:
+            change[max(0, round(float(top))):row, col] = 1
     for col, foot in zip(*_things_on_the_foot(small_cal, cols, rows, size[0], at_edge.any(axis=1), seen)):
         change[:max(0, round(float(foot))), col] = -1
     if not change.any():
@@ -245,6 +250,54 @@ def _feet_seen(calibration, cols, rows, at_edge, tops) -> list:
             if _a_board(calibration, (slope, intercept), board, x[[0, -1]]):
                 seen.append(((slope, intercept), board, cols[run[0]], cols[run[-1]]))
     return seen
+
+
+def _one_board_two_feet(band: np.ndarray, y0: int, cols, rows, px_per_m, seen) -> tuple[list, np.ndarray]:
+    """The stretches of wall ``seen`` at the mask's edge that are far strips, and per column
+    the row the floor reaches (inf: its edge stays), (k,).
+
+    Two stretches whose boards' tops run on one line, one foot lower than the other, with
+    the strip between the feet not plain: the lower foot is a far strip's edge (a sun
+    patch's, a threshold's), the strip read with the board as one taller board, and the
+    floor reaches the higher foot, over the lower stretch, the columns between the two and
+    on while the strip goes on, where it is ``FLOOR.wall_foot.strip_m`` tall upright at
+    most. (A plain strip is the board's own foot under a moulding line.) ``band``, ``y0``:
+    as for :func:`_floor_lines`; ``px_per_m``: pixels per upright meter at the mask's edge,
+    (k,). Returns the stretches that are not far strips, and the rows."""
+    fw = FLOOR.wall_foot
+    top_row = np.full(len(cols), np.inf)
+    strips = set()
+    for a, (foot, board, lo, hi) in enumerate(seen):
+        for b, (other_foot, other_board, other_lo, other_hi) in enumerate(seen):
+            ends = np.array([lo, hi, other_lo, other_hi], np.float64)
+            # (A strip with no rows to read has a nan spread: not a strip.)
+            if (a == b or np.abs(_at(board, ends) - _at(other_board, ends)).max() > fw.clash_px
+                    or np.min(_at(other_foot, ends) - _at(foot, ends)) <= EDGE_PX
+                    or not _spread_between(band, y0, cols, (other_lo, other_hi), foot, other_foot) > fw.plain):
+                continue
+            line = _at(foot, cols)
+            fill = (rows - line > EDGE_PX) & (rows - line <= fw.strip_m[1] * px_per_m)
+            # From the higher stretch's near end to the lower stretch's far end, then on.
+            first, last = np.searchsorted(cols, min(other_lo, hi)), np.searchsorted(cols, max(other_hi, lo), "right") - 1
+            while first > 0 and fill[first - 1] and cols[first] - cols[first - 1] <= 2:
+                first -= 1
+            while last + 1 < len(cols) and fill[last + 1] and cols[last + 1] - cols[last] <= 2:
+                last += 1
+            span = np.arange(first, last + 1)[fill[first:last + 1]]
+            top_row[span] = np.minimum(top_row[span], line[span])
+            strips.add(b)
+    return [s for i, s in enumerate(seen) if i not in strips], top_row
+
+
+def _spread_between(band: np.ndarray, y0: int, cols, span: tuple[int, int], upper, lower) -> float:
+    """The median over the columns ``cols`` within ``span`` of the colour spread of
+    ``band`` (rows from ``y0``) down each column between the lines ``upper`` and ``lower``,
+    two rows in from each; nan where no column has three rows there."""
+    x = cols[(cols >= span[0]) & (cols <= span[1])]
+    a = np.clip(np.round(_at(upper, x)).astype(np.int64) + 2 - y0, 0, band.shape[0])
+    b = np.clip(np.round(_at(lower, x)).astype(np.int64) - 1 - y0, 0, band.shape[0])
+    spreads = [np.linalg.norm(band[i:j, c].std(axis=0)) for c, i, j in zip(x, a, b) if j - i >= 3]
+    return float(np.median(spreads)) if spreads else np.nan
 
 
 def _things_on_the_foot(calibration, cols, rows, width, at_edge, seen) -> tuple[np.ndarray, np.ndarray]:
