@@ -170,10 +170,10 @@ def test_a_lower_foot_under_the_same_board_is_a_far_strip():
     assert np.isinf(top_row).all()
 
 
-def test_a_render_whose_far_strip_the_model_drops(monkeypatch):
-    """A render of the synthetic photographer (seed 991, render 24: concrete past a stepped
-    threshold along the far wall, under a board): the floor model and GrabCut leave out
-    7 % of the floor, all of it that strip; reaching the wall's foot gives it back."""
+def _segmented_render(key, **stress):
+    """A render of the synthetic photographer (``key``: seed and index, ``stress``: a stress
+    set's options), calibrated through its true focal length: a function that segments its
+    floor with the shipped model as the settings stand when called, and the true floor."""
     from augment.camera.board import Board
     from augment.camera.calibrate import calibrate_photo, exif_intrinsics
     from augment.floor.model import DEFAULT_MODEL, FloorModel
@@ -182,15 +182,23 @@ def test_a_render_whose_far_strip_the_model_drops(monkeypatch):
     from augment.synth import render_sample
 
     with Renderer() as renderer:
-        sample = render_sample([991, 24], renderer, two_floors=1.0, far_floor=1.0)
+        sample = render_sample(key, renderer, **stress)
     w, h = sample.truth["size_px"]
     calibration = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
-    model, truth = FloorModel(DEFAULT_MODEL), sample.floor_mask
-    mask = segment_floor(sample.image, model, calibration).mask
+    model = FloorModel(DEFAULT_MODEL)
+    return (lambda: segment_floor(sample.image, model, calibration).mask), sample.floor_mask
+
+
+def test_a_render_whose_far_strip_the_model_drops(monkeypatch):
+    """A render of the synthetic photographer (seed 991, render 24: concrete past a stepped
+    threshold along the far wall, under a board): the floor model and GrabCut leave out
+    7 % of the floor, all of it that strip; reaching the wall's foot gives it back."""
+    segment, truth = _segmented_render([991, 24], two_floors=1.0, far_floor=1.0)
+    mask = segment()
     assert (truth & ~mask).sum() < 0.01 * truth.sum()
     assert (mask & ~truth).sum() < 0.01 * truth.sum()
     monkeypatch.setattr(FLOOR.wall_foot, "strip_m", (1.0, 1.0))  # no strip given back
-    assert (truth & ~segment_floor(sample.image, model, calibration).mask).sum() > 0.05 * truth.sum()
+    assert (truth & ~segment()).sum() > 0.05 * truth.sum()
 
 
 def test_a_render_whose_sun_patch_ends_before_the_wall(monkeypatch):
@@ -199,22 +207,12 @@ def test_a_render_whose_sun_patch_ends_before_the_wall(monkeypatch):
     and the shaded strip above reads with the board as one taller board. The board's top
     seen beside it, over a foot 15 rows higher, gives the strip back (1.8 % of the floor's
     pixels missed without it)."""
-    from augment.camera.board import Board
-    from augment.camera.calibrate import calibrate_photo, exif_intrinsics
     from augment.floor import wall_foot
-    from augment.floor.model import DEFAULT_MODEL, FloorModel
-    from augment.floor.segment import segment_floor
-    from augment.render.gl import Renderer
-    from augment.synth import render_sample
 
-    with Renderer() as renderer:
-        sample = render_sample([987, 0], renderer, two_floors=1.0)
-    w, h = sample.truth["size_px"]
-    calibration = calibrate_photo(sample.image, Board(), intrinsics=exif_intrinsics(sample.truth["K"][0][0], (w, h)))
-    model, truth = FloorModel(DEFAULT_MODEL), sample.floor_mask
-    mask = segment_floor(sample.image, model, calibration).mask
+    segment, truth = _segmented_render([987, 0], two_floors=1.0)
+    mask = segment()
     assert (truth & ~mask).sum() < 0.003 * truth.sum()
     assert (mask & ~truth).sum() < 0.01 * truth.sum()
     monkeypatch.setattr(wall_foot, "_one_board_two_feet", lambda band, y0, cols, rows, px_per_m, seen:
                         (seen, np.full(len(cols), np.inf)))
-    assert (truth & ~segment_floor(sample.image, model, calibration).mask).sum() > 0.01 * truth.sum()
+    assert (truth & ~segment()).sum() > 0.01 * truth.sum()
