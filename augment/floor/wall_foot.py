@@ -44,9 +44,13 @@ EDGE_PX = 3  # a floor line this near the mask's edge (or a line) is at it
 
 class _Sums:
     """Running sums down each wall column of the band, (k, rows + 1, 3): any run of rows'
-    mean colour and colour spread in a few operations, for many runs at once."""
+    mean colour and colour spread in a few operations, for many runs at once. ``band``: the
+    photo's rows the search reads, (n, width, 3) float; ``cols``: the wall columns, (k,)."""
 
-    def __init__(self, profiles: np.ndarray):
+    def __init__(self, band: np.ndarray, cols: np.ndarray):
+        # float32 sums: a column's squares run to about 4e7, each off by a few units, which
+        # moves a spread of 7 over 20 rows by a few hundredths.
+        profiles = np.ascontiguousarray(band[:, cols].transpose(1, 0, 2), np.float32)
         pad = np.zeros((profiles.shape[0], 1, 3), profiles.dtype)
         self.sums = np.concatenate([pad, np.cumsum(profiles, axis=1)], axis=1)
         self.squares = np.concatenate([pad, np.cumsum(profiles * profiles, axis=1)], axis=1)
@@ -62,19 +66,15 @@ class _Sums:
         return np.sqrt(np.maximum((self.squares[j, b] - self.squares[j, a]) / n - m * m, 0).sum(axis=-1))
 
 
-def _floor_lines(band: np.ndarray, y0: int, cols, rows, reach, px_per_m) -> tuple[np.ndarray, np.ndarray]:
+def _floor_lines(sums: _Sums, y0: int, cols, rows, reach, px_per_m) -> tuple[np.ndarray, np.ndarray]:
     """Per column ``cols[j]``, from ``rows[j] + EDGE_PX`` up to ``rows[j] - reach[j]``, the rows
     (lowest first, ``CANDIDATES`` at most) where the floor ends at a board, and the board's
     top row each, (k, CANDIDATES), -1 past the last. A line within ``EDGE_PX`` of the mask's
-    edge is the only one kept (the floor ends there). ``band``: the photo's rows from ``y0``,
-    (n, width, 3) float; ``px_per_m[j, i]``: pixels per upright meter ``K_STEP_PX * i`` rows
+    edge is the only one kept (the floor ends there). ``sums``: the photo's rows from ``y0``
+    down the columns; ``px_per_m[j, i]``: pixels per upright meter ``K_STEP_PX * i`` rows
     above the edge."""
     fw = FLOOR.wall_foot
-    k, n = len(cols), band.shape[0]
-    # float32 sums: a column's squares run to about 4e7, each off by a few units, which
-    # moves a spread of 7 over 20 rows by a few hundredths.
-    profiles = np.ascontiguousarray(band[:, cols].transpose(1, 0, 2), np.float32)
-    sums = _Sums(profiles)
+    k, n = len(cols), sums.sums.shape[1] - 1
     # step[j, y]: between the three rows' mean colours from y down and the three above.
     step = np.zeros((k, n))
     if n >= 6:
@@ -209,11 +209,12 @@ def reach_wall_foot(image: np.ndarray, mask: np.ndarray, calibration) -> np.ndar
         return mask.copy()
     reach, px_per_m = _search_window(small_cal, cols, rows)
     band, y0 = _band_at(image, size, scale, cols, rows, reach, px_per_m)
-    lines, tops = _floor_lines(band, y0, cols, rows, reach, px_per_m)
+    sums = _Sums(band, cols)
+    lines, tops = _floor_lines(sums, y0, cols, rows, reach, px_per_m)
 
     at_edge = (lines >= 0) & (rows[:, None] - lines <= EDGE_PX)
     seen = _feet_seen(small_cal, cols, rows, at_edge, tops)
-    seen, top_row = _one_board_two_feet(band, y0, cols, rows, px_per_m[:, 0], seen)
+    seen, top_row = _one_board_two_feet(sums, y0, cols, rows, px_per_m[:, 0], seen)
     change = np.zeros(small_mask.shape, np.int8)  # 1: floor given back, -1: taken out
     lines[at_edge] = -1
     if (lines >= 0).any(axis=1).sum() >= least:  # a stretch of wall shows its foot above the mask's edge
@@ -252,7 +253,7 @@ def _feet_seen(calibration, cols, rows, at_edge, tops) -> list:
     return seen
 
 
-def _one_board_two_feet(band: np.ndarray, y0: int, cols, rows, px_per_m, seen) -> tuple[list, np.ndarray]:
+def _one_board_two_feet(sums: _Sums, y0: int, cols, rows, px_per_m, seen) -> tuple[list, np.ndarray]:
     """The stretches of wall ``seen`` at the mask's edge that are far strips, and per column
     the row the floor reaches (inf: its edge stays), (k,).
 
@@ -261,7 +262,7 @@ def _one_board_two_feet(band: np.ndarray, y0: int, cols, rows, px_per_m, seen) -
     patch's, a threshold's), the strip read with the board as one taller board, and the
     floor reaches the higher foot, over the lower stretch, the columns between the two and
     on while the strip goes on, where it is ``FLOOR.wall_foot.strip_m`` tall upright at
-    most. (A plain strip is the board's own foot under a moulding line.) ``band``, ``y0``:
+    most. (A plain strip is the board's own foot under a moulding line.) ``sums``, ``y0``:
     as for :func:`_floor_lines`; ``px_per_m``: pixels per upright meter at the mask's edge,
     (k,). Returns the stretches that are not far strips, and the rows."""
     fw = FLOOR.wall_foot
@@ -273,7 +274,7 @@ def _one_board_two_feet(band: np.ndarray, y0: int, cols, rows, px_per_m, seen) -
             # (A strip with no rows to read has a nan spread: not a strip.)
             if (a == b or np.abs(_at(board, ends) - _at(other_board, ends)).max() > fw.clash_px
                     or np.min(_at(other_foot, ends) - _at(foot, ends)) <= EDGE_PX
-                    or not _spread_between(band, y0, cols, (other_lo, other_hi), foot, other_foot) > fw.plain):
+                    or not _spread_between(sums, y0, cols, (other_lo, other_hi), foot, other_foot) > fw.plain):
                 continue
             line = _at(foot, cols)
             fill = (rows - line > EDGE_PX) & (rows - line <= fw.strip_m[1] * px_per_m)
@@ -289,15 +290,16 @@ def _one_board_two_feet(band: np.ndarray, y0: int, cols, rows, px_per_m, seen) -
     return [s for i, s in enumerate(seen) if i not in strips], top_row
 
 
-def _spread_between(band: np.ndarray, y0: int, cols, span: tuple[int, int], upper, lower) -> float:
-    """The median over the columns ``cols`` within ``span`` of the colour spread of
-    ``band`` (rows from ``y0``) down each column between the lines ``upper`` and ``lower``,
-    two rows in from each; nan where no column has three rows there."""
-    x = cols[(cols >= span[0]) & (cols <= span[1])]
-    a = np.clip(np.round(_at(upper, x)).astype(np.int64) + 2 - y0, 0, band.shape[0])
-    b = np.clip(np.round(_at(lower, x)).astype(np.int64) - 1 - y0, 0, band.shape[0])
-    spreads = [np.linalg.norm(band[i:j, c].std(axis=0)) for c, i, j in zip(x, a, b) if j - i >= 3]
-    return float(np.median(spreads)) if spreads else np.nan
+def _spread_between(sums: _Sums, y0: int, cols, span: tuple[int, int], upper, lower) -> float:
+    """The median over the columns ``cols`` within ``span`` of the colour spread down each
+    between the lines ``upper`` and ``lower``, two rows in from each (``sums``: the band's
+    rows from ``y0``); nan where no column has three rows there."""
+    j = np.flatnonzero((cols >= span[0]) & (cols <= span[1]))
+    n = sums.sums.shape[1] - 1
+    a = np.clip(np.round(_at(upper, cols[j])).astype(np.int64) + 2 - y0, 0, n)
+    b = np.clip(np.round(_at(lower, cols[j])).astype(np.int64) - 1 - y0, 0, n)
+    tall = b - a >= 3
+    return float(np.median(sums.spread(j[tall], a[tall], b[tall]))) if tall.any() else np.nan
 
 
 def _things_on_the_foot(calibration, cols, rows, width, at_edge, seen) -> tuple[np.ndarray, np.ndarray]:

@@ -6,7 +6,12 @@ import numpy as np
 import pytest
 
 from augment.floor.settings import FLOOR
-from augment.floor.wall_foot import _clashes, _one_board_two_feet, reach_wall_foot
+from augment.floor.wall_foot import (
+    _clashes,
+    _one_board_two_feet,
+    _Sums,
+    reach_wall_foot,
+)
 from tests.augment.test_skirting import WALL_Y_M, _room, _second_floor_strip
 
 
@@ -157,16 +162,16 @@ def test_a_lower_foot_under_the_same_board_is_a_far_strip():
     stretch is no longer a wall's foot seen. A plain strip between the two feet is the
     board's foot under a moulding line, and nothing changes."""
     band, cols, rows, seen = _two_feet_under_one_board(strip_sd=12.0)
-    left, top_row = _one_board_two_feet(band, 0, cols, rows, np.full(len(cols), 200.0), seen)
+    left, top_row = _one_board_two_feet(_Sums(band, cols), 0, cols, rows, np.full(len(cols), 200.0), seen)
     assert left == seen[:1]
     assert np.isinf(top_row[:201]).all()
     np.testing.assert_allclose(top_row[201:], 300 + 0.05 * cols[201:])
     band, cols, rows, seen = _two_feet_under_one_board(strip_sd=1.0)
-    left, top_row = _one_board_two_feet(band, 0, cols, rows, np.full(len(cols), 200.0), seen)
+    left, top_row = _one_board_two_feet(_Sums(band, cols), 0, cols, rows, np.full(len(cols), 200.0), seen)
     assert left == seen and np.isinf(top_row).all()
     # A strip taller than FLOOR.wall_foot.strip_m (0.35 m) upright is not floor either.
     band, cols, rows, seen = _two_feet_under_one_board(strip_sd=12.0)
-    _, top_row = _one_board_two_feet(band, 0, cols, rows, np.full(len(cols), 20.0), seen)
+    _, top_row = _one_board_two_feet(_Sums(band, cols), 0, cols, rows, np.full(len(cols), 20.0), seen)
     assert np.isinf(top_row).all()
 
 
