@@ -102,6 +102,7 @@ class WallFootSettings:
     floor_step: float = 15.0  # the floor line: a step of this much colour (RGB distance, 3 rows' means) or more
     board_step: float = 8.0  # the board's top: this much (a white board on a pale wall differs little)
     board_m: tuple[float, float] = (0.045, 0.22)  # a board's height upright; a lit bevel on its top is thinner
+    bevel_share: float = 0.25  # a lit bevel along a board's top is this share of its height at most
     board_spread: float = 0.3  # a board's height differs by this share at most from one end of a wall to the other
     wall_m: float = 0.15  # the wall is plain this far above the board
     plain: float = 7.0  # a band is plain when its colour spread (RGB standard deviation) is below this

@@ -6,16 +6,21 @@ band of sun along it, is often dropped whole by the floor model and GrabCut: the
 edge is the threshold, and the wall seems to stand there. The photo says otherwise where
 a skirting board stands on the wall: the floor ends at the board's lower edge. A board
 shows in a column as a step from the floor to a band of one colour 4.5-22 cm tall
-(upright, through the calibration), ending in a sharp step to a plain wall.
+(upright, through the calibration; a lit bevel along its top aside), ending in a sharp
+step to a plain wall.
 
 :func:`reach_wall_foot` looks up each column from the mask's edge for the lowest such
 floor line. Where it is the mask's edge itself, the floor already ends at the wall, and
 that column tells where the wall's foot runs. Higher up, a single column can be fooled
 (a carton's lid looks like a board), so a strip is only given back along a straight line
 that many columns agree on, whose boards' tops line up as well, over a tenth of the
-photo's width at least, where the strip is at most a third of a meter tall as seen
+photo's width at least in one stretch (then in its shorter stretches between things
+standing before the wall too), where the strip is at most a third of a meter tall as seen
 upright (taller is a thing standing in front of the wall), and where the wall's foot
-and board seen beside it, at the mask's edge, run on along the same lines.
+and board seen beside it, at the mask's edge, run on along the same lines. A "board" read
+at the mask's edge may be a board over a far strip of nearly its colour (dark carpet
+under a dark board): where it parts at a sharp step into a board's height over a strip's,
+each plain, the board's foot is that step (:func:`_split_boards`).
 
 The other way round, where the mask's edge rises past a foot seen beside it and comes
 back down to it within a meter, a carton or a radiator against the wall was taken for
@@ -114,14 +119,32 @@ def _floor_lines(sums: _Sums, y0: int, cols, rows, reach, px_per_m) -> tuple[np.
     # A plain board, of another colour than the wall above it, whose top step is sharp; a
     # board at the mask's edge may be shaded along its height (a moulded one).
     at_edge = up <= EDGE_PX
-    keep = sums.spread(j, top + 1, r - 1) <= np.where(at_edge, 1.5 * fw.plain, fw.plain)
+    limit = np.where(at_edge, 1.5 * fw.plain, fw.plain)
+    keep = sums.spread(j, top + 1, r - 1) <= limit
     board, wall_colour = sums.mean(j, top + 1, r - 1), sums.mean(j, top - wall, top - 1)
+    # A board with a lit (or shaded) bevel along its top: its first two rows unlike both the
+    # wall and the board's face, which is plain below the bevel.
+    face = top + 1 + (fw.bevel_share * (r - top)).astype(np.int64)
+    bevel, face_colour = sums.mean(j, top + 1, top + 3), sums.mean(j, face, r - 1)
+    bevelled = (~keep & (sums.spread(j, face, r - 1) <= limit)
+                & (np.linalg.norm(bevel - face_colour, axis=-1) >= fw.floor_step)
+                & (np.linalg.norm(bevel - wall_colour, axis=-1) >= fw.floor_step))
+    keep |= bevelled
+    board[bevelled] = face_colour[bevelled]
     contrast = np.linalg.norm(board - wall_colour, axis=-1)
     keep &= (contrast >= fw.board_step) & (step[j, top] >= fw.sharpness * contrast)
     # The strip given back is not more of the wall above the board.
     strip = edge[j] - 1 - (r + 2) >= 3
     keep &= ~strip | (np.linalg.norm(sums.mean(j, r + 2, edge[j] - 1) - wall_colour, axis=-1) >= fw.floor_step)
-    j, r, up, top, at_edge = j[keep], r[keep], up[keep], top[keep], at_edge[keep]
+    j, r, up, top, at_edge, wall_colour = j[keep], r[keep], up[keep], top[keep], at_edge[keep], wall_colour[keep]
+
+    # A "board" at the mask's edge that is a board over a far strip of another plain colour:
+    # split where the board's foot steps sharply down to the strip.
+    split = _split_boards(sums, step, peak2, j[at_edge], r[at_edge], top[at_edge], wall_colour[at_edge],
+                          px_per_m[j[at_edge], 0])
+    r[np.flatnonzero(at_edge)[split >= 0]] = split[split >= 0]
+    up = edge[j] - r
+    at_edge = up <= EDGE_PX
 
     # Lowest first per column; a line at the edge ends the column's search.
     order = np.lexsort((up, j))
@@ -134,6 +157,39 @@ def _floor_lines(sums: _Sums, y0: int, cols, rows, reach, px_per_m) -> tuple[np.
     lines[j[keep], rank[keep]] = r[keep] + y0
     tops[j[keep], rank[keep]] = top[keep] + y0
     return lines, tops
+
+
+def _split_boards(sums: _Sums, step, peak2, j, r, top, wall_colour, px_per_m) -> np.ndarray:
+    """Per board (column ``j``, floor line ``r`` and top ``top`` in the band's rows, the
+    wall's colour above it, pixels per upright meter), the row where it is a board of
+    ``FLOOR.wall_foot.board_m[0]`` or more over a strip of ``FLOOR.wall_foot.strip_m[0]`` or
+    more upright, each plain, of colours a board's step apart, parted by a sharp step, the
+    strip not of the wall's colour; -1 where none. ``step``, ``peak2``: as in
+    :func:`_floor_lines`."""
+    fw = FLOOR.wall_foot
+    found = np.full(len(j), -1, np.int64)
+    if len(j) == 0:
+        return found
+    lo = top + np.maximum(3, (fw.board_m[0] * px_per_m).astype(np.int64))
+    hi = r - np.maximum(3, (fw.strip_m[0] * px_per_m).astype(np.int64))
+    t = lo[:, None] + np.arange(max(int((hi - lo).max(initial=0)) + 1, 1))[None]
+    jt = j[:, None]
+    t = np.minimum(t, step.shape[1] - 1)  # rows past the band are past hi too
+    ok = (t <= hi[:, None]) & (step[jt, t] >= fw.board_step) & peak2[jt, t]
+    a, b = np.nonzero(ok)
+    tt = t[a, b]
+    face = top[a] + 1 + (fw.bevel_share * (tt - top[a])).astype(np.int64)
+    upper, lower = sums.mean(j[a], face, tt - 1), sums.mean(j[a], tt + 2, r[a] - 1)
+    apart = np.linalg.norm(upper - lower, axis=-1)
+    good = ((sums.spread(j[a], face, tt - 1) <= fw.plain) & (sums.spread(j[a], tt + 2, r[a] - 1) <= fw.plain)
+            & (apart >= fw.board_step) & (step[j[a], tt] >= fw.sharpness * apart)
+            & (np.linalg.norm(lower - wall_colour[a], axis=-1) >= fw.floor_step))
+    ok[a[~good], b[~good]] = False
+    strength = np.where(ok, step[jt, t], -1.0)
+    best = np.argmax(strength, axis=1)
+    has = ok.any(axis=1)
+    found[has] = t[has, best[has]]
+    return found
 
 
 def _straight_lines(x: np.ndarray, y: np.ndarray, least: int) -> list[tuple[float, float, np.ndarray]]:
@@ -345,10 +401,10 @@ def _things_on_the_foot(calibration, cols, rows, width, at_edge, seen) -> tuple[
 
 def _foot_rows(calibration, cols, rows, lines, tops, px_per_m, seen, least) -> np.ndarray:
     """(k,) the row the floor reaches in each column (inf: its edge stays): along straight
-    feet that ``least`` columns or more found above the mask's edge (``lines``, ``tops``:
-    from :func:`_floor_lines`), with their boards' tops on a line too, a board's height
-    above, a strip of a strip's height below (``FLOOR.wall_foot.strip_m``), and no foot or
-    board ``seen`` beside them running elsewhere (:func:`_clashes`)."""
+    feet that ``least`` columns or more in one stretch found above the mask's edge
+    (``lines``, ``tops``: from :func:`_floor_lines`), with their boards' tops on a line too,
+    a board's height above, a strip of a strip's height below (``FLOOR.wall_foot.strip_m``),
+    and no foot or board ``seen`` beside them running elsewhere (:func:`_clashes`)."""
     fw = FLOOR.wall_foot
     j, n = np.nonzero(lines >= 0)
     x, y, board_y = cols[j].astype(np.float64), lines[j, n].astype(np.float64), tops[j, n].astype(np.float64)
@@ -359,7 +415,10 @@ def _foot_rows(calibration, cols, rows, lines, tops, px_per_m, seen, least) -> n
             continue
         foot = (slope, intercept)
         board = tuple(np.polyfit(x[on][lined], board_y[on][lined], 1))
-        for run in _runs(np.unique(j[on[lined]]), cols, least):
+        runs = _runs(np.unique(j[on[lined]]), cols, FLOOR.skirting.min_wall_columns)
+        if not any(len(run) >= least for run in runs):
+            continue
+        for run in runs:  # one wall's foot, seen between the things standing before it
             strip_m = np.median((rows[run] - _at(foot, cols[run])) / px_per_m[run, 0])
             if (not fw.strip_m[0] <= strip_m <= fw.strip_m[1]
                     or not _a_board(calibration, foot, board, cols[run[[0, -1]]].astype(np.float64))

@@ -21,9 +21,10 @@ WALL_Y_M = 4.0
 SIZE = (960, 720)
 
 
-def _room(board_m: float, shadow: str | None = None, seed: int = 0, board_rgb=(238, 236, 230), yaw_deg=0.0):
+def _room(board_m: float, shadow: str | None = None, seed: int = 0, board_rgb=(238, 236, 230), yaw_deg=0.0,
+          bevel_rgb=None):
     """A camera 1.5 m up looking at a wall 4 m ahead, 20 degrees down, turned ``yaw_deg``
-    from square to the wall. Returns the photo, the true floor mask, the floor plus the
+    from square to the wall; ``bevel_rgb``: the board's top 2 cm, a lit bevel. Returns the photo, the true floor mask, the floor plus the
     board's face (the mistake to undo) and the exact calibration."""
     w, h = SIZE
     K = np.array([[800.0, 0, (w - 1) / 2], [0, 800.0, (h - 1) / 2], [0, 0, 1]])
@@ -57,6 +58,8 @@ def _room(board_m: float, shadow: str | None = None, seed: int = 0, board_rgb=(2
     elif shadow == "sharp":  # a band of shade 15 cm deep on the floor, hard-edged
         image[floor & (hit_y > WALL_Y_M - 0.15)] *= 0.55
     image[board] = board_rgb
+    if bevel_rgb is not None:
+        image[board & (hit_z > board_m - 0.02)] = bevel_rgb
     image += rng.normal(0, 3, image.shape)
     image = np.clip(image, 0, 255).astype(np.uint8)
 
@@ -192,11 +195,11 @@ def test_mask_already_at_the_floor_line_is_left_alone(depth_m, factor):
     assert (truth & ~trimmed).sum() < 0.002 * truth.sum()
 
 
-def _second_floor_strip(depth_m: float, rgb, board_m: float = 0.10, yaw_deg: float = 0.0):
-    """:func:`_room` with the floor's last ``depth_m`` before the wall a second floor of
-    colour ``rgb`` (concrete or carpet past a threshold). Returns the photo, the true
-    floor, the strip and the calibration."""
-    image, truth, _, calibration = _room(board_m, yaw_deg=yaw_deg)
+def _second_floor_strip(depth_m: float, rgb, board_m: float = 0.10, yaw_deg: float = 0.0, **room):
+    """:func:`_room` (``room``: its other arguments) with the floor's last ``depth_m``
+    before the wall a second floor of colour ``rgb`` (concrete or carpet past a
+    threshold). Returns the photo, the true floor, the strip and the calibration."""
+    image, truth, _, calibration = _room(board_m, yaw_deg=yaw_deg, **room)
     w, h = SIZE
     u, v = np.meshgrid(np.arange(w), np.arange(h))
     foot = calibration.floor_from_pixels(np.column_stack([u.ravel(), v.ravel()]).astype(float))

@@ -15,11 +15,11 @@ from augment.floor.wall_foot import (
 from tests.augment.test_skirting import WALL_Y_M, _room, _second_floor_strip
 
 
-def _far_strip(depth_m: float, rgb, board_m: float = 0.10, yaw_deg: float = 0.0):
+def _far_strip(depth_m: float, rgb, board_m: float = 0.10, yaw_deg: float = 0.0, **room):
     """A second floor's strip before the wall (:func:`_second_floor_strip`), the mask
     stopping at the threshold, as the floor model and GrabCut leave it. Returns the photo,
     the true floor, the mask, the strip and the calibration."""
-    image, truth, strip, calibration = _second_floor_strip(depth_m, rgb, board_m, yaw_deg)
+    image, truth, strip, calibration = _second_floor_strip(depth_m, rgb, board_m, yaw_deg, **room)
     return image, truth, truth & ~strip, strip, calibration
 
 
@@ -44,6 +44,46 @@ def test_a_strip_on_a_wall_seen_at_an_angle_is_given_back():
     reached = reach_wall_foot(image, mask, calibration)
     assert (strip & ~reached).sum() < 0.05 * strip.sum()
     assert (reached & ~truth).sum() < 0.01 * strip.sum()
+
+
+def test_a_board_with_a_lit_bevel_on_its_top_marks_the_foot():
+    """A board nearly the wall's colour (11 apart) with a bright bevel along its top, 2 of
+    its 10 cm: the board's face below the bevel is plain, and the strip is given back up
+    to it."""
+    image, truth, mask, strip, calibration = _far_strip(0.3, (90, 90, 95), board_rgb=(196, 178, 168),
+                                                        bevel_rgb=(245, 236, 226))
+    reached = reach_wall_foot(image, mask, calibration)
+    assert (strip & ~reached).sum() < 0.03 * strip.sum()
+    assert (reached & ~truth).sum() < 0.01 * strip.sum()
+
+
+@pytest.mark.parametrize("depth_m", [0.25, 0.3])
+def test_a_strip_of_nearly_the_boards_colour_is_told_from_the_board(depth_m):
+    """A dark carpet strip (70, 56, 35) under a dark board (84, 52, 37), 15 apart: the step
+    from the strip to the board is under a floor line's, and the two read as one board
+    standing on the mask's edge, 0.19-0.20 m tall upright. Plain both, parted by a sharp
+    step, a board's height over a strip's: the floor reaches the board's foot."""
+    image, truth, mask, strip, calibration = _far_strip(depth_m, (70, 56, 35), board_rgb=(84, 52, 37))
+    reached = reach_wall_foot(image, mask, calibration)
+    assert (strip & ~reached).sum() < 0.03 * strip.sum()
+    assert (reached & ~truth).sum() < 0.01 * strip.sum()
+
+
+def test_a_wall_seen_between_things_is_given_back_between_each():
+    """A carton 100 px wide stands in the strip 40 px from the photo's right edge: the foot
+    is found along the 820 columns left of it, and the 40 right of it (fewer than the
+    96 one stretch needs on its own) reach it too; the carton's columns keep their edge
+    (but for two each side, which read the board beside it through the rows' blur)."""
+    image, _, mask, strip, calibration = _far_strip(0.3, (90, 90, 95))
+    carton = np.zeros_like(mask)
+    carton[:, 820:920] = ~mask[:, 820:920] & (np.cumsum(mask[:, 820:920], axis=0) == 0)
+    image[carton] = (150, 110, 80)
+    reached = reach_wall_foot(image, mask, calibration)
+    right = strip.copy()
+    right[:, :920] = False
+    assert right.sum() > 0 and (right & ~reached).sum() < 0.05 * right.sum()
+    assert (strip & ~reached)[:, :820].sum() < 0.03 * strip[:, :820].sum()
+    np.testing.assert_array_equal(reached[:, 822:918], mask[:, 822:918])
 
 
 def test_a_mask_at_the_floor_line_is_left_alone():
