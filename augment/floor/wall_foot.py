@@ -45,6 +45,7 @@ from .skirting import px_per_m_upright, working_mask
 CANDIDATES = 4  # floor lines kept per column, lowest first
 K_STEP_PX = 4  # pixels per upright meter are worked out every this many rows and held between
 EDGE_PX = 3  # a floor line this near the mask's edge (or a line) is at it
+ADJACENT_PX = 2  # wall columns this far apart or nearer follow on in one stretch
 
 
 class _Sums:
@@ -336,14 +337,20 @@ def _one_board_two_feet(sums: _Sums, y0: int, cols, rows, px_per_m, seen) -> tup
             fill = (rows - line > EDGE_PX) & (rows - line <= fw.strip_m[1] * px_per_m)
             # From the higher stretch's near end to the lower stretch's far end, then on.
             first, last = np.searchsorted(cols, min(other_lo, hi)), np.searchsorted(cols, max(other_hi, lo), "right") - 1
-            while first > 0 and fill[first - 1] and cols[first] - cols[first - 1] <= 2:
-                first -= 1
-            while last + 1 < len(cols) and fill[last + 1] and cols[last + 1] - cols[last] <= 2:
-                last += 1
+            first, last = _walk(cols, fill, first, -1), _walk(cols, fill, last, 1)
             span = np.arange(first, last + 1)[fill[first:last + 1]]
             top_row[span] = np.minimum(top_row[span], line[span])
             strips.add(b)
     return [s for i, s in enumerate(seen) if i not in strips], top_row
+
+
+def _walk(cols, ok, j: int, step: int) -> int:
+    """The last index reached from ``j`` stepping by ``step`` (1 or -1) through indices
+    where ``ok`` holds and ``cols`` stay within ``ADJACENT_PX`` of the one before: one
+    stretch of wall."""
+    while 0 <= j + step < len(cols) and ok[j + step] and abs(int(cols[j + step]) - int(cols[j])) <= ADJACENT_PX:
+        j += step
+    return j
 
 
 def _spread_between(sums: _Sums, y0: int, cols, span: tuple[int, int], upper, lower) -> float:
@@ -379,18 +386,17 @@ def _things_on_the_foot(calibration, cols, rows, width, at_edge, seen) -> tuple[
         px_per_m[above] = px_per_m_upright(calibration, cols[above], line[above])
         above &= rise > fw.rise_m * px_per_m
         on_foot = np.abs(rise) <= EDGE_PX
-        for j, step in ((np.searchsorted(cols, first) - 1, -1), (np.searchsorted(cols, last, "right"), 1)):
-            while 0 <= j < len(cols) and on_foot[j] and abs(int(cols[j]) - int(cols[j - step])) <= 2:
-                j += step
-            run = []
-            while (0 <= j < len(cols) and above[j] and (not run or abs(int(cols[j]) - int(cols[run[-1]])) <= 2
-                                                         and abs(int(cols[j]) - int(cols[run[0]])) <= fw.thing_m * px_per_m[j])):
-                run.append(j)
-                j += step
-            if not run:
+        for end, step in ((np.searchsorted(cols, first), -1), (np.searchsorted(cols, last, "right") - 1, 1)):
+            j = _walk(cols, on_foot, end, step) + step  # past the foot's columns at the mask's edge
+            if not (0 <= j < len(cols) and above[j]):
                 continue
+            run = np.arange(j, _walk(cols, above, j, step) + step, step)
+            far = np.abs(cols[run] - cols[j]) > fw.thing_m * px_per_m[run]
+            if far.any():
+                run = run[:np.argmax(far)]
+            j = run[-1] + step
             out_of_photo = (j < 0 or j >= len(cols)) and cols[run[-1]] in (0, width - 1)
-            back = 0 <= j < len(cols) and abs(int(cols[j]) - int(cols[run[-1]])) <= 2 and on_foot[j]
+            back = 0 <= j < len(cols) and abs(int(cols[j]) - int(cols[run[-1]])) <= ADJACENT_PX and on_foot[j]
             # A mask edge along the board's top: the "board" beside it was a far strip of floor.
             strip = np.mean(np.abs(rows[run] - _at(board, cols[run])) <= EDGE_PX) >= 0.5
             if (out_of_photo or back) and not strip:
