@@ -106,10 +106,10 @@ def _floor_lines(sums: _Sums, y0: int, cols, rows, reach, px_per_m) -> tuple[np.
     j, r, up, lo, hi, wall = j[fits], r[fits], up[fits], lo[fits], hi[fits], wall[fits]
 
     # The board's top: the highest sharp step below a plain wall, out of the wall's noise.
-    t = (r - hi)[:, None] + np.arange(max(int((hi - lo).max(initial=0)) + 1, 1))[None]
+    t, inside = _rows_between(r - hi, r - lo, n)
     jt, wt = j[:, None], wall[:, None]
     e = step[jt, t]
-    good = (t <= (r - lo)[:, None]) & (e >= fw.board_step) & peak1[jt, t]
+    good = inside & (e >= fw.board_step) & peak1[jt, t]
     good &= e >= fw.noise_factor * (steps[jt, t - 3] - steps[jt, t - wt]) / (wt - 3)
     a, b = np.nonzero(good)  # the dearest test, on what passed the others
     good[a, b] = sums.spread(j[a], t[a, b] - wall[a], t[a, b] - 1) <= fw.plain
@@ -125,7 +125,7 @@ def _floor_lines(sums: _Sums, y0: int, cols, rows, reach, px_per_m) -> tuple[np.
     board, wall_colour = sums.mean(j, top + 1, r - 1), sums.mean(j, top - wall, top - 1)
     # A board with a lit (or shaded) bevel along its top: its first two rows unlike both the
     # wall and the board's face, which is plain below the bevel.
-    face = top + 1 + (fw.bevel_share * (r - top)).astype(np.int64)
+    face = _below_bevel(top, r)
     bevel, face_colour = sums.mean(j, top + 1, top + 3), sums.mean(j, face, r - 1)
     bevelled = (~keep & (sums.spread(j, face, r - 1) <= limit)
                 & (np.linalg.norm(bevel - face_colour, axis=-1) >= fw.floor_step)
@@ -160,6 +160,19 @@ def _floor_lines(sums: _Sums, y0: int, cols, rows, reach, px_per_m) -> tuple[np.
     return lines, tops
 
 
+def _rows_between(first: np.ndarray, last: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Rows ``first[i]``, ``first[i] + 1``, ... for each i, as many as the longest run needs
+    (held within the band's ``n`` rows), (k, m), and which of them are ``last[i]`` or before."""
+    t = first[:, None] + np.arange(max(int((last - first).max(initial=0)) + 1, 1))[None]
+    return np.minimum(t, n - 1), t <= last[:, None]
+
+
+def _below_bevel(top, foot):
+    """The first row of a board's face, from its top row to its foot: below a lit bevel
+    ``FLOOR.wall_foot.bevel_share`` of its height at most."""
+    return top + 1 + (FLOOR.wall_foot.bevel_share * (foot - top)).astype(np.int64)
+
+
 def _split_boards(sums: _Sums, step, peak2, j, r, top, wall_colour, px_per_m) -> np.ndarray:
     """Per board (column ``j``, floor line ``r`` and top ``top`` in the band's rows, the
     wall's colour above it, pixels per upright meter), the row where it is a board of
@@ -173,13 +186,12 @@ def _split_boards(sums: _Sums, step, peak2, j, r, top, wall_colour, px_per_m) ->
         return found
     lo = top + np.maximum(3, (fw.board_m[0] * px_per_m).astype(np.int64))
     hi = r - np.maximum(3, (fw.strip_m[0] * px_per_m).astype(np.int64))
-    t = lo[:, None] + np.arange(max(int((hi - lo).max(initial=0)) + 1, 1))[None]
+    t, ok = _rows_between(lo, hi, step.shape[1])
     jt = j[:, None]
-    t = np.minimum(t, step.shape[1] - 1)  # rows past the band are past hi too
-    ok = (t <= hi[:, None]) & (step[jt, t] >= fw.board_step) & peak2[jt, t]
+    ok &= (step[jt, t] >= fw.board_step) & peak2[jt, t]
     a, b = np.nonzero(ok)
     tt = t[a, b]
-    face = top[a] + 1 + (fw.bevel_share * (tt - top[a])).astype(np.int64)
+    face = _below_bevel(top[a], tt)
     upper, lower = sums.mean(j[a], face, tt - 1), sums.mean(j[a], tt + 2, r[a] - 1)
     apart = np.linalg.norm(upper - lower, axis=-1)
     good = ((sums.spread(j[a], face, tt - 1) <= fw.plain) & (sums.spread(j[a], tt + 2, r[a] - 1) <= fw.plain)

@@ -24,8 +24,9 @@ SIZE = (960, 720)
 def _room(board_m: float, shadow: str | None = None, seed: int = 0, board_rgb=(238, 236, 230), yaw_deg=0.0,
           bevel_rgb=None):
     """A camera 1.5 m up looking at a wall 4 m ahead, 20 degrees down, turned ``yaw_deg``
-    from square to the wall; ``bevel_rgb``: the board's top 2 cm, a lit bevel. Returns the photo, the true floor mask, the floor plus the
-    board's face (the mistake to undo) and the exact calibration."""
+    from square to the wall; ``bevel_rgb``: the board's top 2 cm, a lit bevel. Returns the
+    photo, the true floor mask, the floor plus the board's face (the mistake to undo) and
+    the exact calibration."""
     w, h = SIZE
     K = np.array([[800.0, 0, (w - 1) / 2], [0, 800.0, (h - 1) / 2], [0, 0, 1]])
     pitch, yaw = np.radians(20.0), np.radians(yaw_deg)
