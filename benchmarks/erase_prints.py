@@ -1,8 +1,8 @@
 """The board erased from prints as users make them: paper, margins, marks, shadows, floors.
 
 Run by hand: ``python benchmarks/erase_prints.py [--count 40] [--seed 9300] [--size 1280x960]``
-(a few minutes). Prints a row per case and writes ``results/erase_prints.{json,md}`` and
-``results/erase_prints_worst.png``.
+(a few minutes). Prints a row per case and writes ``results/erase_prints.{json,md}``,
+``results/erase_prints_worst.png`` and ``results/erase_prints_real.png``.
 
 Each case (:func:`augment.synth.prints.pasted_board`, seeds ``[--seed, i]``) is a print on
 white, off-white or cream paper, with the A3 sheet's margin or trimmed to the squares,
@@ -12,7 +12,9 @@ them under a shadow's edge, blurred, noisy and saved as JPEG like a phone photo;
 same floor without it. The photo is calibrated from the board with the true focal length
 (as EXIF gives it) and the board erased with the drawn floor as the floor mask. Scored by
 :func:`augment.synth.prints.erasure_scores`: light, contrast, seam and bright spots
-against the floor that was there, each with its limit.
+against the floor that was there, each with its limit. Then the same print on the real
+floors of ``samples/real`` (pasted by :func:`augment.synth.prints.paste_print`), erased on
+the floor the model finds.
 """
 from __future__ import annotations
 
@@ -29,6 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from results_io import RESULTS, machine, write  # noqa: E402
 
+from augment.camera.board import Board  # noqa: E402
 from augment.camera.calibrate import calibrate_photo, exif_intrinsics  # noqa: E402
 from augment.errors import CalibrationError  # noqa: E402
 from augment.render.erase import erase_board  # noqa: E402
@@ -42,6 +45,35 @@ def crop(images, sheet_px, pad=30, size=(260, 195)):
     h, w = images[0].shape[:2]
     x0, y0, x1, y1 = max(0, x0), max(0, y0), min(w, x1), min(h, y1)
     return np.hstack([cv2.resize(im[y0:y1, x0:x1], size, interpolation=cv2.INTER_AREA) for im in images])
+
+
+def real_floors() -> tuple[list, np.ndarray]:
+    """The print pasted on the four real photos of ``samples/real`` (where their camera would
+    have seen it, as ``before_after.py`` does), erased on the floor the model finds: their
+    scores against the photo without it, and a picture (photo, erased, truth per row)."""
+    import json
+
+    from augment.floor.model import DEFAULT_MODEL, FloorModel
+    from augment.floor.segment import segment_floor
+    from augment.photo.io import read_photo
+    from augment.synth.prints import PastedBoard, level_camera, paste_print
+
+    real = Path(__file__).resolve().parent.parent / "samples" / "real"
+    model = FloorModel(DEFAULT_MODEL)
+    rows, pictures = [], []
+    for name, room in json.loads((real / "rooms.json").read_text()).items():
+        truth = read_photo(real / f"{name}.jpg")
+        size = truth.shape[1::-1]
+        K, pose = level_camera(room["focal_px"], size, np.radians(room["pitch_deg"]), room["height_m"],
+                               room["board_px"], np.radians(room["board_yaw_deg"]))
+        photo, sheet_px = paste_print(truth, K, pose, paper_over_floor=room["paper_over_floor"])
+        cal = calibrate_photo(photo, Board(), intrinsics=exif_intrinsics(room["focal_px"], size))
+        mask = segment_floor(photo, calibration=cal, model=model).mask
+        erased = erase_board(photo, cal, mask)
+        case = PastedBoard(photo, truth, K, pose, Board(), mask, sheet_px, {})
+        rows.append({"photo": name, **erasure_scores(case, erased.image)})
+        pictures.append(crop([photo, erased.image, truth], sheet_px))
+    return rows, np.vstack(pictures)
 
 
 def main(argv=None) -> int:
@@ -97,6 +129,14 @@ def main(argv=None) -> int:
                         ("marks", (True, False)), ("pattern", ("stager", "charuco", "opencv")),
                         ("floor", ("carpet", "wood", "laminate", "tiles", "concrete")), ("shadow", (True, False))):
         lines.append(f"| {key} | " + ", ".join(f"{v}: {share(key, v)}" for v in values) + " |")
+    real, picture = real_floors()
+    lines += ["", "**Real floors** (`samples/real`: the print pasted where each photo's camera would have seen it, "
+              "erased on the floor the model finds; `erase_prints_real.png`: photo, erased, truth):", "",
+              "| photo | light | contrast | seam | spots | within limits |", "|---|---|---|---|---|---|"]
+    lines += [f"| {r['photo']} | {r['light']:.1f} | {r['contrast']:.2f} | {r['seam']:.2f} | {r['spots']} | "
+              f"{'yes' if r['ok'] else 'no'} |" for r in real]
+    ok_png, data = cv2.imencode(".png", cv2.cvtColor(picture, cv2.COLOR_RGB2BGR))
+    write_atomic(RESULTS / "erase_prints_real.png", data.tobytes())
     lines += ["", "Not calibrated: " + (", ".join(f"{r['case']} ({r['pattern']})" for r in rows if not r["calibrated"])
                                         or "none"), "",
               "`erase_prints_worst.png`: the six worst by light, each the photo, the erased photo and the truth."]
@@ -106,7 +146,8 @@ def main(argv=None) -> int:
         sheet = np.vstack([p[1] for p in worst])
         ok_png, data = cv2.imencode(".png", cv2.cvtColor(sheet, cv2.COLOR_RGB2BGR))
         write_atomic(RESULTS / "erase_prints_worst.png", data.tobytes())
-    write("erase_prints", {"machine": machine(seed=args.seed, count=args.count), "summary": summary, "cases": rows},
+    write("erase_prints", {"machine": machine(seed=args.seed, count=args.count), "summary": summary, "cases": rows,
+                           "real": real},
           lines)
     return 0
 

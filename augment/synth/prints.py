@@ -7,6 +7,8 @@ planks or tiles. :func:`pasted_board` draws such a print on a synthetic floor se
 camera, and the same floor without it (the truth), through the same light, blur, noise
 and JPEG. The floor is a plane seen through one homography, so a photo takes tens of
 milliseconds: hundreds of cases where the full photographer would make dozens.
+:func:`paste_print` lays the same print on a real photo taken without one, where its
+camera (:func:`level_camera`) would have seen it.
 """
 from __future__ import annotations
 
@@ -271,3 +273,110 @@ def erasure_scores(case: PastedBoard, erased: np.ndarray) -> dict:
     ok = (light <= LIGHT_MAX and CONTRAST_RANGE[0] <= contrast <= CONTRAST_RANGE[1] and seam <= SEAM_MAX
           and spots == 0)
     return {"light": light, "contrast": contrast, "seam": seam, "spots": spots, "ok": bool(ok)}
+
+
+def level_camera(focal_px: float, size_px, pitch_rad: float, height_m: float, board_px, yaw_rad: float):
+    """The pose of a board lying on the floor under pixel ``board_px``, seen by a camera
+    ``height_m`` above the floor, tipped down ``pitch_rad`` from level, without roll: how a
+    real photo taken without a board gets one where its own camera would have seen it.
+
+    Parameters
+    ----------
+    focal_px : float
+        The photo's focal length, pixels; its principal point is the centre.
+    size_px : (w, h)
+    pitch_rad, height_m : float
+        The camera's tilt below the horizontal and height above the floor (from the
+        photo's vanishing points and a door's height, say).
+    board_px : (2,) float
+        The board's centre in the photo, pixels; below the horizon.
+    yaw_rad : float
+        The board's rows turned this far from the camera's right, about the vertical.
+
+    Returns
+    -------
+    K : (3, 3) float64
+    camera_from_floor : (4, 4) float64
+        Floor frame = the board's (origin at its centre, x along its rows, z up).
+    """
+    w, h = size_px
+    K = np.array([[focal_px, 0, (w - 1) / 2], [0, focal_px, (h - 1) / 2], [0, 0, 1.0]])
+    up = np.array([0.0, -np.cos(pitch_rad), -np.sin(pitch_rad)])  # camera frame: x right, y down, z ahead
+    ray = np.linalg.solve(K, [board_px[0], board_px[1], 1.0])
+    if up @ ray >= 0:
+        raise ValueError(f"board_px {tuple(board_px)} is not below the horizon")
+    centre = -height_m / (up @ ray) * ray
+    ahead = np.array([0.0, 0.0, 1.0]) - up[2] * up
+    ahead /= np.linalg.norm(ahead)
+    x = np.cos(yaw_rad) * np.array([1.0, 0.0, 0.0]) + np.sin(yaw_rad) * ahead
+    pose = np.eye(4)
+    pose[:3, :3] = np.column_stack([x, np.cross(up, x), up])
+    pose[:3, 3] = centre
+    return K, pose
+
+
+def paste_print(photo: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray, *, board: Board | None = None,
+                paper: str = "white", marks: bool = True, paper_over_floor: float = 3.0,
+                seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """``stage board``'s print laid on the floor of a real photo: the sheet seen through the
+    photo's camera, lit by the floor's own light there, with the photo's blur and grain.
+
+    The paper is matte: its brightness is ``paper_over_floor`` times the floor's around it
+    (blurred over the sheet's size), the ratio of their albedos (about 3 on light wood, 6
+    on dark), held below white.
+
+    Parameters
+    ----------
+    photo : (h, w, 3) uint8
+        RGB. Not modified.
+    K, camera_from_floor : from :func:`level_camera`
+    board : Board, optional
+        Default: ``stage board``'s A3 chessboard.
+    paper : str
+        A key of :data:`PAPERS`.
+    marks : bool
+        The ruler and caption in the margin.
+    seed : int
+        The grain's.
+
+    Returns
+    -------
+    image : (h, w, 3) uint8
+        The photo with the print.
+    sheet_px : (4, 2) float64
+        The sheet's corners in the photo.
+    """
+    board = board or Board()
+    h, w = photo.shape[:2]
+    px_per_mm = 2.0
+    ink = _sheet(board, "sheet", marks, px_per_mm)
+    sh, sw = ink.shape
+    floor_from_sheet = np.array([[1 / (1000 * px_per_mm), 0, -sw / (2000 * px_per_mm)],
+                                 [0, 1 / (1000 * px_per_mm), -sh / (2000 * px_per_mm)], [0, 0, 1.0]])
+    pose = camera_from_floor
+    image_from_sheet = K @ np.column_stack([pose[:3, 0], pose[:3, 1], pose[:3, 3]]) @ floor_from_sheet
+    corners = np.array([[0, 0], [sw, 0], [sw, sh], [0, sh]], np.float64)
+    sheet_px = cv2.perspectiveTransform(corners.reshape(-1, 1, 2), image_from_sheet).reshape(-1, 2)
+    # Drawn at twice the photo's size and averaged down (the squares' edges antialiased),
+    # the sheet blurred first by half the sheet pixels that fall in one drawn pixel.
+    size_px = float(np.sqrt(cv2.contourArea(sheet_px.astype(np.float32))))
+    per_px = np.sqrt(sw * sh) / max(2 * size_px, 1.0)
+    src = cv2.GaussianBlur(ink, (0, 0), 0.5 * per_px) if per_px > 1 else ink
+    big_from_padded = (np.array([[2.0, 0, 0.5], [0, 2.0, 0.5], [0, 0, 1]]) @ image_from_sheet
+                       @ np.array([[1.0, 0, -1], [0, 1, -1], [0, 0, 1]]))
+    on_ink = cv2.warpPerspective(np.pad(src, 1, constant_values=-1.0), big_from_padded, (2 * w, 2 * h),
+                                 flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=-1.0)
+    cover = cv2.resize(np.clip(on_ink + 1.0, 0.0, 1.0), (w, h), interpolation=cv2.INTER_AREA)[..., None]
+    reflect = cv2.resize(0.06 + 0.94 * np.clip(on_ink, 0.0, 1.0), (w, h), interpolation=cv2.INTER_AREA)[..., None]
+
+    linear = (photo.astype(np.float32) / 255.0) ** 2.2
+    around = cv2.GaussianBlur(linear, (0, 0), max(2.0, size_px / 2))
+    light = around.mean(axis=2, keepdims=True) * paper_over_floor
+    paper_rgb = np.asarray(PAPERS[paper], np.float32) ** 2.2
+    printed = np.minimum(reflect * paper_rgb * light, 0.93)
+    out = cover * printed + (1 - cover) * linear
+    out = 255.0 * np.clip(out, 0, 1) ** (1 / 2.2)
+    grain = np.random.default_rng(seed).standard_normal(out.shape).astype(np.float32) * 1.5
+    soft = cv2.GaussianBlur(out, (0, 0), 0.6) + grain
+    out = cover * soft + (1 - cover) * photo.astype(np.float32)
+    return np.clip(out + 0.5, 0, 255).astype(np.uint8), sheet_px

@@ -850,3 +850,45 @@ def test_a_board_too_small_is_said_smaller_than_the_size_it_needs(monkeypatch):
     monkeypatch.setattr(CAMERA.calibrate, "min_board_extent_px", 131)
     with pytest.raises(CalibrationError, match=r"only 130 px across \(at least 131 needed\)"):
         calibrate_photo(image, Board())
+
+
+def test_a_level_camera_puts_the_board_where_asked():
+    # Level, the board's centre one focal length below the principal point: the ray runs 45
+    # degrees down, so the board lies as far ahead as the camera is high.
+    from augment.synth.prints import level_camera
+
+    K, pose = level_camera(800.0, (1201, 901), 0.0, 1.3, (600.0, 1250.0), 0.0)
+    assert pose[:3, 3] == pytest.approx([0.0, 1.3, 1.3])
+    assert pose[:3, 2] == pytest.approx([0.0, -1.0, 0.0])  # floor's up is the camera's -y
+    # Tipped 10 degrees down and turned: the centre still lands on the pixel asked for, the
+    # camera stands 1.3 m above the floor, and the floor's frame is a rotation.
+    K, pose = level_camera(800.0, (1200, 900), np.radians(10), 1.3, (450.0, 700.0), np.radians(30))
+    centre = K @ pose[:3, 3]
+    assert centre[:2] / centre[2] == pytest.approx([450.0, 700.0])
+    assert (-pose[:3, :3].T @ pose[:3, 3])[2] == pytest.approx(1.3)
+    assert pose[:3, :3].T @ pose[:3, :3] == pytest.approx(np.eye(3))
+    assert np.linalg.det(pose[:3, :3]) == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="horizon"):
+        level_camera(800.0, (1200, 900), 0.0, 1.3, (600.0, 300.0), 0.0)
+
+
+def test_a_print_pasted_on_a_real_photo_calibrates_to_its_camera(tmp_path):
+    # samples/real/bedroom_white.jpg: Curtis Adams / Pexels (Pexels License).
+    from augment.synth.photo import save_as_phone
+    from augment.synth.prints import level_camera, paste_print
+
+    photo = read_photo(Path(__file__).resolve().parents[2] / "samples" / "real" / "bedroom_white.jpg")
+    K, pose = level_camera(1035.0, photo.shape[1::-1], np.radians(7.0), 1.12, (800.0, 1030.0), np.radians(10))
+    image, sheet_px = paste_print(photo, K, pose, paper_over_floor=2.6)
+    assert photo.shape == image.shape and not np.shares_memory(photo, image)
+    inside = np.zeros(photo.shape[:2], np.uint8)
+    cv2.fillConvexPoly(inside, np.round(sheet_px).astype(np.int32), 1)
+    far = cv2.dilate(inside, np.ones((15, 15), np.uint8)) == 0
+    assert np.array_equal(image[far], photo[far])  # nothing changed off the sheet
+    path = tmp_path / "room.jpg"
+    save_as_phone(path, image, 1035.0, 92)
+    cal = calibrate_photo(read_photo(path), Board(), intrinsics=exif_intrinsics(exif_focal_px(path, (1600, 1200)),
+                                                                                (1600, 1200)))
+    assert cal.camera_height_m == pytest.approx(1.12, rel=0.03)
+    floor_normal = cal.camera_from_floor[:3, 2]
+    assert np.degrees(np.arccos(-floor_normal[1])) == pytest.approx(7.0, abs=1.0)  # the tilt pasted with
