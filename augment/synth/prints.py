@@ -336,6 +336,8 @@ def paste_print(photo: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray,
         A key of :data:`PAPERS`.
     marks : bool
         The ruler and caption in the margin.
+    paper_over_floor : float
+        The paper's brightness over the floor's around it.
     seed : int
         The grain's.
 

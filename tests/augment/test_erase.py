@@ -237,3 +237,23 @@ def test_a_place_the_photo_shows_coarser_is_copied_only_when_no_other_is():
     density[:, 60:] = 0.5
     assert _best_offset(texture, hole, bad, 4, density=density) == (-20, 0)
     assert _best_offset(texture, hole, bad, 4, density=np.where(hole, 1.0, 0.5).astype(np.float32)) == (20, 0)
+
+
+def test_a_print_on_a_real_floor_leaves_no_trace():
+    """samples/real/bedroom_closets.jpg (Curtis Adams / Pexels, Pexels License): a real
+    laminate floor, the print pasted where the photo's camera would have seen it; the
+    erased sheet against the photo taken without it."""
+    from pathlib import Path
+
+    from augment.photo.io import read_photo
+    from augment.synth.prints import PastedBoard, level_camera, paste_print
+
+    truth = read_photo(Path(__file__).resolve().parents[2] / "samples" / "real" / "bedroom_closets.jpg")
+    K, pose = level_camera(1002.9, (1600, 1200), np.radians(6.61), 1.12, (760.0, 1040.0), np.radians(20))
+    photo, sheet_px = paste_print(truth, K, pose, paper_over_floor=3.2)
+    cal = calibrate_photo(photo, Board(), intrinsics=exif_intrinsics(1002.9, (1600, 1200)))
+    floor = np.zeros(photo.shape[:2], bool)
+    floor[700:] = True  # below the walls' feet: all floor there
+    case = PastedBoard(photo, truth, K, pose, Board(), floor, sheet_px, {})
+    scores = erasure_scores(case, erase_board(photo, cal, floor).image)
+    assert scores["ok"] and scores["light"] <= 2.5, scores
