@@ -45,14 +45,11 @@ def real_photos(folder: Path) -> list[tuple[Path, str]]:
     (the focal length in EXIF), and each one's room preset."""
     from augment.photo.io import read_photo
     from augment.synth.photo import save_as_phone
-    from augment.synth.prints import level_camera, paste_print
+    from augment.synth.prints import paste_planned
 
     out = []
     for name, room in json.loads((REAL / "rooms.json").read_text()).items():
-        photo = read_photo(REAL / f"{name}.jpg")
-        K, pose = level_camera(room["focal_px"], photo.shape[1::-1], np.radians(room["pitch_deg"]), room["height_m"],
-                               room["board_px"], np.radians(room["board_yaw_deg"]))
-        image, _ = paste_print(photo, K, pose, paper_over_floor=room["paper_over_floor"])
+        image = paste_planned(read_photo(REAL / f"{name}.jpg"), room)[0]
         path = folder / f"{name}.jpg"
         save_as_phone(path, image, room["focal_px"], 92)
         out.append((path, room["room"]))
@@ -75,9 +72,9 @@ def main(argv=None) -> int:
     old_tree = work / "old"
     subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(old_tree), args.old], check=True)
     renderer = Renderer()
-    sheets = {"before_after.jpg": SAMPLES, "before_after_real.jpg": real_photos(work)}
     rows = []
     try:
+        sheets = {"before_after.jpg": SAMPLES, "before_after_real.jpg": real_photos(work)}
         for sheet, photos in sheets.items():
             for photo, room in photos:
                 result = furnish(photo, Board(), room=room, suggestions=1, seed=0, renderer=renderer)

@@ -56,18 +56,15 @@ def real_floors() -> tuple[list, np.ndarray]:
     from augment.floor.model import DEFAULT_MODEL, FloorModel
     from augment.floor.segment import segment_floor
     from augment.photo.io import read_photo
-    from augment.synth.prints import PastedBoard, level_camera, paste_print
+    from augment.synth.prints import PastedBoard, paste_planned
 
     real = Path(__file__).resolve().parent.parent / "samples" / "real"
     model = FloorModel(DEFAULT_MODEL)
     rows, pictures = [], []
     for name, room in json.loads((real / "rooms.json").read_text()).items():
         truth = read_photo(real / f"{name}.jpg")
-        size = truth.shape[1::-1]
-        K, pose = level_camera(room["focal_px"], size, np.radians(room["pitch_deg"]), room["height_m"],
-                               room["board_px"], np.radians(room["board_yaw_deg"]))
-        photo, sheet_px = paste_print(truth, K, pose, paper_over_floor=room["paper_over_floor"])
-        cal = calibrate_photo(photo, Board(), intrinsics=exif_intrinsics(room["focal_px"], size))
+        photo, K, pose, sheet_px = paste_planned(truth, room)
+        cal = calibrate_photo(photo, Board(), intrinsics=exif_intrinsics(room["focal_px"], truth.shape[1::-1]))
         mask = segment_floor(photo, calibration=cal, model=model).mask
         erased = erase_board(photo, cal, mask)
         case = PastedBoard(photo, truth, K, pose, Board(), mask, sheet_px, {})

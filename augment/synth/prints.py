@@ -8,7 +8,8 @@ camera, and the same floor without it (the truth), through the same light, blur,
 and JPEG. The floor is a plane seen through one homography, so a photo takes tens of
 milliseconds: hundreds of cases where the full photographer would make dozens.
 :func:`paste_print` lays the same print on a real photo taken without one, where its
-camera (:func:`level_camera`) would have seen it.
+camera (:func:`level_camera`) would have seen it; :func:`paste_planned` at a plan as
+``samples/real/rooms.json`` gives one.
 """
 from __future__ import annotations
 
@@ -382,3 +383,14 @@ def paste_print(photo: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray,
     soft = cv2.GaussianBlur(out, (0, 0), 0.6) + grain
     out = cover * soft + (1 - cover) * photo.astype(np.float32)
     return np.clip(out + 0.5, 0, 255).astype(np.uint8), sheet_px
+
+
+def paste_planned(photo: np.ndarray, plan: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`paste_print` where ``plan`` (an entry of ``samples/real/rooms.json``) puts it:
+    its ``focal_px``, ``pitch_deg``, ``height_m``, ``board_px``, ``board_yaw_deg`` and
+    ``paper_over_floor``. Returns the photo with the print, ``K``, ``camera_from_floor``
+    and the sheet's corners in the photo (4, 2)."""
+    K, pose = level_camera(plan["focal_px"], photo.shape[1::-1], np.radians(plan["pitch_deg"]), plan["height_m"],
+                           plan["board_px"], np.radians(plan["board_yaw_deg"]))
+    image, sheet_px = paste_print(photo, K, pose, paper_over_floor=plan["paper_over_floor"])
+    return image, K, pose, sheet_px
