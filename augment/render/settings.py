@@ -96,6 +96,11 @@ class StagedSettings:
     # The sun read off a bright floor with no edges, a window in view: the way and height at which
     # the window's outline slid down covers it best, when that covers it this well (intersection over union).
     window_sun_min_iou: float = 0.4
+    # ... unless the bright floor is the window mirrored by a glossy floor: its mirror image
+    # lands on bright floor (this share of it, at least) and the sun fitted comes from the
+    # window straight at the camera (within this), as a reflection always does.
+    reflection_min_lit: float = 0.8
+    reflection_max_gap_deg: float = 10.0
     # A window in view and the patches not cast by it: it casts them when the line from it to
     # them is this close to the sun's axis (cosine).
     sun_window_alignment: float = 0.5
@@ -154,6 +159,11 @@ class SunSettings:
     board_margin_m: float = 0.08  # the board's sheet, grown by this, is left out (its edges are steps too)
     min_peak_share: float = 0.12  # an edge family this strong against the strongest
     wall_tol_deg: float = 4.0  # edges this close to a wall's direction run along it
+    # The lit floor's rim steps (median) by at least this share of the sun's contrast per
+    # share of the floor lit: the more floor reads as sun, the more its rim must be the
+    # sun's edges and not a level crossed by grain, planks or daylight falling off (real
+    # wood floors without sun: 0.1-0.4 of the contrast at 0.6-0.87 of the floor).
+    rim_step_per_lit: float = 0.6
     min_touch_cells: int = 20  # a patch in the sun: its edges along the sun touch it on this many cells
     family_deg: float = 5.0  # the sun's edges past the planks: this near their peak, this much farther off a wall
     colour_spread: float = 1.2  # no edges in the light: the most varied channel, this many times the light's spread ...

@@ -353,6 +353,29 @@ def _window_sun(window, bright: SunOnFloor, settings: StagedSettings):
     return np.append(found[0] * math.cos(found[1]), -math.sin(found[1]))
 
 
+def _mirrors_window(window, bright: SunOnFloor, eye_m, aim, settings: StagedSettings) -> bool:
+    """Whether the bright floor ``bright`` is the window in view (:func:`_window_on_wall`)
+    mirrored by a glossy floor, not its sun: the window's mirror image below the floor, seen
+    from the camera at ``eye_m`` (3,), lands on bright floor (``settings.reflection_min_lit``
+    of it in view, at least), and the sun fitted to it (``aim`` (3,), :func:`_window_sun`;
+    None: none fits) comes from the window straight at the camera, as a reflection always
+    does (within ``settings.reflection_max_gap_deg``)."""
+    outline = window[0]
+    eye = np.asarray(eye_m, dtype=np.float64)
+    # A point at height z mirrored to -z is seen where the camera's ray to it meets the floor.
+    mirrored = outline * np.array([1.0, 1.0, -1.0])
+    on_floor = eye + (eye[2] / (eye[2] + outline[:, 2:])) * (mirrored - eye)
+    in_view, lit, _ = _on_floor(bright, on_floor[:, :2])
+    if not (in_view >= settings.cast_min_in_view and lit >= settings.reflection_min_lit):
+        return False
+    if aim is None:
+        return True
+    to_camera = eye[:2] - outline[:, :2].mean(axis=0)
+    way = np.asarray(aim[:2], dtype=np.float64)
+    cos = way @ to_camera / max(float(np.linalg.norm(way) * np.linalg.norm(to_camera)), 1e-9)
+    return bool(cos >= math.cos(math.radians(settings.reflection_max_gap_deg)))
+
+
 def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, lum, wall_lum, small_scale,
                          band_m=None) -> bool:
     """Whether the photo shows a plain wall where the window casting sun patches at
@@ -538,11 +561,15 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         # gives its way (where its outline lands on that floor, else the camera's line to
         # it), and only the floor that bright loses it under the furniture.
         bright = _sun_patches(image, floor_seen, calibration, cam_xy, floor_polygon, -toward)
+        aim = None if bright is None or window is None else _window_sun(window, bright, settings)
+        if bright is not None and window is not None and _mirrors_window(window, bright, -R.T @ pose[:3, 3], aim,
+                                                                          settings):
+            bright = aim = None
         sunny = bright is not None
         patches = bright if settings.sun_from_floor else None
+        aim = aim if settings.sun_from_floor else None
         elev = math.radians(settings.sun_elevation_deg if sunny else settings.window_elevation_deg)
         direction, way = np.append(-toward * math.cos(elev), -math.sin(elev)), "line_to_window"
-        aim = None if patches is None or window is None else _window_sun(window, patches, settings)
         if aim is not None:  # the window's patch found on the bright floor: the sun's way and height
             direction, way = aim, "window_patch"
             axis = aim[:2] / np.linalg.norm(aim[:2])

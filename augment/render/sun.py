@@ -508,12 +508,22 @@ def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, wa
     lit = (touch >= settings.min_touch_cells)[labels]
     if lit.sum() < 100:
         return None
+    lit_share = float(lit.sum() / valid.sum())
+    if _rim_step(lit, inner, step) < settings.rim_step_per_lit * lit_share * (sun_log - shade_log):
+        return None
     downstream = _downstream(lit, standing, axes[0], margin)
     if length_m < settings.min_edge_m and not downstream:
         return None  # a small patch is trusted only when its far end says which way the light goes
     return SunOnFloor(axes, bool(along_wall), length_m, contrast, center, downstream,
-                      float(lit.sum() / valid.sum()), (float(lo[0]), float(lo[1])), float(cell), lit, valid,
-                      float(sigma_m))
+                      lit_share, (float(lo[0]), float(lo[1])), float(cell), lit, valid, float(sigma_m))
+
+
+def _rim_step(lit, inner, step) -> float:
+    """The step of log light (median) on the rim of the floor ``lit`` inside ``inner``:
+    the full sun's contrast where the sun's edges bound it, little where the light
+    merely crosses a level (grain, planks, daylight falling off)."""
+    rim = (cv2.morphologyEx(lit.astype(np.uint8), cv2.MORPH_GRADIENT, np.ones((3, 3), np.uint8)) > 0) & inner
+    return float(np.median(step[rim])) if rim.any() else 0.0
 
 
 def _downstream(lit, standing, axis_xy, margin) -> int:

@@ -608,3 +608,83 @@ def test_the_sun_patch_edge_is_as_soft_as_the_photos():
     raw = sun.sunlit(at_edge)
     assert raw.min() == 0.0 and raw.max() == 1.0
     assert np.std(soft.sunlit(at_edge)) < 0.65 * np.std(raw)
+
+
+def _drawn_floor(lit_box_m):
+    """A top-down view of a floor 6 x 4 m (x from -1 m, y from -2 m, 2 cm cells), all seen,
+    lit in the box ((x0, x1), (y0, y1)), meters."""
+    cell, lo = 0.02, (-1.0, -2.0)
+    y, x = np.mgrid[0:200, 0:300] * cell + np.array(lo)[::-1, None, None]
+    (x0, x1), (y0, y1) = lit_box_m
+    lit = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
+    return SunOnFloor(((1.0, 0.0),), False, 0.0, 3.0, (0.0, 0.0), 0, float(lit.mean()), lo, cell, lit,
+                      np.ones(lit.shape, bool))
+
+
+@pytest.mark.parametrize("lit_box_m, aim, mirrored", [
+    (((1.0, 1.8), (-0.35, 0.35)), None, True),  # the window's mirror image is bright
+    (((2.2, 2.9), (-0.35, 0.35)), None, False),  # bright floor between it and the wall: a sun's patch
+    (((1.0, 1.8), (-0.35, 0.35)), (-0.8, 0.0, -0.6), True),  # the sun fitted comes at the camera
+    (((1.0, 1.8), (-0.35, 0.35)), (-0.6, 0.45, -0.66), False),  # ... 37 degrees off it: a sun
+])
+def test_a_glossy_floor_mirroring_the_window_is_no_sun(lit_box_m, aim, mirrored):
+    """A window 1 m wide on the wall x = 3 m (sill 0.9 m, head 2.1 m), the camera 1.2 m
+    above the floor's origin: mirrored below the floor, its sill is seen 3 x 1.2 / 2.1 =
+    1.71 m from the camera, its head 3 x 1.2 / 3.3 = 1.09 m, its sides within 0.29 m of
+    the axis (by hand)."""
+    from augment.render.staged import _mirrors_window
+
+    outline = np.array([[3.0, -0.5, 0.9], [3.0, 0.5, 0.9], [3.0, 0.5, 2.1], [3.0, -0.5, 2.1]])
+    window = (outline, np.array([0.0, 1.0]), np.array([-1.0, 0.0]))
+    assert _mirrors_window(window, _drawn_floor(lit_box_m), (0.0, 0.0, 1.2), aim, RENDER.staged) is mirrored
+
+
+@pytest.fixture(scope="module")
+def real_rooms():
+    """Photos of samples/real (Curtis Adams / Pexels, Pexels License) with the print pasted
+    where ``rooms.json`` puts it, calibrated, their floor segmented and the print erased, as
+    the pipeline does: name -> (image, calibration, floor mask, floor polygon)."""
+    import json
+    from pathlib import Path
+
+    from augment.floor.model import DEFAULT_MODEL, FloorModel
+    from augment.floor.polygon import floor_polygon
+    from augment.floor.segment import segment_floor
+    from augment.photo.io import read_photo
+    from augment.render.erase import erase_board
+    from augment.synth.prints import paste_planned
+
+    real = Path(__file__).resolve().parents[2] / "samples" / "real"
+    plans = json.loads((real / "rooms.json").read_text())
+    model = FloorModel(DEFAULT_MODEL)
+    out = {}
+    for name in ("bedroom_closets", "dining_room"):
+        photo = paste_planned(read_photo(real / f"{name}.jpg"), plans[name])[0]
+        cal = calibrate_photo(photo, Board(), intrinsics=exif_intrinsics(plans[name]["focal_px"], photo.shape[1::-1]))
+        mask = segment_floor(photo, calibration=cal, model=model).mask
+        out[name] = (erase_board(photo, cal, mask).image, cal, mask, floor_polygon(mask, cal))
+    return out
+
+
+def _real_lighting(real_rooms, name, **staged):
+    image, cal, mask, polygon = real_rooms[name]
+    return estimate_lighting(image, cal, mask, replace(RENDER.staged, **staged), floor_polygon=polygon)
+
+
+def test_no_sun_on_real_wood_floors_lit_by_daylight(real_rooms, monkeypatch):
+    """Two real rooms without sun: laminate lit by daylight falling off away from the
+    windows, and hand-scraped dark planks that mirror their windows. Their lighter
+    floor's rim is no sun's edge (it steps by 0.2-0.4 of the contrast its edges read),
+    and the bright floor under the dining room's windows is their mirror image (the sun
+    fitted to it came straight from a window at the camera)."""
+    closets = _real_lighting(real_rooms, "bedroom_closets")
+    assert closets.source != "sun" and closets.sun is None
+    dining = _real_lighting(real_rooms, "dining_room")
+    assert dining.source == "window" and dining.sun is None and dining.way == "line_to_window"
+    assert dining.softness_rad >= RENDER.staged.window_softness_rad  # the window's soft light, not a sun's
+    # Without the mirror test the reflection is a sun through the window; without the rim's
+    # step the grain and the planks are.
+    assert _real_lighting(real_rooms, "dining_room", reflection_min_lit=2.0).way == "window_patch"
+    monkeypatch.setattr(RENDER, "sun", replace(RENDER.sun, rim_step_per_lit=0.0))
+    assert _real_lighting(real_rooms, "bedroom_closets").source == "sun"
+    assert _real_lighting(real_rooms, "dining_room").source == "sun"
