@@ -101,6 +101,20 @@ class StagedSettings:
     # window straight at the camera (within this), as a reflection always does.
     reflection_min_lit: float = 0.8
     reflection_max_gap_deg: float = 10.0
+    # A glossy floor: the share of the light it mirrors, read off the window in view's
+    # reflection on a view this many pixels wide (the window, its reflection and the floor
+    # around that this many pixels each, at least), at most this.
+    gloss_view_px: int = 800
+    gloss_min_px: int = 20
+    max_floor_gloss: float = 0.3
+    # The furniture mirrored by a floor that glossy at least: rendered at this scale of the
+    # photo, what stands this high (m) at most, fading over this height (m) and blurred by
+    # this (m at the furniture's distance): wood's gloss is soft.
+    min_reflection_gloss: float = 0.03
+    reflection_scale: float = 0.5
+    reflection_reach_m: float = 1.2
+    reflection_fade_m: float = 0.35
+    reflection_blur_m: float = 0.015
     # A window in view and the patches not cast by it: it casts them when the line from it to
     # them is this close to the sun's axis (cosine).
     sun_window_alignment: float = 0.5
@@ -164,6 +178,9 @@ class SunSettings:
     # sun's edges and not a level crossed by grain, planks or daylight falling off (real
     # wood floors without sun: 0.1-0.4 of the contrast at 0.6-0.87 of the floor).
     rim_step_per_lit: float = 0.6
+    # ... and is taken as sure from this on: below it, its light is softer and weaker, down
+    # to a window's at rim_step_per_lit (a real floor's grain may come close).
+    rim_step_per_lit_sure: float = 0.8
     min_touch_cells: int = 20  # a patch in the sun: its edges along the sun touch it on this many cells
     family_deg: float = 5.0  # the sun's edges past the planks: this near their peak, this much farther off a wall
     colour_spread: float = 1.2  # no edges in the light: the most varied channel, this many times the light's spread ...

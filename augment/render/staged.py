@@ -112,6 +112,9 @@ class Lighting:
         ``"plain_wall_upstream"`` (a plain wall in view rules the other way out). A window
         in view: ``"window_patch"`` (its outline lands on the bright floor) or
         ``"line_to_window"``. Else ``"behind_camera"``.
+    floor_gloss : float
+        Share of the light the floor mirrors (a glossy floor shows the furniture's
+        reflection), read off the reflection of the window in view; 0 where none is read.
     """
 
     irradiance_rgb: tuple
@@ -124,12 +127,14 @@ class Lighting:
     lamps: tuple = ()
     key_rgb: tuple = (1.0, 1.0, 1.0)
     way: str = ""
+    floor_gloss: float = 0.0
 
     def to_json(self) -> dict:
         return {"source": self.source, "way": self.way, "direction": [round(float(v), 4) for v in self.direction],
                 "key_fraction": round(float(self.key_fraction), 3), "softness_rad": round(float(self.softness_rad), 3),
                 "irradiance_rgb": [round(float(v), 4) for v in self.irradiance_rgb],
                 "key_rgb": [round(float(v), 3) for v in self.key_rgb],
+                "floor_gloss": round(float(self.floor_gloss), 3),
                 "lamps": [lamp.to_json() for lamp in self.lamps]}
 
 
@@ -376,6 +381,37 @@ def _mirrors_window(window, bright: SunOnFloor, eye_m, aim, settings: StagedSett
     return bool(cos >= math.cos(math.radians(settings.reflection_max_gap_deg)))
 
 
+def _floor_gloss(image, floor_mask, K, dist, pose, outline, settings: StagedSettings) -> float:
+    """Share of the light the floor mirrors, read off the window in view's reflection: the
+    floor where the window's mirror image below it is seen, over the floor around that,
+    against the window itself (linear light, medians; within ``settings.max_floor_gloss``).
+    ``outline`` (n, 3): the window on its wall (:func:`_window_on_wall`), floor-frame meters."""
+    h, w = floor_mask.shape
+    scale = min(1.0, settings.gloss_view_px / max(h, w))
+    size = (max(1, round(w * scale)), max(1, round(h * scale)))
+    small = linear_luminance(cv2.resize(image, size, interpolation=cv2.INTER_AREA))
+    floor = cv2.resize(floor_mask.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0
+
+    def polygon(points_m):
+        px, _ = _project(points_m, K, pose, dist)
+        out = np.zeros(small.shape, np.uint8)
+        if np.all(np.isfinite(px)):
+            cv2.fillConvexPoly(out, np.round(cv2.convexHull((px * scale).astype(np.float32))).astype(np.int32), 1)
+        return out
+
+    pane = cv2.erode(polygon(outline), np.ones((3, 3), np.uint8)) > 0
+    mirror = polygon(outline * np.array([1.0, 1.0, -1.0]))
+    grow = max(3, round(0.5 * math.sqrt(float(mirror.sum()))))
+    ring = (cv2.dilate(mirror, np.ones((2 * grow + 1,) * 2, np.uint8)) > 0) & ~(
+        cv2.dilate(mirror, np.ones((5, 5), np.uint8)) > 0) & floor
+    mirror = (cv2.erode(mirror, np.ones((3, 3), np.uint8)) > 0) & floor
+    if min(pane.sum(), mirror.sum(), ring.sum()) < settings.gloss_min_px:
+        return 0.0
+    around = float(np.median(small[ring]))
+    gloss = (float(np.median(small[mirror])) - around) / max(float(np.median(small[pane])) - around, 1e-3)
+    return float(np.clip(gloss, 0.0, settings.max_floor_gloss))
+
+
 def _plain_wall_upstream(center_m, up_xy, walls, K, dist, pose, lum, wall_lum, small_scale,
                          band_m=None) -> bool:
     """Whether the photo shows a plain wall where the window casting sun patches at
@@ -526,6 +562,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     patches = None if not settings.sun_from_floor else _sun_patches(image, floor_seen, calibration, cam_xy,
                                                                      floor_polygon, colour=found is None)
     key_rgb = (1.0, 1.0, 1.0)
+    gloss = 0.0
     if patches is not None:
         patches, cast = (patches, 0.0) if window is None else _window_casts_either(window, patches, settings)
         axis = np.asarray(patches.axes_xy[0])
@@ -577,6 +614,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         key, soft = ((settings.window_sun_key, settings.window_sun_softness_rad) if sunny
                      else (settings.window_key, settings.window_softness_rad))
         source = "window"
+        if not sunny and window is not None and floor_mask is not None:
+            gloss = _floor_gloss(image, np.asarray(floor_mask, dtype=bool), K, dist, pose, window[0], settings)
     else:
         elev = math.radians(65.0)
         direction = np.append(horiz * math.cos(elev), -math.sin(elev))
@@ -587,12 +626,20 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     if sun is not None:
         if source == "sun":
             key = float(np.clip(1.0 - 1.0 / sun.contrast, *settings.sun_key_range))
+            # A rim hardly sharper than a real floor's grain: as much a window's light as the sun's.
+            low, sure_from = RENDER.sun.rim_step_per_lit, RENDER.sun.rim_step_per_lit_sure
+            sure = float(np.clip((sun.rim_sharpness - low) / (sure_from - low), 0.0, 1.0))
+            key = settings.window_key + sure * (key - settings.window_key)
+            soft = soft + (1.0 - sure) * (settings.window_softness_rad - soft)
+        else:
+            sure = 1.0
         # The sun's colour against the shade's: on the paper in the sun, the two mixed
         # (the sheet itself is left out of the sunlit floor: the floor around it tells).
+        # (An unsure sun's colour, as its light, goes part of the way to a window's: white.)
         ratio = np.asarray(sun.ratio_rgb, dtype=np.float64)
         if np.median(sun.sunlit(around_m)) > 0.5:
-            irradiance = irradiance * np.asarray(unit_colour(1.0 / ratio))
-        key_rgb = unit_colour(ratio - 1.0)
+            irradiance = irradiance * np.asarray(unit_colour(1.0 / (1.0 + sure * (ratio - 1.0))))
+        key_rgb = unit_colour(1.0 - sure + sure * np.asarray(unit_colour(ratio - 1.0)))
     lamps = ()
     if floor_mask is not None:
         lamps = find_lamps(image, np.asarray(floor_mask, dtype=bool), calibration,
@@ -601,7 +648,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                            None if sun is None else (lambda xy: sun.sunlit(xy) > 0.25),
                            inside=None if walls is None or len(walls) == 0 else _in_room(walls, cam_xy))
     return Lighting(tuple(float(v) for v in irradiance), tuple(float(v) for v in direction), key, soft,
-                    tuple(float(v) for v in floor_rgb), source, sun, lamps, tuple(float(v) for v in key_rgb), way)
+                    tuple(float(v) for v in floor_rgb), source, sun, lamps, tuple(float(v) for v in key_rgb), way,
+                    gloss)
 
 
 # --------------------------------------------------------------------------------------
@@ -2119,10 +2167,85 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                  else np.full((1, 1), 255, np.uint8))
     _composite(image[y0:y1, x0:x1], rgba, low, gain, wall_gain, floor_share, floor_roi, floor_mask is not None,
                out[y0:y1, x0:x1], full_alpha[y0:y1, x0:x1], full_gain[y0:y1, x0:x1])
-    lay = _layer(out, full_alpha, full_gain, image) if layer else None
     timings["composite"] = time.perf_counter() - t
+    t = time.perf_counter()
+    layer_alpha = full_alpha
+    if lighting.floor_gloss >= settings.min_reflection_gloss and floor_mask is not None:
+        mirrored = _floor_reflection(renderer, fulls, placed, K, dist, pose, lighting, look, (h, w), settings)
+        if mirrored is not None:
+            layer_alpha = full_alpha.copy()
+            _mirror_onto_floor(out, layer_alpha, mirrored, _floor_matte_cached(image, floor_mask, settings),
+                               lighting.floor_gloss)
+    timings["reflection"] = time.perf_counter() - t
+    lay = _layer(out, layer_alpha, full_gain, image) if layer else None
     timings["total"] = time.perf_counter() - t0
     return Staged(out, lay, full_alpha, full_gain, lighting, roi, s, timings)
+
+
+def _floor_reflection(renderer, meshes, placed, K, dist, pose, lighting: Lighting, look: PhotoLook, shape,
+                      settings: StagedSettings):
+    """The furniture as a glossy floor mirrors it: its box in the photo (x0, y0, x1, y1) and
+    there (rows, cols, 4) float32 premultiplied linear RGB and coverage, fading with the
+    height of what is mirrored over ``settings.reflection_fade_m`` (a wood floor's gloss
+    blurs all but what stands on it) and blurred by ``settings.reflection_blur_m`` at its
+    distance; None where none is in view.
+
+    The mirror image is the furniture seen from the camera mirrored below the floor: a
+    proper camera (the mirror, times a flip of the image's rows) whose picture, flipped
+    back, is the reflection; the flat pass's light per vertex is kept."""
+    h, w = shape
+    reach = min(settings.reflection_reach_m, 3.0 * settings.reflection_fade_m)
+    corners = np.concatenate([_item_corners(it, 0.0) for it, _ in placed])
+    mirrored = corners * np.array([1.0, 1.0, -1.0])
+    mirrored[:, 2] = np.maximum(mirrored[:, 2], -reach)
+    px, _ = _project(mirrored, K, pose, dist)
+    if not np.all(np.isfinite(px)):
+        return None
+    x0, y0 = np.maximum(np.floor(px.min(axis=0)).astype(int) - 2, 0)
+    x1, y1 = np.minimum(np.ceil(px.max(axis=0)).astype(int) + 3, [w, h])
+    if x1 - x0 < 4 or y1 - y0 < 4:
+        return None
+    s = settings.reflection_scale
+    rw, rh = max(2, round((x1 - x0) * s)), max(2, round((y1 - y0) * s))
+    Kb = K.astype(np.float64).copy()
+    Kb[0] *= rw / (x1 - x0)
+    Kb[1] *= rh / (y1 - y0)
+    Kb[0, 2] = (K[0, 2] - x0 + 0.5) * rw / (x1 - x0) - 0.5
+    Kb[1, 2] = (K[1, 2] - y0 + 0.5) * rh / (y1 - y0) - 0.5
+    Kb[1, 2] = (rh - 1) - Kb[1, 2]  # rows flipped back below
+    mirror_pose = np.diag([1.0, -1.0, 1.0, 1.0]) @ pose @ np.diag([1.0, 1.0, -1.0, 1.0])
+    flags = pyrender.RenderFlags.RGBA | pyrender.RenderFlags.FLAT
+    rgba, depth = renderer.render(_flat_scene(meshes, pyrender_camera(Kb), gl_from_cv_pose(np.linalg.inv(mirror_pose))),
+                                  rw, rh, flags=flags)
+    # Each pixel's height over the floor, from its depth in the mirror camera.
+    v, u = np.mgrid[0:rh, 0:rw].astype(np.float32)
+    rays = np.stack([(u - Kb[0, 2]) / Kb[0, 0], (v - Kb[1, 2]) / Kb[1, 1], np.ones_like(u)], axis=-1)
+    points = rays * depth[..., None] - mirror_pose[:3, 3].astype(np.float32)
+    height = points @ mirror_pose[:3, 2].astype(np.float32)  # the floor frame's z: row 3 of R^T
+    alpha = rgba[..., 3].astype(np.float32) / 255.0
+    fade = np.where(depth > 0, np.exp(-np.maximum(height, 0.0) / settings.reflection_fade_m), 0.0) * alpha
+    colour = (rgba[..., :3].astype(np.float32) / np.maximum(rgba[..., 3:], 1).astype(np.float32)) ** 2.2
+    out = np.dstack([colour * fade[..., None], fade]).astype(np.float32)[::-1]
+    distance = float(np.median(depth[depth > 0])) if (depth > 0).any() else 1.0
+    blur = max(settings.reflection_blur_m * Kb[0, 0] / distance, look.blur_px * s, 0.5)
+    out = cv2.GaussianBlur(np.ascontiguousarray(out), (0, 0), blur)
+    return (int(x0), int(y0), int(x1), int(y1)), cv2.resize(out, (x1 - x0, y1 - y0), interpolation=cv2.INTER_LINEAR)
+
+
+def _mirror_onto_floor(out, alpha, mirrored, floor_matte_u8, gloss: float) -> None:
+    """The reflection (:func:`_floor_reflection`) over the staged photo ``out`` (h, w, 3)
+    uint8, in place: on the floor (``floor_matte_u8``, 0-255) where no furniture covers it
+    (``alpha``), the share ``gloss`` of the floor's light that mirrored the room now
+    mirrors the furniture (linear light). ``alpha`` takes the reflection's coverage, for
+    the layer."""
+    (x0, y0, x1, y1), refl = mirrored
+    region = np.s_[y0:y1, x0:x1]
+    weight = gloss * floor_matte_u8[region].astype(np.float32) / 255.0 * (1.0 - alpha[region])
+    cover = weight * refl[..., 3]
+    lin = (out[region].astype(np.float32) / 255.0) ** 2.2
+    lin = lin * (1.0 - cover[..., None]) + weight[..., None] * refl[..., :3]
+    out[region] = np.clip(255.0 * np.clip(lin, 0.0, 1.0) ** (1 / 2.2) + 0.5, 0, 255).astype(np.uint8)
+    alpha[region] = 1.0 - (1.0 - alpha[region]) * (1.0 - cover)
 
 
 def _hidden(world, rays, px, floor_mask, walls, K, pose, cam_xy, settings) -> np.ndarray:

@@ -56,6 +56,10 @@ class SunOnFloor:
         1 where not read (the key light is then white).
     sheet : (rows, cols) bool or None
         The board's sheet in the top-down view, left out of ``seen``: floor all the same.
+    rim_sharpness : float
+        How sharply the light steps across the lit floor's rim (median, log) over the
+        share of the floor lit times the sun's contrast (log): a sun's edges give 1 and
+        more, a level crossed by grain or falling daylight less (inf: not read).
     """
 
     axes_xy: tuple
@@ -72,6 +76,7 @@ class SunOnFloor:
     edge_sigma_m: float = 0.0
     ratio_rgb: tuple = (1.0, 1.0, 1.0)
     sheet: np.ndarray | None = field(default=None, compare=False, repr=False)
+    rim_sharpness: float = math.inf
 
     @functools.cached_property
     def _soft(self) -> tuple[np.ndarray, np.ndarray]:
@@ -509,13 +514,15 @@ def _patches_at(top, valid, standing, lo, cell, sigma_m, min_median_contrast, wa
     if lit.sum() < 100:
         return None
     lit_share = float(lit.sum() / valid.sum())
-    if _rim_step(lit, inner, step) < settings.rim_step_per_lit * lit_share * (sun_log - shade_log):
+    rim_sharpness = _rim_step(lit, inner, step) / max(lit_share * (sun_log - shade_log), 1e-9)
+    if rim_sharpness < settings.rim_step_per_lit:
         return None
     downstream = _downstream(lit, standing, axes[0], margin)
     if length_m < settings.min_edge_m and not downstream:
         return None  # a small patch is trusted only when its far end says which way the light goes
     return SunOnFloor(axes, bool(along_wall), length_m, contrast, center, downstream,
-                      lit_share, (float(lo[0]), float(lo[1])), float(cell), lit, valid, float(sigma_m))
+                      lit_share, (float(lo[0]), float(lo[1])), float(cell), lit, valid, float(sigma_m),
+                      rim_sharpness=float(rim_sharpness))
 
 
 def _rim_step(lit, inner, step) -> float:

@@ -1000,3 +1000,41 @@ def test_the_composite_mixes_the_floors_shadow_and_the_walls_by_the_share_of_flo
                    one(102, np.uint8), use_floor, out, alpha, g)
         assert g[0, 0] == pytest.approx(gain, abs=1e-6)
         assert out[0, 0].tolist() == [round(200 * gain)] * 3
+
+
+def test_a_glossy_floor_mirrors_the_furniture_below_its_base(renderer, room_small):
+    """A 0.6 x 0.4 x 0.5 m box on room_1's floor, the floor mirroring 0.3 of the light:
+    the staged photo changes only on floor the box leaves uncovered, within its mirror
+    image (its corners at -z seen by the camera, and its blur around them), most of all
+    right below its base, and changes there toward the box's colour. A floor too matte
+    (below ``min_reflection_gloss``) mirrors nothing."""
+    image, mask, calibration = room_small
+    item = PlacedItem("test_box", (0.2, 0.3, 0.25), 0.4, (0.6, 0.4, 0.5), "box")
+
+    def staged(gloss):
+        return render_staged(image, calibration, [item], renderer, assets={"test_box": _box_parts()},
+                             lighting=replace(LIGHT, floor_gloss=gloss), floor_mask=mask, seed=0, look=CLEAN)
+
+    plain, glossy = staged(0.0), staged(0.3)
+    assert np.array_equal(staged(0.5 * RENDER.staged.min_reflection_gloss).image, plain.image)
+    np.testing.assert_array_equal(glossy.alpha, plain.alpha)
+    change = np.abs(glossy.image.astype(np.float32) - plain.image).max(axis=2)
+    changed = change > 2
+    assert changed.sum() > 300
+    assert not (changed & (~mask | (plain.alpha > 0.99))).any()
+    corners = _box_corners((0.2, 0.3), (0.6, 0.4, 0.5), 0.4) * [1, 1, -1]
+    # The reflection's blur: 1.5 cm at the box's distance, 3 sigma of it around the mirror image.
+    blur_px = RENDER.staged.reflection_blur_m * calibration.intrinsics.K[0, 0] / np.linalg.norm(
+        calibration.camera_from_floor[:3, :3] @ [0.2, 0.3, 0.0] + calibration.camera_from_floor[:3, 3])
+    grow = 2 * math.ceil(3 * blur_px) + 3
+    mirror = cv2.dilate(_hull_mask(change.shape, _project(calibration, corners)).astype(np.uint8),
+                        np.ones((grow, grow), np.uint8)) > 0
+    assert not (changed & ~mirror).any()
+    # Strongest just below the base (what stands on the floor mirrors sharpest), toward the box.
+    base = _hull_mask(change.shape, _project(calibration, corners[:4]))
+    low = _hull_mask(change.shape, _project(calibration, corners * [1, 1, 0.3]))
+    assert change[low & ~base & (plain.alpha < 0.01)].mean() > 2 * change[mirror & ~low].mean()
+    box = plain.image[plain.alpha > 0.99].astype(np.float32).mean(axis=0)
+    ring = changed & ~base
+    before = np.abs(plain.image[ring].astype(np.float32) - box).mean()
+    assert np.abs(glossy.image[ring].astype(np.float32) - box).mean() < before

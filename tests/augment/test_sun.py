@@ -402,6 +402,24 @@ def test_sun_direction_in_a_synthetic_room(renderer):
     assert estimate_lighting(dim.image, cal, dim.floor_mask).source != "sun"
 
 
+def test_a_sun_whose_rim_is_not_sharp_enough_to_be_sure_is_taken_softer(renderer, monkeypatch):
+    """Render [9600, 0]'s sun, its rim sharp enough to be sure (q = rim step over share lit
+    times contrast, at least 1): the sun's hard light. Asked to be sure only from 2q - 0.6,
+    it is half sure: its softness and key half way to a window's (by hand)."""
+    from augment.synth import render_sample
+
+    sample = render_sample([9600, 0], renderer, size_px=(1280, 960), clutter=False)
+    sure, _ = _sun_error_deg(sample)
+    q, st = sure.sun.rim_sharpness, RENDER.staged
+    assert sure.source == "sun" and q >= RENDER.sun.rim_step_per_lit_sure
+    assert sure.softness_rad == st.sun_softness_rad
+    monkeypatch.setattr(RENDER, "sun", replace(RENDER.sun, rim_step_per_lit_sure=2 * q - RENDER.sun.rim_step_per_lit))
+    half, _ = _sun_error_deg(sample)
+    half_way = st.sun_softness_rad + 0.5 * (st.window_softness_rad - st.sun_softness_rad)
+    assert half.softness_rad == pytest.approx(half_way)
+    assert half.key_fraction == pytest.approx(st.window_key + 0.5 * (sure.key_fraction - st.window_key))
+
+
 def test_sun_through_the_window_in_view(renderer):
     """The window in view, slid down along the sun's edges, lands on its patch on the
     floor: it casts it, and the light travels from that window (here toward the camera)."""
@@ -640,9 +658,9 @@ def test_a_glossy_floor_mirroring_the_window_is_no_sun(lit_box_m, aim, mirrored)
 
 
 @pytest.fixture(scope="module")
-def real_rooms():
+def real_rooms(tmp_path_factory):
     """Photos of samples/real (Curtis Adams / Pexels, Pexels License) with the print pasted
-    where ``rooms.json`` puts it, calibrated, their floor segmented and the print erased, as
+    where ``rooms.json`` puts it, saved as JPEG, calibrated and their floor segmented, as
     the pipeline does: name -> (image, calibration, floor mask, floor polygon)."""
     import json
     from pathlib import Path
@@ -651,18 +669,21 @@ def real_rooms():
     from augment.floor.polygon import floor_polygon
     from augment.floor.segment import segment_floor
     from augment.photo.io import read_photo
-    from augment.render.erase import erase_board
+    from augment.synth.photo import save_as_phone
     from augment.synth.prints import paste_planned
 
     real = Path(__file__).resolve().parents[2] / "samples" / "real"
     plans = json.loads((real / "rooms.json").read_text())
     model = FloorModel(DEFAULT_MODEL)
     out = {}
-    for name in ("bedroom_closets", "dining_room"):
-        photo = paste_planned(read_photo(real / f"{name}.jpg"), plans[name])[0]
+    for name in ("bedroom_closets", "bedroom_windows", "dining_room"):
+        path = tmp_path_factory.mktemp("real") / f"{name}.jpg"
+        pasted = paste_planned(read_photo(real / f"{name}.jpg"), plans[name])[0]
+        save_as_phone(path, pasted, plans[name]["focal_px"], 92)
+        photo = read_photo(path)
         cal = calibrate_photo(photo, Board(), intrinsics=exif_intrinsics(plans[name]["focal_px"], photo.shape[1::-1]))
         mask = segment_floor(photo, calibration=cal, model=model).mask
-        out[name] = (erase_board(photo, cal, mask).image, cal, mask, floor_polygon(mask, cal))
+        out[name] = (photo, cal, mask, floor_polygon(mask, cal))
     return out
 
 
@@ -671,20 +692,18 @@ def _real_lighting(real_rooms, name, **staged):
     return estimate_lighting(image, cal, mask, replace(RENDER.staged, **staged), floor_polygon=polygon)
 
 
-def test_no_sun_on_real_wood_floors_lit_by_daylight(real_rooms, monkeypatch):
-    """Two real rooms without sun: laminate lit by daylight falling off away from the
-    windows, and hand-scraped dark planks that mirror their windows. Their lighter
-    floor's rim is no sun's edge (it steps by 0.2-0.4 of the contrast its edges read),
-    and the bright floor under the dining room's windows is their mirror image (the sun
-    fitted to it came straight from a window at the camera)."""
-    closets = _real_lighting(real_rooms, "bedroom_closets")
-    assert closets.source != "sun" and closets.sun is None
-    dining = _real_lighting(real_rooms, "dining_room")
-    assert dining.source == "window" and dining.sun is None and dining.way == "line_to_window"
-    assert dining.softness_rad >= RENDER.staged.window_softness_rad  # the window's soft light, not a sun's
-    # Without the mirror test the reflection is a sun through the window; without the rim's
-    # step the grain and the planks are.
-    assert _real_lighting(real_rooms, "dining_room", reflection_min_lit=2.0).way == "window_patch"
-    monkeypatch.setattr(RENDER, "sun", replace(RENDER.sun, rim_step_per_lit=0.0))
-    assert _real_lighting(real_rooms, "bedroom_closets").source == "sun"
-    assert _real_lighting(real_rooms, "dining_room").source == "sun"
+def test_no_hard_sun_on_real_wood_floors_lit_by_daylight(real_rooms, monkeypatch):
+    """Three real rooms without sun: laminate lit by daylight falling off away from the
+    windows, and two dark glossy plank floors that mirror their windows. No hard key
+    light: their lighter floor's rim does not step like a sun's edge (0.2-0.7 of the
+    share lit times the contrast): no sun read, or one taken mostly as a window's light,
+    nearly white. Without the rim's step the grain and the planks are a hard sun."""
+    st = RENDER.staged
+    for name in real_rooms:
+        lighting = _real_lighting(real_rooms, name)
+        assert lighting.softness_rad > 0.3 and lighting.key_fraction < 0.33, (name, lighting)
+        assert max(lighting.key_rgb) < 1.3, (name, lighting.key_rgb)
+    assert _real_lighting(real_rooms, "bedroom_closets").sun is None
+    monkeypatch.setattr(RENDER, "sun", replace(RENDER.sun, rim_step_per_lit=0.0, rim_step_per_lit_sure=1e-9))
+    hard = [_real_lighting(real_rooms, name) for name in real_rooms]
+    assert sum(lt.source == "sun" and lt.softness_rad <= st.sun_softness_rad for lt in hard) >= 2
