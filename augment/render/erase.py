@@ -17,7 +17,9 @@ looked at square-on), where the floor's texture has one scale and one orientatio
    a flat place does not win), among places the photo shows about as sharp as the sheet
    (from farther back, the copy is a soft smudge): a tiled or planked floor lines up
    its joints, a carpet keeps its grain. The place is found on a small view, then refined at full size; the
-   copy runs on over the rim it was matched on, fading out, so it has no edge.
+   copy runs on over the rim it was matched on, fading out, so it has no edge. What the
+   copy's light still misses of the floor's at the rim (a glossy floor's sheen, a lighter
+   plank running on), a few levels at most, is carried smoothly across the sheet.
 
 The view is then mapped back into the photo and blended over the sheet's pixels with a
 soft edge. Measured against renders of the same room without the board: see
@@ -192,6 +194,22 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
         have |= take
         offsets.append((dx + ox, dy + oy))
     fill = light_full + copied
+    # The copy's light seldom meets the floor's exactly at the rim (a glossy floor's sheen, a
+    # lighter plank running on): what it misses there, smoothed along the rim and within
+    # ``settings.rim_fix_levels``, is carried smoothly across the sheet.
+    # (Worked out where the rim is 4 pixels wide: it is smooth.)
+    rim = ~hole_full & valid & (cv2.distanceTransform((~hole_full).astype(np.uint8), cv2.DIST_L2, 3) <= ring)
+    shrink = min(1.0, 4.0 / ring)
+    size = (max(2, round(rim.shape[1] * shrink)), max(2, round(rim.shape[0] * shrink)))
+    on_rim = cv2.resize(rim.astype(np.float32), size, interpolation=cv2.INTER_AREA)
+    missed = cv2.resize(np.where(rim[..., None], rgb.astype(np.float32) - fill, 0.0).astype(np.float32), size,
+                        interpolation=cv2.INTER_AREA)
+    share = cv2.GaussianBlur(on_rim, (0, 0), ring * shrink)
+    missed = cv2.GaussianBlur(missed, (0, 0), ring * shrink) / np.maximum(share, 1e-6)[..., None]
+    known = (on_rim > 0.5) & (share > 0.05)
+    missed = np.clip(np.where(known[..., None], missed, 0.0), -settings.rim_fix_levels, settings.rim_fix_levels)
+    carried = _push_pull(missed.astype(np.float32), known.astype(np.float32))
+    fill = fill + cv2.resize(carried, rim.shape[::-1], interpolation=cv2.INTER_LINEAR)
     # How much of the fill each pixel takes: all of the sheet, and where a texture was
     # copied, a ramp over the rim it was matched on, so that the copy has no edge.
     outside = cv2.distanceTransform((~hole_full).astype(np.uint8), cv2.DIST_L2, 3)
@@ -297,6 +315,23 @@ class _TopDown:
                              np.arange(y0, y1 + step, step, dtype=np.float64))
         v = self.view_px(self.calibration.floor_from_pixels(np.column_stack([gx.ravel(), gy.ravel()])))
         return [_from_grid(v[:, k].reshape(gx.shape), y1 - y0, x1 - x0) for k in range(2)]
+
+
+def _push_pull(values: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """``values`` (rows, cols, 3) where ``known`` (rows, cols, 0 or 1) is 1, carried smoothly
+    over the rest: averaged down a pyramid (pull), then each level's gaps filled from the
+    level above (push)."""
+    levels = [(values * known[..., None], known)]
+    while min(levels[-1][1].shape) > 4:
+        total, weight = levels[-1]
+        levels.append((cv2.pyrDown(total), cv2.pyrDown(weight)))
+    total, weight = levels[-1]
+    out = total / np.maximum(weight, 1e-6)[..., None]
+    for total, weight in reversed(levels[:-1]):
+        up = cv2.pyrUp(out, dstsize=(weight.shape[1], weight.shape[0]))
+        sure = np.clip(4.0 * weight, 0.0, 1.0)[..., None]
+        out = sure * total / np.maximum(weight, 1e-6)[..., None] + (1.0 - sure) * up
+    return out
 
 
 def _from_grid(grid: np.ndarray, rows: int, cols: int) -> np.ndarray:

@@ -144,6 +144,7 @@ class EraseSettings:
     search_sheet_px: int = 96  # the sheet's shorter side on the small view that finds light and texture source
     light_sigma_share: float = 0.5  # light: what varies slower than this share of the shorter side (blotches: texture)
     rim_share: float = 0.07  # the rim matched when choosing the texture's source, of the sheet's shorter side
+    rim_fix_levels: float = 6.0  # what the copy misses of the floor's light at the rim is carried in, up to this
     paper_growth_squares: float = 1.0  # the paper may reach this many squares beyond the print (larger paper)
     edge_margin_m: float = 0.004  # always erased beyond the sheet: the paper's edge, its shadow and blur
     paper_line_share: float = 0.5  # a line beyond the sheet is paper while this share of it has the paper's colour

@@ -381,11 +381,12 @@ def _mirrors_window(window, bright: SunOnFloor, eye_m, aim, settings: StagedSett
     return bool(cos >= math.cos(math.radians(settings.reflection_max_gap_deg)))
 
 
-def _floor_gloss(image, floor_mask, K, dist, pose, outline, settings: StagedSettings) -> float:
+def _floor_gloss(image, floor_mask, K, dist, pose, outline, sheet_m, settings: StagedSettings) -> float:
     """Share of the light the floor mirrors, read off the window in view's reflection: the
     floor where the window's mirror image below it is seen, over the floor around that,
     against the window itself (linear light, medians; within ``settings.max_floor_gloss``).
-    ``outline`` (n, 3): the window on its wall (:func:`_window_on_wall`), floor-frame meters."""
+    ``outline`` (n, 3): the window on its wall (:func:`_window_on_wall`), floor-frame meters;
+    ``sheet_m`` (4, 2): the board's sheet, no floor (its paper is brighter)."""
     h, w = floor_mask.shape
     scale = min(1.0, settings.gloss_view_px / max(h, w))
     size = (max(1, round(w * scale)), max(1, round(h * scale)))
@@ -399,6 +400,7 @@ def _floor_gloss(image, floor_mask, K, dist, pose, outline, settings: StagedSett
             cv2.fillConvexPoly(out, np.round(cv2.convexHull((px * scale).astype(np.float32))).astype(np.int32), 1)
         return out
 
+    floor &= polygon(np.column_stack([sheet_m, np.zeros(len(sheet_m))])) == 0
     pane = cv2.erode(polygon(outline), np.ones((3, 3), np.uint8)) > 0
     mirror = polygon(outline * np.array([1.0, 1.0, -1.0]))
     grow = max(3, round(0.5 * math.sqrt(float(mirror.sum()))))
@@ -615,7 +617,9 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                      else (settings.window_key, settings.window_softness_rad))
         source = "window"
         if not sunny and window is not None and floor_mask is not None:
-            gloss = _floor_gloss(image, np.asarray(floor_mask, dtype=bool), K, dist, pose, window[0], settings)
+            sheet = np.asarray(board.outline_m(), dtype=np.float64)[:, :2]
+            sheet = sheet + np.sign(sheet - sheet.mean(axis=0)) * RENDER.sun.board_margin_m
+            gloss = _floor_gloss(image, np.asarray(floor_mask, dtype=bool), K, dist, pose, window[0], sheet, settings)
     else:
         elev = math.radians(65.0)
         direction = np.append(horiz * math.cos(elev), -math.sin(elev))

@@ -257,3 +257,22 @@ def test_a_print_on_a_real_floor_leaves_no_trace():
     case = PastedBoard(photo, truth, K, pose, Board(), floor, sheet_px, {})
     scores = erasure_scores(case, erase_board(photo, cal, floor).image)
     assert scores["ok"] and scores["light"] <= 2.5, scores
+
+
+def test_what_the_rim_knows_is_carried_smoothly_across_the_gap():
+    """Push-pull: known pixels keep their values, a constant is carried exactly, and a
+    ramp known on a ring is filled within its range, without steps (by hand: the gap's
+    values lie between the ring's, and neighbours differ by less than the ramp's range
+    over a tenth of the gap)."""
+    from augment.render.erase import _push_pull
+
+    rows, cols = np.mgrid[0:96, 0:128]
+    known = ((np.abs(rows - 48) > 30) | (np.abs(cols - 64) > 40)).astype(np.float32)
+    flat = np.full((96, 128, 3), 7.0, np.float32)
+    np.testing.assert_allclose(_push_pull(flat * known[..., None], known), 7.0, atol=1e-4)
+    ramp = np.repeat((cols / 127.0 * 10.0)[..., None], 3, axis=2).astype(np.float32)
+    out = _push_pull(ramp * known[..., None], known)
+    np.testing.assert_allclose(out[known > 0], ramp[known > 0], atol=1e-4)
+    gap = known == 0
+    assert out[gap].min() >= ramp[gap].min() - 2.0 and out[gap].max() <= ramp[gap].max() + 2.0
+    assert np.abs(np.diff(out[..., 0], axis=1)).max() < 1.0 and np.abs(np.diff(out[..., 0], axis=0)).max() < 1.0
