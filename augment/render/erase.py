@@ -198,7 +198,8 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     # lighter plank running on): what it misses there, smoothed along the rim and within
     # ``settings.rim_fix_levels``, is carried smoothly across the sheet.
     # (Worked out where the rim is 4 pixels wide: it is smooth.)
-    rim = ~hole_full & valid & (cv2.distanceTransform((~hole_full).astype(np.uint8), cv2.DIST_L2, 3) <= ring)
+    outside = cv2.distanceTransform((~hole_full).astype(np.uint8), cv2.DIST_L2, 3)
+    rim = ~hole_full & valid & (outside <= ring)
     shrink = min(1.0, 4.0 / ring)
     size = (max(2, round(rim.shape[1] * shrink)), max(2, round(rim.shape[0] * shrink)))
     on_rim = cv2.resize(rim.astype(np.float32), size, interpolation=cv2.INTER_AREA)
@@ -212,7 +213,6 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     fill = fill + cv2.resize(carried, rim.shape[::-1], interpolation=cv2.INTER_LINEAR)
     # How much of the fill each pixel takes: all of the sheet, and where a texture was
     # copied, a ramp over the rim it was matched on, so that the copy has no edge.
-    outside = cv2.distanceTransform((~hole_full).astype(np.uint8), cv2.DIST_L2, 3)
     weight = np.where(hole_full, 1.0, np.where(have, np.clip(1.0 - outside / (ring + 1), 0.0, 1.0), 0.0))
     weight = np.where(standing, 0.0, weight).astype(np.float32)
     filled = np.clip(fill + 0.5, 0, 255).astype(np.uint8)

@@ -452,6 +452,13 @@ def _nearer_edge_upstream(center_m, axis_xy, walls, floor_polygon) -> float:
     return 1.0 if out_m[0] < out_m[1] else -1.0
 
 
+def _sheet_grown_m(board) -> np.ndarray:
+    """The board's sheet on the floor (4, 2), meters, grown by ``RENDER.sun.board_margin_m``:
+    no floor to read the light on (its paper is brighter, its edges are steps)."""
+    sheet = np.asarray(board.outline_m(), dtype=np.float64)[:, :2]
+    return sheet + np.sign(sheet - sheet.mean(axis=0)) * RENDER.sun.board_margin_m
+
+
 def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon, toward_xy=None, colour=True):
     """:func:`augment.render.sun.find_sun` on this photo (the board's sheet left out; read in
     colour too where ``colour``), or with the sun's way ``toward_xy`` (2,) known,
@@ -463,8 +470,7 @@ def _sun_patches(image, floor_mask, calibration, cam_xy, floor_polygon, toward_x
     if floor_polygon is not None:
         poly = np.asarray(getattr(floor_polygon, "polygon_m", floor_polygon), dtype=np.float64)
         walls_rad = wall_angles_rad(poly, getattr(floor_polygon, "edge_kind", None))
-    sheet = np.asarray(calibration.board.outline_m(), dtype=np.float64)[:, :2]
-    grown = sheet + np.sign(sheet - sheet.mean(axis=0)) * RENDER.sun.board_margin_m
+    grown = _sheet_grown_m(calibration.board)
     floor_from_image = np.linalg.inv(calibration.image_from_floor)
     if toward_xy is not None:
         return bright_floor(image, mask, floor_from_image, cam_xy, toward_xy, grown)
@@ -617,9 +623,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                      else (settings.window_key, settings.window_softness_rad))
         source = "window"
         if not sunny and window is not None and floor_mask is not None:
-            sheet = np.asarray(board.outline_m(), dtype=np.float64)[:, :2]
-            sheet = sheet + np.sign(sheet - sheet.mean(axis=0)) * RENDER.sun.board_margin_m
-            gloss = _floor_gloss(image, np.asarray(floor_mask, dtype=bool), K, dist, pose, window[0], sheet, settings)
+            gloss = _floor_gloss(image, np.asarray(floor_mask, dtype=bool), K, dist, pose, window[0],
+                                 _sheet_grown_m(board), settings)
     else:
         elev = math.radians(65.0)
         direction = np.append(horiz * math.cos(elev), -math.sin(elev))
@@ -1540,6 +1545,16 @@ def _panes(windows_px, K, dist, box) -> np.ndarray:
 # Occlusion by what the photo shows in front of the furniture
 # --------------------------------------------------------------------------------------
 
+def _box_K(K, box, size):
+    """Intrinsics of the photo's box (x0, y0, x1, y1) rendered at ``size`` (cols, rows)
+    (pixel edges kept, as :func:`_scaled_K`)."""
+    Kb = K.astype(np.float64).copy()
+    for axis, (low, n, m) in enumerate(((box[0], size[0], box[2] - box[0]), (box[1], size[1], box[3] - box[1]))):
+        Kb[axis, axis] = K[axis, axis] * n / m
+        Kb[axis, 2] = (K[axis, 2] - low + 0.5) * n / m - 0.5
+    return Kb
+
+
 def _scaled_K(K, s):
     """Intrinsics of the image resized by ``s`` (pixel edges kept: centers move by (s - 1) / 2)."""
     Ks = K.astype(np.float64).copy()
@@ -2033,11 +2048,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     fw, fh = fbox[2] - fbox[0], fbox[3] - fbox[1]
     s = _render_scale(fw * fh, supersample, look.blur_px, settings)
     rw, rh = max(1, round(fw * s)), max(1, round(fh * s))
-    Kr = _scaled_K(K - np.array([[0, 0, fbox[0]], [0, 0, fbox[1]], [0, 0, 0]]), 1.0)
-    Kr[0, 0] *= rw / fw
-    Kr[1, 1] *= rh / fh
-    Kr[0, 2] = (Kr[0, 2] + 0.5) * rw / fw - 0.5
-    Kr[1, 2] = (Kr[1, 2] + 0.5) * rh / fh - 0.5
+    Kr = _box_K(K, fbox, (rw, rh))
     timings["setup"] = time.perf_counter() - t
 
     # The flat passes: all light, and the key light alone for its shadows (premultiplied:
@@ -2211,11 +2222,7 @@ def _floor_reflection(renderer, meshes, placed, K, dist, pose, lighting: Lightin
         return None
     s = settings.reflection_scale
     rw, rh = max(2, round((x1 - x0) * s)), max(2, round((y1 - y0) * s))
-    Kb = K.astype(np.float64).copy()
-    Kb[0] *= rw / (x1 - x0)
-    Kb[1] *= rh / (y1 - y0)
-    Kb[0, 2] = (K[0, 2] - x0 + 0.5) * rw / (x1 - x0) - 0.5
-    Kb[1, 2] = (K[1, 2] - y0 + 0.5) * rh / (y1 - y0) - 0.5
+    Kb = _box_K(K, (x0, y0, x1, y1), (rw, rh))
     Kb[1, 2] = (rh - 1) - Kb[1, 2]  # rows flipped back below
     mirror_pose = np.diag([1.0, -1.0, 1.0, 1.0]) @ pose @ np.diag([1.0, 1.0, -1.0, 1.0])
     flags = pyrender.RenderFlags.RGBA | pyrender.RenderFlags.FLAT
