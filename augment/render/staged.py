@@ -571,6 +571,11 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
                                                                      floor_polygon, colour=found is None)
     key_rgb = (1.0, 1.0, 1.0)
     gloss = 0.0
+    if (patches is not None and window is not None and patches.rim_sharpness < RENDER.sun.rim_step_per_lit_sure
+            and _mirrors_window(window, patches, -R.T @ pose[:3, 3], None, settings)):
+        # An unsure sun's patches lying where a glossy floor mirrors the window in view:
+        # the floor's sheen. Read again as the window's light (or its sun, edges aside).
+        patches = None
     if patches is not None:
         patches, cast = (patches, 0.0) if window is None else _window_casts_either(window, patches, settings)
         axis = np.asarray(patches.axes_xy[0])

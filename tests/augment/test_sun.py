@@ -692,6 +692,17 @@ def _real_lighting(real_rooms, name, **staged):
     return estimate_lighting(image, cal, mask, replace(RENDER.staged, **staged), floor_polygon=polygon)
 
 
+def test_real_glossy_floors_read_as_their_windows_sheen(real_rooms):
+    """The two dark glossy plank floors mirror their windows: their bright floor lies under
+    the window's mirror image and its rim steps less than a sure sun's. Read as the
+    window's soft light, with the floor's gloss from the window's reflection (a sun read
+    there left them without reflections, its light from a wrong way)."""
+    for name in ("bedroom_windows", "dining_room"):
+        lighting = _real_lighting(real_rooms, name)
+        assert lighting.source == "window" and lighting.sun is None, (name, lighting.source, lighting.way)
+        assert lighting.floor_gloss >= 0.2, (name, lighting.floor_gloss)
+
+
 def test_no_hard_sun_on_real_wood_floors_lit_by_daylight(real_rooms, monkeypatch):
     """Three real rooms without sun: laminate lit by daylight falling off away from the
     windows, and two dark glossy plank floors that mirror their windows. No hard key
