@@ -20,7 +20,8 @@ temporary folder):
 * ``following calls``: the median of ``--runs`` calls after it; each makes its own GL
   context and loads the model, as the command does.
 
-Target (issue 9): under 8 s wall for the four staged images after the first run.
+Target (issue 9): under 8 s wall for the four staged images after the first run; issue 51:
+the fresh command at most 5 s.
 
 ``--large [--old REV]`` times 12 MP photos instead (issue 51: a fresh ``stage furnish``,
 four suggestions, at most 10 s): three of the synthetic photographer's rooms at 4032x3024
@@ -52,6 +53,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PHOTO = ROOT / "samples" / "photos" / "room_4.jpg"
 SUGGESTIONS = 4
 TARGET_S = 8.0
+COMMAND_TARGET_S = 5.0  # issue 51: a fresh `stage furnish` of a 1280x960 photo
 STAGES = ("calibrate", "segment", "floor", "height", "furniture", "layout", "render", "scene", "overlays", "plans",
           "write")
 
@@ -227,7 +229,9 @@ def main() -> None:
         md += ["", f"First run after set-up: {extra:+.2f} s against the warm runs with the same cache (target: at "
                    f"most 20 s more): {'met' if extra <= 20 else 'MISSED'}."]
     md += ["", f"Target: under {TARGET_S:g} s after the first run: following calls {median['total']:.2f} s, "
-               f"command {np.median(commands):.2f} s: {'met' if ok and np.median(commands) < TARGET_S else 'MISSED'}.",
+               f"command {np.median(commands):.2f} s: {'met' if ok and np.median(commands) < TARGET_S else 'MISSED'}; "
+               f"the command at most {COMMAND_TARGET_S:g} s: "
+               f"{'met' if np.median(commands) <= COMMAND_TARGET_S else 'MISSED'}.",
            "The first call in a process pays for loading numba's compiled solver from its disk cache, "
            "onnxruntime's session and the first build of each furniture piece; `render` includes making "
            "the GL context and estimating the light. The plans (matplotlib) are drawn on a second "
