@@ -108,10 +108,12 @@ class StagedSettings:
     gloss_min_px: int = 20
     max_floor_gloss: float = 0.3
     # The furniture mirrored by a floor that glossy at least: rendered at this scale of the
-    # photo, what stands this high (m) at most, fading over this height (m) and blurred by
-    # this (m at the furniture's distance): wood's gloss is soft.
+    # photo at most, coarser while its blur still spans this many rendered pixels, what
+    # stands this high (m) at most, fading over this height (m) and blurred by this (m at
+    # the furniture's distance): wood's gloss is soft.
     min_reflection_gloss: float = 0.03
     reflection_scale: float = 0.5
+    reflection_blur_px: float = 2.0
     reflection_reach_m: float = 1.2
     reflection_fade_m: float = 0.35
     reflection_blur_m: float = 0.015

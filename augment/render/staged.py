@@ -2225,7 +2225,10 @@ def _floor_reflection(renderer, meshes, placed, K, dist, pose, lighting: Lightin
     x1, y1 = np.minimum(np.ceil(px.max(axis=0)).astype(int) + 3, [w, h])
     if x1 - x0 < 4 or y1 - y0 < 4:
         return None
-    s = settings.reflection_scale
+    # As coarse as its blur allows (a 12 MP photo's blurs over some 15 pixels).
+    distance = float(np.median((corners @ pose[:3, :3].T + pose[:3, 3])[:, 2]))
+    blur_px = max(settings.reflection_blur_m * float(K[0, 0]) / max(distance, 0.1), look.blur_px)
+    s = float(np.clip(settings.reflection_blur_px / blur_px, 0.05, settings.reflection_scale))
     rw, rh = max(2, round((x1 - x0) * s)), max(2, round((y1 - y0) * s))
     Kb = _box_K(K, (x0, y0, x1, y1), (rw, rh))
     Kb[1, 2] = (rh - 1) - Kb[1, 2]  # rows flipped back below
@@ -2258,10 +2261,15 @@ def _mirror_onto_floor(out, alpha, mirrored, floor_matte_u8, gloss: float) -> No
     region = np.s_[y0:y1, x0:x1]
     weight = gloss * floor_matte_u8[region].astype(np.float32) / 255.0 * (1.0 - alpha[region])
     cover = weight * refl[..., 3]
-    lin = (out[region].astype(np.float32) / 255.0) ** 2.2
+    lin = _DECODE[out[region]]
     lin = lin * (1.0 - cover[..., None]) + weight[..., None] * refl[..., :3]
-    out[region] = np.clip(255.0 * np.clip(lin, 0.0, 1.0) ** (1 / 2.2) + 0.5, 0, 255).astype(np.uint8)
+    out[region] = _LEVEL_OF_LINEAR[np.clip(lin * 65535.0 + 0.5, 0, 65535).astype(np.uint16)]
     alpha[region] = 1.0 - (1.0 - alpha[region]) * (1.0 - cover)
+
+
+# Linear light (in 1/65535) back to the photo's levels, a table: a 12 MP photo's powers cost
+# more (:data:`_DECODE` is the way there).
+_LEVEL_OF_LINEAR = np.clip(255.0 * (np.arange(65536) / 65535.0) ** (1.0 / GAMMA) + 0.5, 0, 255).astype(np.uint8)
 
 
 def _hidden(world, rays, px, floor_mask, walls, K, pose, cam_xy, settings) -> np.ndarray:
