@@ -548,7 +548,8 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
 
     # Key light: the sun where the floor shows its patches, else the brightest window.
     R = pose[:3, :3]
-    cam_xy = (-R.T @ pose[:3, 3])[:2]
+    eye = -R.T @ pose[:3, 3]
+    cam_xy = eye[:2]
     forward = R.T @ np.array([0, 0, 1.0])
     lum_small = small @ np.array([0.299, 0.587, 0.114])
     wall_lum = float(np.median(lum_small[~region_small])) if (~region_small).any() else None
@@ -572,7 +573,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
     key_rgb = (1.0, 1.0, 1.0)
     gloss = 0.0
     if (patches is not None and window is not None and patches.rim_sharpness < RENDER.sun.rim_step_per_lit_sure
-            and _mirrors_window(window, patches, -R.T @ pose[:3, 3], None, settings)):
+            and _mirrors_window(window, patches, eye, None, settings)):
         # An unsure sun's patches lying where a glossy floor mirrors the window in view:
         # the floor's sheen. Read again as the window's light (or its sun, edges aside).
         patches = None
@@ -612,8 +613,7 @@ def estimate_lighting(image: np.ndarray, calibration, floor_mask: np.ndarray | N
         # it), and only the floor that bright loses it under the furniture.
         bright = _sun_patches(image, floor_seen, calibration, cam_xy, floor_polygon, -toward)
         aim = None if bright is None or window is None else _window_sun(window, bright, settings)
-        if bright is not None and window is not None and _mirrors_window(window, bright, -R.T @ pose[:3, 3], aim,
-                                                                          settings):
+        if bright is not None and window is not None and _mirrors_window(window, bright, eye, aim, settings):
             bright = aim = None
         sunny = bright is not None
         patches = bright if settings.sun_from_floor else None
@@ -2225,7 +2225,8 @@ def _floor_reflection(renderer, meshes, placed, K, dist, pose, lighting: Lightin
     x1, y1 = np.minimum(np.ceil(px.max(axis=0)).astype(int) + 3, [w, h])
     if x1 - x0 < 4 or y1 - y0 < 4:
         return None
-    # As coarse as its blur allows (a 12 MP photo's blurs over some 15 pixels).
+    # Its blur in the photo's pixels (at the furniture's median depth, or the photo's own),
+    # rendered as coarse as that allows (a 12 MP photo's blurs over some 15 pixels).
     distance = float(np.median((corners @ pose[:3, :3].T + pose[:3, 3])[:, 2]))
     blur_px = max(settings.reflection_blur_m * float(K[0, 0]) / max(distance, 0.1), look.blur_px)
     s = float(np.clip(settings.reflection_blur_px / blur_px, 0.05, settings.reflection_scale))
@@ -2245,9 +2246,7 @@ def _floor_reflection(renderer, meshes, placed, K, dist, pose, lighting: Lightin
     fade = np.where(depth > 0, np.exp(-np.maximum(height, 0.0) / settings.reflection_fade_m), 0.0) * alpha
     colour = (rgba[..., :3].astype(np.float32) / np.maximum(rgba[..., 3:], 1).astype(np.float32)) ** 2.2
     out = np.dstack([colour * fade[..., None], fade]).astype(np.float32)[::-1]
-    distance = float(np.median(depth[depth > 0])) if (depth > 0).any() else 1.0
-    blur = max(settings.reflection_blur_m * Kb[0, 0] / distance, look.blur_px * s, 0.5)
-    out = cv2.GaussianBlur(np.ascontiguousarray(out), (0, 0), blur)
+    out = cv2.GaussianBlur(np.ascontiguousarray(out), (0, 0), max(blur_px * s, 0.5))
     return (int(x0), int(y0), int(x1), int(y1)), cv2.resize(out, (x1 - x0, y1 - y0), interpolation=cv2.INTER_LINEAR)
 
 
