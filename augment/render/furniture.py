@@ -197,6 +197,12 @@ class Part:
     casts_shadow : bool
         False for small details inside the silhouette (knobs, books on a shelf), which
         the floor shadows can leave out.
+    cavity : (n,) float64 or None
+        Share of the room's light each vertex gets where the part's own shape hides
+        some of it (deep in a fold of cloth): occlusion finer than the renderer's. None: 1.
+    outline : (k, 3) float64 or None
+        A few points whose convex hull stands in for a convex part where only its outline
+        counts (the floor's shadows): a stuffed cushion's box. None: its vertices.
     """
 
     vertices: np.ndarray
@@ -206,6 +212,8 @@ class Part:
     uv: np.ndarray | None = None
     convex: bool = True
     casts_shadow: bool = True
+    cavity: np.ndarray | None = None
+    outline: np.ndarray | None = None
 
     def transformed(self, matrix: np.ndarray) -> "Part":
         """The part moved by a 4x4 affine ``matrix`` (normals by its inverse transpose)."""
@@ -214,7 +222,8 @@ class Part:
         n = self.normals @ np.linalg.inv(m[:3, :3])
         n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
         faces = self.faces if np.linalg.det(m[:3, :3]) > 0 else self.faces[:, ::-1]
-        return replace(self, vertices=v, normals=n, faces=faces)
+        outline = None if self.outline is None else self.outline @ m[:3, :3].T + m[:3, 3]
+        return replace(self, vertices=v, normals=n, faces=faces, outline=outline)
 
 
 def _oriented(vertices, normals, faces):
@@ -260,10 +269,11 @@ def _face_grid(coords_b, coords_d):
     return np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
 
 
-def _rounded_box_mesh(lo, hi, radius, segments):
+def _rounded_box_mesh(lo, hi, radius, segments, steps=1):
     """A box from ``lo`` to ``hi`` with its edges rounded by ``radius`` (``segments`` facets
-    per 45 degrees; radius 0 gives a sharp box). Exact extents, analytic normals; each
-    side's texture coordinates (meters) run along its longer edge first."""
+    per 45 degrees; radius 0 gives a sharp box; each flat side cut in ``steps`` x ``steps``
+    quads). Exact extents, analytic normals; each side's texture coordinates (meters) run
+    along its longer edge first."""
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     center, half = (lo + hi) / 2, (hi - lo) / 2
     r = float(min(radius, 0.999 * half.min()))
@@ -278,8 +288,8 @@ def _rounded_box_mesh(lo, hi, radius, segments):
     for a in range(3):
         b, d = (a + 1) % 3, (a + 2) % 3
         along, across = (b, d) if half[b] >= half[d] else (d, b)
-        cb = np.concatenate([-inner[b] - r * t[::-1], [-inner[b], inner[b]], inner[b] + r * t])
-        cd = np.concatenate([-inner[d] - r * t[::-1], [-inner[d], inner[d]], inner[d] + r * t])
+        cb = np.concatenate([-inner[b] - r * t[::-1], np.linspace(-inner[b], inner[b], steps + 1), inner[b] + r * t])
+        cd = np.concatenate([-inner[d] - r * t[::-1], np.linspace(-inner[d], inner[d], steps + 1), inner[d] + r * t])
         for sign in (-1.0, 1.0):
             gb, gd = np.meshgrid(cb, cd, indexing="ij")
             p = np.zeros(gb.shape + (3,))
@@ -305,6 +315,178 @@ def _rounded_box_mesh(lo, hi, radius, segments):
     area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     f = f[area > 1e-14]
     return v, n, _oriented(v, n, f), np.concatenate(uvs)
+
+
+def _crowned_box_mesh(lo, hi, radius, crown_m, steps=8):
+    """A stuffed cushion filling the box ``lo``-``hi``: a rounded box whose flat sides
+    bulge out by ``crown_m`` (3,) (the sides across x, y, z) at their middle, falling to
+    nothing at their rims, so that its seams sit inside and its faces catch the light
+    unevenly. Exact extents; normals follow the bulge."""
+    lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    crown = np.minimum(np.asarray(crown_m, dtype=np.float64), 0.25 * (hi - lo))
+    v, n, f, uv = _rounded_box_mesh(lo + crown, hi - crown, radius, 2, steps)
+    center = (lo + hi) / 2
+    r = min(radius, 0.999 * float(((hi - lo) / 2 - crown).min()))
+    inner = np.maximum((hi - lo) / 2 - crown - r, 1e-9)
+    c = np.clip((v - center) / inner, -1.0, 1.0)
+    bend = n.copy()
+    for a in range(3):
+        b, d = (a + 1) % 3, (a + 2) % 3
+        bump = crown[a] * (1 - c[:, b] ** 2) * (1 - c[:, d] ** 2)
+        v[:, a] += bump * n[:, a]
+        # The bulge's slope tilts the normal (weighted by how squarely the side faces a).
+        w = n[:, a] ** 2
+        bend[:, b] -= w * crown[a] * (-2 * c[:, b] / inner[b]) * (1 - c[:, d] ** 2) * (np.abs(c[:, b]) < 1)
+        bend[:, d] -= w * crown[a] * (-2 * c[:, d] / inner[d]) * (1 - c[:, b] ** 2) * (np.abs(c[:, d]) < 1)
+    bend /= np.linalg.norm(bend, axis=1, keepdims=True)
+    return v, bend, _oriented(v, bend, f), uv
+
+
+def _wave(rng, count=4, shortest_m=0.12, longest_m=0.4):
+    """A smooth random wave of ``count`` sines (wavelengths between the two, meters):
+    f(s) in [-1, 1] along a length s (meters)."""
+    lam = rng.uniform(shortest_m, longest_m, count)
+    phase = rng.uniform(0, 2 * np.pi, count)
+    amp = rng.uniform(0.5, 1.0, count)
+
+    def wave(s):
+        s = np.asarray(s, dtype=np.float64)[..., None]
+        return (amp * np.sin(2 * np.pi * s / lam + phase)).sum(-1) / amp.sum()
+    return wave
+
+
+class Folds:
+    """Where cloth hanging down a bed's sides folds: a wave along each side (left, right,
+    head, foot, by where the cloth hangs in the item's frame), so that layers of bedding
+    made with one fold the same way and the upper never dips into the lower. The cloth
+    folds in by up to ``depth_m`` below the height ``rim_z`` (the mattress's edge),
+    fully from ``full_m`` below it on."""
+
+    def __init__(self, rng, depth_m: float, rim_z: float, full_m: float = 0.08):
+        self.depth_m, self.rim_z, self.full_m = float(depth_m), float(rim_z), float(full_m)
+        self.valley_dark = 0.5  # light lost at the bottom of the deepest fold (about half its sky hidden)
+        self._in = [_wave(rng, 4, 0.1, 0.3) for _ in range(4)]
+        self._hem = [_wave(rng) for _ in range(4)]
+
+    def at(self, x, y, z, ux, uy):
+        """How far the cloth folds in (n,) and its hem's rise (n,), at rest points
+        (x, y, z), the horizontal way out (ux, uy)."""
+        weights = (np.maximum(-ux, 0) ** 2, np.maximum(ux, 0) ** 2, np.maximum(-uy, 0) ** 2, np.maximum(uy, 0) ** 2)
+        along = (y, y, x, x)
+        grow = self.depth_m * np.clip((self.rim_z - z) / self.full_m, 0.0, 1.0) ** 1.5
+        inward = grow * sum(w * (1 - f(s)) / 2 for w, f, s in zip(weights, self._in, along))
+        rise = 0.3 * grow * sum(w * f(s) for w, f, s in zip(weights, self._hem, along))
+        return inward, rise
+
+
+def _box_corners(lo, hi) -> np.ndarray:
+    """The 8 corners (8, 3) of the box ``lo``-``hi``."""
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])], float)
+
+
+def _grid_normals(P, outward):
+    """Unit normals (rows, cols, 3) of a grid of points, from its two directions, on the
+    side ``outward`` (rows, cols, 3) points to on the whole (up where they degenerate: a
+    corner's rim)."""
+    n = np.cross(np.gradient(P, axis=0), np.gradient(P, axis=1))
+    n *= np.sign(float((n * outward).sum()) or 1.0)
+    length = np.linalg.norm(n, axis=-1, keepdims=True)
+    return np.where(length > 1e-12, n / np.maximum(length, 1e-12), (0.0, 0.0, 1.0))
+
+
+def _perimeter(lo, hi, step_m, corner_steps):
+    """A rectangle's outline as points (n, 2) and outward directions (n, 2), once round
+    counter-clockwise from its (lo, lo) corner; at each corner the direction turns
+    through 90 degrees in ``corner_steps`` steps. Sides are cut every ``step_m`` or finer."""
+    corners = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]])
+    outward = np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]])
+    points, ways = [], []
+    for k in range(4):
+        a, b = corners[k], corners[(k + 1) % 4]
+        count = max(1, int(np.ceil(np.linalg.norm(b - a) / step_m)))
+        t = np.linspace(0.0, 1.0, count + 1)[:-1]
+        points.append(a + t[:, None] * (b - a))
+        ways.append(np.repeat(outward[k][None], count, axis=0))
+        turn = np.linspace(0.0, np.pi / 2, corner_steps + 1)[:-1]  # at b, from this side's way to the next's
+        c0 = math.atan2(outward[k][1], outward[k][0])
+        points.append(np.repeat(b[None], corner_steps, axis=0))
+        ways.append(np.column_stack([np.cos(c0 + turn), np.sin(c0 + turn)]))
+    return np.concatenate(points), np.concatenate(ways)
+
+
+def _draped_mesh(lo_xy, hi_xy, z_top, radius, hang_m, folds: Folds | None = None, puff_m=0.0, rng=None,
+                 step_m=0.02, top_step_m=0.05):
+    """Cloth covering the rectangle ``lo_xy``-``hi_xy`` at height ``z_top`` and hanging down
+    its four sides (a duvet, a sheet, a throw): over the rim by a roll of ``radius``, then
+    straight down by ``hang_m`` (left, right, head (low y), foot (high y)); rounded around
+    the corners. Its top puffs up by ``puff_m`` toward the middle (unevenly, by ``rng``)
+    and the hanging cloth folds as ``folds`` says. (n, 3) vertices, normals, faces and
+    texture coordinates (meters along the cloth), and (n,) the light left deep in the
+    folds (:attr:`Part.cavity`).
+
+    Two grids: the top, coarse (``top_step_m``), and the skirt round it, fine along the
+    rim (``step_m``: layers of bedding sampled apart must not cross in a fold), reaching
+    a little onto the top so that no gap opens between them."""
+    lo, hi = np.asarray(lo_xy, dtype=np.float64), np.asarray(hi_xy, dtype=np.float64)
+    r = float(radius)
+    arc = r * np.pi / 2
+    reach = arc + np.asarray(hang_m, dtype=np.float64)  # cloth past the top's rim, per side
+    core_lo, core_hi = lo + r, hi - r
+    size = np.maximum(core_hi - core_lo, 1e-9)
+    uneven = (lambda x, y: 1.0) if rng is None else (
+        lambda x, y, w=_wave(rng, 3, 0.3, 0.8): 1 + 0.25 * w(x + 0.7 * y))
+
+    def rise(x, y):
+        u, w = 2 * (x - core_lo[0]) / size[0] - 1, 2 * (y - core_lo[1]) / size[1] - 1
+        return puff_m * (1 - u ** 4) * (1 - w ** 4) * uneven(x, y)
+
+    # The top.
+    xs = np.linspace(core_lo[0], core_hi[0], max(2, int(np.ceil(size[0] / top_step_m)) + 1))
+    ys = np.linspace(core_lo[1], core_hi[1], max(2, int(np.ceil(size[1] / top_step_m)) + 1))
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    top = np.stack([X, Y, z_top + rise(X, Y)], axis=-1)
+    # The skirt: along the rim, and out from it (from a little inside, under the top's edge).
+    rim, way = _perimeter(core_lo, core_hi, step_m, max(4, int(np.ceil(reach.max() * np.pi / 2 / step_m))))
+    ex = np.where(way[:, 0] < 0, reach[0], reach[1])
+    ey = np.where(way[:, 1] < 0, reach[2], reach[3])
+    e = np.hypot(way[:, 0] * ex, way[:, 1] * ey)  # how far the cloth runs on past the rim this way
+    inside = min(step_m, 0.5 * float(size.min()))
+    t = np.concatenate([[-inside], np.linspace(0.0, 1.0, max(3, int(np.ceil(e.max() / step_m))) + 1)])
+    d = np.maximum(t[None, :], 0.0) * e[:, None]
+    theta = np.minimum(d, arc) / max(r, 1e-9)
+    straight = (np.abs(way).max(axis=1) > 1 - 1e-9)[:, None]  # round a corner the strip under the top stays put
+    out = r * np.sin(theta) + np.minimum(t[None, :], 0.0) * straight
+    drop = r * (1 - np.cos(theta)) + np.maximum(d - arc, 0.0)
+    cx, cy = np.broadcast_to(rim[:, :1], d.shape), np.broadcast_to(rim[:, 1:], d.shape)
+    ux, uy = np.broadcast_to(way[:, :1], d.shape), np.broadcast_to(way[:, 1:], d.shape)
+    inward, hem = (np.zeros(d.shape), 0.0) if folds is None else folds.at(cx, cy, z_top - drop, ux, uy)
+    along = ux * (out - inward), uy * (out - inward)
+    lift = np.where(t[None, :] < 0, rise(cx + along[0], cy + along[1]) - 1e-4, 0.0)  # the strip under the top
+    skirt = np.stack([cx + along[0], cy + along[1], z_top + lift - drop + hem], axis=-1)
+    skirt = np.concatenate([skirt, skirt[:1]])  # closed round
+    ring_uv = np.concatenate([rim, rim[:1]])[:, None, :] + np.concatenate([way, way[:1]])[:, None, :] * (
+        np.concatenate([d, d[:1]]) + np.minimum(t, 0.0)[None, :] * np.concatenate([straight, straight[:1]]))[..., None]
+    up = np.array([0.0, 0.0, 1.0])
+    away = np.concatenate([way, way[:1]])
+    grids = [(top, up, _face_grid(xs, ys), np.column_stack([X.ravel(), Y.ravel()]), np.ones(top.shape[:2])),
+             (skirt, np.column_stack([away, np.ones(len(away))])[:, None, :], _face_grid(np.arange(len(skirt)), t),
+              ring_uv.reshape(-1, 2),
+              1.0 - (0.0 if folds is None else folds.valley_dark / folds.depth_m)
+              * np.concatenate([inward, inward[:1]]))]
+    vs, ns, fs, uvs, cav = [], [], [], [], []
+    count = 0
+    for k, (P, outward, faces, uv, c) in enumerate(grids):
+        n = _grid_normals(P, np.broadcast_to(outward, P.shape))
+        if k == 1:  # the strip under the top and the rim face up (round a corner they are single points)
+            n[:, :2] = (0.0, 0.0, 1.0)
+        vs.append(P.reshape(-1, 3))
+        ns.append(n.reshape(-1, 3))
+        fs.append(_oriented(vs[-1], ns[-1], faces) + count)
+        uvs.append(uv)
+        cav.append(np.ravel(c))
+        count += len(vs[-1])
+    v = np.concatenate(vs)
+    return v, np.concatenate(ns), np.concatenate(fs), np.concatenate(uvs), np.concatenate(cav)
 
 
 def _lathe_mesh(profile, sections, arc=(0.0, 2 * np.pi), smooth_deg=35.0):
@@ -409,11 +591,11 @@ class _Shop:
     def __init__(self):
         self.parts: list[Part] = []
 
-    def _add(self, v, n, f, uv, mat, convex=True, shadow=True, matrix=None) -> Part:
+    def _add(self, v, n, f, uv, mat, convex=True, shadow=True, matrix=None, cavity=None, outline=None) -> Part:
         # Each part starts its surface elsewhere, so that neighbours' grain does not line up.
         phase = abs(math.sin(float(v.mean(axis=0) @ (12.9898, 78.233, 37.719))))
         start = np.modf(phase * np.array([43758.55, 24634.63]))[0]
-        part = Part(v, n, f, mat, uv + 3.0 * start, convex, shadow)
+        part = Part(v, n, f, mat, uv + 3.0 * start, convex, shadow, cavity, outline)
         if matrix is not None:
             part = part.transformed(matrix)
         self.parts.append(part)
@@ -422,6 +604,18 @@ class _Shop:
     def box(self, lo, hi, mat, round_m=0.0, segments=1, shadow=True, matrix=None) -> Part:
         """Axis-aligned box from corner ``lo`` to ``hi``, edges rounded by ``round_m``."""
         return self._add(*_rounded_box_mesh(lo, hi, round_m, segments), mat, True, shadow, matrix)
+
+    def cushion(self, lo, hi, mat, round_m=0.04, crown_m=(0.01, 0.01, 0.015), matrix=None) -> Part:
+        """A stuffed cushion filling the box ``lo``-``hi``, its sides bulging by ``crown_m``."""
+        return self._add(*_crowned_box_mesh(lo, hi, round_m, crown_m), mat, True, True, matrix,
+                         outline=_box_corners(lo, hi))
+
+    def drape(self, lo_xy, hi_xy, z_top, mat, rng, radius=0.04, hang_m=(0.1, 0.1, 0.1, 0.1), folds=None,
+              puff_m=0.0) -> Part:
+        """Cloth over a rectangle, hanging down its sides (:func:`_draped_mesh`)."""
+        *mesh, cavity = _draped_mesh(lo_xy, hi_xy, z_top, radius, hang_m, folds, puff_m, rng)
+        low, high = mesh[0].min(axis=0), mesh[0].max(axis=0)
+        return self._add(*mesh, mat, cavity=cavity, outline=_box_corners(low, high))
 
     def lathe(self, x, y, profile, mat, sections=24, arc=(0.0, 2 * np.pi), convex=True, shadow=True,
               matrix=None) -> Part:
@@ -676,7 +870,11 @@ def _fronts(shop, x0, x1, z0, z1, y_face, mat, handle_mat, rows, cols, handle, g
 
 
 def _cushion(shop, lo, hi, mat, round_m=0.04, matrix=None):
-    return shop.box(lo, hi, mat, round_m, 3, matrix=matrix)
+    """A stuffed cushion: it bulges most across its thinnest side, as a pillow does."""
+    size = np.asarray(hi, dtype=np.float64) - np.asarray(lo, dtype=np.float64)
+    crown = 0.07 * size.min() * np.ones(3)
+    crown[size.argmin()] = 0.2 * size.min()
+    return shop.cushion(lo, hi, mat, round_m, crown, matrix)
 
 
 # --------------------------------------------------------------------------------------
@@ -723,30 +921,38 @@ def _bed(shop, rng, W, D, H, pillows=None):
             shop.rod((x, -D / 2 + t, frame_top + 0.02), (x, -D / 2 + t, H - t), 0.007, frame, 6)
         shop.box((-W / 2 + t, y_head, frame_top - 0.09), (W / 2 - t, D / 2, frame_top - 0.05), frame, 0.002)
         frame_top = frame_top - 0.05
-    ins = 0.02 if style != "metal" else 0.0
-    shop.box((-W / 2 + ins, y_head + ins, frame_top - 0.05), (W / 2 - ins, D / 2 - ins, mattress_top), mattress,
+    ins = 0.02 if style != "metal" else 0.015
+    folds = Folds(rng, 0.04, mattress_top - 0.01)  # the bedding folds in this far: the mattress stands back
+    m_in = ins + folds.depth_m
+    shop.box((-W / 2 + m_in, y_head + ins, frame_top - 0.05), (W / 2 - m_in, D / 2 - m_in, mattress_top), mattress,
              0.05, 2)
-    # Duvet over most of the mattress, hanging a little over the sides, turned down at the head.
+    # Duvet over most of the mattress, rolling over its sides and hanging in folds,
+    # turned down at the head.
     fold_y = y_head + 0.42
-    # Duvet, turned-down sheet and throw overlap: their sides stand 3 mm apart, never
-    # in one plane (coplanar faces flicker between the two colours).
+    # Duvet, turned-down sheet and throw overlap: their sides stand 8 mm apart, never
+    # in one plane (coplanar faces flicker between the two colours) nor crossing in a fold.
     edge = ins * 0.9  # how far the bedding hangs over the mattress
     x_out, y_out = W / 2 - ins + edge, D / 2 - ins + edge
-    shop.box((-x_out + 0.003, fold_y, mattress_top - 0.12), (x_out - 0.003, y_out - 0.003, mattress_top + 0.045),
-             duvet, 0.04, 2)
-    shop.box((-x_out, fold_y - 0.02, mattress_top - 0.1), (x_out, fold_y + 0.2, mattress_top + 0.065), sheet, 0.035, 2)
+    r = 0.05
+    shop.drape((-x_out + 0.008, fold_y - r), (x_out - 0.008, y_out - 0.008), mattress_top + 0.04, duvet, rng,
+               r, (0.11, 0.11, 0.0, 0.11), folds, puff_m=0.025)
+    r = 0.035
+    shop.drape((-x_out, fold_y - 0.02), (x_out, fold_y + 0.2), mattress_top + 0.06, sheet, rng, r,
+               (0.065, 0.065, 0.02, 0.0), folds, puff_m=0.01)
     n = pillows or (2 if W > 1.2 else 1)
     pw = (W - 2 * ins - 0.08 - (n - 1) * 0.04) / n
     first = len(shop.parts)
     for i in range(n):
         x0 = -W / 2 + ins + 0.04 + i * (pw + 0.04)
         tilt = _about((0, y_head + 0.02, mattress_top), _rot_x(math.radians(12)))
-        _cushion(shop, (x0, y_head + 0.04, mattress_top - 0.01), (x0 + pw, y_head + 0.34, pillow_top - 0.05), sheet,
-                 0.05, tilt)
+        shop.cushion((x0, y_head + 0.04, mattress_top - 0.01), (x0 + pw, y_head + 0.38, pillow_top - 0.03), sheet,
+                     0.04, (0.012, 0.02, 0.035), tilt)
     shop.reach(first, 2, pillow_top - 0.015)
     if rng.random() < 0.5:
         throw = _mat(rng, *_pick(rng, _styled("bedding", BEDDING) + _styled("fabrics", FABRICS)), 0.95)
-        shop.box((-x_out, D / 2 - 0.5, mattress_top - 0.14), (x_out, y_out, mattress_top + 0.07), throw, 0.03, 2)
+        r = 0.03
+        shop.drape((-x_out, D / 2 - 0.5), (x_out, y_out), mattress_top + 0.07, throw, rng, r,
+                   (0.18, 0.18, 0.0, 0.15), folds, puff_m=0.005)
     return style
 
 

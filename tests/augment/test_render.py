@@ -16,16 +16,19 @@ from augment.camera.board import Board
 from augment.camera.calibration import Calibration, Intrinsics
 from augment.floor.polygon import FloorPolygon
 from augment.photo.io import read_photo
-from augment.render.furniture import (BUILDERS, Part, PlacedItem, build_furniture, furniture_for, furniture_from_asset,
-                                      load_asset, placed_items, world_from_item)
+from augment.render.furniture import (BUILDERS, Folds, Part, PlacedItem, _crowned_box_mesh, _draped_mesh,
+                                      build_furniture, furniture_for, furniture_from_asset, load_asset, placed_items,
+                                      world_from_item)
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
-from augment.render.staged import (Lighting, _Caster, _composite, _floor_gain, _nearer_edge_upstream, _on_wall_m,
+from augment.render.staged import (Lighting, _Caster, _composite, _floor_gain, _furniture_meshes, _nearer_edge_upstream,
+                                   _on_wall_m,
                                    _plain_wall_upstream, _render_scale, _roll_off, _wall_shading, _walls_run_on,
                                    _window, _window_casts, _window_casts_either, _window_on_wall, _window_sun,
                                    estimate_lighting, floor_matte, render_staged, wall_segments, write_jpeg)
 from augment.render.sun import SunOnFloor
+from augment.synth.scene import furniture_meshes
 from layout.catalog import CATALOG
 
 PHOTOS = Path(__file__).resolve().parents[2] / "samples" / "photos"
@@ -525,6 +528,96 @@ def test_every_kind_fills_its_box_exactly(kind):
             assert np.abs(raw - target).max() < RENDER.furniture.fit_slack_m, (kind, f.style, raw - target)
         assert all(np.all(np.isfinite(p.vertices)) and np.allclose(np.linalg.norm(p.normals, axis=1), 1, atol=1e-6)
                    for p in f.parts)
+
+
+def test_cloth_without_folds_is_the_rectangle_rolled_over_its_rim_and_hanging_straight():
+    """Hand-made shape: the top at z_top over the rectangle less the roll's radius; past
+    its rim every point lies on the quarter circle of the roll (radius r about the rim
+    r below the top) or straight below its end, hanging as far as each side says."""
+    lo, hi, z_top, r, hang = (-0.5, -1.0), (0.5, 1.0), 0.6, 0.05, (0.1, 0.12, 0.02, 0.15)
+    v, n, faces, uv, cavity = _draped_mesh(lo, hi, z_top, r, hang)
+    assert np.allclose(v[:, :2].min(0), lo, atol=1e-9) and np.allclose(v[:, :2].max(0), hi, atol=1e-9)
+    assert v[:, 2].max() == pytest.approx(z_top) and v[:, 2].min() == pytest.approx(z_top - r - max(hang))
+    core_lo, core_hi = np.add(lo, r), np.subtract(hi, r)
+    off = v[:, :2] - np.clip(v[:, :2], core_lo, core_hi)  # how far past the top's rim, horizontally
+    h = np.linalg.norm(off, axis=1)
+    roll = v[:, 2] >= z_top - r
+    assert np.allclose(v[roll & (h < 1e-9), 2], z_top, atol=2e-4)  # the top (and the skirt's strip under its edge)
+    on_roll = roll & (h > 1e-6)
+    assert np.allclose(np.hypot(h[on_roll], v[on_roll, 2] - (z_top - r)), r, atol=1e-9)
+    assert np.allclose(h[~roll], r, atol=1e-9)
+    # Normals point away from the rim's axis (up on the top), and the cloth is all lit: no folds.
+    axis = np.column_stack([np.clip(v[:, :2], core_lo, core_hi), np.full(len(v), z_top - r)])
+    away = np.where(roll[:, None], v - axis, np.column_stack([off, np.zeros(len(v))]))
+    away[h < 1e-9] = (0, 0, 1)
+    assert np.min(np.einsum("ij,ij->i", n, away / np.linalg.norm(away, axis=1, keepdims=True))) > 0.9
+    assert np.all(cavity == 1.0)
+    tri = v[faces]
+    assert np.all(np.einsum("ij,ij->i", np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), n[faces].sum(1)) >= 0)
+
+
+def test_hanging_cloth_folds_in_toward_its_hem_alike_in_every_layer():
+    """Below the rim height the cloth folds in, by up to the folds' depth and most at the
+    hem, darkened by how deep; layers laid one over the other fold alike, so at equal
+    heights the outer never comes inside the inner."""
+    folds = Folds(np.random.default_rng(5), 0.04, rim_z=0.45)
+    v, n, faces, uv, cavity = _draped_mesh((-0.5, -1.0), (0.5, 1.0), 0.55, 0.05, (0.15,) * 4, folds)
+    side = (v[:, 0] < -0.44) & (v[:, 2] <= 0.5 + 1e-9) & (np.abs(v[:, 1]) < 0.9)  # the left side hanging at x = -0.5
+    inward = v[side, 0] + 0.5
+    assert inward.min() >= -1e-9 and inward.max() <= 0.04 + 1e-9
+    assert np.all(np.abs(inward[v[side, 2] > 0.45 + 1e-9]) < 1e-9)  # above the rim height: no folds
+    hem = side & (v[:, 2] < 0.36)
+    assert np.ptp(v[hem, 0]) > 0.02  # folds at the hem, at least half as deep as they may be
+    assert np.allclose(cavity[side], 1 - folds.valley_dark * inward / 0.04, atol=1e-9)
+    # A second layer 8 mm further out (its top 1 cm higher): at the same height and place along
+    # the side, 8 mm outside the first.
+    w, *_ = _draped_mesh((-0.508, -1.0), (0.508, 1.0), 0.565, 0.05, (0.15,) * 4, folds)
+    for y in (-0.3, 0.0, 0.41):
+        for z in (0.45, 0.4):
+            def x_at(mesh, y=y, z=z):
+                pts = mesh[(mesh[:, 0] < -0.44) & (np.abs(mesh[:, 1] - y) < 0.011) & (np.abs(mesh[:, 2] - z) < 0.012)]
+                return pts[np.argmin(np.abs(pts[:, 2] - z) + np.abs(pts[:, 1] - y)), 0], pts
+            inner, _ = x_at(v)
+            outer, _ = x_at(w)
+            assert outer < inner, (y, z, outer, inner)
+
+
+def test_a_cushion_bulges_by_its_crown_and_keeps_its_box():
+    lo, hi, crown = np.array([0.0, 0.0, 0.0]), np.array([0.6, 0.5, 0.14]), np.array([0.01, 0.015, 0.03])
+    v, n, faces, uv = _crowned_box_mesh(lo, hi, 0.03, crown)
+    assert np.allclose(v.min(0), lo, atol=1e-9) and np.allclose(v.max(0), hi, atol=1e-9)
+    top = v[:, 2] > hi[2] - 1e-9  # only the middle of the top reaches the box
+    assert np.allclose(v[top, :2].mean(0), (lo[:2] + hi[:2]) / 2, atol=0.02)
+    # The normals follow the bulge: on the flat sides' inner parts, within 3 degrees of the
+    # faces around each vertex, and tilted off the box's axes there by up to the bulge's slope.
+    tri = v[faces]
+    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    acc = np.zeros_like(v)
+    np.add.at(acc, faces.ravel(), np.repeat(fn, 3, axis=0))
+    a = np.abs(n).argmax(axis=1)
+    inner_lo, inner_hi = lo + crown + 0.03 + 0.01, hi - crown - 0.03 - 0.01
+    flat = np.all([(a == k) | ((v[:, k] > inner_lo[k]) & (v[:, k] < inner_hi[k])) for k in range(3)], axis=0)
+    acc = acc[flat] / np.linalg.norm(acc[flat], axis=1, keepdims=True)
+    assert np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", acc, n[flat]), -1, 1))).max() < 3
+    tilt = np.degrees(np.arccos(np.abs(n[flat & (a == 2), 2])))
+    assert 2.0 < tilt.max() < np.degrees(np.arctan(2 * crown[2] / (hi[0] - lo[0] - 2 * crown[0] - 0.06) * 2))
+
+
+def test_a_parts_cavity_darkens_its_light_in_the_staged_render_and_the_photographers():
+    """Part.cavity multiplies the light of each vertex: staged (vertex colours, photo gamma)
+    and the photographer's physically based meshes (vertex colour times base colour)."""
+    box = build_furniture("side_table", (0.4, 0.4, 0.5), style_seed=0)
+    shaded = replace(box, parts=tuple(replace(p, cavity=np.full(len(p.vertices), 0.5)) for p in box.parts))
+    item = PlacedItem("side_table", (0.0, 0.0, 0.0), 0.0, (0.4, 0.4, 0.5), "t")
+    cam = np.array([2.0, 0.0, 1.5])
+    plain = _furniture_meshes([(item, box)], LIGHT, cam, np.array([-1.0, 0.0]), RENDER.staged)[0]
+    dark = _furniture_meshes([(item, shaded)], LIGHT, cam, np.array([-1.0, 0.0]), RENDER.staged)[0]
+    a = np.concatenate([m.primitives[0].color_0[:, :3] for m in plain])
+    b = np.concatenate([m.primitives[0].color_0[:, :3] for m in dark])
+    lit = a > 0.05
+    assert np.allclose(b[lit] / a[lit], 0.5 ** (1 / 2.2), rtol=1e-4)
+    synth = furniture_meshes([(shaded, np.eye(4))])
+    assert all(np.allclose(m.primitives[0].color_0[:, :3], 0.5) for m in synth)
 
 
 def test_styles_vary_and_seeds_repeat():
