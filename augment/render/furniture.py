@@ -36,6 +36,7 @@ from layout.fileio import path_problem
 
 from ..errors import FurnishError
 from .settings import RENDER
+from .rugs import PATTERNS, rug_pattern
 from .styles import STYLES, WEAVES
 from .surfaces import surface, surface_name
 
@@ -889,7 +890,7 @@ def _bed(shop, rng, W, D, H, pillows=None):
     duvet = _mat(rng, *_pick(rng, _styled("bedding", BEDDING)), 0.95)
     mattress = _mat(rng, "mattress", (232, 230, 224), 0.9, spread=0.02)
     pillow_top = H
-    mattress_top = H - min(0.14, 0.3 * H)
+    mattress_top = H - min(0.18, 0.36 * H)  # room for plump pillows
     tm = min(0.22, 0.45 * mattress_top)
     frame_top = mattress_top - tm + 0.05
     head_t = 0.07 if style != "metal" else 0.03
@@ -945,8 +946,8 @@ def _bed(shop, rng, W, D, H, pillows=None):
     for i in range(n):
         x0 = -W / 2 + ins + 0.04 + i * (pw + 0.04)
         tilt = _about((0, y_head + 0.02, mattress_top), _rot_x(math.radians(12)))
-        shop.cushion((x0, y_head + 0.04, mattress_top - 0.01), (x0 + pw, y_head + 0.38, pillow_top - 0.03), sheet,
-                     0.04, (0.012, 0.02, 0.035), tilt)
+        shop.cushion((x0, y_head + 0.04, mattress_top - 0.01), (x0 + pw, y_head + 0.4, pillow_top - 0.02), sheet,
+                     0.03, (0.015, 0.03, 0.055), tilt)
     shop.reach(first, 2, pillow_top - 0.015)
     if rng.random() < 0.5:
         throw = _mat(rng, *_pick(rng, _styled("bedding", BEDDING) + _styled("fabrics", FABRICS)), 0.95)
@@ -1396,14 +1397,31 @@ def _floor_lamp(shop, rng, W, D, H):
     return style
 
 
+RUG_WOOLS = (("cream wool", (222, 212, 190)), ("grey wool", (150, 150, 148)), ("charcoal wool", (70, 70, 72)),
+             ("rust wool", (170, 96, 70)), ("navy wool", (50, 62, 92)), ("sand wool", (196, 176, 140)),
+             ("sage wool", (150, 162, 136)), ("blush wool", (204, 164, 150)))
+
+
 def _rug(shop, rng, W, D, H):
     # No half-and-half rug: under furniture its dark half reads as a hard shadow.
-    style = _pick(rng, ("border", "stripes", "plain"))
-    colors = (("cream wool", (222, 212, 190)), ("grey wool", (150, 150, 148)), ("charcoal wool", (70, 70, 72)),
-              ("rust wool", (170, 96, 70)), ("navy wool", (50, 62, 92)), ("sand wool", (196, 176, 140)),
-              ("sage wool", (150, 162, 136)), ("blush wool", (204, 164, 150)))
-    field_ = _mat(rng, *_pick(rng, colors), 0.98)
-    other = _mat(rng, *_pick(rng, colors), 0.98)
+    chosen = _STYLE.get()
+    style = _pick(rng, chosen.rug_patterns if chosen is not None and chosen.rug_patterns
+                  else ("border", "stripes", "plain") + PATTERNS)
+    wools = _styled("rugs", RUG_WOOLS)
+    if style in PATTERNS:  # one woven image across the whole rug
+        field_, ground = (wools[i][1] for i in rng.choice(len(wools), 2, replace=False))
+        light = ([c for _, c in wools if sum(c) > 500 and c not in (field_, ground)]
+                 or [c for _, c in RUG_WOOLS if sum(c) > 500 and c not in (field_, ground)])
+        accent = light[int(rng.integers(len(light)))]
+        image = rug_pattern(style, (field_, ground, accent), (W, D), rng)
+        image.setflags(write=False)
+        woven = Material(f"{style} rug", (1.0, 1.0, 1.0), 0.98, texture=image,
+                         texture_key=f"rug {zlib.crc32(image.tobytes()):08x}")
+        part = shop.box((-W / 2, -D / 2, 0), (W / 2, D / 2, H), woven, min(0.003, H / 3), shadow=False)
+        part.uv = np.column_stack([(part.vertices[:, 0] + W / 2) / W, (part.vertices[:, 1] + D / 2) / D])
+        return style
+    field_ = _mat(rng, *_pick(rng, wools), 0.98)
+    other = _mat(rng, *_pick(rng, wools), 0.98)
     zb = H * 0.7
     shop.box((-W / 2, -D / 2, 0), (W / 2, D / 2, zb), field_ if style != "border" else other, min(0.003, zb / 3))
     if style == "border":

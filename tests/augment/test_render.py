@@ -954,19 +954,20 @@ def test_bad_inputs_are_named(renderer, room_small):
 def test_a_style_keeps_every_piece_in_its_palette():
     """Each style's woods, paints, fabrics, leathers, bedding and pots are the only ones its
     pieces show (metals fall back where a piece takes only some); the styles differ."""
-    from augment.render.furniture import BEDDING, FABRICS, LEATHERS, PAINTS, POTS, WOODS
+    from augment.render.furniture import BEDDING, FABRICS, LEATHERS, PAINTS, POTS, RUG_WOOLS, WOODS
     from augment.render.styles import STYLES
 
     palettes = {"woods": WOODS, "paints": PAINTS, "fabrics": FABRICS, "leathers": LEATHERS, "bedding": BEDDING,
-                "pots": POTS}
+                "pots": POTS, "rugs": RUG_WOOLS}
     seen = {}
     for name, style in STYLES.items():
         used = set()
         for kind in ("sofa", "armchair", "coffee_table", "tv_stand", "bed", "nightstand", "bookcase", "plant",
-                     "dining_table", "chair", "desk", "wardrobe"):
+                     "dining_table", "chair", "desk", "wardrobe", "rug"):
             for seed in range(4):
-                used |= {p.material.name.removesuffix(" inside")
-                         for p in build_furniture(kind, rng=np.random.default_rng(seed), style=name).parts}
+                built = build_furniture(kind, rng=np.random.default_rng(seed), style=name)
+                used |= {p.material.name.removesuffix(" inside") for p in built.parts}
+                assert kind != "rug" or built.style in style.rug_patterns, (name, built.style)
         for palette, options in palettes.items():
             allowed = set(getattr(style, palette))
             assert not (used & {o[0] for o in options}) - allowed, (name, palette, used - allowed)
