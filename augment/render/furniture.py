@@ -380,9 +380,18 @@ class Folds:
         return inward, rise
 
 
-def _box_corners(lo, hi) -> np.ndarray:
-    """The 8 corners (8, 3) of the box ``lo``-``hi``."""
-    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])], float)
+# 42 directions evenly spread, and the 26 of a box's faces, edges and corners (the builders'
+# parts are boxes at heart: their silhouettes' corners lie along those).
+_BOX_WAYS = np.array([(x, y, z) for x in (-1, 0, 1) for y in (-1, 0, 1) for z in (-1, 0, 1) if x or y or z], float)
+_SUPPORT_WAYS = np.vstack([trimesh.creation.icosphere(subdivisions=1).vertices,
+                           _BOX_WAYS / np.linalg.norm(_BOX_WAYS, axis=1, keepdims=True)])
+
+
+def _support_points(points) -> np.ndarray:
+    """The points (k <= 68, 3) of ``points`` (n, 3) furthest along 68 directions: their
+    hull is the points' own within a few percent from any side, and stays so under any
+    affine map (extreme points stay extreme)."""
+    return np.asarray(points)[np.unique(np.argmax(np.asarray(points) @ _SUPPORT_WAYS.T, axis=0))]
 
 
 def _grid_normals(P, outward):
@@ -608,15 +617,14 @@ class _Shop:
 
     def cushion(self, lo, hi, mat, round_m=0.04, crown_m=(0.01, 0.01, 0.015), matrix=None) -> Part:
         """A stuffed cushion filling the box ``lo``-``hi``, its sides bulging by ``crown_m``."""
-        return self._add(*_crowned_box_mesh(lo, hi, round_m, crown_m), mat, True, True, matrix,
-                         outline=_box_corners(lo, hi))
+        mesh = _crowned_box_mesh(lo, hi, round_m, crown_m)
+        return self._add(*mesh, mat, True, True, matrix, outline=_support_points(mesh[0]))
 
     def drape(self, lo_xy, hi_xy, z_top, mat, rng, radius=0.04, hang_m=(0.1, 0.1, 0.1, 0.1), folds=None,
               puff_m=0.0) -> Part:
         """Cloth over a rectangle, hanging down its sides (:func:`_draped_mesh`)."""
         *mesh, cavity = _draped_mesh(lo_xy, hi_xy, z_top, radius, hang_m, folds, puff_m, rng)
-        low, high = mesh[0].min(axis=0), mesh[0].max(axis=0)
-        return self._add(*mesh, mat, cavity=cavity, outline=_box_corners(low, high))
+        return self._add(*mesh, mat, cavity=cavity, outline=_support_points(mesh[0]))
 
     def lathe(self, x, y, profile, mat, sections=24, arc=(0.0, 2 * np.pi), convex=True, shadow=True,
               matrix=None) -> Part:

@@ -22,9 +22,9 @@ from augment.render.furniture import (BUILDERS, Folds, Part, PlacedItem, _crowne
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
-from augment.render.staged import (Lighting, _Caster, _composite, _floor_gain, _furniture_meshes, _nearer_edge_upstream,
-                                   _on_wall_m,
-                                   _plain_wall_upstream, _render_scale, _roll_off, _wall_shading, _walls_run_on,
+from augment.render.staged import (Lighting, _Caster, _casters, _composite, _floor_gain, _furniture_meshes,
+                                   _nearer_edge_upstream, _on_wall_m, _plain_wall_upstream, _render_scale, _roll_off,
+                                   _wall_shading, _walls_run_on,
                                    _window, _window_casts, _window_casts_either, _window_on_wall, _window_sun,
                                    estimate_lighting, floor_matte, render_staged, wall_segments, write_jpeg)
 from augment.render.sun import SunOnFloor
@@ -603,12 +603,31 @@ def test_a_cushion_bulges_by_its_crown_and_keeps_its_box():
     assert 2.0 < tilt.max() < np.degrees(np.arctan(2 * crown[2] / (hi[0] - lo[0] - 2 * crown[0] - 0.06) * 2))
 
 
+def test_a_stuffed_or_draped_parts_outline_stands_in_for_its_shape_in_the_shadows():
+    """The few points of Part.outline: their hull seen from above is the part's own within
+    6 %, from the sides within 12 % (a bulge's crown is cut by chords), and the floor's
+    casters take them."""
+    from scipy.spatial import ConvexHull
+
+    sofa = build_furniture("sofa", style_seed=2)
+    bed = build_furniture("bed", style_seed=1)
+    stand_ins = [p for f in (sofa, bed) for p in f.parts if p.outline is not None]
+    assert len(stand_ins) >= 8 and all(len(p.outline) <= 68 < len(p.vertices) for p in stand_ins)
+    for part in stand_ins:
+        for axes, tolerance in (((0, 1), 0.06), ((1, 2), 0.12), ((0, 2), 0.12)):
+            ratio = ConvexHull(part.outline[:, axes]).volume / ConvexHull(part.vertices[:, axes]).volume
+            assert 1 - tolerance <= ratio <= 1 + 1e-9, (part.material.name, axes, ratio)
+    item = PlacedItem("sofa", (0.0, 0.0, sofa.size_m[2] / 2), 0.0, sofa.size_m, "s")
+    counts = [len(c.points) for c in _casters([(item, sofa)], RENDER.staged)]
+    assert sum(n <= 68 for n in counts) >= 8  # every cushion's caster is its outline
+
+
 def test_a_parts_cavity_darkens_its_light_in_the_staged_render_and_the_photographers():
     """Part.cavity multiplies the light of each vertex: staged (vertex colours, photo gamma)
     and the photographer's physically based meshes (vertex colour times base colour)."""
     box = build_furniture("side_table", (0.4, 0.4, 0.5), style_seed=0)
     shaded = replace(box, parts=tuple(replace(p, cavity=np.full(len(p.vertices), 0.5)) for p in box.parts))
-    item = PlacedItem("side_table", (0.0, 0.0, 0.0), 0.0, (0.4, 0.4, 0.5), "t")
+    item = PlacedItem("side_table", (0.0, 0.0, 0.25), 0.0, (0.4, 0.4, 0.5), "t")
     cam = np.array([2.0, 0.0, 1.5])
     plain = _furniture_meshes([(item, box)], LIGHT, cam, np.array([-1.0, 0.0]), RENDER.staged)[0]
     dark = _furniture_meshes([(item, shaded)], LIGHT, cam, np.array([-1.0, 0.0]), RENDER.staged)[0]
