@@ -878,12 +878,62 @@ def _fronts(shop, x0, x1, z0, z1, y_face, mat, handle_mat, rows, cols, handle, g
                              shadow=False)
 
 
-def _cushion(shop, lo, hi, mat, round_m=0.04, matrix=None):
-    """A stuffed cushion: it bulges most across its thinnest side, as a pillow does."""
-    size = np.asarray(hi, dtype=np.float64) - np.asarray(lo, dtype=np.float64)
+def _cushion(shop, lo, hi, mat, round_m=0.04, matrix=None, piping_m=0.004):
+    """A stuffed cushion: it bulges most across its thinnest side, as a pillow does, and
+    piping (a cord ``piping_m`` thick, 0 for none) runs round its two big faces where their
+    panels meet the sides: along the middle of the rounded rims, corners left out."""
+    lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    size = hi - lo
+    a = int(size.argmin())
     crown = 0.07 * size.min() * np.ones(3)
-    crown[size.argmin()] = 0.2 * size.min()
-    return shop.cushion(lo, hi, mat, round_m, crown, matrix)
+    crown[a] = 0.2 * size.min()
+    part = shop.cushion(lo, hi, mat, round_m, crown, matrix)
+    if piping_m <= 0:
+        return part
+    half = size / 2 - np.minimum(crown, 0.25 * size)  # as _crowned_box_mesh builds it
+    r = min(round_m, 0.999 * float(half.min()))
+    inner = half - r
+    if r < RENDER.furniture.bevel_min_m or inner.min() <= 0:
+        return part
+    center = (lo + hi) / 2
+    cords = []
+    for b in (k for k in range(3) if k != a):
+        d = 3 - a - b
+        for sa in (-1.0, 1.0):
+            for sd in (-1.0, 1.0):
+                seam = center.copy()
+                seam[a] += sa * (inner[a] + r / math.sqrt(2))
+                seam[d] += sd * (inner[d] + r / math.sqrt(2))
+                ends = np.repeat(seam[None], 2, axis=0)
+                ends[:, b] += (-inner[b], inner[b])
+                cords.append(ends)
+    shop._add(*_tubes_mesh(np.array(cords), piping_m / 2), mat, False, False, matrix)
+    return part
+
+
+def _tubes_mesh(ends, radius, sections=6):
+    """Open tubes of ``radius`` between the end points ``ends`` (k, 2, 3), all in one mesh:
+    (n, 3) vertices, normals, faces, uv (meters along and around)."""
+    ends = np.asarray(ends, dtype=np.float64)
+    axis = ends[:, 1] - ends[:, 0]
+    length = np.linalg.norm(axis, axis=1)
+    axis /= np.maximum(length, 1e-12)[:, None]
+    helper = np.where(np.abs(axis[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
+    u = np.cross(axis, helper)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    v = np.cross(axis, u)
+    angle = np.linspace(0.0, 2 * np.pi, sections, endpoint=False)
+    ring = np.cos(angle)[None, :, None] * u[:, None] + np.sin(angle)[None, :, None] * v[:, None]  # (k, s, 3)
+    points = ends[:, :, None, :] + radius * ring[:, None]  # (k, 2, s, 3)
+    normals = np.broadcast_to(ring[:, None], points.shape)
+    i = np.arange(sections)
+    j = (i + 1) % sections
+    quad = np.concatenate([np.stack([i, j, sections + j], 1), np.stack([i, sections + j, sections + i], 1)])
+    faces = (quad[None] + 2 * sections * np.arange(len(ends))[:, None, None]).reshape(-1, 3)
+    uv = np.stack([np.broadcast_to((length[:, None] * np.array([0.0, 1.0]))[:, :, None], points.shape[:3]),
+                   np.broadcast_to(radius * angle, points.shape[:3])], axis=-1)
+    vs, ns = points.reshape(-1, 3), normals.reshape(-1, 3)
+    return vs, ns, _oriented(vs, ns, faces), uv.reshape(-1, 2)
 
 
 # --------------------------------------------------------------------------------------

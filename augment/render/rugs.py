@@ -9,6 +9,8 @@ as a pile rug's motifs do. The rug's pile (:func:`augment.render.surfaces.surfac
 """
 from __future__ import annotations
 
+import functools
+
 import cv2
 import numpy as np
 
@@ -45,15 +47,22 @@ def rug_pattern(pattern: str, colours_srgb, size_m, rng: np.random.Generator, mm
     """
     label = rug_labels(pattern, size_m, rng, mm_per_px, knot_m)
     rows, cols = label.shape
-    colour = np.asarray(colours_srgb, dtype=np.float64).reshape(3, 3)[label]
-    # The pile woven in: its detail (linear multiplier, mean about 0.8) taken to this
-    # resolution, divided by its mean so the colours stay the rug's on average.
+    # The pile woven in: its detail (linear multiplier, mean about 0.8) divided by its mean
+    # so the colours stay the rug's on average. Encoded (power 1 / 2.2) a product is the
+    # product of the encoded factors: no powers per pixel.
+    detail = _pile(round(surface("rug").tile_m * 1000 / mm_per_px))
+    detail = np.tile(detail, (rows // len(detail) + 1, cols // len(detail) + 1, 1))[:rows, :cols]
+    colour = np.asarray(colours_srgb, dtype=np.float32).reshape(3, 3)[label]
+    return np.clip(colour * detail + 0.5, 0, 255).astype(np.uint8)
+
+
+@functools.lru_cache(maxsize=4)
+def _pile(tile_px: int) -> np.ndarray:
+    """The rug surface's detail at ``tile_px`` a repeat, encoded and over its mean's
+    encoding: (tile_px, tile_px, 3) float32 factors for encoded colours."""
     pile = surface("rug")
-    tile_px = max(2, round(pile.tile_m * 1000 / mm_per_px))
-    detail = cv2.resize(pile.image, (tile_px, tile_px), interpolation=cv2.INTER_AREA)
-    detail = np.tile(detail, (rows // tile_px + 1, cols // tile_px + 1, 1))[:rows, :cols]
-    linear = (colour / 255.0) ** GAMMA * (detail / 255.0) ** GAMMA / np.asarray(pile.mean_rgb)
-    return np.clip(255.0 * np.clip(linear, 0.0, 1.0) ** (1 / GAMMA) + 0.5, 0, 255).astype(np.uint8)
+    detail = cv2.resize(pile.image, (max(2, tile_px),) * 2, interpolation=cv2.INTER_AREA).astype(np.float32)
+    return detail / 255.0 / np.asarray(pile.mean_rgb, dtype=np.float32) ** (1 / GAMMA)
 
 
 def rug_labels(pattern: str, size_m, rng: np.random.Generator, mm_per_px: float = 4.0,

@@ -16,9 +16,9 @@ from augment.camera.board import Board
 from augment.camera.calibration import Calibration, Intrinsics
 from augment.floor.polygon import FloorPolygon
 from augment.photo.io import read_photo
-from augment.render.furniture import (BUILDERS, Folds, Part, PlacedItem, _crowned_box_mesh, _draped_mesh,
-                                      build_furniture, furniture_for, furniture_from_asset, load_asset, placed_items,
-                                      world_from_item)
+from augment.render.furniture import (BUILDERS, Folds, Material, Part, PlacedItem, _crowned_box_mesh, _cushion,
+                                      _draped_mesh, _Shop, build_furniture, furniture_for, furniture_from_asset,
+                                      load_asset, placed_items, world_from_item)
 from augment.render.gl import Renderer
 from augment.render.look import CLEAN
 from augment.render.settings import RENDER
@@ -601,6 +601,29 @@ def test_a_cushion_bulges_by_its_crown_and_keeps_its_box():
     assert np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", acc, n[flat]), -1, 1))).max() < 3
     tilt = np.degrees(np.arccos(np.abs(n[flat & (a == 2), 2])))
     assert 2.0 < tilt.max() < np.degrees(np.arctan(2 * crown[2] / (hi[0] - lo[0] - 2 * crown[0] - 0.06) * 2))
+
+
+def test_piping_runs_round_a_cushions_big_faces_along_the_middle_of_its_rims():
+    """Eight cords (4 mm) where the two big faces' panels meet the sides: each on the 45
+    degree line of its rounded rim, so on the cushion's surface; they cast no shadow."""
+    shop = _Shop()
+    lo, hi = np.array([0.0, 0.0, 0.0]), np.array([0.6, 0.55, 0.13])  # a seat cushion, thin along z
+    _cushion(shop, lo, hi, Material("fabric", (0.5, 0.5, 0.5)), round_m=0.04)
+    cushion, piping = shop.parts
+    assert not piping.casts_shadow and len(piping.vertices) == 8 * 2 * 6
+    crown = np.array([0.07, 0.07, 0.2]) * 0.13
+    half = (hi - lo) / 2 - crown
+    r = min(0.04, 0.999 * half.min())  # as the mesh rounds it
+    axis = np.array([0.3, 0.275, 0.065])
+    # Every cord's axis lies on a rim's arc: r from the arc's centre line, at 45 degrees.
+    centre_lines = piping.vertices - piping.normals * 0.002
+    rel = np.abs(centre_lines - axis) - (half - r)
+    on_arc = np.sort(rel, axis=1)[:, 1:]  # the two coordinates across the cord
+    assert np.allclose(on_arc, r / np.sqrt(2), atol=1e-9)
+    assert np.all(np.abs(centre_lines[:, 2] - axis[2]) > half[2] - r)  # round the big faces (z), none on the sides
+    # On the cushion: the surface at the seam is r from the arc's centre line too.
+    nearest = np.min(np.linalg.norm(cushion.vertices[:, None] - centre_lines[None, ::7], axis=2), axis=0)
+    assert nearest.max() < 0.012
 
 
 def test_a_stuffed_or_draped_parts_outline_stands_in_for_its_shape_in_the_shadows():
