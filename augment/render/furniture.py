@@ -1473,7 +1473,9 @@ def _rug(shop, rng, W, D, H):
         accent = light[int(rng.integers(len(light)))]
         image = rug_pattern(style, (field_, ground, accent), (W, D), rng)
         image.setflags(write=False)
-        woven = Material(f"{style} rug", (1.0, 1.0, 1.0), 0.98, texture=image,
+        # Its colour (the image's mean) is what flat-coloured exports (scene.glb) show.
+        mean = tuple(float(c) for c in ((image / 255.0) ** 2.2).mean(axis=(0, 1)))
+        woven = Material(f"{style} rug", mean, 0.98, texture=image,
                          texture_key=f"rug {zlib.crc32(image.tobytes()):08x}")
         part = shop.box((-W / 2, -D / 2, 0), (W / 2, D / 2, H), woven, min(0.003, H / 3), shadow=False)
         part.uv = np.column_stack([(part.vertices[:, 0] + W / 2) / W, (part.vertices[:, 1] + D / 2) / D])

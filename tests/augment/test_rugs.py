@@ -64,6 +64,9 @@ def test_a_patterned_rug_is_one_woven_image_laid_once_across_it():
     key, image, uv, scale = part_texture(part)
     assert key.startswith("rug ") and scale is None and image.shape == (575, 400, 3)  # depth x width at 4 mm
     assert np.allclose(uv.min(axis=0), 0.0) and np.allclose(uv.max(axis=0), 1.0)
+    # Flat-coloured exports (scene.glb) show the rug's mean colour, not white.
+    assert np.allclose(part.material.color_rgb, ((image / 255.0) ** 2.2).mean(axis=(0, 1)), rtol=1e-6)
+    assert max(part.material.color_rgb) < 0.9
     assert not part.casts_shadow
     with pytest.raises(ValueError, match="choose one of medallion"):
         rug_labels("paisley", (2.0, 1.5), np.random.default_rng(0))
