@@ -881,7 +881,7 @@ def _fronts(shop, x0, x1, z0, z1, y_face, mat, handle_mat, rows, cols, handle, g
 def _cushion(shop, lo, hi, mat, round_m=0.04, matrix=None, piping_m=0.004):
     """A stuffed cushion: it bulges most across its thinnest side, as a pillow does, and
     piping (a cord ``piping_m`` thick, 0 for none) runs round its two big faces where their
-    panels meet the sides: along the middle of the rounded rims, corners left out."""
+    panels meet the sides: along the middle of the rounded rims and round the corners."""
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     size = hi - lo
     a = int(size.argmin())
@@ -896,44 +896,46 @@ def _cushion(shop, lo, hi, mat, round_m=0.04, matrix=None, piping_m=0.004):
     if r < RENDER.furniture.bevel_min_m or inner.min() <= 0:
         return part
     center = (lo + hi) / 2
-    cords = []
-    for b in (k for k in range(3) if k != a):
-        d = 3 - a - b
-        for sa in (-1.0, 1.0):
-            for sd in (-1.0, 1.0):
-                seam = center.copy()
-                seam[a] += sa * (inner[a] + r / math.sqrt(2))
-                seam[d] += sd * (inner[d] + r / math.sqrt(2))
-                ends = np.repeat(seam[None], 2, axis=0)
-                ends[:, b] += (-inner[b], inner[b])
-                cords.append(ends)
-    shop._add(*_tubes_mesh(np.array(cords), piping_m / 2), mat, False, False, matrix)
+    b, d = (k for k in range(3) if k != a)
+    # Round a big face: 45 degrees down its rims, each corner an eighth of a sphere's seam.
+    turn = np.linspace(0.0, np.pi / 2, 4)
+    loop = []
+    for sb, sd, start in ((1, 1, 0.0), (-1, 1, np.pi / 2), (-1, -1, np.pi), (1, -1, 1.5 * np.pi)):
+        phi = start + turn
+        point = np.zeros((len(phi), 3))
+        point[:, b] = sb * inner[b] + r / math.sqrt(2) * np.cos(phi)
+        point[:, d] = sd * inner[d] + r / math.sqrt(2) * np.sin(phi)
+        loop.append(point)
+    loop = np.concatenate(loop) + center
+    up = np.eye(3)[a]
+    for sa in (-1.0, 1.0):
+        loop[:, a] = center[a] + sa * (inner[a] + r / math.sqrt(2))
+        shop._add(*_loop_tube_mesh(loop, piping_m / 2, up), mat, False, False, matrix)
     return part
 
 
-def _tubes_mesh(ends, radius, sections=6):
-    """Open tubes of ``radius`` between the end points ``ends`` (k, 2, 3), all in one mesh:
-    (n, 3) vertices, normals, faces, uv (meters along and around)."""
-    ends = np.asarray(ends, dtype=np.float64)
-    axis = ends[:, 1] - ends[:, 0]
-    length = np.linalg.norm(axis, axis=1)
-    axis /= np.maximum(length, 1e-12)[:, None]
-    helper = np.where(np.abs(axis[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
-    u = np.cross(axis, helper)
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    v = np.cross(axis, u)
+def _loop_tube_mesh(points, radius, up, sections=6):
+    """A tube of ``radius`` round the closed loop ``points`` (k, 3), lying in a plane across
+    the unit vector ``up``: one ring of ``sections`` vertices at each point, swept without
+    twist. (n, 3) vertices, normals, faces, uv (meters along and around)."""
+    points = np.asarray(points, dtype=np.float64)
+    k = len(points)
+    tangent = np.roll(points, -1, axis=0) - np.roll(points, 1, axis=0)
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-12)
+    u = np.cross(tangent, up)
+    u /= np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-12)
+    v = np.cross(tangent, u)
     angle = np.linspace(0.0, 2 * np.pi, sections, endpoint=False)
     ring = np.cos(angle)[None, :, None] * u[:, None] + np.sin(angle)[None, :, None] * v[:, None]  # (k, s, 3)
-    points = ends[:, :, None, :] + radius * ring[:, None]  # (k, 2, s, 3)
-    normals = np.broadcast_to(ring[:, None], points.shape)
-    i = np.arange(sections)
-    j = (i + 1) % sections
-    quad = np.concatenate([np.stack([i, j, sections + j], 1), np.stack([i, sections + j, sections + i], 1)])
-    faces = (quad[None] + 2 * sections * np.arange(len(ends))[:, None, None]).reshape(-1, 3)
-    uv = np.stack([np.broadcast_to((length[:, None] * np.array([0.0, 1.0]))[:, :, None], points.shape[:3]),
-                   np.broadcast_to(radius * angle, points.shape[:3])], axis=-1)
-    vs, ns = points.reshape(-1, 3), normals.reshape(-1, 3)
-    return vs, ns, _oriented(vs, ns, faces), uv.reshape(-1, 2)
+    vs = (points[:, None] + radius * ring).reshape(-1, 3)
+    ns = ring.reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(k), np.arange(sections), indexing="ij")
+    a, b = i * sections + j, i * sections + (j + 1) % sections
+    c, d = ((i + 1) % k) * sections + (j + 1) % sections, ((i + 1) % k) * sections + j
+    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+    uv = np.stack([np.repeat(along, sections), np.tile(radius * angle, k)], axis=1)
+    return vs, ns, _oriented(vs, ns, faces), uv
 
 
 # --------------------------------------------------------------------------------------

@@ -604,25 +604,33 @@ def test_a_cushion_bulges_by_its_crown_and_keeps_its_box():
 
 
 def test_piping_runs_round_a_cushions_big_faces_along_the_middle_of_its_rims():
-    """Eight cords (4 mm) where the two big faces' panels meet the sides: each on the 45
-    degree line of its rounded rim, so on the cushion's surface; they cast no shadow."""
+    """A 4 mm cord round each of the two big faces where their panels meet the sides: on
+    the 45 degree line of the rounded rims and of the corners' spheres, so on the
+    cushion's surface, closed round; it casts no shadow."""
     shop = _Shop()
     lo, hi = np.array([0.0, 0.0, 0.0]), np.array([0.6, 0.55, 0.13])  # a seat cushion, thin along z
     _cushion(shop, lo, hi, Material("fabric", (0.5, 0.5, 0.5)), round_m=0.04)
-    cushion, piping = shop.parts
-    assert not piping.casts_shadow and len(piping.vertices) == 8 * 2 * 6
+    cushion, *cords = shop.parts
+    assert len(cords) == 2 and not any(c.casts_shadow for c in cords)
+    piping = replace(cords[0], vertices=np.vstack([c.vertices for c in cords]),
+                     normals=np.vstack([c.normals for c in cords]))
     crown = np.array([0.07, 0.07, 0.2]) * 0.13
     half = (hi - lo) / 2 - crown
     r = min(0.04, 0.999 * half.min())  # as the mesh rounds it
-    axis = np.array([0.3, 0.275, 0.065])
-    # Every cord's axis lies on a rim's arc: r from the arc's centre line, at 45 degrees.
-    centre_lines = piping.vertices - piping.normals * 0.002
-    rel = np.abs(centre_lines - axis) - (half - r)
-    on_arc = np.sort(rel, axis=1)[:, 1:]  # the two coordinates across the cord
-    assert np.allclose(on_arc, r / np.sqrt(2), atol=1e-9)
-    assert np.all(np.abs(centre_lines[:, 2] - axis[2]) > half[2] - r)  # round the big faces (z), none on the sides
-    # On the cushion: the surface at the seam is r from the arc's centre line too.
-    nearest = np.min(np.linalg.norm(cushion.vertices[:, None] - centre_lines[None, ::7], axis=2), axis=0)
+    centre = (lo + hi) / 2
+    core = half - r
+    line = piping.vertices - piping.normals * 0.002  # the cords' centre lines
+    rel = line - centre
+    # r from the rounded box's core (its rims' and corners' centres), 45 degrees off the big faces.
+    assert np.allclose(np.linalg.norm(rel - np.clip(rel, -core, core), axis=1), r, atol=1e-9)
+    assert np.allclose(np.abs(rel[:, 2]), core[2] + r / np.sqrt(2), atol=1e-9)
+    # Closed round each face: every ring joins the next, the last the first.
+    for cord in cords:
+        rings = len(cord.vertices) // 6
+        joined = np.unique(np.sort(cord.faces // 6, axis=1)[:, [0, 2]], axis=0)
+        pairs = {tuple(p) for p in joined if p[0] != p[1]}
+        assert all((i, (i + 1) % rings) in pairs or ((i + 1) % rings, i) in pairs for i in range(rings))
+    nearest = np.min(np.linalg.norm(cushion.vertices[:, None] - line[None, ::7], axis=2), axis=0)
     assert nearest.max() < 0.012
 
 
