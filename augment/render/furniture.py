@@ -203,7 +203,7 @@ class Part:
         some of it (deep in a fold of cloth): occlusion finer than the renderer's. None: 1.
     outline : (k, 3) float64 or None
         A few points whose convex hull stands in for a convex part where only its outline
-        counts (the floor's shadows): a stuffed cushion's box. None: its vertices.
+        counts (the floor's shadows): a cushion's or cloth's support points. None: its vertices.
     """
 
     vertices: np.ndarray
@@ -225,6 +225,10 @@ class Part:
         faces = self.faces if np.linalg.det(m[:3, :3]) > 0 else self.faces[:, ::-1]
         outline = None if self.outline is None else self.outline @ m[:3, :3].T + m[:3, 3]
         return replace(self, vertices=v, normals=n, faces=faces, outline=outline)
+
+    def light_share(self) -> np.ndarray:
+        """(n,) :attr:`cavity`, 1 for every vertex where it is None."""
+        return np.ones(len(self.vertices)) if self.cavity is None else self.cavity
 
 
 def _oriented(vertices, normals, faces):
@@ -318,17 +322,26 @@ def _rounded_box_mesh(lo, hi, radius, segments, steps=1):
     return v, n, _oriented(v, n, f), np.concatenate(uvs)
 
 
+def _crowned_core(lo, hi, radius, crown_m):
+    """How :func:`_crowned_box_mesh` shapes the box ``lo``-``hi``: the crown it takes (3,)
+    (at most a quarter of each side), its rims' radius, and the half sides (3,) of the core
+    whose edges the rims round (the rims' centre lines)."""
+    crown = np.minimum(np.asarray(crown_m, dtype=np.float64), 0.25 * (hi - lo))
+    half = (hi - lo) / 2 - crown
+    r = min(radius, 0.999 * float(half.min()))
+    return crown, r, half - r
+
+
 def _crowned_box_mesh(lo, hi, radius, crown_m, steps=8):
     """A stuffed cushion filling the box ``lo``-``hi``: a rounded box whose flat sides
     bulge out by ``crown_m`` (3,) (the sides across x, y, z) at their middle, falling to
     nothing at their rims, so that its seams sit inside and its faces catch the light
     unevenly. Exact extents; normals follow the bulge."""
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
-    crown = np.minimum(np.asarray(crown_m, dtype=np.float64), 0.25 * (hi - lo))
+    crown, r, inner = _crowned_core(lo, hi, radius, crown_m)
     v, n, f, uv = _rounded_box_mesh(lo + crown, hi - crown, radius, 2, steps)
     center = (lo + hi) / 2
-    r = min(radius, 0.999 * float(((hi - lo) / 2 - crown).min()))
-    inner = np.maximum((hi - lo) / 2 - crown - r, 1e-9)
+    inner = np.maximum(inner, 1e-9)
     c = np.clip((v - center) / inner, -1.0, 1.0)
     bend = n.copy()
     for a in range(3):
@@ -890,9 +903,7 @@ def _cushion(shop, lo, hi, mat, round_m=0.04, matrix=None, piping_m=0.004):
     part = shop.cushion(lo, hi, mat, round_m, crown, matrix)
     if piping_m <= 0:
         return part
-    half = size / 2 - np.minimum(crown, 0.25 * size)  # as _crowned_box_mesh builds it
-    r = min(round_m, 0.999 * float(half.min()))
-    inner = half - r
+    _, r, inner = _crowned_core(lo, hi, round_m, crown)
     if r < RENDER.furniture.bevel_min_m or inner.min() <= 0:
         return part
     center = (lo + hi) / 2
@@ -1476,7 +1487,7 @@ def _rug(shop, rng, W, D, H):
         image = rug_pattern(style, (field_, ground, accent), (W, D), rng)
         image.setflags(write=False)
         # Its colour (the image's mean) is what flat-coloured exports (scene.glb) show.
-        mean = tuple(float(c) for c in ((image / 255.0) ** 2.2).mean(axis=(0, 1)))
+        mean = tuple(float(c) for c in _linear(image).mean(axis=(0, 1)))
         woven = Material(f"{style} rug", mean, 0.98, texture=image,
                          texture_key=f"rug {zlib.crc32(image.tobytes()):08x}")
         part = shop.box((-W / 2, -D / 2, 0), (W / 2, D / 2, H), woven, min(0.003, H / 3), shadow=False)

@@ -858,8 +858,7 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
         metal = np.repeat([p[3] for p in per], sizes)
         emissive = np.repeat(np.array([p[4] for p in per], dtype=np.float64), sizes, axis=0)
         ao = _vertex_occlusion(v[:, 2] - np.concatenate(hs), n, np.repeat([p[5] for p in per], sizes))
-        ao *= np.concatenate([np.ones(len(part.vertices)) if part.cavity is None else part.cavity
-                              for part, *_ in members])
+        ao *= np.concatenate([part.light_share() for part, *_ in members])
         fill, key = _vertex_light(v, n, albedo, rough, metal, emissive, ao, lighting, cam_pos, forward_xy, settings)
         gain = np.ones((len(v), 1)) if light_map is None else light_map.at(v)[:, None]
         if lighting.sun is not None:

@@ -212,8 +212,7 @@ def furniture_meshes(pieces) -> list:
             normals=np.concatenate([p.normals for p, _ in members]).astype(np.float32),
             texcoord_0=np.concatenate([uv for _, uv in members]).astype(np.float32) if key else None,
             # The folds' own occlusion, as staged photos bake it (base colour x vertex colour).
-            color_0=np.concatenate([np.ones(len(p.vertices)) if p.cavity is None else p.cavity
-                                    for p, _ in members]).astype(np.float32)[:, None].repeat(3, axis=1),
+            color_0=np.concatenate([p.light_share() for p, _ in members]).astype(np.float32)[:, None].repeat(3, 1),
             indices=np.concatenate([p.faces + c for (p, _), c in zip(members, counts)]).astype(np.uint32),
             material=material, mode=pyrender.GLTF.TRIANGLES)]))
     return meshes
