@@ -274,8 +274,8 @@ def _pose(detection: BoardDetection, board: Board, intrinsics: Intrinsics):
         rvec, tvec = cv2.solvePnPRefineLM(obj, detection.corners_px, K, dist, rvec, tvec)
         R = cv2.Rodrigues(rvec)[0]
         camera_in_board = -R.T @ tvec.ravel()
-        if camera_in_board[2] > 0 or board.kind == "charuco":
-            break  # ChArUco ids are printed on the board: never mirrored
+        if camera_in_board[2] > 0 or detection.detector == "charuco":
+            break  # ids read from ChArUco markers are printed on the board: never mirrored
         # A checkerboard detector may read the rows in the mirrored order: the board frame
         # would point into the floor. Reading the rows the other way flips it.
         row, col = np.divmod(ids, board.cols)
@@ -496,7 +496,7 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
         if board.kind == "chessboard":
             hint += (f" The whole board must be in view (a ChArUco board, --board charuco:{board.cols}x{board.rows}, "
                      "may be partly hidden).")
-        tried = ("OpenCV's ChArUco detector" if board.kind == "charuco"
+        tried = ("OpenCV's ChArUco detector, then its checkerboard detectors" if board.kind == "charuco"
                  else "OpenCV's SB and classic detectors, on the whole photo and on crops")
         small = ""
         if max(size_px) < settings.small_photo_boards * settings.min_board_extent_px:
@@ -511,6 +511,9 @@ def calibrate_photo(image: np.ndarray, board: Board, *, intrinsics: Intrinsics |
             f"the board in {where} is only {math.floor(extent.max())} px across (at least "
             f"{settings.min_board_extent_px} needed): move the board closer to the camera or use a larger board")
     warnings = []
+    if board.kind == "charuco" and detection.detector != "charuco":
+        warnings.append("the ChArUco board's markers were too small or blurred to read: its squares were found as "
+                        "a checkerboard's, which works only with the whole board in view")
     exif_ruled_out = False
     if intrinsics is None:
         intrinsics = single_view_intrinsics(detection.corners_px, board, size_px, detection.ids)

@@ -15,7 +15,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from .board import Board, charuco_board
+from .board import CHARUCO_BITS_PER_SQUARE, CHARUCO_MARKER_BITS, Board, charuco_board
 from .settings import CAMERA
 
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 40, 1e-3)
@@ -41,7 +41,9 @@ class BoardDetection:
     detector : str
         ``"sb"`` or ``"classic"`` (OpenCV's checkerboard detectors), with ``" crop"`` when
         found only on a crop around the board, ``" rectified"`` when only on a view of it
-        with its foreshortening undone (:func:`_find_rectified`); ``"charuco"``.
+        with its foreshortening undone (:func:`_find_rectified`); ``"charuco"`` when a
+        ChArUco board's markers were read (a ChArUco board whose markers are not read is
+        found as a checkerboard, by those names).
     """
 
     corners_px: np.ndarray
@@ -435,15 +437,52 @@ def _detect_charuco(gray: np.ndarray, board: Board) -> BoardDetection | None:
         corners, charuco_ids, _, _ = detector.detectBoard(big)
         if corners is not None:
             corners = (corners + 0.5) / zoom - 0.5
-    if charuco_ids is None or len(charuco_ids) < settings.min_charuco_corners:
-        return None
-    if charuco_board(board.cols, board.rows).checkCharucoCornersCollinear(charuco_ids):
-        return None
+    if charuco_ids is None or len(charuco_ids) < settings.min_charuco_corners \
+            or charuco_board(board.cols, board.rows).checkCharucoCornersCollinear(charuco_ids):
+        # Markers too small or blurred to read one by one: the board is still a
+        # checkerboard, found whole as one, and turned as its markers' pattern says.
+        found = _detect_chessboard(gray, board)
+        ids = None if found is None else _orient_by_markers(gray, found.corners_px, board)
+        return None if ids is None else BoardDetection(found.corners_px, ids, found.detector)
     ids = board.corner_ids(charuco_ids)
     corners = corners.reshape(-1, 2).astype(np.float64)
     order = np.argsort(ids)
     ids, corners = ids[order], corners[order]
     return BoardDetection(_refine(gray, corners, ids, board), ids, "charuco")
+
+
+def _orient_by_markers(gray: np.ndarray, corners_px: np.ndarray, board: Board) -> np.ndarray | None:
+    """Corner ids (cols * rows,) of a ChArUco board whose every corner was found in
+    checkerboard order: of the four numberings a checkerboard allows (as read, turned half
+    round, either way mirrored), the one under which the middles of the photo's white
+    squares correlate best with the printed markers. Blurred markers no detector reads
+    still match as a whole. None when no numbering matches them
+    (``CAMERA.detect.min_marker_match``): a plain checkerboard."""
+    px = 16  # per square: two per marker bit
+    template = board.image(px)
+    pad_y = (template.shape[0] - (board.rows + 1) * px) // 2
+    pad_x = (template.shape[1] - (board.cols + 1) * px) // 2
+    template = template[pad_y:template.shape[0] - pad_y, pad_x:template.shape[1] - pad_x].astype(np.float32)
+    step = board.square_m / px
+    # Template pixel (c, r) -> board meters (x, y): row 0 is board -y, as Board.image draws it.
+    meters_from_template = np.array([[step, 0, (0.5 - (board.cols + 1) * px / 2) * step],
+                                     [0, step, (0.5 - (board.rows + 1) * px / 2) * step], [0, 0, 1]])
+    squares = template.reshape(board.rows + 1, px, board.cols + 1, px).mean(axis=(1, 3))
+    edge = (CHARUCO_BITS_PER_SQUARE - CHARUCO_MARKER_BITS) // 2 * px // CHARUCO_BITS_PER_SQUARE
+    inner = np.zeros((px, px))
+    inner[edge:px - edge, edge:px - edge] = 1
+    markers = np.kron(squares > 64, inner) > 0  # the white squares' middles, where markers are printed
+    row, col = np.divmod(np.arange(board.corner_count), board.cols)
+    numberings = (row * board.cols + col, (board.rows - 1 - row) * board.cols + (board.cols - 1 - col),
+                  (board.rows - 1 - row) * board.cols + col, row * board.cols + (board.cols - 1 - col))
+    scores = []
+    for ids in numberings:
+        pixels_from_meters, _ = cv2.findHomography(board.corners_m()[ids][:, :2], corners_px, 0)
+        view = cv2.warpPerspective(gray, pixels_from_meters @ meters_from_template, template.shape[::-1],
+                                   flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP).astype(np.float32)
+        scores.append(np.corrcoef(view[markers], template[markers])[0, 1])
+    best = int(np.nanargmax(scores))
+    return numberings[best] if scores[best] >= CAMERA.detect.min_marker_match else None
 
 
 def detect_board(image: np.ndarray, board: Board) -> BoardDetection | None:
@@ -455,7 +494,8 @@ def detect_board(image: np.ndarray, board: Board) -> BoardDetection | None:
     (small, foreshortened boards in large photos). A checkerboard grid whose inner squares
     do not alternate as printed (:func:`squares_alternate`) is passed over. A ChArUco
     board's markers are read at full resolution; any ``CAMERA.detect.min_charuco_corners``
-    corners not in a line will do. Corners are then refined at full resolution to the
+    corners not in a line will do; when fewer are read, the whole board is looked for as a
+    checkerboard. Corners are then refined at full resolution to the
     saddle point of the intensity.
 
     Parameters

@@ -22,6 +22,10 @@ class DetectSettings:
     min_charuco_corners: int = 6  # a partly hidden ChArUco board needs this many corners, not in a line
     charuco_zoom: float = 2.0  # markers not read at full size are looked for again this much enlarged ...
     charuco_zoom_max_px: int = 4096  # ... when the enlarged photo's long side stays within this
+    # A ChArUco board whose markers are read by neither is found as a checkerboard when its
+    # white squares' middles correlate this well with the markers (blurred prints 0.5-0.94;
+    # a plain checkerboard 0.04).
+    min_marker_match: float = 0.3
     saddle_window: dict[str, float] = field(
         default_factory=lambda: {"chessboard": 0.4, "charuco": 0.15})  # x spacing: in a corner's squares, off markers
     max_saddle_radius_px: int = 24  # the saddle window's radius at most: the fit's cost grows with its area

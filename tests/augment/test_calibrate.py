@@ -668,6 +668,29 @@ def test_a_charuco_print_whose_markers_show_only_enlarged(seed):
     assert np.linalg.norm(px[:, None] - np.asarray(case.sheet_px)[None], axis=2).min(axis=1).max() < 2.0
 
 
+@pytest.mark.parametrize("seed", [[9300, 5], [9300, 18]])
+def test_a_charuco_print_whose_markers_no_detector_reads_is_found_by_its_squares(seed):
+    """ChArUco prints blurred over a pixel, markers of 3 px bits: OpenCV reads too few of
+    them at full size and enlarged. The board is found as a checkerboard and turned the way
+    its markers' pattern matches as a whole: the pose is the true one, not the board turned
+    half round or mirrored (both fit the squares alike), and the calibration says how it
+    was found."""
+    from augment.synth.prints import pasted_board
+
+    case = pasted_board(np.random.default_rng(seed), (1280, 960))
+    assert case.case["pattern"] == "charuco"
+    gray = cv2.cvtColor(case.photo, cv2.COLOR_RGB2GRAY)
+    for image in (gray, cv2.resize(gray, None, fx=2, fy=2, interpolation=cv2.INTER_CUBIC)):
+        ids = detect._charuco_detector(case.board).detectBoard(image)[1]
+        assert ids is None or len(ids) < CAMERA.detect.min_charuco_corners
+    cal = calibrate_photo(case.photo, case.board, intrinsics=exif_intrinsics(case.K[0, 0], (1280, 960)))
+    assert cal.detector != "charuco" and any("markers were too small or blurred" in w for w in cal.warnings)
+    turn = cal.camera_from_floor[:3, :3] @ case.camera_from_floor[:3, :3].T
+    assert np.degrees(np.arccos(np.clip((np.trace(turn) - 1) / 2, -1, 1))) < 1.0
+    truth = case.camera_from_floor[:3, 3]
+    assert np.linalg.norm(cal.camera_from_floor[:3, 3] - truth) < 0.01 * np.linalg.norm(truth)
+
+
 def test_hidden_checkerboard_is_refused_naming_charuco():
     with Renderer() as renderer:
         sample = render_sample([99, 4], renderer, size_px=(640, 480), board_hidden=0.4)
