@@ -40,8 +40,10 @@ class Kind:
     label : str
         Human-readable description.
     bare_height_m : float
-        Its height without what stands on it (a TV stand without the TV), for a photo
-        that shows too little above the floor for the whole; 0 for none.
+        Its height without its top part (a TV stand without the TV, a bed without its
+        headboard), for a photo that shows too little above the floor for the whole; 0 for none.
+    bare_part : str
+        That top part, for messages: "what it carries", "its headboard".
     """
 
     name: str
@@ -51,15 +53,17 @@ class Kind:
     collides: bool = True
     label: str = ""
     bare_height_m: float = 0.0
+    bare_part: str = ""
 
     @property
     def footprint_m2(self) -> float:
         return self.size_m[0] * self.size_m[1]
 
 
-def _k(name, size_m, access_m=(0.0, 0.0, 0.0, 0.0), against_wall=False, collides=True, label="", bare_m=0.0):
+def _k(name, size_m, access_m=(0.0, 0.0, 0.0, 0.0), against_wall=False, collides=True, label="", bare_m=0.0,
+       bare_part=""):
     return name, Kind(name, tuple(float(v) for v in size_m), tuple(float(v) for v in access_m),
-                      against_wall, collides, label or name.replace("_", " "), float(bare_m))
+                      against_wall, collides, label or name.replace("_", " "), float(bare_m), bare_part)
 
 
 #: Kind name -> :class:`Kind`. Access tuples are (back, left, front, right) in meters.
@@ -68,8 +72,11 @@ def _k(name, size_m, access_m=(0.0, 0.0, 0.0, 0.0), against_wall=False, collides
 CATALOG = dict(
     [
         # Bedroom.
-        _k("bed", (1.6, 2.1, 0.5), (0, 0.6, 0.6, 0.6), True, label="double bed"),
-        _k("single_bed", (0.9, 2.0, 0.5), (0, 0.6, 0.6, 0), True, label="single bed"),
+        # Beds to the headboard's top; without it, 0.5 m (a photo that shows too little above the floor).
+        _k("bed", (1.6, 2.1, 1.05), (0, 0.6, 0.6, 0.6), True, label="double bed", bare_m=0.5,
+           bare_part="its headboard"),
+        _k("single_bed", (0.9, 2.0, 0.95), (0, 0.6, 0.6, 0), True, label="single bed", bare_m=0.5,
+           bare_part="its headboard"),
         _k("nightstand", (0.5, 0.4, 0.55), (0, 0, 0.4, 0), label="nightstand"),
         _k("wardrobe", (1.2, 0.6, 2.0), (0, 0, 0.7, 0), True, label="wardrobe"),
         _k("dresser", (1.0, 0.5, 0.8), (0, 0, 0.6, 0), True, label="dresser / sideboard"),
@@ -78,7 +85,8 @@ CATALOG = dict(
         _k("armchair", (0.85, 0.85, 0.9), (0, 0, 0.6, 0), label="armchair"),
         _k("coffee_table", (1.1, 0.6, 0.45), label="coffee table"),
         _k("side_table", (0.5, 0.5, 0.55), label="side table"),
-        _k("tv_stand", (1.6, 0.45, 1.25), (0, 0, 0.6, 0), True, label="TV on a low stand", bare_m=0.55),
+        _k("tv_stand", (1.6, 0.45, 1.25), (0, 0, 0.6, 0), True, label="TV on a low stand", bare_m=0.55,
+           bare_part="what it carries"),
         _k("bookcase", (0.8, 0.35, 1.9), (0, 0, 0.6, 0), True, label="bookcase"),
         _k("plant", (0.4, 0.4, 1.0), label="indoor plant in a pot"),
         _k("floor_lamp", (0.35, 0.35, 1.6), label="floor lamp"),

@@ -960,8 +960,9 @@ def _bed(shop, rng, W, D, H, pillows=None):
     sheet = _mat(rng, *_pick(rng, _styled("bedding", BEDDING)), 0.95)
     duvet = _mat(rng, *_pick(rng, _styled("bedding", BEDDING)), 0.95)
     mattress = _mat(rng, "mattress", (232, 230, 224), 0.9, spread=0.02)
-    pillow_top = H
-    mattress_top = H - min(0.18, 0.36 * H)  # room for plump pillows
+    # A mattress at sitting height, plump pillows leaning on the headboard, which rises to H;
+    # a bed without its headboard (H 0.5 m) is all bed.
+    mattress_top = min(0.55, H - min(0.18, 0.36 * H))
     tm = min(0.22, 0.45 * mattress_top)
     frame_top = mattress_top - tm + 0.05
     head_t = 0.07 if style != "metal" else 0.03
@@ -1013,13 +1014,17 @@ def _bed(shop, rng, W, D, H, pillows=None):
                (0.065, 0.065, 0.02, 0.0), folds, puff_m=0.01)
     n = pillows or (2 if W > 1.2 else 1)
     pw = (W - 2 * ins - 0.08 - (n - 1) * 0.04) / n
-    first = len(shop.parts)
+    # Pillows propped against a headboard that rises well above them (resting on the
+    # mattress at the front, their back end raised), else lying flat under the box's top.
+    thick, deep = min(0.16, H - mattress_top - 0.02), 0.38
+    propped = H - mattress_top >= 0.36
+    y_front = y_head + 0.01 + deep
+    tilt = (_move(0, -0.04, 0) @ _about((0, y_front, mattress_top - 0.01), _rot_x(math.radians(-25))) if propped
+            else None)
     for i in range(n):
         x0 = -W / 2 + ins + 0.04 + i * (pw + 0.04)
-        tilt = _about((0, y_head + 0.02, mattress_top), _rot_x(math.radians(12)))
-        shop.cushion((x0, y_head + 0.04, mattress_top - 0.01), (x0 + pw, y_head + 0.4, pillow_top - 0.02), sheet,
-                     0.03, (0.015, 0.03, 0.055), tilt)
-    shop.reach(first, 2, pillow_top - 0.015)
+        shop.cushion((x0, y_front - deep, mattress_top - 0.01), (x0 + pw, y_front, mattress_top - 0.01 + thick),
+                     sheet, 0.03, (0.015, 0.03, 0.3 * thick), tilt)
     if rng.random() < 0.5:
         throw = _mat(rng, *_pick(rng, _styled("bedding", BEDDING) + _styled("fabrics", FABRICS)), 0.95)
         r = 0.03

@@ -239,9 +239,23 @@ def _units(spec) -> list[list]:
     return units
 
 
-# What follows an item's id in the note that it is kept bare (fit_spec), retracted when
-# the item is left out after all (solve_suggestions).
-BARE_NOTE = " stands without what it carries: "
+# What follows an item's id in the note that it is kept bare (fit_spec, solve_suggestions),
+# retracted when the item is left out after all.
+BARE_NOTE = " stands without "
+
+
+def _kept_bare(spec, items, why: str, notes: list):
+    """``spec`` with ``items`` at their kind's ``bare_height_m`` (a TV stand without its TV,
+    a bed without its headboard), each with a line in ``notes`` saying ``why``."""
+    lowered = {i.id: dataclasses.replace(i, kind=dataclasses.replace(
+        i.kind, size_m=(*i.kind.size_m[:2], i.kind.bare_height_m))) for i in items}
+    notes.extend(f"{i.id}{BARE_NOTE}{i.kind.bare_part}: {why}" for i in items)
+    return dataclasses.replace(spec, items=tuple(lowered.get(i.id, i) for i in spec.items))
+
+
+def _lowerable(item) -> bool:
+    """Whether ``item`` stands on the floor at more than its kind's bare height."""
+    return item.elevation_m == 0.0 and 0.0 < item.kind.bare_height_m < item.kind.size_m[2]
 
 
 def _stands_in_view(camera: Camera, polygon_m, size_m) -> bool:
@@ -321,12 +335,9 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None =
             if _stands_in_view(camera, poly, (w, d, top)):
                 continue
             why = f"{top:.2f} m tall, {IN_NO_VIEW} (a photo taken from higher or farther back shows more)"
-            bare = unit[0].kind.bare_height_m if len(unit) == 1 and unit[0].elevation_m == 0.0 else 0.0
-            if 0.0 < bare < top and _stands_in_view(camera, poly, (w, d, bare)):
-                lowered = dataclasses.replace(unit[0], kind=dataclasses.replace(
-                    unit[0].kind, size_m=(*unit[0].kind.size_m[:2], bare)))
-                spec = dataclasses.replace(spec, items=tuple(lowered if i.id == lowered.id else i for i in spec.items))
-                notes.append(f"{lowered.id}{BARE_NOTE}{why}")
+            if len(unit) == 1 and _lowerable(unit[0]) \
+                    and _stands_in_view(camera, poly, (w, d, unit[0].kind.bare_height_m)):
+                spec = _kept_bare(spec, unit, why, notes)
             else:
                 drop(unit, why)
     stacked = _stacked_tops(spec.constraints)
@@ -1035,6 +1046,13 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             reason = (f"suggestion {failed} could not place everything without overlaps or leaving the "
                       f"{area_m2:.1f} m\u00b2 floor")
             gone_units = units[-1:]
+        if spec.camera is not None and (by_cut or by_astray) \
+                and (lower := [i for u in gone_units for i in u if _lowerable(i)]):
+            # Cut by the photo's edge, or kept off its wall by where it may stand whole in
+            # the photo: without its top part first (a bed without its headboard).
+            spec = _kept_bare(spec, lower, f"with it, {reason}", notes)
+            progress.grow(suggestions)
+            continue
         asked = {i.id for u in gone_units for i in u}
         rest, gone = _drop(spec, sorted(asked))
         why = {i: reason if i in asked else _why_gone(kinds[i], reason) for i in gone}

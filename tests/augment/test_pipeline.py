@@ -35,6 +35,7 @@ from augment.room import fit
 from augment.room.doors import open_edges
 from augment.room.fit import fit_spec, inset_polygon
 from augment.room.settings import ROOM
+from layout.catalog import CATALOG
 from layout.geometry import edge_distances, polygon_area
 from layout.solver import ACCESS_CLEAR_M
 from layout.spec import load_spec
@@ -792,6 +793,21 @@ def test_fit_spec_keeps_a_tv_stand_without_its_tv_where_the_frame_is_too_low(tmp
     # Without the camera nothing is cut: the TV stays on its stand.
     fitted, _ = fit_spec(spec, poly, 3.0)
     assert next(i for i in fitted.items if i.id == "tv").kind.size_m[2] == 1.25
+
+
+def test_a_bed_whose_headboard_keeps_it_off_every_wall_in_view_is_staged_without_it():
+    """room_4 with the bedroom preset: with its 0.95 m headboard the bed finds no wall in the
+    photo where it stands whole (it would be dropped, and its nightstand with it); at its bare
+    0.5 m it stands at one, and the warning says why it has no headboard."""
+    result = furnish(ROOMY, Board(), room="bedroom", suggestions=1, seed=0)
+    lay = result.layouts[0]
+    beds = [i for i in lay.items if lay.model.names[i] == "bed"]
+    assert len(beds) == 1 and lay.model.kinds[beds[0]] == "single_bed"  # the preset's, for this floor
+    kind = CATALOG["single_bed"]
+    assert kind.size_m[2] == 0.95 and lay.model.particle_size_m[beds[0], 2] == kind.bare_height_m == 0.5
+    assert "bed" not in [d["id"] for d in result.dropped]
+    assert any(w.startswith("bed stands without its headboard: with it, it found no place against a wall")
+               for w in result.warnings)
 
 
 def test_fit_spec_caps_the_summed_footprint(square_spec):
@@ -1670,8 +1686,8 @@ def test_one_piece_that_only_dresses_a_group_is_no_staging(tmp_path):
     """room_1 (a 2 m² corner) held of the living room only its side table, staged alone in
     suggestion 1; render [9900, 6] (2.4 m² of an office) only its plant, staged alone four
     times. A lone side table or plant is a corner set's (a plant with a side table) place,
-    or no staging: the photo is refused, saying why. The corner set that room_1 gets at
-    last stages a side table and a plant: neither is said to be left out (they were, as
+    or no staging: the photo is refused, saying why. The corner sets that room_1 gets at
+    last stage a side table and a plant: neither is said to be left out (they were, as
     "alone, ... no staging", beside the note naming them staged)."""
     m = pipeline.measure(CRAMPED, Board())
     layouts, notes, dropped = _suggestions(m, "living_room", corners=True)
@@ -1679,9 +1695,13 @@ def test_one_piece_that_only_dresses_a_group_is_no_staging(tmp_path):
     assert {"side_table", "plant"} <= staged, staged
     assert not staged & {d["kind"] for d in dropped}, dropped
     assert "sofa" in {d["id"] for d in dropped} and "no staging" not in fit.dropped_summary(dropped)
-    # The room's TV stand and a corner set's, cut alike, are said once.
-    assert [d["id"] for d in dropped].count("tv_stand") == 2
-    assert fit.dropped_summary(dropped).count("tv_stand") == 1
+    # A TV stand cut by the photo's edge wherever it stands with the rest is staged
+    # without its TV (0.55 m), and said so, rather than left out.
+    stands = [(lay, i) for lay in layouts for i in lay.items if lay.model.kinds[i] == "tv_stand"]
+    assert stands and all(lay.model.particle_size_m[i, 2] == CATALOG["tv_stand"].bare_height_m == 0.55
+                          for lay, i in stands)
+    assert "tv_stand" not in {d["kind"] for d in dropped}
+    assert any(n.startswith("tv_stand stands without what it carries: with it, the photo's edge") for n in notes)
     assert any(n.startswith("staged as a corner (") for n in notes), notes
     for lay in layouts:
         kinds = [lay.model.kinds[i] for i in lay.items]

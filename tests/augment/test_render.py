@@ -653,6 +653,22 @@ def test_a_stuffed_or_draped_parts_outline_stands_in_for_its_shape_in_the_shadow
     assert sum(n <= 68 for n in counts) >= 8  # every cushion's caster is its outline
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_a_beds_headboard_rises_above_its_propped_pillows(seed):
+    """A double bed of the catalog (1.05 m): a part reaches the box's top at the head end,
+    and everything reaching toward the foot (mattress, bedding, pillows) stays at least
+    15 cm below it, the pillows propped on the 0.55 m mattress. Kept bare (0.5 m) the same
+    bed has no headboard above its pillows and stays in its box."""
+    W, D, H = CATALOG["bed"].size_m
+    bed = build_furniture("bed", style_seed=seed)
+    points = np.vstack([p.vertices for p in bed.parts])
+    toward_foot = points[points[:, 0] > -D / 2 + 0.3]  # built with its front toward +x
+    assert points[:, 2].max() == pytest.approx(H, abs=1e-6)
+    assert 0.55 + 0.15 < toward_foot[:, 2].max() <= H - 0.15
+    bare = build_furniture("bed", (W, D, CATALOG["bed"].bare_height_m), style_seed=seed)
+    assert max(float(p.vertices[:, 2].max()) for p in bare.parts) <= 0.5 + 1e-6
+
+
 def test_a_parts_cavity_darkens_its_light_in_the_staged_render_and_the_photographers():
     """Part.cavity multiplies the light of each vertex: staged (vertex colours, photo gamma)
     and the photographer's physically based meshes (vertex colour times base colour)."""

@@ -451,7 +451,7 @@ def test_catalog_sizes_are_believable():
         assert 0 < w <= 6.0 and 0 < d <= 6.0 and 0 < h <= 4.0, name
         assert all(a >= 0 for a in kind.access_m) and len(kind.access_m) == 4
         assert kind.label
-    assert CATALOG["bed"].size_m == (1.6, 2.1, 0.5)
+    assert CATALOG["bed"].size_m == (1.6, 2.1, 1.05) and CATALOG["bed"].bare_height_m == 0.5  # headboard, mattress
     assert CATALOG["sofa"].size_m == (2.1, 0.95, 0.85)
     assert not CATALOG["rug"].collides and CATALOG["rug"].size_m[2] <= 0.02
     against = {n for n, k in CATALOG.items() if k.against_wall}
