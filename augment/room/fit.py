@@ -1046,17 +1046,17 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             reason = (f"suggestion {failed} could not place everything without overlaps or leaving the "
                       f"{area_m2:.1f} m\u00b2 floor")
             gone_units = units[-1:]
-        if spec.camera is not None and (by_cut or by_astray) \
-                and (lower := [i for u in gone_units for i in u if _lowerable(i)]):
-            # Cut by the photo's edge, or kept off its wall by where it may stand whole in
-            # the photo: without its top part first (a bed without its headboard).
-            spec = _kept_bare(spec, lower, f"with it, {reason}", notes)
-            progress.grow(suggestions)
-            continue
         asked = {i.id for u in gone_units for i in u}
         rest, gone = _drop(spec, sorted(asked))
         why = {i: reason if i in asked else _why_gone(kinds[i], reason) for i in gone}
         lone = spec.camera is not None and bool(corners) and _lone_dressing(i.kind.name for i in rest.items)
+        lower = [i for u in gone_units for i in u if _lowerable(i)] if by_cut or by_astray else []
+        if spec.camera is not None and lower and (longer or (rest.items and not lone)):
+            # Cut by the photo's edge, or kept off its wall by where it may stand whole in the
+            # photo (after the longer search, where all would go): without its top part first.
+            spec = _kept_bare(spec, lower, f"with it, {reason}", notes)
+            progress.grow(suggestions)
+            continue
         why.update({i.id: _alone(i) for i in rest.items} if lone else {})
         if not rest.items or lone:  # what serves the units dropped goes with them (SERVES)
             if not longer:
