@@ -24,10 +24,11 @@ from layout import report as layout_report
 from layout.builder import LayoutBuilder
 from layout.camera import Camera, in_view_share, seats_at
 from layout.camera import faults as camera_faults
+from layout.catalog import CATALOG
 from layout.errors import LayoutError
 from layout.geometry import edge_distances, polygon_area
-from layout.spec import Opening
 from layout.presets import DEFAULT_ROOM, PRESETS, corner_sets
+from layout.spec import Opening
 
 from ..errors import FurnishError
 from .doors import doors_on_floor, open_edges
@@ -253,6 +254,14 @@ def _kept_bare(spec, items, why: str, notes: list):
     return dataclasses.replace(spec, items=tuple(lowered.get(i.id, i) for i in spec.items))
 
 
+def _bare_notes(items) -> list[str]:
+    """The notes of :func:`_kept_bare` for those of ``items`` (a corner set's) that stand
+    at their kind's bare height: a corner set is fitted to the photo on its own."""
+    return [f"{i.id}{BARE_NOTE}{i.kind.bare_part}: {CATALOG[i.kind.name].size_m[2]:.2f} m tall, {IN_NO_VIEW} "
+            "(a photo taken from higher or farther back shows more)"
+            for i in items if 0.0 < i.kind.bare_height_m == i.kind.size_m[2] and i.kind.name in CATALOG]
+
+
 def _lowerable(item) -> bool:
     """Whether ``item`` stands on the floor at more than its kind's bare height."""
     return item.elevation_m == 0.0 and 0.0 < item.kind.bare_height_m < item.kind.size_m[2]
@@ -335,9 +344,12 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None =
             if _stands_in_view(camera, poly, (w, d, top)):
                 continue
             why = f"{top:.2f} m tall, {IN_NO_VIEW} (a photo taken from higher or farther back shows more)"
-            if len(unit) == 1 and _lowerable(unit[0]) \
-                    and _stands_in_view(camera, poly, (w, d, unit[0].kind.bare_height_m)):
-                spec = _kept_bare(spec, unit, why, notes)
+            # Its pieces without their top parts (a bed with its nightstands, headboard off).
+            lower = [i for i in unit if _lowerable(i)]
+            bare = {i.id for i in lower}
+            bare_top = max((i.kind.bare_height_m if i.id in bare else i.kind.size_m[2]) + i.elevation_m for i in unit)
+            if lower and _stands_in_view(camera, poly, (w, d, bare_top)):
+                spec = _kept_bare(spec, lower, why, notes)
             else:
                 drop(unit, why)
     stacked = _stacked_tops(spec.constraints)
@@ -404,8 +416,8 @@ def corner_specs(source, fitted, calibration=None) -> list:
     """The preset's corner sets (:func:`layout.presets.corner_sets`) fitted to the floor of
     ``fitted`` (its polygon, height, open edges and doors) and the photo's camera (that of
     ``calibration``, also where ``fitted`` is laid out without it), for suggestions that
-    would otherwise repeat the first: those that keep their first piece whole in view and
-    stand as the preset made them (none kept bare of what it carries), in order. None for
+    would otherwise repeat the first: those that keep their first piece in view, whole or
+    bare (a bed without its headboard; said where the set is staged), in order. None for
     a spec file's furniture: that is what the user chose."""
     from layout.spec import spec_from_dict
 
@@ -419,7 +431,7 @@ def corner_specs(source, fitted, calibration=None) -> list:
         spec = spec_from_dict({"room": room, **parts}, where=f"preset {source}, corner set {k + 1}")
         notes = []
         spec, dropped = fit_spec(spec, fitted.polygon_m, fitted.height_m, camera, notes)
-        if notes or not spec.items or parts["items"][0]["id"] in {d["id"] for d in dropped}:
+        if not spec.items or parts["items"][0]["id"] in {d["id"] for d in dropped}:
             continue
         out.append(dataclasses.replace(spec, camera=camera, doors=fitted.doors, windows=fitted.windows))
     return out
@@ -1018,6 +1030,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 if sorted(i.kind.name for i in kept) != _kinds(spec):
                     said.append(f"suggestion {k + 1} stages another corner set ({', '.join(i.id for i in kept)}): "
                                 "the floor in view leaves room for one arrangement of the room's furniture")
+                said.extend(_bare_notes(kept))
             elif pick.twin:
                 said.append(f"suggestion {k + 1} repeats an earlier one: the floor in view leaves no other "
                             "arrangement of this furniture")
@@ -1029,7 +1042,8 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             # kind: a corner set's) is in the photos: it is not said to be left out.
             staged = {(lay.model.names[i], lay.model.kinds[i]) for lay in layouts for i in lay.items}
             dropped[:] = [d for d in dropped if (d["id"], d["kind"]) not in staged]
-            notes.extend(([cornered] if cornered else []) + _said_once(said))
+            bare = _bare_notes(spec.items) if cornered else []
+            notes.extend(([cornered] if cornered else []) + [n for n in bare if n not in notes] + _said_once(said))
             return spec, layouts, reports
         units = _units(spec)
         kinds = {i.id: i.kind.name for i in spec.items}
@@ -1066,6 +1080,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 continue
             tries = fit.seed_tries
             if spec.camera is not None and corners:
+                notes[:] = [n for n in notes if not n.startswith(tuple(i.id + BARE_NOTE for i in spec.items))]
                 spec, cornered = _corner_instead(spec, corners.pop(0), dropped, why)
                 progress.grow(suggestions)
                 continue

@@ -1712,6 +1712,20 @@ def test_one_piece_that_only_dresses_a_group_is_no_staging(tmp_path):
         _suggestions(m, "office", corners=True)
 
 
+def test_a_corner_set_may_stage_its_bed_without_the_headboard(tmp_path):
+    """Render [9900, 25], a bedroom seen from low: the room's furniture finds no wall in view
+    (its bed even at 0.5 m), and the single bed of the first corner set stands whole only
+    without its 0.95 m headboard. That corner set is staged, the bed at 0.5 m, and the
+    warnings say so once (not the room's own bed's, which went)."""
+    m, _ = _measured_render([9900, 25], tmp_path)
+    layouts, notes, _ = _suggestions(m, "bedroom", corners=True)
+    beds = [(lay, i) for lay in layouts for i in lay.items if lay.model.kinds[i] == "single_bed"]
+    assert beds and all(lay.model.particle_size_m[i, 2] == CATALOG["single_bed"].bare_height_m for lay, i in beds)
+    assert any(n.startswith("staged as a corner (bed, nightstand)") for n in notes), notes
+    bare = [n for n in notes if n.startswith("bed stands without its headboard")]
+    assert len(bare) == 1 and "0.95 m tall" in bare[0], notes
+
+
 def test_pieces_left_out_for_one_reason_at_different_heights_are_said_once():
     """room_2's living room left out four pieces each "N m tall, it would be cut by the
     photo's edge ... wherever it stood (...)", the long reason written four times over.
