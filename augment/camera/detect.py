@@ -459,10 +459,7 @@ def _orient_by_markers(gray: np.ndarray, corners_px: np.ndarray, board: Board) -
     still match as a whole. None when no numbering matches them
     (``CAMERA.detect.min_marker_match``): a plain checkerboard."""
     px = 16  # per square: two per marker bit
-    template = board.image(px)
-    pad_y = (template.shape[0] - (board.rows + 1) * px) // 2
-    pad_x = (template.shape[1] - (board.cols + 1) * px) // 2
-    template = template[pad_y:template.shape[0] - pad_y, pad_x:template.shape[1] - pad_x].astype(np.float32)
+    template = board.printed_image(px)[::-1].astype(np.float32)  # as Board.image lays it, without the margin
     step = board.square_m / px
     # Template pixel (c, r) -> board meters (x, y): row 0 is board -y, as Board.image draws it.
     meters_from_template = np.array([[step, 0, (0.5 - (board.cols + 1) * px / 2) * step],

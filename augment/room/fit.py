@@ -245,20 +245,32 @@ def _units(spec) -> list[list]:
 BARE_NOTE = " stands without "
 
 
+def _bare_note(item, why: str) -> str:
+    return f"{item.id}{BARE_NOTE}{item.kind.bare_part}: {why}"
+
+
+def _without_bare_notes(notes: list, ids) -> None:
+    """Take back the notes that pieces ``ids`` stand bare (they were left out after all)."""
+    notes[:] = [n for n in notes if not n.startswith(tuple(i + BARE_NOTE for i in ids))]
+
+
+def _too_tall_for_view(top_m: float) -> str:
+    return f"{top_m:.2f} m tall, {IN_NO_VIEW} (a photo taken from higher or farther back shows more)"
+
+
 def _kept_bare(spec, items, why: str, notes: list):
     """``spec`` with ``items`` at their kind's ``bare_height_m`` (a TV stand without its TV,
     a bed without its headboard), each with a line in ``notes`` saying ``why``."""
     lowered = {i.id: dataclasses.replace(i, kind=dataclasses.replace(
         i.kind, size_m=(*i.kind.size_m[:2], i.kind.bare_height_m))) for i in items}
-    notes.extend(f"{i.id}{BARE_NOTE}{i.kind.bare_part}: {why}" for i in items)
+    notes.extend(_bare_note(i, why) for i in items)
     return dataclasses.replace(spec, items=tuple(lowered.get(i.id, i) for i in spec.items))
 
 
 def _bare_notes(items) -> list[str]:
     """The notes of :func:`_kept_bare` for those of ``items`` (a corner set's) that stand
     at their kind's bare height: a corner set is fitted to the photo on its own."""
-    return [f"{i.id}{BARE_NOTE}{i.kind.bare_part}: {CATALOG[i.kind.name].size_m[2]:.2f} m tall, {IN_NO_VIEW} "
-            "(a photo taken from higher or farther back shows more)"
+    return [_bare_note(i, _too_tall_for_view(CATALOG[i.kind.name].size_m[2]))
             for i in items if 0.0 < i.kind.bare_height_m == i.kind.size_m[2] and i.kind.name in CATALOG]
 
 
@@ -343,7 +355,7 @@ def fit_spec(spec, polygon_m, height_m: float, camera=None, notes: list | None =
             top = max(i.kind.size_m[2] + i.elevation_m for i in unit)
             if _stands_in_view(camera, poly, (w, d, top)):
                 continue
-            why = f"{top:.2f} m tall, {IN_NO_VIEW} (a photo taken from higher or farther back shows more)"
+            why = _too_tall_for_view(top)
             # Its pieces without their top parts (a bed with its nightstands, headboard off).
             lower = [i for i in unit if _lowerable(i)]
             bare = {i.id for i in lower}
@@ -1080,7 +1092,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
                 continue
             tries = fit.seed_tries
             if spec.camera is not None and corners:
-                notes[:] = [n for n in notes if not n.startswith(tuple(i.id + BARE_NOTE for i in spec.items))]
+                _without_bare_notes(notes, [i.id for i in spec.items])
                 spec, cornered = _corner_instead(spec, corners.pop(0), dropped, why)
                 progress.grow(suggestions)
                 continue
@@ -1100,7 +1112,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
         spec = rest
         dropped.extend({"id": i, "kind": kinds[i], "reason": why[i]} for i in sorted(gone))
         # A piece kept bare for the frame and left out after all is said once, as left out.
-        notes[:] = [n for n in notes if not n.startswith(tuple(i + BARE_NOTE for i in gone))]
+        _without_bare_notes(notes, gone)
         progress.grow(suggestions)
 
 
