@@ -267,11 +267,14 @@ def _kept_bare(spec, items, why: str, notes: list):
     return dataclasses.replace(spec, items=tuple(lowered.get(i.id, i) for i in spec.items))
 
 
-def _bare_notes(items) -> list[str]:
+def _bare_notes(items, noted=()) -> list[str]:
     """The notes of :func:`_kept_bare` for those of ``items`` (a corner set's) that stand
-    at their kind's bare height: a corner set is fitted to the photo on its own."""
+    at their kind's bare height, but for pieces ``noted`` already says so of: a corner set
+    is fitted to the photo on its own."""
+    said = tuple(n for n in noted if BARE_NOTE in n)
     return [_bare_note(i, _too_tall_for_view(CATALOG[i.kind.name].size_m[2]))
-            for i in items if 0.0 < i.kind.bare_height_m == i.kind.size_m[2] and i.kind.name in CATALOG]
+            for i in items if 0.0 < i.kind.bare_height_m == i.kind.size_m[2] and i.kind.name in CATALOG
+            and not any(n.startswith(i.id + BARE_NOTE) for n in said)]
 
 
 def _lowerable(item) -> bool:
@@ -1054,8 +1057,8 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             # kind: a corner set's) is in the photos: it is not said to be left out.
             staged = {(lay.model.names[i], lay.model.kinds[i]) for lay in layouts for i in lay.items}
             dropped[:] = [d for d in dropped if (d["id"], d["kind"]) not in staged]
-            bare = _bare_notes(spec.items) if cornered else []
-            notes.extend(([cornered] if cornered else []) + [n for n in bare if n not in notes] + _said_once(said))
+            bare = _bare_notes(spec.items, notes) if cornered else []
+            notes.extend(([cornered] if cornered else []) + bare + _said_once(said))
             return spec, layouts, reports
         units = _units(spec)
         kinds = {i.id: i.kind.name for i in spec.items}

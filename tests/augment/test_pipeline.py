@@ -1726,6 +1726,24 @@ def test_a_corner_set_may_stage_its_bed_without_the_headboard(tmp_path):
     assert len(bare) == 1 and "0.95 m tall" in bare[0], notes
 
 
+def test_a_corner_sets_bare_piece_is_said_once():
+    """A corner set's single bed at its bare 0.5 m gets the note of the bed kept bare for
+    the view (its full 0.95 m named), unless the notes already say that piece stands bare
+    (kept so while solving, "with it, ..."); a bed at full height and a plant get none."""
+    from types import SimpleNamespace
+
+    single = CATALOG["single_bed"]
+    bare = SimpleNamespace(id="bed", kind=dataclasses.replace(single, size_m=(0.9, 2.0, 0.5)))
+    whole = SimpleNamespace(id="bed_2", kind=single)
+    plant = SimpleNamespace(id="plant", kind=CATALOG["plant"])
+    assert fit._bare_notes([bare, whole, plant]) == [
+        "bed stands without its headboard: 0.95 m tall, " + fit.IN_NO_VIEW
+        + " (a photo taken from higher or farther back shows more)"]
+    noted = ["bed stands without its headboard: with it, it found no place against a wall"]
+    assert fit._bare_notes([bare, whole, plant], noted) == []
+    assert len(fit._bare_notes([bare], ["bed_2 stands without its headboard: ..."])) == 1
+
+
 def test_pieces_left_out_for_one_reason_at_different_heights_are_said_once():
     """room_2's living room left out four pieces each "N m tall, it would be cut by the
     photo's edge ... wherever it stood (...)", the long reason written four times over.
