@@ -9,8 +9,11 @@ looked at square-on), where the floor's texture has one scale and one orientatio
    paper than Stager assumes), at most one square; less what stands on it (a carton
    over part of a ChArUco board), found where the photo does not follow the print's
    pattern.
-2. **Light.** The floor's slow changes of light and colour (shade, the falloff of a lamp)
-   are filled smoothly from the sheet's rim (OpenCV's Telea inpainting, then blurred).
+2. **Light.** A shadow's straight edge across the sheet (a window frame's, in the sun) is
+   found where the floor on both sides of the sheet steps in brightness along one line;
+   it is taken out of the view and put back on the fill, sharp as the photo shows it.
+   The floor's slow changes of light and colour (shade, the falloff of a lamp) are filled
+   smoothly from the sheet's rim (OpenCV's Telea inpainting, then blurred).
 3. **Texture.** What remains of the floor (grain, carpet, blotches, tile joints) is
    copied from the place beside the sheet whose rim matches the sheet's rim best (masked
    template matching, the squared differences relative to the two rims' energy, so that
@@ -153,6 +156,16 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     small_valid = small_valid & ~foreign
     hole &= ~foreign
     bad = hole | ~small_valid
+    # A shadow's straight edges across the sheet are taken out first and put back on the
+    # fill: smoothing would blur them, and the copied texture would bring another place's.
+    usable = small_valid & ~(cv2.dilate(hole.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0)
+    shade = []
+    for _ in range(settings.shadow_max_edges):
+        edge = _shadow_edge(small, small_rgb, usable, hole)
+        if edge is None:
+            break
+        shade.append(edge)
+        small_rgb = edge.lift(small, small_rgb, (0, 0, cols, rows))
     # Light is what varies slowly; the floor's own blotches and planks are texture, copied whole.
     sigma = max(1.0, settings.light_sigma_share * short_m * small.ppm)
     smooth = cv2.inpaint(small_rgb, bad.astype(np.uint8) * 255, 3, cv2.INPAINT_TELEA)
@@ -167,6 +180,7 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     (c0, r0), (c1, r1) = np.floor(full.view_px(sheet)).astype(int) + [[-ring], [ring + 1]]
     box = (c0, r0, c1, r1)
     rgb, valid = full.sample(image, floor_mask, box)
+    rgb = _lift(shade, full, rgb, box)
     standing = _upsample(foreign.astype(np.float32), scale, box) > 0.5
     hole_full = full.rectangle(sheet, box) & ~standing
     valid &= ~standing
@@ -183,6 +197,7 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
         dx, dy = (round(v / scale) for v in found)
         source = (c0 + dx - reach, r0 + dy - reach, c1 + dx + reach, r1 + dy + reach)
         src_rgb, src_valid = full.sample(image, floor_mask, source)
+        src_rgb = _lift(shade, full, src_rgb, source)
         src_texture = src_rgb.astype(np.float32) - _upsample(light, scale, source)
         refined = _best_offset(texture, part, hole_full | ~valid, ring, search=(src_texture, ~src_valid, reach))
         if refined is None:
@@ -215,6 +230,8 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     # copied, a ramp over the rim it was matched on, so that the copy has no edge.
     weight = np.where(hole_full, 1.0, np.where(have, np.clip(1.0 - outside / (ring + 1), 0.0, 1.0), 0.0))
     weight = np.where(standing, 0.0, weight).astype(np.float32)
+    for edge in shade:
+        fill = fill * edge.factor(full, box)
     filled = np.clip(fill + 0.5, 0, 255).astype(np.uint8)
 
     # Back into the photo: the sheet's pixels, with the print's blurred edge, and the ramp.
@@ -315,6 +332,159 @@ class _TopDown:
                              np.arange(y0, y1 + step, step, dtype=np.float64))
         v = self.view_px(self.calibration.floor_from_pixels(np.column_stack([gx.ravel(), gy.ravel()])))
         return [_from_grid(v[:, k].reshape(gx.shape), y1 - y0, x1 - x0) for k in range(2)]
+
+
+@dataclass(frozen=True)
+class _ShadowEdge:
+    """A shadow's straight soft edge on the floor: each channel of the photo is
+    ``exp(step[k] * s)`` times what it would be without it, ``s = 1 / (1 + exp(-t))`` and
+    ``t = (normal_m . p - offset_m) / width_m`` at floor point ``p``; the darker side is 1."""
+
+    normal_m: np.ndarray
+    offset_m: float
+    width_m: float
+    step: np.ndarray
+
+    def factor(self, view: _TopDown, box) -> np.ndarray:
+        """(rows, cols, 3) float32: the shadow's factor at the view's box."""
+        c0, r0, c1, r1 = box
+        d = (view.origin_m @ self.normal_m + ((np.arange(c0, c1) + 0.5) / view.ppm)[None] * self.normal_m[0]
+             + ((np.arange(r0, r1) + 0.5) / view.ppm)[:, None] * self.normal_m[1])
+        s = 1.0 / (1.0 + np.exp(-np.clip((d - self.offset_m) / self.width_m, -50, 50)))
+        return np.exp(s[..., None] * self.step - np.minimum(self.step, 0.0)).astype(np.float32)
+
+    def lift(self, view: _TopDown, rgb: np.ndarray, box) -> np.ndarray:
+        """``rgb`` (uint8) of the view's box with the shadow's edge taken out: its lit side
+        brought down to the shaded side's light."""
+        return np.clip(rgb / self.factor(view, box) + 0.5, 0, 255).astype(np.uint8)
+
+
+def _lift(edges, view: _TopDown, rgb: np.ndarray, box) -> np.ndarray:
+    """``rgb`` of the view's box with every shadow edge of ``edges`` taken out."""
+    for edge in edges:
+        rgb = edge.lift(view, rgb, box)
+    return rgb
+
+
+def _shadow_edge(view: _TopDown, rgb: np.ndarray, usable: np.ndarray, hole: np.ndarray) -> _ShadowEdge | None:
+    """The shadow's edge that crosses the sheet (``hole``, view pixels) in a straight line,
+    found on the floor around it (``usable``) of the view's ``rgb``, or None.
+
+    Along a candidate line the floor is cut into pieces; in each, the log brightness of a
+    strip on one side is compared with the strip on the other. A shadow's edge darkens one
+    side all along (a seam between planks of different colours flips sign from plank to
+    plank, a tile's joint darkens neither side): of every direction and every place through
+    the sheet, the line kept is the one whose pieces agree on the strongest step. Its
+    softness and height per channel are then fitted to the median profile across it. A
+    plank's lighter run that does agree all along is taken too: carried straight across
+    the sheet, it is what the planks most likely do there."""
+    settings = RENDER.erase
+    hy, hx = np.nonzero(hole)
+    short = min(hx.max() - hx.min(), hy.max() - hy.min()) + 1 if len(hx) else 0
+    if short < 8:
+        return None
+    strip = max(3, round(settings.shadow_strip_share * short))
+    piece = max(6, round(settings.shadow_piece_share * short))
+    # The floor within a sheet's width around it. Closed (grey morphology): a joint's or a
+    # seam's dark line is gone, a step stays.
+    near = np.zeros_like(usable)
+    near[max(0, hy.min() - short):hy.max() + short + 1, max(0, hx.min() - short):hx.max() + short + 1] = True
+    near &= usable
+    closed = cv2.morphologyEx(rgb, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
+
+    def floor(stride):
+        """Every ``stride``-th pixel's column, row, log brightness, and log of each channel."""
+        ys, xs = np.nonzero(near[::stride, ::stride])
+        logs = np.log(closed[ys * stride, xs * stride].astype(np.float64) + 4.0)
+        return xs * stride, ys * stride, logs @ [0.299, 0.587, 0.114], logs
+
+    def score(theta, xs, ys, lum, stride):
+        """How strongly the pieces along the line at ``theta`` agree on a step: the best
+        place through the sheet, (the step's median where they agree, else 0; the place)."""
+        cos, sin = np.cos(theta), np.sin(theta)
+        d, t = xs * cos + ys * sin, ys * cos - xs * sin
+        d0 = d.min()
+        db, tb = (d - d0).astype(int), ((t - t.min()) / piece).astype(int)
+        nd = db.max() + 1
+        shape = (tb.max() + 1, nd)
+        total = np.pad(np.cumsum(np.bincount(tb * nd + db, lum, shape[0] * nd).reshape(shape), 1), ((0, 0), (1, 0)))
+        count = np.pad(np.cumsum(np.bincount(tb * nd + db, None, shape[0] * nd).reshape(shape), 1), ((0, 0), (1, 0)))
+        dh = hx * cos + hy * sin - d0
+        places = np.arange(max(strip, int(dh.min())), min(nd - strip, int(np.ceil(dh.max()))) + 1)
+        if len(places) == 0:
+            return 0.0, 0.0
+        hi_n = count[:, places + strip] - count[:, places]
+        lo_n = count[:, places] - count[:, places - strip]
+        hi = (total[:, places + strip] - total[:, places]) / np.maximum(hi_n, 1)
+        lo = (total[:, places] - total[:, places - strip]) / np.maximum(lo_n, 1)
+        step = np.where(np.minimum(hi_n, lo_n) >= strip * piece / (4 * stride ** 2), hi - lo, np.nan)
+        seen = np.isfinite(step)
+        n = seen.sum(0)
+        ranked = np.sort(step, 0)  # nan last
+        middle = [np.take_along_axis(ranked, np.maximum(k, 0)[None], 0)[0] for k in ((n - 1) // 2, n // 2)]
+        median = np.where(n >= 4, (middle[0] + middle[1]) / 2, 0.0)
+        agree = np.sum(seen & (step * median[None] >= 0.5 * median[None] ** 2), 0) / np.maximum(n, 1)
+        value = np.abs(median) * (agree >= settings.shadow_agree)
+        k = int(np.argmax(value))
+        return float(value[k]), float(places[k] + d0)
+
+    # Every direction on a coarse sample, then the best one's neighbourhood on a finer one.
+    coarse = floor(4)
+    xs, ys, lum, logs = floor(2)
+    if len(xs) < 200:
+        return None
+    theta = max(np.deg2rad(np.arange(0.0, 180.0, 3.0)), key=lambda a: score(a, *coarse[:3], 4)[0])
+    found = max((score(a, xs, ys, lum, 2) + (a,) for a in theta + np.deg2rad(np.arange(-2.0, 2.5, 0.5))),
+                key=lambda v: v[0])
+    if found[0] < settings.shadow_min_step:
+        return None
+    _, place, theta = found
+    # The profile across the line: per piece, the log brightness about its mean, then the
+    # median over pieces; fitted by a level, a slope and a soft step.
+    cos, sin = np.cos(theta), np.sin(theta)
+    d, t = xs * cos + ys * sin - place, ys * cos - xs * sin
+    reach = 3 * strip
+    inside = np.abs(d) < reach
+    if inside.sum() < 50:
+        return None
+    db = (d[inside] + reach).astype(int)
+    tb = ((t[inside] - t.min()) / piece).astype(int)
+    nd = 2 * reach
+    key = tb * nd + db
+    rows = tb.max() + 1
+    count = np.bincount(key, None, rows * nd).reshape(rows, nd)
+    whole = (count[:, :reach].sum(1) > strip * piece / 8) & (count[:, reach:].sum(1) > strip * piece / 8)
+    if whole.sum() < 4:
+        return None
+    profiles = []
+    for channel in np.column_stack([lum, logs])[inside].T:
+        mean = np.bincount(key, channel, rows * nd).reshape(rows, nd) / np.where(count > 0, count, np.nan)
+        mean = mean[whole] - np.nanmean(mean[whole], 1, keepdims=True)
+        profile = np.full(nd, np.nan)
+        some = np.isfinite(mean).any(0)
+        profile[some] = np.nanmedian(mean[:, some], 0)
+        profiles.append(profile)
+    profiles = np.array(profiles)
+    x = np.arange(nd) - reach + 0.5
+    known = np.all(np.isfinite(profiles), 0)
+    best = None
+    for shift in np.arange(-strip / 2, strip / 2 + 0.1, 0.5):
+        for width in (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0):
+            soft = 1.0 / (1.0 + np.exp(-np.clip((x - shift) / width, -50, 50)))
+            model = np.column_stack([np.ones(nd), x, soft])[known]
+            coef = np.linalg.lstsq(model, profiles[:, known].T, rcond=None)[0]
+            res = float(np.sum((profiles[0, known] - model @ coef[:, 0]) ** 2))
+            if best is None or res < best[0]:
+                best = (res, shift, width, coef[2])
+    _, shift, width, height = best
+    # A step: strong, within the strips, and the profile's shape (a joint's dark line is no step).
+    across = profiles[0, known]
+    explained = 1.0 - best[0] / max(float(np.sum((across - across.mean()) ** 2)), 1e-12)
+    if abs(height[0]) < settings.shadow_min_step or abs(shift) >= strip / 2 or explained < settings.shadow_fit:
+        return None
+    normal = np.array([cos, sin])
+    offset_m = view.origin_m @ normal + (place + shift + 0.5 * normal.sum()) / view.ppm
+    return _ShadowEdge(normal, float(offset_m), width / view.ppm, height[1:].astype(np.float32))
 
 
 def _push_pull(values: np.ndarray, known: np.ndarray) -> np.ndarray:

@@ -154,6 +154,12 @@ class EraseSettings:
     feather_px: float = 1.0  # the blend's soft edge (Gaussian sigma)
     max_splits: int = 2  # where no place beside the sheet is all floor, its halves look for one, and theirs
     map_step_px: int = 4  # the view's pixel maps are computed on this coarse grid, then interpolated
+    shadow_max_edges: int = 2  # straight shadow edges looked for, one after the other (a band has two)
+    shadow_strip_share: float = 0.125  # a shadow's edge: the strips compared on its sides, of the sheet's shorter side
+    shadow_piece_share: float = 0.33  # ... the pieces along it that must agree, of the sheet's shorter side
+    shadow_agree: float = 0.8  # ... this share of them darken the same side ...
+    shadow_min_step: float = 0.1  # ... by at least this (log of the photo's levels, about 20 % of the light) ...
+    shadow_fit: float = 0.9  # ... and a soft step explains this share of the median profile across it
     covered_warn: float = 0.02  # the user is warned when something stands on more of the sheet than this
 
 
