@@ -2,7 +2,8 @@
 
 Run by hand: ``python benchmarks/erase_prints.py [--count 40] [--seed 9300] [--size 1280x960]``
 (a few minutes). Prints a row per case and writes ``results/erase_prints.{json,md}``,
-``results/erase_prints_worst.png`` and ``results/erase_prints_real.png``.
+``results/erase_prints_worst.png``, ``results/erase_prints_real.png`` and
+``results/erase_prints_real_shadow.png``.
 
 Each case (:func:`augment.synth.prints.pasted_board`, seeds ``[--seed, i]``) is a print on
 white, off-white or cream paper, with the A3 sheet's margin or trimmed to the squares,
@@ -14,7 +15,8 @@ same floor without it. The photo is calibrated from the board with the true foca
 :func:`augment.synth.prints.erasure_scores`: light, contrast, seam and bright spots
 against the floor that was there, each with its limit. Then the same print on the real
 floors of ``samples/real`` (pasted by :func:`augment.synth.prints.paste_print`), erased on
-the floor the model finds.
+the floor the model finds; and again with the photo and its truth under a shadow's edge
+across the print.
 """
 from __future__ import annotations
 
@@ -47,10 +49,28 @@ def crop(images, sheet_px, pad=30, size=(260, 195)):
     return np.hstack([cv2.resize(im[y0:y1, x0:x1], size, interpolation=cv2.INTER_AREA) for im in images])
 
 
-def real_floors() -> tuple[list, np.ndarray]:
+def under_a_shadow(image: np.ndarray, K: np.ndarray, camera_from_floor: np.ndarray, angle_rad: float,
+                   offset_m: float = 0.03, width_m: float = 0.008, depth: float = 0.5) -> np.ndarray:
+    """``image`` with a straight shadow's soft edge on the floor (a window frame's): in
+    linear light, the floor beyond the line at ``angle_rad`` passing ``offset_m`` from the
+    board's middle darkened by ``depth``, over a logistic width ``width_m``."""
+    h, w = image.shape[:2]
+    floor_from_pixels = np.linalg.inv(K @ camera_from_floor[:3][:, [0, 1, 3]])
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    q = floor_from_pixels @ np.stack([u.ravel(), v.ravel(), np.ones(u.size)])
+    seen = q[2] > 1e-9
+    along = (np.cos(angle_rad) * q[0] + np.sin(angle_rad) * q[1]) / np.where(seen, q[2], 1.0) - offset_m
+    shade = 1.0 - depth / (1.0 + np.exp(-np.clip(along / width_m, -50, 50)))
+    factor = np.where(seen, shade, 1.0).reshape(h, w) ** (1 / 2.2)
+    return np.clip(image * factor[..., None] + 0.5, 0, 255).astype(np.uint8)
+
+
+def real_floors(shadow: bool) -> tuple[list, np.ndarray]:
     """The print pasted on the four real photos of ``samples/real`` (where their camera would
     have seen it, as ``before_after.py`` does), erased on the floor the model finds: their
-    scores against the photo without it, and a picture (photo, erased, truth per row)."""
+    scores against the photo without it, and a picture (photo, erased, truth per row).
+    ``shadow``: the photo and the truth both under a shadow's edge across the print (a
+    different direction on each photo)."""
     import json
 
     from augment.floor.model import DEFAULT_MODEL, FloorModel
@@ -61,9 +81,12 @@ def real_floors() -> tuple[list, np.ndarray]:
     real = Path(__file__).resolve().parent.parent / "samples" / "real"
     model = FloorModel(DEFAULT_MODEL)
     rows, pictures = [], []
-    for name, room in json.loads((real / "rooms.json").read_text()).items():
+    for k, (name, room) in enumerate(json.loads((real / "rooms.json").read_text()).items()):
         truth = read_photo(real / f"{name}.jpg")
         photo, K, pose, sheet_px = paste_planned(truth, room)
+        if shadow:
+            angle = np.radians(25.0 + 45.0 * k)
+            photo, truth = (under_a_shadow(im, K, pose, angle) for im in (photo, truth))
         cal = calibrate_photo(photo, Board(), intrinsics=exif_intrinsics(room["focal_px"], truth.shape[1::-1]))
         mask = segment_floor(photo, calibration=cal, model=model).mask
         erased = erase_board(photo, cal, mask)
@@ -126,14 +149,21 @@ def main(argv=None) -> int:
                         ("marks", (True, False)), ("pattern", ("stager", "charuco", "opencv")),
                         ("floor", ("carpet", "wood", "laminate", "tiles", "concrete")), ("shadow", (True, False))):
         lines.append(f"| {key} | " + ", ".join(f"{v}: {share(key, v)}" for v in values) + " |")
-    real, picture = real_floors()
-    lines += ["", "**Real floors** (`samples/real`: the print pasted where each photo's camera would have seen it, "
-              "erased on the floor the model finds; `erase_prints_real.png`: photo, erased, truth):", "",
-              "| photo | light | contrast | seam | spots | within limits |", "|---|---|---|---|---|---|"]
-    lines += [f"| {r['photo']} | {r['light']:.1f} | {r['contrast']:.2f} | {r['seam']:.2f} | {r['spots']} | "
-              f"{'yes' if r['ok'] else 'no'} |" for r in real]
-    ok_png, data = cv2.imencode(".png", cv2.cvtColor(picture, cv2.COLOR_RGB2BGR))
-    write_atomic(RESULTS / "erase_prints_real.png", data.tobytes())
+    real, picture = real_floors(shadow=False)
+    shaded, shaded_picture = real_floors(shadow=True)
+    for title, found in (
+            ("**Real floors** (`samples/real`: the print pasted where each photo's camera would have seen it, "
+             "erased on the floor the model finds; `erase_prints_real.png`: photo, erased, truth):", real),
+            ("**Real floors under a shadow's edge** (the same, photo and truth darkened to half the light, in linear "
+             "light, beyond a soft straight line across the print, 3 cm from its middle, at 25, 70, 115 and 160 "
+             "degrees to the board; `erase_prints_real_shadow.png`):", shaded)):
+        lines += ["", title, "", "| photo | light | contrast | seam | spots | within limits |",
+                  "|---|---|---|---|---|---|"]
+        lines += [f"| {r['photo']} | {r['light']:.1f} | {r['contrast']:.2f} | {r['seam']:.2f} | {r['spots']} | "
+                  f"{'yes' if r['ok'] else 'no'} |" for r in found]
+    for image, name in ((picture, "erase_prints_real.png"), (shaded_picture, "erase_prints_real_shadow.png")):
+        ok_png, data = cv2.imencode(".png", cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+        write_atomic(RESULTS / name, data.tobytes())
     lines += ["", "Not calibrated: " + (", ".join(f"{r['case']} ({r['pattern']})" for r in rows if not r["calibrated"])
                                         or "none"), "",
               "`erase_prints_worst.png`: the six worst by light, each the photo, the erased photo and the truth."]
@@ -144,7 +174,7 @@ def main(argv=None) -> int:
         ok_png, data = cv2.imencode(".png", cv2.cvtColor(sheet, cv2.COLOR_RGB2BGR))
         write_atomic(RESULTS / "erase_prints_worst.png", data.tobytes())
     write("erase_prints", {"machine": machine(seed=args.seed, count=args.count), "summary": summary, "cases": rows,
-                           "real": real},
+                           "real": real, "real_shadow": shaded},
           lines)
     return 0
 
