@@ -378,8 +378,8 @@ class Folds:
 
     def __init__(self, rng, depth_m: float, rim_z: float, full_m: float = 0.08):
         self.depth_m, self.rim_z, self.full_m = float(depth_m), float(rim_z), float(full_m)
-        self.valley_dark = 0.5  # light lost at the bottom of the deepest fold (about half its sky hidden)
-        self._in = [_wave(rng, 4, 0.1, 0.3) for _ in range(4)]
+        self.valley_dark = 0.3  # light lost at the bottom of the deepest fold (a soft fold hides a third of it)
+        self._in = [_wave(rng, 3, 0.25, 0.6) for _ in range(4)]
         self._hem = [_wave(rng) for _ in range(4)]
 
     def at(self, x, y, z, ux, uy):
@@ -389,7 +389,7 @@ class Folds:
         along = (y, y, x, x)
         grow = self.depth_m * np.clip((self.rim_z - z) / self.full_m, 0.0, 1.0) ** 1.5
         inward = grow * sum(w * (1 - f(s)) / 2 for w, f, s in zip(weights, self._in, along))
-        rise = 0.3 * grow * sum(w * f(s) for w, f, s in zip(weights, self._hem, along))
+        rise = 0.15 * grow * sum(w * f(s) for w, f, s in zip(weights, self._hem, along))
         return inward, rise
 
 
@@ -999,18 +999,22 @@ def _bed(shop, rng, W, D, H, pillows=None):
     m_in = ins + folds.depth_m
     shop.box((-W / 2 + m_in, y_head + ins, frame_top - 0.05), (W / 2 - m_in, D / 2 - m_in, mattress_top), mattress,
              0.05, 2)
-    # Duvet over most of the mattress, rolling over its sides and hanging in folds,
-    # turned down at the head.
-    fold_y = y_head + 0.42
+    # A lofty duvet over most of the mattress, rolling over its sides and hanging in folds
+    # down to the frame, turned down at the head.
+    loft = 0.08  # the duvet's top above the mattress's
+    r = r_duvet = 0.075
+    fold_y = y_head + 0.37 + r
     # Duvet, turned-down sheet and throw overlap: their sides stand 8 mm apart, never
-    # in one plane (coplanar faces flicker between the two colours) nor crossing in a fold.
+    # in one plane (coplanar faces flicker between the two colours) nor crossing in a fold;
+    # the sheet, higher, rolls over the duvet's edge by as much larger a radius, so that it
+    # follows the edge rather than standing off it like a lid.
     edge = ins * 0.9  # how far the bedding hangs over the mattress
     x_out, y_out = W / 2 - ins + edge, D / 2 - ins + edge
-    r = 0.05
-    shop.drape((-x_out + 0.008, fold_y - r), (x_out - 0.008, y_out - 0.008), mattress_top + 0.04, duvet, rng,
-               r, (0.11, 0.11, 0.0, 0.11), folds, puff_m=0.025)
-    r = 0.035
-    shop.drape((-x_out, fold_y - 0.02), (x_out, fold_y + 0.2), mattress_top + 0.06, sheet, rng, r,
+    hang = max(0.05, mattress_top + loft - r - (frame_top + 0.008))
+    shop.drape((-x_out + 0.008, fold_y - r), (x_out - 0.008, y_out - 0.008), mattress_top + loft, duvet, rng,
+               r, (hang, hang, 0.0, hang), folds, puff_m=0.025)
+    r = r_duvet + 0.02
+    shop.drape((-x_out, fold_y - 0.02), (x_out, fold_y + 0.2), mattress_top + loft + 0.02, sheet, rng, r,
                (0.065, 0.065, 0.02, 0.0), folds, puff_m=0.01)
     n = pillows or (2 if W > 1.2 else 1)
     pw = (W - 2 * ins - 0.08 - (n - 1) * 0.04) / n
@@ -1027,9 +1031,11 @@ def _bed(shop, rng, W, D, H, pillows=None):
                      sheet, 0.03, (0.015, 0.03, 0.3 * thick), tilt)
     if rng.random() < 0.5:
         throw = _mat(rng, *_pick(rng, _styled("bedding", BEDDING) + _styled("fabrics", FABRICS)), 0.95)
-        r = 0.03
-        shop.drape((-x_out, D / 2 - 0.5), (x_out, y_out), mattress_top + 0.07, throw, rng, r,
-                   (0.18, 0.18, 0.0, 0.15), folds, puff_m=0.005)
+        # Folded across the foot on the duvet's flat top, short of its rolled edges (round
+        # the corners of a cloth draped over them the duvet would show through).
+        x_top, y_top = x_out - 0.008 - r_duvet, y_out - 0.008 - r_duvet
+        shop.drape((-x_top, D / 2 - 0.5), (x_top, y_top), mattress_top + loft + 0.035, throw, rng, 0.02,
+                   (0.02,) * 4, None, puff_m=0.003)
     return style
 
 

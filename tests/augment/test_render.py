@@ -669,6 +669,29 @@ def test_a_beds_headboard_rises_above_its_propped_pillows(seed):
     assert max(float(p.vertices[:, 2].max()) for p in bare.parts) <= 0.5 + 1e-6
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_a_beds_duvet_is_lofty_and_hangs_over_the_mattress_to_the_frame(seed):
+    """The duvet (the longest cloth) lies at least 6 cm above the mattress and hangs down
+    its sides and foot to within 2 cm of the frame it sinks into (5 cm up the mattress's
+    foot): no band of bare mattress below the hem, as a made bed has none. (Once it
+    hung 16 cm, leaving 5 cm of mattress bare.)"""
+    bed = build_furniture("bed", style_seed=seed)
+    mattress = next(p for p in bed.parts if p.material.name == "mattress")
+    cloths = [p for p in bed.parts if p.cavity is not None]
+    duvet = max(cloths, key=lambda p: np.ptp(p.vertices[:, 0]))
+    frame_top = mattress.vertices[:, 2].min() + 0.05
+    v = duvet.vertices  # built with its front (the foot) toward +x, its width along y
+    assert v[:, 2].max() >= mattress.vertices[:, 2].max() + 0.06
+    width = np.ptp(v[:, 1])
+    reach = 0.05  # the hanging cloth folds in by up to 4 cm
+    for side in (v[:, 1] < v[:, 1].min() + reach, v[:, 1] > v[:, 1].max() - reach, v[:, 0] > v[:, 0].max() - reach):
+        along = v[side, 0] if np.ptp(v[side, 0]) > width / 2 else v[side, 1]
+        slices = np.floor((along - along.min()) / 0.05).astype(int)
+        inner = np.unique(slices)[2:-2]  # clear of the rounded corners
+        lowest = np.array([v[side][slices == k, 2].min() for k in inner])
+        assert len(inner) >= 8 and lowest.max() <= frame_top + 0.02, (lowest.max(), frame_top)
+
+
 def test_a_parts_cavity_darkens_its_light_in_the_staged_render_and_the_photographers():
     """Part.cavity multiplies the light of each vertex: staged (vertex colours, photo gamma)
     and the photographer's physically based meshes (vertex colour times base colour)."""
