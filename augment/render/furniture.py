@@ -1006,15 +1006,15 @@ def _bed(shop, rng, W, D, H, pillows=None):
     fold_y = y_head + 0.37 + r
     # Duvet, turned-down sheet and throw overlap: their sides stand 8 mm apart, never
     # in one plane (coplanar faces flicker between the two colours) nor crossing in a fold;
-    # the sheet, higher, rolls over the duvet's edge by as much larger a radius, so that it
-    # follows the edge rather than standing off it like a lid.
+    # the sheet, higher, rolls over the duvet's edges (from beyond its head's) by as much
+    # larger a radius, so that it follows them rather than standing off them like a lid.
     edge = ins * 0.9  # how far the bedding hangs over the mattress
     x_out, y_out = W / 2 - ins + edge, D / 2 - ins + edge
     hang = max(0.05, mattress_top + loft - r - (frame_top + 0.008))
     shop.drape((-x_out + 0.008, fold_y - r), (x_out - 0.008, y_out - 0.008), mattress_top + loft, duvet, rng,
                r, (hang, hang, 0.0, hang), folds, puff_m=0.025)
     r = r_duvet + 0.02
-    shop.drape((-x_out, fold_y - 0.02), (x_out, fold_y + 0.2), mattress_top + loft + 0.02, sheet, rng, r,
+    shop.drape((-x_out, fold_y - r_duvet - 0.01), (x_out, fold_y + 0.2), mattress_top + loft + 0.02, sheet, rng, r,
                (0.065, 0.065, 0.02, 0.0), folds, puff_m=0.01)
     n = pillows or (2 if W > 1.2 else 1)
     pw = (W - 2 * ins - 0.08 - (n - 1) * 0.04) / n
