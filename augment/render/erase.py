@@ -165,7 +165,7 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
         if edge is None:
             break
         shade.append(edge)
-        small_rgb = edge.lift(small, small_rgb, (0, 0, cols, rows))
+        small_rgb = _lifted(small_rgb, [edge.factor(small, (0, 0, cols, rows))])
     # Light is what varies slowly; the floor's own blotches and planks are texture, copied whole.
     sigma = max(1.0, settings.light_sigma_share * short_m * small.ppm)
     smooth = cv2.inpaint(small_rgb, bad.astype(np.uint8) * 255, 3, cv2.INPAINT_TELEA)
@@ -180,7 +180,8 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     (c0, r0), (c1, r1) = np.floor(full.view_px(sheet)).astype(int) + [[-ring], [ring + 1]]
     box = (c0, r0, c1, r1)
     rgb, valid = full.sample(image, floor_mask, box)
-    rgb = _lift(shade, full, rgb, box)
+    shade_box = [edge.factor(full, box) for edge in shade]
+    rgb = _lifted(rgb, shade_box)
     standing = _upsample(foreign.astype(np.float32), scale, box) > 0.5
     hole_full = full.rectangle(sheet, box) & ~standing
     valid &= ~standing
@@ -197,7 +198,7 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
         dx, dy = (round(v / scale) for v in found)
         source = (c0 + dx - reach, r0 + dy - reach, c1 + dx + reach, r1 + dy + reach)
         src_rgb, src_valid = full.sample(image, floor_mask, source)
-        src_rgb = _lift(shade, full, src_rgb, source)
+        src_rgb = _lifted(src_rgb, [edge.factor(full, source) for edge in shade])
         src_texture = src_rgb.astype(np.float32) - _upsample(light, scale, source)
         refined = _best_offset(texture, part, hole_full | ~valid, ring, search=(src_texture, ~src_valid, reach))
         if refined is None:
@@ -230,8 +231,8 @@ def erase_board(image: np.ndarray, calibration, floor_mask: np.ndarray | None = 
     # copied, a ramp over the rim it was matched on, so that the copy has no edge.
     weight = np.where(hole_full, 1.0, np.where(have, np.clip(1.0 - outside / (ring + 1), 0.0, 1.0), 0.0))
     weight = np.where(standing, 0.0, weight).astype(np.float32)
-    for edge in shade:
-        fill = fill * edge.factor(full, box)
+    for factor in shade_box:
+        fill = fill * factor
     filled = np.clip(fill + 0.5, 0, 255).astype(np.uint8)
 
     # Back into the photo: the sheet's pixels, with the print's blurred edge, and the ramp.
@@ -353,16 +354,13 @@ class _ShadowEdge:
         s = 1.0 / (1.0 + np.exp(-np.clip((d - self.offset_m) / self.width_m, -50, 50)))
         return np.exp(s[..., None] * self.step - np.minimum(self.step, 0.0)).astype(np.float32)
 
-    def lift(self, view: _TopDown, rgb: np.ndarray, box) -> np.ndarray:
-        """``rgb`` (uint8) of the view's box with the shadow's edge taken out: its lit side
-        brought down to the shaded side's light."""
-        return np.clip(rgb / self.factor(view, box) + 0.5, 0, 255).astype(np.uint8)
 
-
-def _lift(edges, view: _TopDown, rgb: np.ndarray, box) -> np.ndarray:
-    """``rgb`` of the view's box with every shadow edge of ``edges`` taken out."""
-    for edge in edges:
-        rgb = edge.lift(view, rgb, box)
+def _lifted(rgb: np.ndarray, factors) -> np.ndarray:
+    """``rgb`` (uint8) with each shadow edge's factor of ``factors`` (:meth:`_ShadowEdge.factor`
+    at its box) taken out in turn, as they were found: the lit side brought down to the
+    shaded side's light (a factor is at least 1, so nothing clips)."""
+    for factor in factors:
+        rgb = np.clip(rgb / factor + 0.5, 0, 255).astype(np.uint8)
     return rgb
 
 

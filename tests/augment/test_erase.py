@@ -162,10 +162,17 @@ def test_wrong_inputs_are_refused():
         erase_board(photo.image.astype(np.float32), cal)
 
 
-def _print_case(seed, **choices):
+def _erased_print(seed, **choices):
+    """A pasted print (:func:`pasted_board`, 1280x960), calibrated with its true focal length
+    and erased on its floor: the case and the erased photo."""
     case = pasted_board(np.random.default_rng(seed), (1280, 960), **choices)
     cal = calibrate_photo(case.photo, case.board, intrinsics=exif_intrinsics(case.K[0, 0], (1280, 960)))
-    return case, erasure_scores(case, erase_board(case.photo, cal, case.floor_mask).image)
+    return case, erase_board(case.photo, cal, case.floor_mask).image
+
+
+def _print_case(seed, **choices):
+    case, erased = _erased_print(seed, **choices)
+    return case, erasure_scores(case, erased)
 
 
 def test_opencvs_chessboard_on_cream_paper_leaves_no_dots():
@@ -302,7 +309,7 @@ def test_a_straight_shadow_edge_is_found_where_it_crosses_the_sheet():
     grain: its direction within a degree, its place within a pixel, its height log(0.7)
     within 0.05 per channel; lifted, the floor steps across the line by less than a tenth
     of what it did."""
-    from augment.render.erase import _shadow_edge
+    from augment.render.erase import _lifted, _shadow_edge
 
     rows, cols = np.mgrid[0:200, 0:240] + 0.5
     normal = np.array([np.cos(np.deg2rad(30.0)), np.sin(np.deg2rad(30.0))])
@@ -321,7 +328,7 @@ def test_a_straight_shadow_edge_is_found_where_it_crosses_the_sheet():
         image = image.astype(float).mean(axis=2)
         return np.log(image[far & (across > 0)].mean() / image[far & (across < 0)].mean())
 
-    before, after = step(rgb), step(edge.lift(_FlatView(), rgb, (0, 0, 240, 200)))
+    before, after = step(rgb), step(_lifted(rgb, [edge.factor(_FlatView(), (0, 0, 240, 200))]))
     assert before < -0.3 and abs(after) < 0.1 * abs(before), (before, after)
 
 
@@ -345,10 +352,8 @@ def test_a_shadows_edge_across_the_print_runs_on_over_the_erased_sheet():
     the light across the sheet, the edge fading out in its middle (10 levels off on
     average, correlation 0.72 with the truth, both blurred 4 px). Now the edge runs on
     across the sheet: within 7.5 levels on average, correlation above 0.85."""
-    case = pasted_board(np.random.default_rng([9420, 5]), (1280, 960), shadow=True)
+    case, erased = _erased_print([9420, 5], shadow=True)
     assert case.case["floor"] == "concrete"
-    cal = calibrate_photo(case.photo, case.board, intrinsics=exif_intrinsics(case.K[0, 0], (1280, 960)))
-    erased = erase_board(case.photo, cal, case.floor_mask).image
     sheet = np.zeros(erased.shape[:2], np.uint8)
     cv2.fillConvexPoly(sheet, np.round(case.sheet_px).astype(np.int32), 1)
     sheet = cv2.erode(sheet, np.ones((5, 5), np.uint8)) > 0
