@@ -164,8 +164,7 @@ class FloorModel:
                                     "or use --method grabcut")
         sidecar = self.path.with_suffix(".json")
         self.spec = spec if spec is not None else (ModelSpec.from_json(sidecar) if sidecar.is_file() else ModelSpec())
-        options = ort.SessionOptions()
-        options.log_severity_level = 3
+        options = _session_options()
         if threads is not None:
             options.intra_op_num_threads = threads
         try:
@@ -281,6 +280,18 @@ class FloorModel:
         return cv2.resize(p, size_px, interpolation=cv2.INTER_LINEAR)
 
 
+def _session_options():
+    """Quiet, and with worker threads that sleep between runs: spinning ones took a core
+    from the threads that erase the board and load the solver meanwhile (a 1280x960
+    ``stage furnish``: 6.1 -> 5.7 s, median of 8 side by side)."""
+    import onnxruntime as ort
+
+    options = ort.SessionOptions()
+    options.log_severity_level = 3
+    options.add_session_config_entry("session.intra_op.allow_spinning", "0")
+    return options
+
+
 @lru_cache(maxsize=4)
 def shipped_session(path: str):
     """An onnxruntime session of one of the small models that ship in ``models/``, kept."""
@@ -289,9 +300,7 @@ def shipped_session(path: str):
     if not Path(path).is_file():
         raise FileNotFoundError(f"the model {path} is missing: it ships with Stager, "
                                 f"restore it with `git checkout models/{Path(path).name}`")
-    options = ort.SessionOptions()
-    options.log_severity_level = 3
-    return ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
+    return ort.InferenceSession(path, _session_options(), providers=["CPUExecutionProvider"])
 
 
 def shrink_to(image: np.ndarray, long_px: int) -> np.ndarray:
