@@ -3,9 +3,10 @@
 Run by hand: ``python benchmarks/staging.py [--count 40] [--seed 9800]`` (about ten
 minutes). Writes ``results/staging.{json,md}`` and ``results/staging_worst.png``.
 
-Photos: the four sample photos (living room preset) and ``--count`` held-out renders of the
+Photos: the four sample photos (living room preset), ``--count`` held-out renders of the
 synthetic photographer (seed ``[--seed, i]``, 1280x960, empty rooms, saved as a phone
-would), with the living room, bedroom, office and dining room presets in turn. Each photo
+would), with the living room, bedroom, office and dining room presets in turn, and the
+four real photos of ``samples/real`` with a board pasted, with each of the four. Each photo
 is measured once (calibration, floor, height) and laid out twice, four suggestions each:
 as a plan seen from above (``ROOM.fit.for_camera = False``, how layouts were made before
 the camera was in them) and for the photo's camera, in the same run.
@@ -18,9 +19,12 @@ shows; :func:`layout.camera.judge`):
   other items' boxes in front (what the layout's own test sees, boxes as occluders; a
   table or desk is seen through its own chairs, :func:`layout.camera.seats_at`);
 * ``visible_in_photo``: the same for the furniture's meshes as rendered (each judged
-  item's silhouette, drawn alone, against the drawing of all; :func:`_rendered_visible`):
+  item's silhouette, drawn alone, against the drawing of all; :func:`_rendered`):
   what the staged photo shows, where a chair in front hides less than its box;
 * ``good_side``: no sofa or armchair nearer than the floor's middle seen from behind;
+* ``view_open``: no piece whose top is above the lens (the photo shows nothing past it)
+  fills more than ``CAMERA.max_cover`` (15 %) of the frame with its rendered silhouette
+  (drawn alone): no wardrobe in the foreground walling off the room;
 * ``doors_clear``: no furniture in the swing zone (as deep as the door is wide) of the
   photographer's true doors with both feet in view (renders only); before, no door was
   known to the solver, now those found in the photo are
@@ -67,8 +71,8 @@ sys.path.insert(0, str(HERE))
 
 ROOMS = ("living_room", "bedroom", "office", "dining_room")
 SUGGESTIONS = 4
-CHECKS = ("foreground_clear", "whole", "visible", "visible_in_photo", "good_side", "doors_clear", "windows_clear",
-          "rules_met", "at_walls", "different", "different_or_forced")
+CHECKS = ("foreground_clear", "whole", "visible", "visible_in_photo", "good_side", "view_open", "doors_clear",
+          "windows_clear", "rules_met", "at_walls", "different", "different_or_forced")
 TARGET = 0.95
 DOOR_MATCH_M = 0.3  # a found door this close to a true one is that door (its error is reported)
 TIMED = 3  # timed solves per photo and mode, after a warm one: their median is its time
@@ -84,7 +88,11 @@ class _Quiet:
 
 
 def _photos(count: int, seed: int, work: Path):
-    """(name, path, preset, truth or None) of the sample photos and the renders."""
+    """(name, path, preset, truth or None) of the sample photos, the renders and the real
+    photos of ``samples/real`` with a board pasted (as ``before_after.py`` pastes it),
+    each with every preset."""
+    from before_after import real_photos
+
     from augment.render.gl import Renderer
     from augment.synth import render_sample
     from augment.synth.photo import save_as_phone
@@ -96,6 +104,7 @@ def _photos(count: int, seed: int, work: Path):
             path = work / f"render_{i:02d}.jpg"
             save_as_phone(path, sample.image, sample.truth["K"][0][0], sample.truth["photo"]["jpeg_quality"])
             out.append((f"render {seed}/{i}", path, ROOMS[i % len(ROOMS)], sample.truth))
+    out += [(f"real {path.stem} ({room})", path, room, None) for path, _ in real_photos(work) for room in ROOMS]
     return out
 
 
@@ -198,6 +207,9 @@ def _checks(layouts, camera, calibration, doors, windows, renderer) -> list[dict
         uv, z = camera.project(corners)
         feet = uv[:, [0, 2, 4, 6]]  # the corners at the floor (z - h/2)
         j = judge(lay, camera=camera)
+        eye_m = camera.center_m[2]
+        tall = [m.names[i] for i in items if lay.position_m[i, 2] + 0.5 * m.particle_size_m[i, 2] > eye_m]
+        visible, cover = _rendered(lay, calibration, renderer, styles[k], j["visible"], tall)
         r = residuals(m, State(lay.position_m, lay.yaw_rad))
         zones = [_swing_zone(d, m.floor_polygon_m) for d in doors]
         footprints = lay.corners_m(items)
@@ -211,9 +223,9 @@ def _checks(layouts, camera, calibration, doors, windows, renderer) -> list[dict
             "whole": bool(np.all(z > 0) and np.all((uv[..., 0] >= -1) & (uv[..., 0] <= w + 1) & (uv[..., 1] >= -1)
                                                    & (uv[..., 1] <= h + 1))),
             "visible": not j["hidden"],
-            "visible_in_photo": all(v >= CAMERA.min_visible for v in _rendered_visible(
-                lay, calibration, renderer, styles[k], j["visible"]).values()),
+            "visible_in_photo": all(v >= CAMERA.min_visible for v in visible.values()),
             "good_side": not j["from_behind"],
+            "view_open": all(c <= CAMERA.max_cover for c in cover.values()),
             "doors_clear": None if not zones else all(
                 convex_intersection_area(zn, f) <= 0.01 for zn in zones for f in footprints),
             "windows_clear": None if not window_zones else all(
@@ -227,11 +239,11 @@ def _checks(layouts, camera, calibration, doors, windows, renderer) -> list[dict
     return rows
 
 
-def _rendered_visible(lay, calibration, renderer, style: str, judged) -> dict:
-    """Each judged item's share of its rendered silhouette that the staged photo shows (the
-    furniture's meshes, as the pipeline builds them, at a quarter of the photo's size),
-    for the items ``judged`` (names :func:`layout.camera.judge` judges); the box test's
-    check, from meshes."""
+def _rendered(lay, calibration, renderer, style: str, judged, tall) -> tuple[dict, dict]:
+    """From the furniture's meshes, as the pipeline builds them, drawn at a quarter of the
+    photo's size: each judged item's share of its silhouette that the staged photo shows,
+    for the items ``judged`` (names :func:`layout.camera.judge` judges; the box test's
+    check), and the share of the frame each item of ``tall`` (names) fills, drawn alone."""
     import pyrender
 
     from augment.render.furniture import furniture_for, placed_items, world_from_item
@@ -271,7 +283,7 @@ def _rendered_visible(lay, calibration, renderer, style: str, judged) -> dict:
         front = depth([j for j in meshes if j not in seats.get(i, ())]) if i in seats else everything
         shown = silhouette & (np.abs(front - alone) <= 1e-3 * np.maximum(alone, 1.0))
         out[i] = float(shown.sum() / max(silhouette.sum(), 1))
-    return out
+    return out, {i: float((depth([i]) > 0).mean()) for i in tall if i in meshes}
 
 
 def _said_to_repeat(notes) -> set:
@@ -459,7 +471,8 @@ def main(argv=None) -> int:
             "suggestions": results}
     md = ["# Staging for the camera: `python benchmarks/staging.py`", "",
           f"{len(photos)} photos (the 4 samples, living room; {args.count} held-out renders, seed "
-          f"[{args.seed}, i], 1280x960, living room / bedroom / office / dining room in turn), "
+          f"[{args.seed}, i], 1280x960, living room / bedroom / office / dining room in turn; the 4 real "
+          "photos of `samples/real` with a board pasted, with each of the four), "
           f"{SUGGESTIONS} suggestions each, laid out as a plan (before) and for the photo's camera (now), "
           "in one run. Share of suggestions meeting each check (target "
           f"{TARGET:.0%} each); n = suggestions judged.", "",

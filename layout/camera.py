@@ -39,6 +39,7 @@ class CameraRules:
     back_view_deg: float = 60.0  # seen from behind: the camera within this of the item's back
     screen_view_deg: float = 70.0  # a TV no seat faces: the camera within this of its screen's normal
     grid_px: int = 96  # rays across the image's longer side for the visibility test
+    max_cover: float = 0.15  # a piece taller than the lens fills at most this share of the frame
 
 
 CAMERA = CameraRules()
@@ -213,14 +214,17 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
     - ``from_behind``: seating in :data:`FRONT_KINDS`, not at a table, nearer than the
       floor's middle, with the camera within ``rules.back_view_deg`` of its back; and a TV
       (:data:`SCREEN_KINDS`, carrying its screen) that no seat faces, with the camera more
-      than ``rules.screen_view_deg`` off its front (edge-on or from behind).
+      than ``rules.screen_view_deg`` off its front (edge-on or from behind);
+    - ``looms``: its top is above the lens, so the photo shows nothing past it, and its box
+      fills more than ``rules.max_cover`` of the frame (a wardrobe in the foreground walls
+      off the room a stager would show).
 
     Returns
     -------
     dict
         ``visible`` (item name -> share shown, for the items judged), the names ``cut``,
-        ``hidden``, ``from_behind``, and ``hidden_by`` (hidden item -> the item in front of
-        most of what is hidden); empty without a camera.
+        ``hidden``, ``from_behind``, ``looms``, and ``hidden_by`` (hidden item -> the item
+        in front of most of what is hidden); empty without a camera.
     """
     model = layout.model
     cam = model.camera if camera is None else camera
@@ -248,6 +252,8 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
     ray_box_entry(np.asarray(cam.center_m, dtype=np.float64), dirs, np.ascontiguousarray(pos),
                   np.ascontiguousarray(yaw, dtype=np.float64), np.ascontiguousarray(size), hits)
     seen = np.isfinite(hits)
+    tall = pos[:, 2] + 0.5 * size[:, 2] > cam.center_m[2]
+    looms = [n for n, t, cover in zip(names, tall, seen.mean(axis=0)) if t and cover > rules.max_cover]
     exempt = _not_judged_for_hiding(model, items)
     seats = seats_at(model)
     visible = {}
@@ -288,12 +294,13 @@ def judge(layout, rules: CameraRules | None = None, camera: Camera | None = None
         front = to_eye @ np.array([np.cos(yaw[k]), np.sin(yaw[k])]) / dist  # cos of the camera's angle off its front
         if (seat and dist < middle and -front >= cos_back) or (screen and front < cos_screen):
             behind.append(names[k])
-    return {"visible": visible, "cut": cut, "hidden": hidden, "hidden_by": hidden_by, "from_behind": behind}
+    return {"visible": visible, "cut": cut, "hidden": hidden, "hidden_by": hidden_by, "from_behind": behind,
+            "looms": looms}
 
 
 def faults(judged: dict) -> int:
     """How many items a camera judgement finds at fault (0 without a camera)."""
-    return sum(len(judged.get(k, ())) for k in ("cut", "hidden", "from_behind"))
+    return sum(len(judged.get(k, ())) for k in ("cut", "hidden", "from_behind", "looms"))
 
 
 def _group_kinds(model, i) -> set:

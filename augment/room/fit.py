@@ -705,19 +705,22 @@ OFF_SPOT = "in view, it found no place at the piece it goes with"
 MAY_FLOAT = ("desk",)
 UNSEEN = "it would stand hidden behind the others"
 IN_FRONT = "it would hide a piece that stays behind it"
+LOOMS = "it would stand tall in the foreground and wall off the room"
 HIDING_ROUNDS = 3  # taking a piece out can show or hide others: judge again this often at most
 
 
 class _Pick:
     """The best try of one suggestion: clean first, then no seating (or lone TV) seen from
-    behind, then not one piece of dressing alone (:data:`DRESSING`), then furnishing at
-    least ``ROOM.fit.sparse_share`` of the floor the first suggestion furnishes
+    behind and no tall piece looming in the foreground, then not one piece of dressing
+    alone (:data:`DRESSING`), then furnishing at least ``ROOM.fit.sparse_share`` of the
+    floor the first suggestion furnishes
     (:func:`footprint_m2`), then different from the earlier suggestions, then with the fewest faults (the camera's,
     :func:`broken_rules`, a piece taken out). A piece off its spot (:func:`_off_their_spots`)
     or hidden behind others (:func:`layout.camera.judge`) is taken out of the try, as a
     stager takes it out of the shot, with the pieces placed at it (a desk's chair); where
     the hidden piece stays (the most important unit, a member of a rigid set) or comes
-    before it in the spec's order, the piece in front of it goes instead."""
+    before it in the spec's order, the piece in front of it goes instead. A tall piece that
+    looms in the foreground goes too, unless it stays."""
 
     def __init__(self, earlier: list, spec, anchor=frozenset(), built: dict | None = None):
         self.earlier = earlier
@@ -780,6 +783,9 @@ class _Pick:
                     goes, why = (h, UNSEEN) if h not in stays else (None, None)
                 if goes is not None:
                     hiding.update(dict.fromkeys({goes} | with_it.get(goes, set()), why))
+            for t in camera.get("looms", ()):
+                if t not in stays:
+                    hiding.update(dict.fromkeys({t} | with_it.get(t, set()), LOOMS))
             if not hiding or judged == HIDING_ROUNDS or {lay.model.names[i] for i in lay.items} <= set(hiding):
                 break
             taken |= hiding
@@ -792,9 +798,10 @@ class _Pick:
         # less than a perfect one.
         nearest = min((apart_m(old, lay) for old in self.earlier), default=math.inf)
         sparse = bool(self.earlier) and footprint_m2(lay) < ROOM.fit.sparse_share * footprint_m2(self.earlier[0])
-        key = (bool(rep.get("camera", {}).get("from_behind")), _lone_dressing(lay.model.kinds[i] for i in lay.items),
-               sparse, nearest < ROOM.fit.min_difference_m,
-               camera_faults(rep.get("camera", {})) + len(broken_rules(lay, r)) + len(taken))
+        # What looms still is a piece that stays (a corner set's wardrobe): as bad as a back.
+        key = (bool(camera.get("from_behind") or camera.get("looms")),
+               _lone_dressing(lay.model.kinds[i] for i in lay.items), sparse, nearest < ROOM.fit.min_difference_m,
+               camera_faults(camera) + len(broken_rules(lay, r)) + len(taken))
         self.pinned += nearest < PINNED_M
         if self.best is None or key < self.best[0]:
             self.best = (key, lay, taken)
@@ -1035,7 +1042,7 @@ def solve_suggestions(spec, suggestions: int, seed: int, area_m2: float, dropped
             layouts.append(dataclasses.replace(pick.best[1], seed=seed + k))
             reports.append(layout_report.evaluate(pick.best[1]))
             taken = pick.best[2]
-            for why in (OFF_SPOT, UNSEEN, IN_FRONT):
+            for why in (OFF_SPOT, UNSEEN, IN_FRONT, LOOMS):
                 if ids := sorted(i for i, w in taken.items() if w == why):
                     said.append(f"suggestion {k + 1} leaves out {', '.join(ids)}: {why}")
             left = sorted(set(i.id for i in _drop(pick.spec, taken)[0].items) - set(pick.best[1].model.names))

@@ -1351,6 +1351,39 @@ def test_a_hidden_piece_or_the_piece_in_front_of_it_is_taken_out_of_the_shot(tmp
     assert offered(spec, solved, {"plant": "coffee_table"})[2] == {"plant": fit.UNSEEN}
 
 
+def test_a_tall_piece_looming_in_the_foreground_leaves_the_shot(tmp_path, monkeypatch):
+    """Judged looming (layout.camera.judge), a bookcase leaves the try, with the side table
+    placed at it; a looming anchor stays, and the try then counts as badly as seating
+    seen from behind: worse than a repeat, so more starts are tried."""
+    from layout import Solver
+    from layout import report as layout_report
+    from layout.spec import build
+
+    real = layout_report.evaluate
+    spec = load_spec(write_spec(tmp_path, "[room]\npolygon = [[0, 0], [6, 0], [6, 4], [0, 4]]\nheight = 2.6"
+                                + "".join(f'\n[[items]]\nid = "{k}"\nkind = "{k}"'
+                                          for k in ("sofa", "bookcase", "side_table"))
+                                + '\n[[constraints]]\ntype = "heat"\nmembers = ["side_table"]\nframe = "bookcase"'
+                                + "\ntarget = [0.0, 0.9]"))
+    solved = Solver().solve(build(spec)[0], seed=0)
+
+    def offered(looms, anchor):
+        monkeypatch.setattr(layout_report, "evaluate", lambda lay, walkable=True: {
+            **real(lay, walkable), "camera": {"cut": [], "from_behind": [], "hidden": [], "hidden_by": {},
+                                              "looms": [n for n in looms if n in lay.model.names]}})
+        pick = fit._Pick([], spec, anchor=anchor)
+        pick.offer(solved)
+        return pick
+
+    pick = offered(["bookcase"], frozenset({"sofa"}))
+    assert pick.best[2] == {"bookcase": fit.LOOMS, "side_table": fit.LOOMS}
+    kept = [pick.best[1].model.names[i] for i in pick.best[1].items]
+    assert kept == ["sofa"] and not pick.lacking
+    pick = offered(["bookcase"], frozenset({"bookcase"}))
+    assert "bookcase" not in pick.best[2] and pick.best[0][0] and pick.lacking
+    assert not offered([], frozenset({"bookcase"})).best[0][0]
+
+
 def test_the_rules_a_layout_breaks_are_named_with_how_far_off(tmp_path):
     """Face to face 2.0 m apart, the sofa-TV distance is 0.5 m short; turned 90 degrees,
     the sofa's facing is 90 degrees off too; the TV 1 m off its wall, its wall rule is

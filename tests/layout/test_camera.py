@@ -201,6 +201,32 @@ def test_a_desk_is_seen_through_its_chair_but_not_through_a_bookcase():
     assert j["hidden_by"] == {"desk": "shelf", "chair": "shelf"}
 
 
+def test_a_tall_piece_looms_where_it_fills_much_of_the_frame():
+    """Level camera 1.2 m up, f = 500 px, 640 x 480. A wardrobe 1.2 m wide, 0.6 m deep,
+    2 m tall, its front 2.7 m out: the front face (the hull of its outline, the lens
+    between its floor and top) spans 2 x 500 x 0.6 / 2.7 = 222.2 px by 500 x 2 / 2.7 =
+    370.4 px, 26.8 % of the frame: it looms (the rule's 15 %), not with a limit of 30 %.
+    At 7.7 m it fills 3.3 %; a 1 m chest there as near sits below the lens and the photo
+    shows the room past it; with the lens 2.5 m up the wardrobe does not loom either."""
+    from layout.solver import Layout
+
+    def judged(height_m, x_m, lens_m=1.2, rules=None):
+        b = LayoutBuilder([[0, -3], [12, -3], [12, 3], [0, 3]], 3.0)
+        b.add_item("piece", (1.2, 0.6, height_m), kind="wardrobe")
+        b.set_camera(Camera(K, looking_along_x(lens_m), (640, 480)), rules)
+        model = b.finalize()
+        pos = model.particle_init_position_m.copy()
+        pos[0] = [x_m, 0.0, height_m / 2]
+        return judge(Layout.from_state(model, pos, np.zeros(model.n), {}, np.zeros(0), 0, 0, None, 0.0))["looms"]
+
+    assert judged(2.0, 3.0) == ["piece"]
+    assert judged(2.0, 3.0, rules=CameraRules(max_cover=0.25)) == ["piece"]
+    assert judged(2.0, 3.0, rules=CameraRules(max_cover=0.29)) == []
+    assert judged(2.0, 8.0) == [] and judged(2.0, 8.0, rules=CameraRules(max_cover=0.03)) == ["piece"]
+    assert judged(1.0, 3.0) == []
+    assert judged(2.0, 3.0, lens_m=2.5) == []
+
+
 def test_a_spec_names_its_camera():
     T = looking_along_x(1.5).tolist()
     doc = {"room": {"polygon": [[0, -3], [9, -3], [9, 3], [0, 3]], "height": 3.0},
