@@ -2454,9 +2454,16 @@ def world_from_item(item: PlacedItem) -> np.ndarray:
     return _move(x, y, item.elevation_m) @ _rot_z(item.yaw_rad)
 
 
+# Kinds whose pieces in one room are each their own design; the pieces of any other kind
+# match, as a stager buys a table's chairs or a pair of nightstands.
+VARIED_KINDS = ("plant", "book", "binder", "mug", "photo_frame", "plate", "pencil")
+
+
 def item_seed(item: PlacedItem, seed: int = 0) -> int:
-    """A seed for an item's style, stable across suggestions: from ``seed`` and its id (or kind)."""
-    return int(zlib.crc32(f"{seed}:{item.id or item.kind}".encode()))
+    """A seed for an item's design, stable across suggestions: from ``seed`` and its kind
+    (its id for :data:`VARIED_KINDS`)."""
+    name = (item.id or item.kind) if item.kind in VARIED_KINDS else item.kind
+    return int(zlib.crc32(f"{seed}:{name}".encode()))
 
 
 def furniture_for(item: PlacedItem, seed: int = 0, assets: dict | None = None, cache: dict | None = None,

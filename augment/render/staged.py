@@ -773,9 +773,11 @@ class _LightMap:
 
 def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, hi_m,
                     settings: StagedSettings) -> _LightMap | None:
-    """The floor's light around the furniture, from the photo (None without a floor mask
-    or with too little floor in view). ``lo_m``, ``hi_m``: the floor box to cover."""
-    if floor_mask is None:
+    """The floor's light around the furniture, from the photo (None without a floor mask,
+    with too little floor in view, or on a floor that mirrors the furniture: what it
+    mirrors, a window's reflection above all, is no light falling there). ``lo_m``,
+    ``hi_m``: the floor box to cover."""
+    if floor_mask is None or lighting.floor_gloss >= settings.min_reflection_gloss:
         return None
     cell = settings.light_cell_m
     lo = np.asarray(lo_m, dtype=np.float64)[:2]
