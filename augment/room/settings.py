@@ -63,7 +63,7 @@ class FitSettings:
     astray_deg: float = 30.0  # ... nor two pieces that should face each other turned farther off than this
     for_camera: bool = True  # lay out for the photo's camera (layout.camera); False: as a plan seen from above
     min_difference_m: float = 0.3  # a suggestion this close to an earlier one (fit.apart_m) is a twin
-    sparse_share: float = 0.4  # furnishing less of the floor than this x the first suggestion: worse than a twin
+    sparse_share: float = 0.45  # furnishing less of the floor than this x the first suggestion: worse than a twin
     fit_cell_m: float = 0.02  # raster cell of the "does this footprint fit the floor" test
     fit_angles: int = 36  # orientations tried, over 180 degrees
     inset_cell_m: float = 0.01  # raster cell of the floor shrunk by the wall margin
