@@ -275,15 +275,15 @@ def _rendered(lay, calibration, renderer, style: str, judged, tall) -> tuple[dic
 
     seats = seats_at(lay.model)
     everything = depth(list(meshes))
+    alone = {i: depth([i]) for i in (set(judged) | set(tall)) & set(meshes)}  # each drawn by itself
     out = {}
     for i in sorted(set(judged) & set(meshes)):
-        alone = depth([i])
-        silhouette = alone > 0
+        silhouette = alone[i] > 0
         # A table is seen through its own chairs, as the box test judges it.
         front = depth([j for j in meshes if j not in seats.get(i, ())]) if i in seats else everything
-        shown = silhouette & (np.abs(front - alone) <= 1e-3 * np.maximum(alone, 1.0))
+        shown = silhouette & (np.abs(front - alone[i]) <= 1e-3 * np.maximum(alone[i], 1.0))
         out[i] = float(shown.sum() / max(silhouette.sum(), 1))
-    return out, {i: float((depth([i]) > 0).mean()) for i in tall if i in meshes}
+    return out, {i: float((alone[i] > 0).mean()) for i in tall if i in meshes}
 
 
 def _said_to_repeat(notes) -> set:
