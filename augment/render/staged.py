@@ -831,8 +831,9 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
     alone), one primitive per texture (all untextured parts share one). ``light_map``
     scales each vertex's light by the floor's light below it; with ``renderer``, what
     stands between a lamp and a vertex keeps the lamp's light from it. With
-    ``beam_per_pixel`` the sun's key is left whole: the caller cuts it to the beam per
-    pixel (its edge crosses a face between vertices)."""
+    ``beam_per_pixel`` the first meshes carry the fill light alone and the sun's key is
+    left whole: the caller adds it where the beam and the key's shadows let it through,
+    per pixel (the beam's edge crosses a face between vertices)."""
     lamp_views = [_lamp_view(renderer, placed, lamp) for lamp in lighting.lamps] if renderer is not None else []
     groups: dict = {}
     for item, furniture in placed:
@@ -883,12 +884,13 @@ def _furniture_meshes(placed, lighting: Lighting, cam_pos, forward_xy, settings:
             fill = fill + lit[:, None] * np.asarray(lighting.irradiance_rgb) * albedo * (1.0 - 0.96 * metal)[:, None]
         roll = _roll_off(fill + key * beam, settings.highlight_knee)[:, None]
         fill, key = fill * roll, key * roll * (1.0 if beam_per_pixel else beam)
+        first = fill if beam_per_pixel else fill + key
         positions, normals = v.astype(np.float32), n.astype(np.float32)
         indices = np.concatenate(fs).astype(np.uint32)
         uv = np.concatenate([m[3] for m in members]).astype(np.float32) if tex_key else None
         # One texture for both meshes: pyrender uploads it once while it stays in the scenes.
         tex = None if image is None else pyrender.Texture(source=image, source_channels="RGB")
-        for colors, out in ((fill + key, fills), (key, keys)):
+        for colors, out in ((first, fills), (key, keys)):
             material = pyrender.MetallicRoughnessMaterial(baseColorFactor=(1.0, 1.0, 1.0, 1.0), baseColorTexture=tex)
             out.append(pyrender.Mesh([pyrender.Primitive(
                 positions=positions, normals=normals, texcoord_0=uv, color_0=_encode(colors), indices=indices,
@@ -1047,27 +1049,29 @@ _ENCODE = (255.0 * (np.arange(_ENCODE_STEPS + 2) / _ENCODE_STEPS).clip(0, 1) ** 
 
 
 @njit(cache=True, parallel=True)
-def _combine(full, key, visibility, decode, encode, out):
-    """Premultiplied RGBA (h, w, 4) uint8 of the full light less the key light's shadowed
-    share, in linear light: full - key x (1 - visibility). ``full`` and ``key`` are the
-    two passes, premultiplied by coverage (``full``'s alpha); ``visibility`` (h, w)."""
-    h, w = full.shape[0], full.shape[1]
+def _combine(fill, key, visibility, decode, encode, out):
+    """Premultiplied RGBA (h, w, 4) uint8 of the fill light plus the key light's unshadowed
+    share, in linear light: fill + key x visibility. ``fill`` and ``key`` are the two
+    passes, premultiplied by coverage (``fill``'s alpha); ``visibility`` (h, w). (Adding
+    the key, not taking it off a pass of all the light: a strong coloured key clips that
+    pass in one channel, and taking it off there tints the shade.)"""
+    h, w = fill.shape[0], fill.shape[1]
     steps = encode.shape[0] - 2
     for i in prange(h):
         for j in range(w):
-            cov = full[i, j, 3]
+            cov = fill[i, j, 3]
             out[i, j, 3] = cov
-            shade = 1.0 - visibility[i, j]
-            if cov == 0 or shade <= 1e-3:
+            lit = visibility[i, j]
+            if cov == 0 or lit <= 1e-3 or (key[i, j, 0] == 0 and key[i, j, 1] == 0 and key[i, j, 2] == 0):
                 for c in range(3):
-                    out[i, j, c] = full[i, j, c]
+                    out[i, j, c] = fill[i, j, c]
                 continue
             for c in range(3):
                 if cov == 255:
-                    lin = decode[full[i, j, c]] - shade * decode[key[i, j, c]]
+                    lin = decode[fill[i, j, c]] + lit * decode[key[i, j, c]]
                 else:
                     scale = 1.0 / cov
-                    lin = (full[i, j, c] * scale) ** 2.2 - shade * (key[i, j, c] * scale) ** 2.2
+                    lin = (fill[i, j, c] * scale) ** 2.2 + lit * (key[i, j, c] * scale) ** 2.2
                 t = np.sqrt(max(lin, 0.0)) * steps
                 k = min(int(t), steps)
                 f = t - k
@@ -2080,6 +2084,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
                             windows_px, K, dist, pose, box, undistort, settings)
     beside.shutdown(wait=False)  # its thread ends with the task
     self_shadows = self_shadows and lighting.key_fraction > 0
+    # With self-shadows the first pass is the fill light alone, the key added per pixel.
     fulls, keys = _furniture_meshes(placed, lighting, cam_pos, forward_xy, settings, light_map, renderer,
                                     beam_per_pixel=self_shadows)
     camera, camera_gl = pyrender_camera(Kr), gl_from_cv_pose(np.linalg.inv(pose))

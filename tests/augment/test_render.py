@@ -197,6 +197,31 @@ def test_the_suns_beam_edge_crosses_a_face_where_it_falls(renderer, room_small):
     assert sun_side == pytest.approx(far_sun, rel=0.03) and shade_side == pytest.approx(far_shade, rel=0.03)
 
 
+def test_a_strong_coloured_sun_leaves_the_shade_its_own_colour(renderer, room_small):
+    """The cube of the test above, its top half in a sun far bluer than it is red, bright
+    enough that sun and shade together pass white in blue: out of the beam the top shows
+    the shade's light alone, grey as under a white sun (not all the light less the key,
+    whose blue was clipped: yellow)."""
+    image, _, calibration = room_small
+    x = (np.arange(500) + 0.5) * 0.01 - 2.5
+    lit = np.broadcast_to(x < 0.1, (500, 500)).copy()
+    sun = SunOnFloor(((1.0, 0.0),), True, 2.0, 2.0, (0.0, 0.0), 0, 0.5, (-2.5, -2.5), 0.01, lit, np.ones_like(lit))
+    item = PlacedItem("test_box", (0.0, 0.0, 0.5), 0.0, (1.0, 1.0, 1.0), "box")
+    at = np.rint(_project(calibration, [(0.1, 0.0, 1.0), (-0.4, 0.0, 1.0)])).astype(int)
+    colours = {}
+    for key_rgb in ((1.0, 1.0, 1.0), (0.55, 0.95, 1.5)):
+        light = replace(LIGHT, source="sun", sun=sun, key_rgb=key_rgb, irradiance_rgb=(2.0, 2.0, 2.0))
+        staged = render_staged(image, calibration, [item], renderer, assets={"test_box": _box_parts()}, seed=0,
+                               lighting=light, look=CLEAN, supersample=1.0)
+        colours[key_rgb] = staged.image[at[:, 1], at[:, 0]].astype(float)
+    white, blue = colours.values()
+    assert blue[1, 2] > blue[1, 0] + 40  # in the sun: blue
+    # In the shade: grey as under a white sun (a little darker: the sunlit corner's light
+    # rolls off more, and its vertex shares the face).
+    assert np.ptp(white[0]) <= 2 and np.ptp(blue[0]) <= 2
+    assert blue[0, 0] == pytest.approx(white[0, 0], abs=10)
+
+
 def test_a_blurrier_photo_is_rendered_coarser_but_never_sharper_than_it_needs():
     """The render scale of a 12 MP region: 0.6 by default; where the photo's edge spread
     is wide, low enough that the render's (0.55 px / scale) stays at 0.7 of it; never
