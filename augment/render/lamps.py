@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit, prange
 
 from .settings import RENDER, LampSettings
-from .sun import linear_luminance
+from .sun import REC709, linear_rgb
 
 
 @dataclass(frozen=True)
@@ -98,7 +98,7 @@ def find_lamps(image: np.ndarray, floor_mask: np.ndarray, calibration, ceiling_m
     cells = _floor_light(image, floor_mask, calibration, reference, left_out, settings)
     if cells is None:
         return ()
-    xy, light = cells
+    xy, light, rgb = cells
     height = ceiling_m - settings.below_ceiling_m
     widths = [f * height for f in settings.width_shares]
     base = np.column_stack([np.ones(len(xy)), xy - xy.mean(axis=0)])
@@ -135,24 +135,30 @@ def find_lamps(image: np.ndarray, floor_mask: np.ndarray, calibration, ceiling_m
                 or misfit > settings.max_misfit):
             break
         columns.append(pool[:, None])
-        found.append((centre, width))
+        found.append((centre, width, _peak_seen(xy, centre, width, settings)))
     if not found:
         return ()
     # A pool as wide as a bare bulb's carries the room's broad light with it (the bounce, a
     # fill at the ceiling's middle): it places the lamp, which then lights as a narrower one.
-    found = [(centre, min(width, settings.max_width_share * height)) for centre, width in found]
-    columns = [base] + [_pool(xy, centre, width)[:, None] for centre, width in found]
-    # All peaks at once: two pools share the floor between them.
+    found = [(centre, min(width, settings.max_width_share * height), seen) for centre, width, seen in found]
+    columns = [base] + [_pool(xy, centre, width)[:, None] for centre, width, _ in found]
+    # All peaks at once: two pools share the floor between them; and in red and blue.
     design = np.column_stack(columns)
-    amplitudes = np.linalg.lstsq(design, light, rcond=None)[0][base.shape[1]:]
+    fitted = np.linalg.lstsq(design, np.column_stack([light, rgb[:, 0], rgb[:, 2]]), rcond=None)[0][base.shape[1]:]
+    # A pool whose peak the photo does not show falls off one way only, as a window's
+    # light does: a lamp only when its light is no bluer than the floor's at large.
+    red, blue = np.median(rgb[:, 0]), np.median(rgb[:, 2])
     lamps = [Lamp((float(c[0]), float(c[1]), float(height)), float(w), float(a))
-             for (c, w), a in zip(found, amplitudes) if settings.min_peak <= a <= settings.max_peak]
+             for (c, w, seen), (a, a_red, a_blue) in zip(found, fitted)
+             if settings.min_peak <= a <= settings.max_peak
+             and (seen or (a_red > 0 and a_red * blue >= settings.min_flank_warmth * a_blue * red))]
     return tuple(sorted(lamps, key=lambda lamp: -lamp.peak))
 
 
 def _floor_light(image, floor_mask, calibration, reference, left_out, settings: LampSettings):
     """The floor's light in view seen from above: cell centres (n, 2) and their light (n,)
-    over ``reference``, smoothed past texture; None with too little floor in view."""
+    and linear colour (n, 3) over ``reference``, smoothed past texture; None with too
+    little floor in view."""
     pose = np.asarray(calibration.camera_from_floor, dtype=np.float64)
     R, t = pose[:3, :3], pose[:3, 3]
     foot = (-R.T @ t)[:2]
@@ -178,16 +184,17 @@ def _floor_light(image, floor_mask, calibration, reference, left_out, settings: 
         ok[ok] = ~np.asarray(left_out(points[ok, :2]), dtype=bool)
     if ok.sum() < 4 * settings.min_cells:
         return None
-    lum = np.zeros(len(points), np.float32)
-    lum[ok] = linear_luminance(image[ij[ok, 1], ij[ok, 0]]) / max(reference, 1e-6)
+    values = np.zeros((len(points), 4), np.float32)  # linear RGB and luminance
+    values[ok, :3] = linear_rgb(image[ij[ok, 1], ij[ok, 0]]) / max(reference, 1e-6)
+    values[ok, 3] = values[ok, :3] @ REC709.astype(np.float32)
     sigma = settings.smooth_m / fine
     weight = ok.reshape(n, n).astype(np.float32)
-    num = cv2.GaussianBlur(lum.reshape(n, n), (0, 0), sigma)
+    num = cv2.GaussianBlur(values.reshape(n, n, 4), (0, 0), sigma)
     den = cv2.GaussianBlur(weight, (0, 0), sigma)
     # Cells whose fine points are all floor: the edges of the floor in view, smoothed with
     # what is not floor, are left out.
     whole = cv2.resize(weight, (n // 2, n // 2), interpolation=cv2.INTER_AREA) > 0.99
-    light = cv2.resize(num / np.maximum(den, 1e-6), (n // 2, n // 2), interpolation=cv2.INTER_AREA)
+    light = cv2.resize(num / np.maximum(den, 1e-6)[..., None], (n // 2, n // 2), interpolation=cv2.INTER_AREA)
     if whole.sum() < settings.min_cells:
         return None
     centres = (np.arange(n // 2) + 0.5) * settings.cell_m
@@ -195,7 +202,22 @@ def _floor_light(image, floor_mask, calibration, reference, left_out, settings: 
     xy = np.column_stack([cx[whole], cy[whole]])
     if np.ptp(xy, axis=0).max() < settings.min_extent_m:
         return None
-    return xy, light[whole].astype(np.float64)
+    light = light[whole].astype(np.float64)
+    return xy, light[:, 3], light[:, :3]
+
+
+def _peak_seen(xy, centre, width, settings: LampSettings) -> bool:
+    """Whether the floor in view (cells (n, 2)) shows the pool's peak: floor near its
+    centre all around it but for a gap of at most ``settings.max_gap_deg`` (180: a centre
+    on the edge of the view). A pool's flank alone falls off one way, as a window's light
+    on the floor does: it tells no lamp."""
+    d = xy - centre
+    near = (d * d).sum(axis=1) <= (settings.side_reach_share * width) ** 2
+    if near.sum() < 2:
+        return False
+    angles = np.sort(np.arctan2(d[near, 1], d[near, 0]))
+    gaps = np.diff(np.append(angles, angles[0] + 2 * np.pi))
+    return math.degrees(float(gaps.max())) <= settings.max_gap_deg
 
 
 def _pool(xy, centre, width):

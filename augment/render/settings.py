@@ -229,6 +229,9 @@ class LampSettings:
     min_core_cells: int = 20  # ... its core (light over half its peak) shows on this many cells ...
     max_misfit: float = 0.15  # ... where the light departs from it by this share of its peak at most (rms)
     min_peak: float = 0.25  # ... and is this much brighter than the floor at large, right under it
+    side_reach_share: float = 0.5  # its peak is seen: floor in view within this x its width of its centre ...
+    max_gap_deg: float = 200.0  # ... all around it but for a gap this wide (180: the centre on the view's edge);
+    min_flank_warmth: float = 1.0  # else its red over blue is this x the floor's at large, at least (not daylight)
     max_peak: float = 3.0  # brighter is a sun patch or a reflection, not a lamp's pool
     shade_radius_m: float = 0.1  # a lamp's shade: its shadows' penumbra
     shadow_top_share: float = 0.75  # shadows are cast from at most this share of a lamp's height up

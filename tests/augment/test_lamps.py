@@ -101,6 +101,35 @@ def test_no_lamp_is_hung_behind_a_wall(rng):
     assert all(inside(np.array([lamp.position_m[:2]]))[0] for lamp in lamps)
 
 
+@pytest.mark.parametrize("beyond_m, pool_rgb, lamp", [(-0.6, (0.85, 1.0, 1.2), True), (0.3, (0.85, 1.0, 1.2), False),
+                                                     (0.3, (1.2, 1.0, 0.7), True)])
+def test_a_pool_whose_peak_is_out_of_view_is_a_lamp_by_its_warm_light(rng, beyond_m, pool_rgb, lamp):
+    """A pool whose centre lies 0.3 m short of the floor in view (toward the camera: the
+    photo shows its flank only, falling off one way as a window's light does) hangs a lamp
+    only in light warmer than the floor's at large (grey here); 0.6 m inside the view,
+    whatever its colour."""
+    image, mask, calibration = _truth_calibration("room_1", 0.5)
+    rows, cols = np.nonzero(mask)
+    seen = calibration.floor_from_pixels(np.column_stack([cols, rows]).astype(np.float64))
+    pose = calibration.camera_from_floor
+    foot = (-pose[:3, :3].T @ pose[:3, 3])[:2]
+    toward = np.median(seen, axis=0) - foot
+    toward /= np.linalg.norm(toward)
+    nearest = float(np.min((seen - foot) @ toward))  # the floor in view starts this far ahead
+    centre = foot + (nearest - beyond_m) * toward
+    width = 0.8 * HEIGHT_M
+
+    def light(xy):
+        pool = 1.5 * (1 + ((xy - centre) ** 2).sum(1) / width ** 2) ** -1.5
+        return 1.0 + pool[:, None] * np.asarray(pool_rgb)
+
+    painted, _ = _painted_floor(calibration, mask, light, rng)
+    lamps = find_lamps(painted, mask, calibration, CEILING_M, 0.18)
+    assert len(lamps) == int(lamp)
+    if lamp:
+        assert np.hypot(*(np.asarray(lamps[0].position_m[:2]) - centre)) < 0.3
+
+
 def test_the_room_ends_at_the_walls_in_view():
     """A far wall along y = 3 m and a left one along x = -2 m, seen from (0, -1): points
     past either (by more than 0.1 m) are out of the room; where no wall is seen, in."""
