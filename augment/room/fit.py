@@ -1211,7 +1211,10 @@ def furniture_for_floor(source, floor, height_m: float, where: Path, *, doors=No
             (door,) = doors_on_floor([d], calibration, poly, edges)
         except FurnishError:
             continue  # not a door of this floor's walls: a false find
-        door = dataclasses.replace(door, where=f"found {door.where}")
+        # Its zone as deep as its widest leaf can be: wider, it is a double door or a
+        # folding or sliding closet, whose leaves are narrower.
+        door = dataclasses.replace(door, where=f"found {door.where}",
+                                   clearance_m=min(door.width_m, ROOM.fit.max_leaf_m))
         for door in (_padded(door), door):
             try:
                 LayoutBuilder(poly, height_m, open_edges=edges).add_door(door.at_m, *door.zone_m)

@@ -294,8 +294,9 @@ def find_openings(image: np.ndarray, calibration, floor) -> Openings:
             if not any(i0 - 3 <= i and j <= i1 + 3 for i0, i1, _ in spans):
                 spans.append((i, j + 1, 0.5))
         rows = _rows(step, settings.model_top_m)
-        spans += _model_spans(_strip_features(tall_strip[:rows], tall_inside[:rows], wall), settings)
-        spans = _without_overlaps(spans)
+        spans = _with_model_spans(spans, _model_spans(_strip_features(tall_strip[:rows], tall_inside[:rows], wall),
+                                                      settings), settings)
+        spans = _without_overlaps([sp for sp in spans if _has_head(tall_strip[..., 0], tall_inside, *sp[:2], settings)])
         u = (b - a) / np.linalg.norm(b - a)
 
         def segment(i0, i1):
@@ -414,10 +415,48 @@ def _upright_lines(lightness: np.ndarray, low: np.ndarray, tall: np.ndarray, set
     return peaks
 
 
+def _has_head(lightness: np.ndarray, inside: np.ndarray, i0: int, i1: int, settings) -> bool:
+    """Whether the columns i0 to i1 (end exclusive) of a wall strip show a door's head: a
+    horizontal line (a lightness step across the row) between ``head_m`` high, in
+    ``head_share`` of them at least. True when that band is not in view: it cannot tell.
+    A wall between two windows, or next to a wide closet, has a casing's edge or another
+    colour at its sides but nothing across its top."""
+    z = (np.arange(lightness.shape[0]) + 0.5) * settings.step_m
+    rows = np.flatnonzero((z >= settings.head_m[0]) & (z <= settings.head_m[1]))
+    rows = rows[(rows >= 1) & (rows < lightness.shape[0] - 1)]
+    if len(rows) == 0 or inside[rows.min() - 1:rows.max() + 2, i0:i1].all(axis=0).mean() < 0.5:
+        return True
+    step = np.abs(lightness[rows + 1, i0:i1] - lightness[rows - 1, i0:i1]) / 2.0 > settings.line_step
+    step &= inside[rows + 1, i0:i1] & inside[rows - 1, i0:i1]
+    # A row's line, one sample up or down, in each column.
+    near = step.copy()
+    near[1:] |= step[:-1]
+    near[:-1] |= step[1:]
+    return float(near.mean(axis=1).max()) >= settings.head_share
+
+
+def _with_model_spans(rules: list, model: list, settings) -> list:
+    """The rules' and the model's (start, end, score) spans together. A casing's two lines
+    around a model's door that fills less than ``settings.model_in_casing`` of the span
+    between them are that door's sides: the model saw a louvred or panelled leaf in part.
+    (A door the model sees whole fills more: its casing's own width is all it leaves.)"""
+    out = list(rules)
+    for m0, m1, score in model:
+        around = [(i0, i1) for i0, i1, _ in rules
+                  if i0 <= m0 and m1 <= i1 and (m1 - m0) < settings.model_in_casing * (i1 - i0)]
+        out.append((*min(around, key=lambda t: t[1] - t[0]), score) if around else (m0, m1, score))
+    return out
+
+
 def _without_overlaps(spans: list) -> list:
-    """Of overlapping (start, end, score) spans, the best scored."""
+    """Of overlapping (start, end, score) spans, the best scored; then a span left out
+    that shares no more than a line with those kept (a double door's or a folding
+    closet's middle) is kept too."""
     kept = []
     for sp in sorted(spans, key=lambda t: -t[2]):
         if all(sp[1] <= k[0] or sp[0] >= k[1] for k in kept):
+            kept.append(sp)
+    for sp in sorted(spans, key=lambda t: -t[2]):
+        if sp not in kept and all(sp[1] <= k[0] + 1 or sp[0] >= k[1] - 1 for k in kept):
             kept.append(sp)
     return sorted(kept)

@@ -70,6 +70,7 @@ class FitSettings:
     door_graze_m2: float = 0.005  # furniture area inside a marked door's swing zone that still leaves the door usable
     door_width_m: tuple[float, float] = (0.5, 2.5)  # a door's feet this far apart: a cupboard door to a double door
     door_from_wall_m: float = 0.5  # a door's middle at most this far from a wall of the layouts' floor (a margin in)
+    max_leaf_m: float = 0.9  # a found door's zone is as deep as it is wide, up to a single leaf's width
     found_door_margin_m: float = 0.1  # a found door's zone reaches this far past its found sides and depth
     found_window_margin_m: float = 0.15  # a found window's zone reaches this far past its found sides
     window_clearance_m: float = 0.4  # furniture taller than a found window's sill keeps this far from it
@@ -97,6 +98,9 @@ class DoorSettings:
     line_margin: int = 4  # ... and stands this many samples off the wall's ends (its corners)
     wall_turn_deg: float = 20.0  # the outline's edges form one wall while they turn less than this,
     jog_m: float = 0.3  # ... or by any angle over an edge shorter than this (round a threshold)
+    model_in_casing: float = 0.75  # a model's door filling less of the casing around it is a leaf seen in part
+    head_m: tuple[float, float] = (1.9, 2.25)  # a door's head (its casing's top) lies between these heights ...
+    head_share: float = 0.4  # ... across this share of its columns at least, where the photo shows it
     model_threshold: float = 0.5  # a column is a door's where the model's probability is this or more
     model_margin: int = 64  # columns of nothing in view padded at a wall's ends, as in training
     model_top_m: float = 2.4  # the door model reads the wall up to here (a door's head and the wall above)

@@ -1852,3 +1852,41 @@ def test_a_door_on_a_wall_drawn_in_steps_keeps_its_width_and_its_place():
         segment = b.finalize().door_segments_m[0]
         np.testing.assert_allclose(sorted(segment @ u), [mid @ u - 0.5, mid @ u + 0.5], atol=0.005)
         assert np.all(np.abs(segment @ n - mid @ n) <= 0.03)
+
+
+def test_a_casing_around_the_models_door_and_a_folding_closets_halves_are_whole_doors():
+    """bedroom_closets (samples/real), its louvred closets' wall read as columns: casing
+    lines at 22, 57, 69, 100 and 132 pair into spans, the model's door is 78-109 (part
+    of the leaves). The closet whose casing stands at 69 and 132 is that door, whole; the
+    span 22-58 beside it stays. A folding closet read as two halves sharing its middle
+    line (6-56, 55-103) is both; a door the model sees nearly whole (render [9900, 11])
+    keeps the model's sides."""
+    from augment.room.openings import _with_model_spans, _without_overlaps
+
+    settings = ROOM.doors
+    casings = [(22, 58, 0.5), (22, 70, 0.5), (57, 101, 0.5), (69, 132, 0.5)]
+    assert _without_overlaps(_with_model_spans(casings, [(78, 109, 0.74)], settings)) == [(22, 58, 0.5),
+                                                                                         (69, 132, 0.74)]
+    assert _without_overlaps(_with_model_spans(casings, [], settings)) == [(22, 58, 0.5), (69, 132, 0.5)]
+    assert _without_overlaps(_with_model_spans([], [(78, 109, 0.74)], settings)) == [(78, 109, 0.74)]
+    # A door the model sees nearly whole keeps its own sides (the casing adds its width).
+    assert _with_model_spans([(20, 78, 0.5)], [(25, 73, 0.96)], settings)[1] == (25, 73, 0.96)
+    assert _without_overlaps([(6, 56, 0.5), (55, 103, 0.5)]) == [(6, 56, 0.5), (55, 103, 0.5)]
+    assert _without_overlaps([(6, 56, 0.5), (53, 103, 0.6)]) == [(53, 103, 0.6)]
+
+
+def test_a_door_shows_its_head_a_wall_between_windows_does_not(rng):
+    """A wall strip (2 cm samples up to 2.4 m) of lightness 60 with noise of 1: where a
+    casing's top crosses it at 2.05 m (10 darker above), the columns under it show a
+    door's head; a plain stretch, however lit from below to above, does not; with the
+    band out of view (the photo cut at 1.8 m) it cannot tell and says so."""
+    from augment.room.openings import _has_head
+
+    settings = ROOM.doors
+    z = (np.arange(120) + 0.5) * settings.step_m
+    strip = 60.0 + rng.normal(0.0, 1.0, (120, 100)) - 8.0 * (z[:, None] / 2.4)  # lit more near the floor
+    strip[z > 2.05, 20:70] -= 10.0
+    inside = np.ones(strip.shape, bool)
+    assert _has_head(strip, inside, 20, 70, settings)
+    assert not _has_head(strip, inside, 72, 100, settings)
+    assert _has_head(strip, inside & (z[:, None] < 1.8), 72, 100, settings)
