@@ -376,7 +376,7 @@ class Folds:
     folds in by up to ``depth_m`` below the height ``rim_z`` (the mattress's edge),
     fully from ``full_m`` below it on."""
 
-    def __init__(self, rng, depth_m: float, rim_z: float, full_m: float = 0.08):
+    def __init__(self, rng, depth_m: float, rim_z: float, full_m: float = 0.16):
         self.depth_m, self.rim_z, self.full_m = float(depth_m), float(rim_z), float(full_m)
         self.valley_dark = 0.3  # light lost at the bottom of the deepest fold (a soft fold hides a third of it)
         self._in = [_wave(rng, 3, 0.25, 0.6) for _ in range(4)]

@@ -585,7 +585,7 @@ def test_hanging_cloth_folds_in_toward_its_hem_alike_in_every_layer():
     """Below the rim height the cloth folds in, by up to the folds' depth and most at the
     hem, darkened by how deep; layers laid one over the other fold alike, so at equal
     heights the outer never comes inside the inner."""
-    folds = Folds(np.random.default_rng(5), 0.04, rim_z=0.45)
+    folds = Folds(np.random.default_rng(5), 0.04, rim_z=0.45, full_m=0.08)
     v, n, faces, uv, cavity = _draped_mesh((-0.5, -1.0), (0.5, 1.0), 0.55, 0.05, (0.15,) * 4, folds)
     side = (v[:, 0] < -0.44) & (v[:, 2] <= 0.5 + 1e-9) & (np.abs(v[:, 1]) < 0.9)  # the left side hanging at x = -0.5
     inward = v[side, 0] + 0.5
