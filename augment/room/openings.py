@@ -290,8 +290,11 @@ def find_openings(image: np.ndarray, calibration, floor) -> Openings:
         edges = _upright_lines(strip[..., 0], low, tall, settings, settings.side_share)
         spans = [(i0, i1, float(share[i0:i1].mean())) for i0, i1 in _runs(leaf)
                  if lo_w <= (i1 - i0) * step <= hi_w and any(min(abs(e - i0), abs(e - i1)) <= 3 for e in edges)]
+        # A window's casing may run down to the floor (an apron, wainscot): between the
+        # lines glass over the wall's colour is a window, not a door of the wall's colour.
+        window_like = _window_like(strip, inside, differs, wall, settings)
         for i, j in ((i, j) for i in lines for j in lines if lo_w <= (j - i) * step <= hi_w):
-            if not any(i0 - 3 <= i and j <= i1 + 3 for i0, i1, _ in spans):
+            if not any(i0 - 3 <= i and j <= i1 + 3 for i0, i1, _ in spans) and window_like[i:j + 1].mean() < 0.5:
                 spans.append((i, j + 1, 0.5))
         rows = _rows(step, settings.model_top_m)
         spans = _with_model_spans(spans, _model_spans(_strip_features(tall_strip[:rows], tall_inside[:rows], wall),
@@ -413,6 +416,22 @@ def _upright_lines(lightness: np.ndarray, low: np.ndarray, tall: np.ndarray, set
     keep = tall & (share >= min_share)
     peaks = [i for i in np.flatnonzero(keep) if share[i] >= share[max(i - 2, 0): i + 3].max()]
     return peaks
+
+
+def _window_like(strip: np.ndarray, inside: np.ndarray, differs: np.ndarray, wall: np.ndarray,
+                 settings) -> np.ndarray:
+    """Per column of a wall strip, whether it shows a window's glass over the wall: it is
+    brighter than the wall's colour over the band every window covers (daylight through
+    it) and does not differ near the floor (as :func:`_window_spans` reads a window).
+    (columns,) bool."""
+    z = (np.arange(strip.shape[0]) + 0.5) * settings.step_m
+    lo, hi = settings.window_band_m
+    band = inside & (z[:, None] >= lo) & (z[:, None] <= hi)
+    floor_band = inside & (z[:, None] >= settings.leaf_from_m) & (z[:, None] <= settings.window_below_m)
+    brighter = differs & (strip[..., 0] > wall[0] + settings.min_difference)
+    return ((band.sum(axis=0) * settings.step_m >= settings.window_seen_m)
+            & (_column_share(brighter, band) >= settings.min_share)
+            & (_column_share(differs, floor_band) < settings.window_floor_share))
 
 
 def _has_head(lightness: np.ndarray, inside: np.ndarray, i0: int, i1: int, settings) -> bool:

@@ -1890,3 +1890,22 @@ def test_a_door_shows_its_head_a_wall_between_windows_does_not(rng):
     assert _has_head(strip, inside, 20, 70, settings)
     assert not _has_head(strip, inside, 72, 100, settings)
     assert _has_head(strip, inside & (z[:, None] < 1.8), 72, 100, settings)
+
+
+def test_a_windows_casing_down_to_the_floor_is_no_door():
+    """A wall strip (Lab, 2 cm samples to 2.2 m) of lightness 60: columns 0-40 are a
+    window's glass (lightness 90) from 1.0 m up over the wall's colour (wainscot below a
+    window: the dining room of samples/real), 40-80 a door of the wall's colour, 80-100 a
+    louvred closet darker than the wall from the floor up. Only the first are a window's."""
+    from augment.room.openings import _window_like
+
+    settings = ROOM.doors
+    z = (np.arange(110) + 0.5) * settings.step_m
+    strip = np.zeros((110, 100, 3), np.float32)
+    strip[..., 0] = 60.0
+    strip[z >= 1.0, :40, 0] = 90.0
+    strip[:, 80:, 0] = 40.0
+    wall = np.array([60.0, 0.0, 0.0], np.float32)
+    differs = np.linalg.norm(strip - wall, axis=-1) > settings.min_difference
+    like = _window_like(strip, np.ones((110, 100), bool), differs, wall, settings)
+    assert like[:40].all() and not like[40:].any()
