@@ -771,13 +771,18 @@ class _LightMap:
                          borderMode=cv2.BORDER_REPLICATE).ravel()[:n]
 
 
+def _mirrors(lighting: Lighting, settings: StagedSettings) -> bool:
+    """Whether the photo's floor is glossy enough to mirror the furniture."""
+    return lighting.floor_gloss >= settings.min_reflection_gloss
+
+
 def floor_light_map(image, floor_mask, K, dist, pose, lighting: Lighting, lo_m, hi_m,
                     settings: StagedSettings) -> _LightMap | None:
     """The floor's light around the furniture, from the photo (None without a floor mask,
     with too little floor in view, or on a floor that mirrors the furniture: what it
     mirrors, a window's reflection above all, is no light falling there). ``lo_m``,
     ``hi_m``: the floor box to cover."""
-    if floor_mask is None or lighting.floor_gloss >= settings.min_reflection_gloss:
+    if floor_mask is None or _mirrors(lighting, settings):
         return None
     cell = settings.light_cell_m
     lo = np.asarray(lo_m, dtype=np.float64)[:2]
@@ -2201,8 +2206,10 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     timings["composite"] = time.perf_counter() - t
     t = time.perf_counter()
     layer_alpha = full_alpha
-    if lighting.floor_gloss >= settings.min_reflection_gloss and floor_mask is not None:
-        mirrored = _floor_reflection(renderer, fulls, placed, K, dist, pose, lighting, look, (h, w), settings)
+    if _mirrors(lighting, settings) and floor_mask is not None:
+        # The mirror shows all the light, the key's too (the first pass is the fill alone with self-shadows).
+        passes = (fulls, keys) if self_shadows else (fulls,)
+        mirrored = _floor_reflection(renderer, passes, placed, K, dist, pose, lighting, look, (h, w), settings)
         if mirrored is not None:
             layer_alpha = full_alpha.copy()
             _mirror_onto_floor(out, layer_alpha, mirrored, _floor_matte_cached(image, floor_mask, settings),
@@ -2213,7 +2220,7 @@ def render_staged(image: np.ndarray, calibration, items, renderer: Renderer, *,
     return Staged(out, lay, full_alpha, full_gain, lighting, roi, s, timings)
 
 
-def _floor_reflection(renderer, meshes, placed, K, dist, pose, lighting: Lighting, look: PhotoLook, shape,
+def _floor_reflection(renderer, passes, placed, K, dist, pose, lighting: Lighting, look: PhotoLook, shape,
                       settings: StagedSettings):
     """The furniture as a glossy floor mirrors it: its box in the photo (x0, y0, x1, y1) and
     there (rows, cols, 4) float32 premultiplied linear RGB and coverage, fading with the
@@ -2223,7 +2230,8 @@ def _floor_reflection(renderer, meshes, placed, K, dist, pose, lighting: Lightin
 
     The mirror image is the furniture seen from the camera mirrored below the floor: a
     proper camera (the mirror, times a flip of the image's rows) whose picture, flipped
-    back, is the reflection; the flat pass's light per vertex is kept."""
+    back, is the reflection; the flat passes' light per vertex is kept, ``passes`` (mesh
+    lists of one geometry) adding up."""
     h, w = shape
     reach = min(settings.reflection_reach_m, 3.0 * settings.reflection_fade_m)
     corners = np.concatenate([_item_corners(it, 0.0) for it, _ in placed])
@@ -2246,8 +2254,13 @@ def _floor_reflection(renderer, meshes, placed, K, dist, pose, lighting: Lightin
     Kb[1, 2] = (rh - 1) - Kb[1, 2]  # rows flipped back below
     mirror_pose = np.diag([1.0, -1.0, 1.0, 1.0]) @ pose @ np.diag([1.0, 1.0, -1.0, 1.0])
     flags = pyrender.RenderFlags.RGBA | pyrender.RenderFlags.FLAT
-    rgba, depth = renderer.render(_flat_scene(meshes, pyrender_camera(Kb), gl_from_cv_pose(np.linalg.inv(mirror_pose))),
-                                  rw, rh, flags=flags)
+    camera, camera_gl = pyrender_camera(Kb), gl_from_cv_pose(np.linalg.inv(mirror_pose))
+    rgba, depth = renderer.render(_flat_scene(passes[0], camera, camera_gl), rw, rh, flags=flags)
+    cover = np.maximum(rgba[..., 3:], 1).astype(np.float32)
+    colour = (rgba[..., :3].astype(np.float32) / cover) ** 2.2
+    for meshes in passes[1:]:
+        more, _ = renderer.render(_flat_scene(meshes, camera, camera_gl), rw, rh, flags=flags, depth=False)
+        colour += (more[..., :3].astype(np.float32) / cover) ** 2.2
     # Each pixel's height over the floor, from its depth in the mirror camera.
     v, u = np.mgrid[0:rh, 0:rw].astype(np.float32)
     rays = np.stack([(u - Kb[0, 2]) / Kb[0, 0], (v - Kb[1, 2]) / Kb[1, 1], np.ones_like(u)], axis=-1)
@@ -2255,8 +2268,7 @@ def _floor_reflection(renderer, meshes, placed, K, dist, pose, lighting: Lightin
     height = points @ mirror_pose[:3, 2].astype(np.float32)  # the floor frame's z: row 3 of R^T
     alpha = rgba[..., 3].astype(np.float32) / 255.0
     fade = np.where(depth > 0, np.exp(-np.maximum(height, 0.0) / settings.reflection_fade_m), 0.0) * alpha
-    colour = (rgba[..., :3].astype(np.float32) / np.maximum(rgba[..., 3:], 1).astype(np.float32)) ** 2.2
-    out = np.dstack([colour * fade[..., None], fade]).astype(np.float32)[::-1]
+    out = np.dstack([np.minimum(colour, 1.0) * fade[..., None], fade]).astype(np.float32)[::-1]
     out = cv2.GaussianBlur(np.ascontiguousarray(out), (0, 0), max(blur_px * s, 0.5))
     return (int(x0), int(y0), int(x1), int(y1)), cv2.resize(out, (x1 - x0, y1 - y0), interpolation=cv2.INTER_LINEAR)
 

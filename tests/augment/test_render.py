@@ -1265,3 +1265,9 @@ def test_a_glossy_floor_mirrors_the_furniture_below_its_base(renderer, room_smal
     ring = changed & ~base
     before = np.abs(plain.image[ring].astype(np.float32) - box).mean()
     assert np.abs(glossy.image[ring].astype(np.float32) - box).mean() < before
+    # The mirror shows the key light too, whether the key's shadows are worked out per
+    # pixel (its light then drawn apart from the fill) or not.
+    flat = render_staged(image, calibration, [item], renderer, assets={"test_box": _box_parts()},
+                         lighting=replace(LIGHT, floor_gloss=0.3), floor_mask=mask, seed=0, look=CLEAN,
+                         self_shadows=False)
+    np.testing.assert_allclose(glossy.image[ring].astype(float).mean(), flat.image[ring].astype(float).mean(), atol=0.5)
