@@ -184,12 +184,11 @@ def _floor_light(image, floor_mask, calibration, reference, left_out, settings: 
         ok[ok] = ~np.asarray(left_out(points[ok, :2]), dtype=bool)
     if ok.sum() < 4 * settings.min_cells:
         return None
-    values = np.zeros((len(points), 4), np.float32)  # linear RGB and luminance
-    values[ok, :3] = linear_rgb(image[ij[ok, 1], ij[ok, 0]]) / max(reference, 1e-6)
-    values[ok, 3] = values[ok, :3] @ REC709.astype(np.float32)
+    rgb = np.zeros((len(points), 3), np.float32)
+    rgb[ok] = linear_rgb(image[ij[ok, 1], ij[ok, 0]]) / max(reference, 1e-6)
     sigma = settings.smooth_m / fine
     weight = ok.reshape(n, n).astype(np.float32)
-    num = cv2.GaussianBlur(values.reshape(n, n, 4), (0, 0), sigma)
+    num = cv2.GaussianBlur(rgb.reshape(n, n, 3), (0, 0), sigma)
     den = cv2.GaussianBlur(weight, (0, 0), sigma)
     # Cells whose fine points are all floor: the edges of the floor in view, smoothed with
     # what is not floor, are left out.
@@ -202,8 +201,8 @@ def _floor_light(image, floor_mask, calibration, reference, left_out, settings: 
     xy = np.column_stack([cx[whole], cy[whole]])
     if np.ptp(xy, axis=0).max() < settings.min_extent_m:
         return None
-    light = light[whole].astype(np.float64)
-    return xy, light[:, 3], light[:, :3]
+    rgb = light[whole].astype(np.float64)
+    return xy, rgb @ REC709, rgb  # smoothing is linear: the luminance of the smoothed colour
 
 
 def _peak_seen(xy, centre, width, settings: LampSettings) -> bool:

@@ -338,9 +338,7 @@ def _window_spans(strip: np.ndarray, inside: np.ndarray, wall: np.ndarray, in_do
     z = (np.arange(strip.shape[0]) + 0.5) * step
     differs = np.linalg.norm(strip - wall, axis=-1) > settings.min_difference
     lo, hi = settings.window_band_m
-    band = inside & (z[:, None] >= lo) & (z[:, None] <= hi)
-    floor_band = inside & (z[:, None] >= settings.leaf_from_m) & (z[:, None] <= settings.window_below_m)
-    shows = band.sum(axis=0) * step >= settings.window_seen_m
+    band, floor_band, shows = _window_bands(inside, settings)
     glass = shows & ~in_door & (_column_share(differs, band) >= settings.min_share) & (
         _column_share(differs, floor_band) < settings.window_floor_share)
     middle = int(np.searchsorted(z, 0.5 * (lo + hi)))
@@ -418,19 +416,26 @@ def _upright_lines(lightness: np.ndarray, low: np.ndarray, tall: np.ndarray, set
     return peaks
 
 
+def _window_bands(inside: np.ndarray, settings) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Of a wall strip's samples in view (rows from the floor up), those in the band every
+    window covers (``settings.window_band_m``) and those near the floor, below any sill;
+    and the columns that show enough of that band (``settings.window_seen_m``)."""
+    z = (np.arange(inside.shape[0]) + 0.5) * settings.step_m
+    lo, hi = settings.window_band_m
+    band = inside & (z[:, None] >= lo) & (z[:, None] <= hi)
+    floor_band = inside & (z[:, None] >= settings.leaf_from_m) & (z[:, None] <= settings.window_below_m)
+    return band, floor_band, band.sum(axis=0) * settings.step_m >= settings.window_seen_m
+
+
 def _window_like(strip: np.ndarray, inside: np.ndarray, differs: np.ndarray, wall: np.ndarray,
                  settings) -> np.ndarray:
     """Per column of a wall strip, whether it shows a window's glass over the wall: it is
     brighter than the wall's colour over the band every window covers (daylight through
     it) and does not differ near the floor (as :func:`_window_spans` reads a window).
     (columns,) bool."""
-    z = (np.arange(strip.shape[0]) + 0.5) * settings.step_m
-    lo, hi = settings.window_band_m
-    band = inside & (z[:, None] >= lo) & (z[:, None] <= hi)
-    floor_band = inside & (z[:, None] >= settings.leaf_from_m) & (z[:, None] <= settings.window_below_m)
+    band, floor_band, shows = _window_bands(inside, settings)
     brighter = differs & (strip[..., 0] > wall[0] + settings.min_difference)
-    return ((band.sum(axis=0) * settings.step_m >= settings.window_seen_m)
-            & (_column_share(brighter, band) >= settings.min_share)
+    return (shows & (_column_share(brighter, band) >= settings.min_share)
             & (_column_share(differs, floor_band) < settings.window_floor_share))
 
 
